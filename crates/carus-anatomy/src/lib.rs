@@ -1,0 +1,2 @@
+//! Maternal pelvis, fetus and pelvic floor: generated from clinical diameters
+//! or imported from real meshes, in the pelvis frame of CONVENTIONS.md.

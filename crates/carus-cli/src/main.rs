@@ -1,0 +1,53 @@
+//! `carus`: forward simulation of human childbirth from physics.
+//!
+//! Exit status (CONVENTIONS.md): 0 on success, 1 on a failed validation or an
+//! error the user can fix, 2 on bad arguments (clap's own code).
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+mod commands;
+
+use commands::Status;
+
+#[derive(Parser)]
+#[command(name = "carus", version, about = "Forward simulation of human childbirth from physics")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run a verification case of docs/VALIDATION.md and print PASS/FAIL.
+    Validate(commands::validate::ValidateArgs),
+    /// Measure speed and print figures.
+    #[command(subcommand)]
+    Bench(commands::bench::BenchCommand),
+    /// Solve a soft-tissue model (mesh file + loads) and write VTU/PVD results.
+    Solve(commands::solve::SolveArgs),
+    /// Build or import anatomy and print every diameter, plane and landmark.
+    Measure(commands::measure::MeasureArgs),
+    /// Write anatomy surfaces (STL) and volume meshes (VTU) for inspection.
+    Mesh(commands::mesh::MeshArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match &cli.command {
+        Command::Validate(args) => commands::validate::run(args),
+        Command::Bench(cmd) => commands::bench::run(cmd),
+        Command::Solve(args) => commands::solve::run(args),
+        Command::Measure(args) => commands::measure::run(args),
+        Command::Mesh(args) => commands::mesh::run(args),
+    };
+    match result {
+        Ok(Status::Success) => ExitCode::SUCCESS,
+        Ok(Status::Failed) => ExitCode::from(1),
+        Err(error) => {
+            eprintln!("error: {error:#}");
+            ExitCode::from(1)
+        }
+    }
+}

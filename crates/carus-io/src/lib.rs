@@ -1,0 +1,1 @@
+//! Mesh input and result output.
