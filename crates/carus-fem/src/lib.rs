@@ -4,6 +4,7 @@
 //! volumes, lumped masses) is kept apart from the mutable state
 //! (displacements of the current and previous steps).
 
+pub mod baseline;
 pub mod generate;
 pub mod mesh;
 
