@@ -1,6 +1,10 @@
 //! Maternal pelvis, fetus and pelvic floor: generated from clinical diameters
 //! or imported from real meshes, in the pelvis frame of CONVENTIONS.md.
 
+pub mod axis;
+pub mod pelvis;
 pub mod surface;
 
+pub use axis::{AxisFrame, PelvicAxis, Plane};
+pub use pelvis::{Pelvis, PelvisError, PelvisLandmarks, PelvisPlanes};
 pub use surface::{SurfaceDefect, TriSurface};
