@@ -1,0 +1,294 @@
+//! Pictures without a window: the painter draws into a multisampled
+//! texture, which is resolved and read back row by row.
+
+use std::sync::mpsc;
+
+use crate::camera::Camera;
+use crate::colour::srgb_to_linear;
+use crate::error::RenderError;
+use crate::gpu::GpuContext;
+use crate::painter::{MeshPainter, DEPTH_FORMAT};
+use crate::picture::Image;
+use crate::scene::Scene;
+
+/// Colour format of offscreen pictures: 8-bit sRGB, so the bytes read back
+/// are the PNG's bytes and shading happens in linear light.
+pub const PICTURE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+
+/// Samples per pixel for anti-aliased edges.
+pub const MSAA_SAMPLES: u32 = 4;
+
+/// Draws scenes into RGBA8 pictures.
+pub struct Renderer {
+    gpu: GpuContext,
+    painter: MeshPainter,
+    sample_count: u32,
+    /// Kept between pictures of the same size.
+    target: Option<OffscreenTarget>,
+}
+
+impl Renderer {
+    /// Opens the best adapter (a real GPU, else a software one such as
+    /// lavapipe) and builds the pipelines. Fails, never panics, when no
+    /// adapter exists, with the packages that provide one in the message.
+    pub fn new_headless() -> Result<Self, RenderError> {
+        Self::with_context(GpuContext::new_headless()?)
+    }
+
+    /// Draws with a device opened elsewhere.
+    pub fn with_context(gpu: GpuContext) -> Result<Self, RenderError> {
+        // Vulkan, Metal and DX12 all multisample 8-bit sRGB and 32-bit depth
+        // 4x (WebGPU requires it); a device that cannot fails in the scope below.
+        let sample_count = MSAA_SAMPLES;
+        let painter = gpu.scoped("building the mesh pipelines", || {
+            MeshPainter::new(&gpu.device, &gpu.queue, PICTURE_FORMAT, sample_count)
+        })?;
+        Ok(Self {
+            gpu,
+            painter,
+            sample_count,
+            target: None,
+        })
+    }
+
+    /// The device, for sharing with other GPU work.
+    pub fn gpu(&self) -> &GpuContext {
+        &self.gpu
+    }
+
+    /// Draws `scene` seen by `camera` into a `width` x `height` picture.
+    pub fn render(&mut self, scene: &Scene, camera: &Camera, width: u32, height: u32) -> Result<Image, RenderError> {
+        let max = self.gpu.device.limits().max_texture_dimension_2d;
+        if width == 0 || height == 0 || width > max || height > max {
+            return Err(RenderError::InvalidSize { width, height, max });
+        }
+        scene.validate()?;
+        let meshes = self
+            .gpu
+            .scoped("uploading the meshes", || self.painter.upload_scene(&self.gpu.device, scene))??;
+        let target = match self.target.take().filter(|t| (t.width, t.height) == (width, height)) {
+            Some(target) => target,
+            None => self.gpu.scoped("creating the picture target", || {
+                OffscreenTarget::new(&self.gpu.device, width, height, self.sample_count)
+            })?,
+        };
+        let picture = self.draw(scene, camera, &meshes, &target);
+        // Kept for the next picture of the same size even after a failure.
+        self.target = Some(target);
+        picture
+    }
+
+    fn draw(
+        &self,
+        scene: &Scene,
+        camera: &Camera,
+        meshes: &[crate::painter::GpuMesh],
+        target: &OffscreenTarget,
+    ) -> Result<Image, RenderError> {
+        let (width, height) = (target.width, target.height);
+        let [r, g, b, a] = scene.background;
+        // The clear colour of an sRGB target is given in linear light.
+        let clear = wgpu::Color {
+            r: srgb_to_linear(r) as f64,
+            g: srgb_to_linear(g) as f64,
+            b: srgb_to_linear(b) as f64,
+            a: a as f64,
+        };
+        let submission = self.gpu.scoped("drawing the picture", || {
+            self.painter
+                .prepare(&self.gpu.queue, camera, &scene.lights, width as f32 / height as f32);
+            let mut encoder = self.gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("carus-render picture"),
+            });
+            {
+                let (view, resolve_target) = match &target.multisampled {
+                    Some(msaa) => (msaa, Some(&target.resolved)),
+                    None => (&target.resolved, None),
+                };
+                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("carus-render meshes"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view,
+                        depth_slice: None,
+                        resolve_target,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(clear),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: &target.depth,
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(1.0),
+                            store: wgpu::StoreOp::Discard,
+                        }),
+                        stencil_ops: None,
+                    }),
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                self.painter.paint(&mut pass, meshes, camera);
+            }
+            target.copy_to_readback(&mut encoder);
+            self.gpu.queue.submit([encoder.finish()])
+        })?;
+        self.gpu.wait(submission, "drawing the picture")?;
+        target.read_back(&self.gpu)
+    }
+}
+
+/// The textures a picture is drawn into, and the buffer it is read through.
+struct OffscreenTarget {
+    width: u32,
+    height: u32,
+    /// Multisampled colour, resolved into `resolved`; `None` with one sample.
+    multisampled: Option<wgpu::TextureView>,
+    resolved_texture: wgpu::Texture,
+    resolved: wgpu::TextureView,
+    depth: wgpu::TextureView,
+    readback: wgpu::Buffer,
+    /// Bytes per row in `readback`: rows are padded to COPY_BYTES_PER_ROW_ALIGNMENT.
+    padded_row: u32,
+}
+
+impl OffscreenTarget {
+    fn new(device: &wgpu::Device, width: u32, height: u32, sample_count: u32) -> Self {
+        let size = wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        };
+        let texture = |label, format, samples, usage| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size,
+                mip_level_count: 1,
+                sample_count: samples,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats: &[],
+            })
+        };
+        let view = |t: &wgpu::Texture| t.create_view(&wgpu::TextureViewDescriptor::default());
+        let multisampled = (sample_count > 1).then(|| {
+            view(&texture(
+                "carus-render multisampled colour",
+                PICTURE_FORMAT,
+                sample_count,
+                wgpu::TextureUsages::RENDER_ATTACHMENT,
+            ))
+        });
+        let resolved_texture = texture(
+            "carus-render picture",
+            PICTURE_FORMAT,
+            1,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        );
+        let depth = view(&texture(
+            "carus-render depth",
+            DEPTH_FORMAT,
+            sample_count,
+            wgpu::TextureUsages::RENDER_ATTACHMENT,
+        ));
+        let padded_row = padded_bytes_per_row(width);
+        let readback = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("carus-render readback"),
+            size: padded_row as u64 * height as u64,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        Self {
+            width,
+            height,
+            multisampled,
+            resolved: view(&resolved_texture),
+            resolved_texture,
+            depth,
+            readback,
+            padded_row,
+        }
+    }
+
+    fn copy_to_readback(&self, encoder: &mut wgpu::CommandEncoder) {
+        encoder.copy_texture_to_buffer(
+            self.resolved_texture.as_image_copy(),
+            wgpu::TexelCopyBufferInfo {
+                buffer: &self.readback,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(self.padded_row),
+                    rows_per_image: Some(self.height),
+                },
+            },
+            wgpu::Extent3d {
+                width: self.width,
+                height: self.height,
+                depth_or_array_layers: 1,
+            },
+        );
+    }
+
+    /// Maps the readback buffer and strips the row padding.
+    fn read_back(&self, gpu: &GpuContext) -> Result<Image, RenderError> {
+        let (sender, receiver) = mpsc::channel();
+        let slice = self.readback.slice(..);
+        slice.map_async(wgpu::MapMode::Read, move |result| {
+            // The receiver waits below; if it is gone there is no one to tell.
+            let _ = sender.send(result);
+        });
+        gpu.device
+            .poll(wgpu::PollType::Wait {
+                submission_index: None,
+                timeout: Some(crate::gpu::GPU_TIMEOUT),
+            })
+            .map_err(|e| RenderError::Gpu {
+                during: "reading the picture back",
+                message: e.to_string(),
+            })?;
+        receiver
+            .try_recv()
+            .map_err(|_| RenderError::Timeout {
+                during: "reading the picture back",
+                seconds: crate::gpu::GPU_TIMEOUT.as_secs(),
+            })?
+            .map_err(|e| RenderError::Gpu {
+                during: "reading the picture back",
+                message: e.to_string(),
+            })?;
+        let row = self.width as usize * 4;
+        let mut pixels = Vec::with_capacity(row * self.height as usize);
+        {
+            let mapped = slice.get_mapped_range().map_err(|e| RenderError::Gpu {
+                during: "reading the picture back",
+                message: e.to_string(),
+            })?;
+            for padded in mapped.chunks_exact(self.padded_row as usize) {
+                pixels.extend_from_slice(&padded[..row]);
+            }
+        }
+        self.readback.unmap();
+        Image::from_rgba(self.width, self.height, pixels)
+    }
+}
+
+/// Row length in a buffer that a texture is copied into: wgpu requires a
+/// multiple of COPY_BYTES_PER_ROW_ALIGNMENT (256 bytes).
+fn padded_bytes_per_row(width: u32) -> u32 {
+    let unpadded = width * 4;
+    unpadded.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rows_are_padded_to_256_bytes() {
+        assert_eq!(padded_bytes_per_row(64), 256);
+        assert_eq!(padded_bytes_per_row(65), 512);
+        assert_eq!(padded_bytes_per_row(1), 256);
+        assert_eq!(padded_bytes_per_row(100), 512);
+    }
+}
