@@ -138,14 +138,9 @@ impl MeshBuilder {
         self.node_sets.get(name).map(Vec::as_slice)
     }
 
-    /// The nodes of volume element `id` (file ids), if it is one.
-    pub(crate) fn volume_element_nodes(&self, id: u64) -> Option<&[u64]> {
-        // Linear search: only *SURFACE definitions ask, once per face.
-        self.hexahedra
-            .iter()
-            .find(|(e, _)| *e == id)
-            .map(|(_, n)| n.as_slice())
-            .or_else(|| self.tetrahedra.iter().find(|(e, _)| *e == id).map(|(_, n)| n.as_slice()))
+    /// Whether element `id` was skipped on purpose (a shell, a line).
+    pub(crate) fn is_ignored(&self, id: u64) -> bool {
+        self.ignored_elements.contains(&id)
     }
 
     /// Adds a triangle or a quadrilateral (split into two triangles along

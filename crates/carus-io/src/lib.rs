@@ -8,6 +8,7 @@
 
 mod builder;
 pub mod error;
+pub mod abaqus;
 pub mod gmsh;
 mod text;
 pub mod units;
