@@ -252,7 +252,10 @@ mod tests {
     fn inferior_and_superior_views_put_the_pubis_up() {
         for view in [View::Inferior, View::Superior] {
             let cam = Camera::standard(view, &unit_box());
-            assert!(cam.project(Vec3::new(0.0, 0.4, 0.0), 100, 100)[1] < 50.0, "{view:?}");
+            assert!(
+                cam.project(Vec3::new(0.0, 0.4, 0.0), 100, 100)[1] < 50.0,
+                "{view:?}"
+            );
         }
         let below = Camera::standard(View::Inferior, &unit_box());
         assert!(below.project(Vec3::new(0.4, 0.0, 0.0), 100, 100)[0] < 50.0);
@@ -267,7 +270,10 @@ mod tests {
             for (w, h) in [(100, 100), (200, 100), (100, 300)] {
                 for corner in unit_box().corners() {
                     let [x, y] = cam.project(corner, w, h);
-                    assert!((0.0..=w as f32).contains(&x) && (0.0..=h as f32).contains(&y), "{view:?}");
+                    assert!(
+                        (0.0..=w as f32).contains(&x) && (0.0..=h as f32).contains(&y),
+                        "{view:?}"
+                    );
                 }
             }
         }

@@ -123,7 +123,10 @@ mod tests {
     fn srgb_round_trip_is_identity() {
         for i in 0..=255 {
             let c = i as f32 / 255.0;
-            assert!((linear_to_srgb(srgb_to_linear(c)) - c).abs() < 1e-5, "channel {i}");
+            assert!(
+                (linear_to_srgb(srgb_to_linear(c)) - c).abs() < 1e-5,
+                "channel {i}"
+            );
         }
     }
 
@@ -137,7 +140,10 @@ mod tests {
     fn colour_maps_hit_their_end_points_and_clamp() {
         assert_eq!(ColourMap::Viridis.sample(0.0), [68, 1, 84, 255]);
         assert_eq!(ColourMap::Viridis.sample(1.0), [253, 231, 37, 255]);
-        assert_eq!(ColourMap::Viridis.sample(-3.0), ColourMap::Viridis.sample(0.0));
+        assert_eq!(
+            ColourMap::Viridis.sample(-3.0),
+            ColourMap::Viridis.sample(0.0)
+        );
         assert_eq!(ColourMap::CoolWarm.sample(0.5), [221, 221, 221, 255]);
         assert_eq!(ColourMap::CoolWarm.sample(7.0), [180, 4, 38, 255]);
     }
@@ -145,7 +151,10 @@ mod tests {
     #[test]
     fn lookup_table_has_one_row_per_map() {
         let table = ColourMap::lookup_table();
-        assert_eq!(table.len(), ColourMap::ALL.len() * ColourMap::RESOLUTION * 4);
+        assert_eq!(
+            table.len(),
+            ColourMap::ALL.len() * ColourMap::RESOLUTION * 4
+        );
         let row = ColourMap::CoolWarm.row() * ColourMap::RESOLUTION * 4;
         assert_eq!(&table[row..row + 4], &[59, 76, 192, 255]);
     }

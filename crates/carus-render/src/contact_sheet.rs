@@ -16,7 +16,7 @@ pub struct ContactSheet {
     pub tile_size: [u32; 2],
     /// Pixels of background between and around the tiles.
     pub gap: u32,
-    /// Writes each view's name in the top-left corner of its tile.
+    /// Writes each view's name in a strip above its tile.
     pub labels: bool,
 }
 
@@ -35,17 +35,30 @@ impl Default for ContactSheet {
 /// Pixels per font pixel of the labels (the font is 8 x 8).
 const LABEL_SCALE: u32 = 2;
 
+/// Height of the strip that holds a label: the text and a little air below it.
+pub const LABEL_STRIP: u32 = 8 * LABEL_SCALE + 6;
+
 impl Renderer {
     /// Renders `scene` from each view of `sheet` at one common scale
     /// (orthographic, so sizes compare across tiles) into one picture.
-    pub fn contact_sheet(&mut self, scene: &Scene, sheet: &ContactSheet) -> Result<Image, RenderError> {
+    pub fn contact_sheet(
+        &mut self,
+        scene: &Scene,
+        sheet: &ContactSheet,
+    ) -> Result<Image, RenderError> {
         let bounds = scene.bounds()?;
         let [tile_w, tile_h] = sheet.tile_size;
         let count = sheet.views.len() as u32;
         if count == 0 {
-            return Err(RenderError::InvalidCamera("a contact sheet needs at least one view".into()));
+            return Err(RenderError::InvalidCamera(
+                "a contact sheet needs at least one view".into(),
+            ));
         }
-        let mut cameras: Vec<Camera> = sheet.views.iter().map(|v| Camera::standard(*v, &bounds)).collect();
+        let mut cameras: Vec<Camera> = sheet
+            .views
+            .iter()
+            .map(|v| Camera::standard(*v, &bounds))
+            .collect();
         // One scale for every tile: each keeps the largest extent of any view.
         let common = cameras.iter().fold([0.0_f32; 2], |acc, c| {
             [acc[0].max(c.half_extent[0]), acc[1].max(c.half_extent[1])]
@@ -55,17 +68,17 @@ impl Renderer {
         }
 
         let background = srgba_to_bytes(scene.background);
+        let strip = if sheet.labels { LABEL_STRIP } else { 0 };
         let width = count * tile_w + (count + 1) * sheet.gap;
-        let height = tile_h + 2 * sheet.gap;
+        let height = tile_h + strip + 2 * sheet.gap;
         let mut picture = Image::filled(width, height, background);
         for (i, (view, camera)) in sheet.views.iter().zip(&cameras).enumerate() {
             let tile = self.render(scene, camera, tile_w, tile_h)?;
             let x = sheet.gap + i as u32 * (tile_w + sheet.gap);
-            picture.paste(&tile, x, sheet.gap);
+            picture.paste(&tile, x, sheet.gap + strip);
             if sheet.labels {
                 let ink = label_ink(scene.background);
-                let margin = sheet.gap + 4 * LABEL_SCALE;
-                draw_label(&mut picture, &view.name().to_uppercase(), x + 4 * LABEL_SCALE, margin, ink);
+                draw_label(&mut picture, &view.name().to_uppercase(), x, sheet.gap, ink);
             }
         }
         Ok(picture)
@@ -129,6 +142,8 @@ mod tests {
             .filter(|&(x, y)| picture.pixel(x, y) == Some([0, 0, 0, 255]))
             .collect();
         assert!(inked.len() > 20, "{} inked pixels", inked.len());
-        assert!(inked.iter().all(|&(x, y)| (4..4 + 32).contains(&x) && (4..4 + 16).contains(&y)));
+        assert!(inked
+            .iter()
+            .all(|&(x, y)| (4..4 + 32).contains(&x) && (4..4 + 16).contains(&y)));
     }
 }

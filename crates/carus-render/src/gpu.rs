@@ -70,9 +70,11 @@ impl GpuContext {
         })?;
         let context = Self::from_device(device, queue, adapter_info);
         let sink = Arc::clone(&context.uncaptured);
-        context.device.on_uncaptured_error(Arc::new(move |error: wgpu::Error| {
-            record(&sink, Fault::Error(error.to_string()));
-        }));
+        context
+            .device
+            .on_uncaptured_error(Arc::new(move |error: wgpu::Error| {
+                record(&sink, Fault::Error(error.to_string()));
+            }));
         let sink = Arc::clone(&context.uncaptured);
         context
             .device
@@ -86,7 +88,11 @@ impl GpuContext {
     /// solver) so pictures can be drawn with it. The caller keeps its own
     /// uncaptured-error handler; errors inside `render` are caught by error
     /// scopes either way.
-    pub fn from_device(device: wgpu::Device, queue: wgpu::Queue, adapter_info: wgpu::AdapterInfo) -> Self {
+    pub fn from_device(
+        device: wgpu::Device,
+        queue: wgpu::Queue,
+        adapter_info: wgpu::AdapterInfo,
+    ) -> Self {
         Self {
             device,
             queue,
@@ -102,7 +108,11 @@ impl GpuContext {
 
     /// Runs `work` inside validation, out-of-memory and internal error
     /// scopes and returns its value, or the first error the device reported.
-    pub(crate) fn scoped<T>(&self, during: &'static str, work: impl FnOnce() -> T) -> Result<T, RenderError> {
+    pub(crate) fn scoped<T>(
+        &self,
+        during: &'static str,
+        work: impl FnOnce() -> T,
+    ) -> Result<T, RenderError> {
         let internal = self.device.push_error_scope(wgpu::ErrorFilter::Internal);
         let memory = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
@@ -121,7 +131,11 @@ impl GpuContext {
 
     /// Fails with an error recorded outside the scopes, such as device loss.
     pub(crate) fn check_uncaptured(&self, during: &'static str) -> Result<(), RenderError> {
-        let recorded = self.uncaptured.lock().map(|mut slot| slot.take()).unwrap_or(None);
+        let recorded = self
+            .uncaptured
+            .lock()
+            .map(|mut slot| slot.take())
+            .unwrap_or(None);
         match recorded {
             Some(Fault::Lost(message)) => Err(RenderError::DeviceLost(message)),
             Some(Fault::Error(message)) => Err(RenderError::Gpu { during, message }),
@@ -130,7 +144,11 @@ impl GpuContext {
     }
 
     /// Blocks until a submission has finished, at most `GPU_TIMEOUT`.
-    pub(crate) fn wait(&self, submission: wgpu::SubmissionIndex, during: &'static str) -> Result<(), RenderError> {
+    pub(crate) fn wait(
+        &self,
+        submission: wgpu::SubmissionIndex,
+        during: &'static str,
+    ) -> Result<(), RenderError> {
         self.device
             .poll(wgpu::PollType::Wait {
                 submission_index: Some(submission),

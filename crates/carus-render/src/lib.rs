@@ -29,7 +29,7 @@ mod scene;
 
 pub use camera::{Camera, Projection, View};
 pub use colour::{linear_to_srgb, srgb_to_linear, ColourMap};
-pub use contact_sheet::ContactSheet;
+pub use contact_sheet::{ContactSheet, LABEL_STRIP};
 pub use error::RenderError;
 pub use gpu::{GpuContext, GPU_TIMEOUT};
 pub use mesh::{Bounds, RenderMesh, ScalarField};

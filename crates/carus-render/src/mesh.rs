@@ -68,7 +68,12 @@ impl RenderMesh {
     }
 
     /// Colours the mesh by a per-vertex scalar field.
-    pub fn with_scalars(mut self, values: Vec<f32>, range: [f32; 2], colour_map: ColourMap) -> Self {
+    pub fn with_scalars(
+        mut self,
+        values: Vec<f32>,
+        range: [f32; 2],
+        colour_map: ColourMap,
+    ) -> Self {
         self.scalars = Some(ScalarField {
             values,
             range,
@@ -103,10 +108,21 @@ impl RenderMesh {
                 self.indices.len()
             )));
         }
-        if let Some(v) = self.positions.iter().position(|p| p.iter().any(|c| !c.is_finite())) {
-            return Err(fail(format!("vertex {v} has a non-finite coordinate {:?}", self.positions[v])));
+        if let Some(v) = self
+            .positions
+            .iter()
+            .position(|p| p.iter().any(|c| !c.is_finite()))
+        {
+            return Err(fail(format!(
+                "vertex {v} has a non-finite coordinate {:?}",
+                self.positions[v]
+            )));
         }
-        if let Some(i) = self.indices.iter().position(|&i| i as usize >= self.positions.len()) {
+        if let Some(i) = self
+            .indices
+            .iter()
+            .position(|&i| i as usize >= self.positions.len())
+        {
             return Err(fail(format!(
                 "triangle {} refers to vertex {} but there are only {} vertices",
                 i / 3,
@@ -122,7 +138,10 @@ impl RenderMesh {
                     self.positions.len()
                 )));
             }
-            if let Some(v) = normals.iter().position(|n| n.iter().any(|c| !c.is_finite())) {
+            if let Some(v) = normals
+                .iter()
+                .position(|n| n.iter().any(|c| !c.is_finite()))
+            {
                 return Err(fail(format!("normal {v} is not finite")));
             }
         }
@@ -158,7 +177,8 @@ impl RenderMesh {
         }
         let mut sums = vec![Vec3::ZERO; self.positions.len()];
         for tri in self.indices.chunks_exact(3) {
-            let [a, b, c] = [tri[0], tri[1], tri[2]].map(|i| Vec3::from(self.positions[i as usize]));
+            let [a, b, c] =
+                [tri[0], tri[1], tri[2]].map(|i| Vec3::from(self.positions[i as usize]));
             // The cross product's length is twice the area: larger triangles weigh more.
             let n = (b - a).cross(c - a);
             for &i in tri {
@@ -261,9 +281,17 @@ mod tests {
     fn non_finite_vertex_and_wrong_scalar_count_are_refused() {
         let mut mesh = triangle();
         mesh.positions[1][2] = f32::NAN;
-        assert!(mesh.validate(0).unwrap_err().to_string().contains("vertex 1"));
+        assert!(mesh
+            .validate(0)
+            .unwrap_err()
+            .to_string()
+            .contains("vertex 1"));
         let mesh = triangle().with_scalars(vec![1.0], [0.0, 1.0], ColourMap::Viridis);
-        assert!(mesh.validate(0).unwrap_err().to_string().contains("1 scalar values for 3"));
+        assert!(mesh
+            .validate(0)
+            .unwrap_err()
+            .to_string()
+            .contains("1 scalar values for 3"));
         let mesh = triangle().with_scalars(vec![1.0; 3], [1.0, 1.0], ColourMap::Viridis);
         assert!(mesh.validate(0).is_err());
     }

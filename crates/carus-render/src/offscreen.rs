@@ -57,16 +57,26 @@ impl Renderer {
     }
 
     /// Draws `scene` seen by `camera` into a `width` x `height` picture.
-    pub fn render(&mut self, scene: &Scene, camera: &Camera, width: u32, height: u32) -> Result<Image, RenderError> {
+    pub fn render(
+        &mut self,
+        scene: &Scene,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+    ) -> Result<Image, RenderError> {
         let max = self.gpu.device.limits().max_texture_dimension_2d;
         if width == 0 || height == 0 || width > max || height > max {
             return Err(RenderError::InvalidSize { width, height, max });
         }
         scene.validate()?;
-        let meshes = self
-            .gpu
-            .scoped("uploading the meshes", || self.painter.upload_scene(&self.gpu.device, scene))??;
-        let target = match self.target.take().filter(|t| (t.width, t.height) == (width, height)) {
+        let meshes = self.gpu.scoped("uploading the meshes", || {
+            self.painter.upload_scene(&self.gpu.device, scene)
+        })??;
+        let target = match self
+            .target
+            .take()
+            .filter(|t| (t.width, t.height) == (width, height))
+        {
             Some(target) => target,
             None => self.gpu.scoped("creating the picture target", || {
                 OffscreenTarget::new(&self.gpu.device, width, height, self.sample_count)
@@ -95,11 +105,18 @@ impl Renderer {
             a: a as f64,
         };
         let submission = self.gpu.scoped("drawing the picture", || {
-            self.painter
-                .prepare(&self.gpu.queue, camera, &scene.lights, width as f32 / height as f32);
-            let mut encoder = self.gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("carus-render picture"),
-            });
+            self.painter.prepare(
+                &self.gpu.queue,
+                camera,
+                &scene.lights,
+                width as f32 / height as f32,
+            );
+            let mut encoder =
+                self.gpu
+                    .device
+                    .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                        label: Some("carus-render picture"),
+                    });
             {
                 let (view, resolve_target) = match &target.multisampled {
                     Some(msaa) => (msaa, Some(&target.resolved)),

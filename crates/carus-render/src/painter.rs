@@ -211,7 +211,12 @@ impl MeshPainter {
     }
 
     /// Uploads a mesh (checked first; `index` names it in errors).
-    pub fn upload(&self, device: &wgpu::Device, mesh: &RenderMesh, index: usize) -> Result<GpuMesh, RenderError> {
+    pub fn upload(
+        &self,
+        device: &wgpu::Device,
+        mesh: &RenderMesh,
+        index: usize,
+    ) -> Result<GpuMesh, RenderError> {
         mesh.validate(index)?;
         let vertex_buffer = |label, contents: &[u8]| {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -246,8 +251,14 @@ impl MeshPainter {
             problem: "has no vertices".into(),
         })?;
         Ok(GpuMesh {
-            positions: vertex_buffer("carus-render positions", bytemuck::cast_slice(&mesh.positions)),
-            normals: vertex_buffer("carus-render normals", bytemuck::cast_slice(&mesh.vertex_normals())),
+            positions: vertex_buffer(
+                "carus-render positions",
+                bytemuck::cast_slice(&mesh.positions),
+            ),
+            normals: vertex_buffer(
+                "carus-render normals",
+                bytemuck::cast_slice(&mesh.vertex_normals()),
+            ),
             scalars: vertex_buffer("carus-render scalars", bytemuck::cast_slice(&scalar_values)),
             indices: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("carus-render indices"),
@@ -269,7 +280,11 @@ impl MeshPainter {
     }
 
     /// Uploads every mesh of a scene.
-    pub fn upload_scene(&self, device: &wgpu::Device, scene: &Scene) -> Result<Vec<GpuMesh>, RenderError> {
+    pub fn upload_scene(
+        &self,
+        device: &wgpu::Device,
+        scene: &Scene,
+    ) -> Result<Vec<GpuMesh>, RenderError> {
         scene
             .meshes
             .iter()
@@ -281,7 +296,9 @@ impl MeshPainter {
     /// Writes the camera and lights for a target of `aspect` (width / height).
     pub fn prepare(&self, queue: &wgpu::Queue, camera: &Camera, lights: &Lights, aspect: f32) {
         let towards = |light: &crate::scene::DirectionalLight| {
-            let d = Vec3::from(light.towards_light).try_normalize().unwrap_or(Vec3::Z);
+            let d = Vec3::from(light.towards_light)
+                .try_normalize()
+                .unwrap_or(Vec3::Z);
             [d.x, d.y, d.z, light.intensity]
         };
         let frame = FrameUniform {
@@ -308,7 +325,11 @@ impl MeshPainter {
             draw(pass, mesh);
         }
         let mut transparent: Vec<&GpuMesh> = meshes.iter().filter(|m| m.transparent).collect();
-        transparent.sort_by(|a, b| camera.depth_of(b.centre).total_cmp(&camera.depth_of(a.centre)));
+        transparent.sort_by(|a, b| {
+            camera
+                .depth_of(b.centre)
+                .total_cmp(&camera.depth_of(a.centre))
+        });
         for mesh in transparent {
             pass.set_pipeline(&self.transparent_back_faces);
             draw(pass, mesh);

@@ -22,7 +22,11 @@ impl Image {
                 actual: pixels.len(),
             });
         }
-        Ok(Self { width, height, pixels })
+        Ok(Self {
+            width,
+            height,
+            pixels,
+        })
     }
 
     /// A picture of one colour.

@@ -69,7 +69,10 @@ mod tests {
     #[test]
     fn unwritable_path_is_named() {
         let picture = Image::filled(1, 1, [0; 4]);
-        let err = picture.save_png("/nonexistent-carus-dir/x.png").unwrap_err().to_string();
+        let err = picture
+            .save_png("/nonexistent-carus-dir/x.png")
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("/nonexistent-carus-dir/x.png"), "{err}");
     }
 }
