@@ -1,11 +1,26 @@
 //! Total Lagrangian Explicit Dynamics (Miller et al. 2007) for soft tissue.
 //!
-//! A constant [`TledModel`]-style model (precomputed shape derivatives,
-//! volumes, lumped masses) is kept apart from the mutable state
-//! (displacements of the current and previous steps).
+//! The constant [`TledModel`] (precomputed shape derivatives, volumes,
+//! lumped masses, hourglass vectors, gather table) is kept apart from the
+//! mutable state of a run, held by [`TledSolver`].
 
 pub mod baseline;
+pub mod error;
+pub mod fields;
 pub mod generate;
+pub mod kernel;
+pub mod loads;
+pub mod material;
 pub mod mesh;
+pub mod model;
+pub mod quality;
+pub mod solver;
 
+pub use error::FemError;
+pub use fields::{ElementFields, Energies};
+pub use loads::{BoundaryConditions, FixedDofs, ImposedDisplacement, LoadShape, NodalForce, SurfacePressure};
+pub use material::{Material, MaterialLaw, MooneyRivlin, NeoHookean};
 pub use mesh::{ElementKind, Mesh};
+pub use model::{MaterialRegion, ModelOptions, Precision, TetFormulation, TledModel};
+pub use quality::{check_quality, QualityReport};
+pub use solver::{SolverSnapshot, StepControl, TledSolver};

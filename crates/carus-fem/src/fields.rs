@@ -1,0 +1,185 @@
+//! Output quantities evaluated from a displacement state, in f64: per-element
+//! von Mises stress, maximum principal stretch and Jacobian, and the
+//! kinetic, strain and hourglass energies. Evaluated on demand (for output
+//! frames), never inside the step loop.
+
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::kernel::blocks::KernelData;
+use crate::kernel::element::{
+    add_hourglass_forces, deformation_gradient, det3, hourglass_amplitudes, right_cauchy_green, second_piola_kirchhoff,
+    strain_energy_density, Coefficients, Sym,
+};
+use crate::kernel::lanes::Real;
+
+/// Per-element fields, one value per element in mesh order.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct ElementFields {
+    /// Von Mises equivalent of the Cauchy stress, Pa.
+    pub von_mises_pa: Vec<f64>,
+    /// Largest principal stretch, sqrt of the largest eigenvalue of C.
+    pub max_principal_stretch: Vec<f64>,
+    /// J = det F.
+    pub jacobian: Vec<f64>,
+}
+
+/// Energies of the current state, J.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct Energies {
+    /// 1/2 sum m v^2 with the backward-difference velocity of the last step.
+    pub kinetic_j: f64,
+    /// Integral of W over the elements (one-point rule).
+    pub strain_j: f64,
+    /// Energy stored in the hourglass springs, 1/2 u^T K_hg u.
+    pub hourglass_j: f64,
+}
+
+/// Largest eigenvalue of a symmetric 3x3 tensor (trigonometric closed form,
+/// Smith 1961).
+pub fn largest_eigenvalue(c: &Sym<f64>) -> f64 {
+    let p1 = c.xy * c.xy + c.yz * c.yz + c.xz * c.xz;
+    let q = c.trace() / 3.0;
+    if p1 <= 1e-30 * (q * q).max(1e-300) {
+        return c.xx.max(c.yy).max(c.zz);
+    }
+    let p2 = (c.xx - q).powi(2) + (c.yy - q).powi(2) + (c.zz - q).powi(2) + 2.0 * p1;
+    let p = (p2 / 6.0).sqrt();
+    let b = Sym { xx: (c.xx - q) / p, yy: (c.yy - q) / p, zz: (c.zz - q) / p, xy: c.xy / p, yz: c.yz / p, xz: c.xz / p };
+    let r = (b.det() / 2.0).clamp(-1.0, 1.0);
+    q + 2.0 * p * (r.acos() / 3.0).cos()
+}
+
+/// Von Mises equivalent of a symmetric stress.
+pub fn von_mises(s: &Sym<f64>) -> f64 {
+    (0.5 * ((s.xx - s.yy).powi(2) + (s.yy - s.zz).powi(2) + (s.zz - s.xx).powi(2)) + 3.0 * (s.xy * s.xy + s.yz * s.yz + s.xz * s.xz)).sqrt()
+}
+
+/// Cauchy stress sigma = F S F^T / J.
+fn cauchy(f: &[[f64; 3]; 3], s: &Sym<f64>, j: f64) -> Sym<f64> {
+    let sr = s.to_rows();
+    let mut fs = [[0.0; 3]; 3];
+    for i in 0..3 {
+        for k in 0..3 {
+            fs[i][k] = (0..3).map(|m| f[i][m] * sr[m][k]).sum();
+        }
+    }
+    let e = |i: usize, k: usize| (0..3).map(|m| fs[i][m] * f[k][m]).sum::<f64>() / j;
+    Sym { xx: e(0, 0), yy: e(1, 1), zz: e(2, 2), xy: e(0, 1), yz: e(1, 2), xz: e(0, 2) }
+}
+
+struct ElementResult {
+    von_mises: f64,
+    stretch: f64,
+    jacobian: f64,
+    strain_j: f64,
+    hourglass_j: f64,
+}
+
+fn evaluate_element<T: Real, const N: usize>(k: &KernelData<T>, e: usize, u: &[T], nodal_j: Option<&[f64]>) -> ElementResult {
+    let eb = &k.elements;
+    let ue: [[f64; 3]; N] = std::array::from_fn(|a| std::array::from_fn(|c| u[3 * eb.node(e, a) + c].to_f64()));
+    let dh: [[f64; 3]; N] = std::array::from_fn(|a| std::array::from_fn(|i| eb.shape_derivative(e, a, i)));
+    let co = Coefficients { c10: eb.coefficient(e, 0), c01: eb.coefficient(e, 1), kappa: eb.coefficient(e, 2) };
+    let w = eb.element_weight(e);
+    let f = deformation_gradient(&ue, &dh);
+    let j = det3(&f);
+    let c = right_cauchy_green(&f);
+    let j_vol = nodal_j.map_or(j, |nj| (0..N).map(|a| nj[eb.node(e, a)]).sum::<f64>() / N as f64);
+    let s = second_piola_kirchhoff(&c, j, j_vol, &co);
+    let hourglass_j = if eb.hourglass.is_empty() || N != 8 {
+        0.0
+    } else {
+        let hg: [[f64; N]; 4] = std::array::from_fn(|g| std::array::from_fn(|a| eb.hourglass_vector(e, g, a)));
+        let q = hourglass_amplitudes(&ue, &hg);
+        // E_hg = 1/2 u . K_hg u = 1/2 u . f_hg.
+        let mut fhg = [[0.0; 3]; N];
+        add_hourglass_forces(&mut fhg, &q, &hg);
+        0.5 * (0..N).map(|a| (0..3).map(|c| ue[a][c] * fhg[a][c]).sum::<f64>()).sum::<f64>()
+    };
+    ElementResult {
+        von_mises: von_mises(&cauchy(&f, &s, j)),
+        stretch: largest_eigenvalue(&c).max(0.0).sqrt(),
+        jacobian: j,
+        strain_j: w * strain_energy_density(&c, j, j_vol, &co),
+        hourglass_j,
+    }
+}
+
+/// Nodal dilatation of T4ANP in f64 (the step loop's passes, unvectorised).
+fn anp_nodal_j<T: Real>(k: &KernelData<T>, u: &[T]) -> Vec<f64> {
+    let eb = &k.elements;
+    let nn = k.nodes.mass.len();
+    let shares: Vec<f64> = (0..eb.element_count)
+        .into_par_iter()
+        .map(|e| {
+            let ue: [[f64; 3]; 4] = std::array::from_fn(|a| std::array::from_fn(|c| u[3 * eb.node(e, a) + c].to_f64()));
+            let dh: [[f64; 3]; 4] = std::array::from_fn(|a| std::array::from_fn(|i| eb.shape_derivative(e, a, i)));
+            det3(&deformation_gradient(&ue, &dh)) * eb.quarter_volume[e].to_f64()
+        })
+        .collect();
+    (0..nn)
+        .map(|n| {
+            let inv = k.nodes.inv_nodal_volume[n].to_f64();
+            if inv > 0.0 {
+                k.nodes.slots_of(n).iter().map(|&s| shares[eb.slot_element(s as usize)]).sum::<f64>() * inv
+            } else {
+                1.0
+            }
+        })
+        .collect()
+}
+
+/// Fields and element energies (strain, hourglass) of displacement `u`.
+pub(crate) fn evaluate<T: Real>(k: &KernelData<T>, anp: bool, u: &[T]) -> (ElementFields, f64, f64) {
+    let nodal_j = if anp { Some(anp_nodal_j(k, u)) } else { None };
+    let nj = nodal_j.as_deref();
+    let results: Vec<ElementResult> = (0..k.elements.element_count)
+        .into_par_iter()
+        .map(|e| match k.elements.nodes_per_element {
+            8 => evaluate_element::<T, 8>(k, e, u, nj),
+            _ => evaluate_element::<T, 4>(k, e, u, nj),
+        })
+        .collect();
+    let fields = ElementFields {
+        von_mises_pa: results.iter().map(|r| r.von_mises).collect(),
+        max_principal_stretch: results.iter().map(|r| r.stretch).collect(),
+        jacobian: results.iter().map(|r| r.jacobian).collect(),
+    };
+    (fields, results.iter().map(|r| r.strain_j).sum(), results.iter().map(|r| r.hourglass_j).sum())
+}
+
+/// Kinetic energy with velocity (u - u_prev) / h.
+pub(crate) fn kinetic_energy<T: Real>(k: &KernelData<T>, u: &[T], u_prev: &[T], h: f64) -> f64 {
+    k.nodes
+        .mass
+        .iter()
+        .enumerate()
+        .map(|(n, m)| {
+            let v2: f64 = (0..3).map(|c| ((u[3 * n + c].to_f64() - u_prev[3 * n + c].to_f64()) / h).powi(2)).sum();
+            0.5 * m.to_f64() * v2
+        })
+        .sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn eigenvalue_of_diagonal_and_rotated() {
+        let d = Sym { xx: 2.0, yy: 5.0, zz: 3.0, xy: 0.0, yz: 0.0, xz: 0.0 };
+        assert_eq!(largest_eigenvalue(&d), 5.0);
+        // [[2,1,0],[1,2,0],[0,0,1]] has eigenvalues 3, 1, 1.
+        let s = Sym { xx: 2.0, yy: 2.0, zz: 1.0, xy: 1.0, yz: 0.0, xz: 0.0 };
+        assert!((largest_eigenvalue(&s) - 3.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn von_mises_of_uniaxial_and_hydrostatic() {
+        let uni = Sym { xx: 7.0, yy: 0.0, zz: 0.0, xy: 0.0, yz: 0.0, xz: 0.0 };
+        assert!((von_mises(&uni) - 7.0).abs() < 1e-12);
+        let hyd = Sym { xx: 4.0, yy: 4.0, zz: 4.0, xy: 0.0, yz: 0.0, xz: 0.0 };
+        assert!(von_mises(&hyd).abs() < 1e-12);
+    }
+}

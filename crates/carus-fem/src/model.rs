@@ -1,0 +1,465 @@
+//! The immutable TLED model: everything that does not change during a run,
+//! computed once from the mesh and materials (Miller et al. 2007, sec. 2):
+//! reference shape-function derivatives, volumes, lumped masses, hourglass
+//! vectors, the node-to-element-slot gather table and the critical time step.
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::FemError;
+use crate::kernel::blocks::{ElementBlocks, ElementInput, KernelData, NodeTable};
+use crate::kernel::lanes::Real;
+use crate::material::{Material, MaterialLaw};
+use crate::mesh::{ElementKind, Mesh};
+
+/// Tetrahedron formulation (ignored for H8 meshes).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum TetFormulation {
+    /// Linear tetrahedron, one integration point.
+    #[default]
+    T4,
+    /// Average nodal pressure tetrahedron (Joldes, Wittek & Miller 2009,
+    /// "Improved linear tetrahedral element for surgical simulation",
+    /// Med. Eng. Phys. 31:1008): the dilatation is averaged per node over
+    /// the elements sharing it, weighted by volume, and each element takes the
+    /// pressure of the mean of its nodal values. Avoids volumetric locking of
+    /// nearly incompressible tissue.
+    T4Anp,
+}
+
+/// Precision of the step-loop kernels. The public API stays f64.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Precision {
+    #[default]
+    F64,
+    /// Single precision: twice the lanes per instruction and half the memory
+    /// traffic; VALIDATION.md V2 allows 1e-4 relative error in f32.
+    F32,
+}
+
+/// Options of the model.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ModelOptions {
+    pub tet_formulation: TetFormulation,
+    /// NiftySim's HGKappa; 0 switches hourglass control off. Default 0.075
+    /// as in VALIDATION.md V3.
+    pub hourglass_coefficient: f64,
+    /// Mass-proportional damping alpha, 1/s.
+    pub damping_per_s: f64,
+    pub precision: Precision,
+}
+
+impl Default for ModelOptions {
+    fn default() -> Self {
+        ModelOptions { tet_formulation: TetFormulation::T4, hourglass_coefficient: 0.075, damping_per_s: 0.0, precision: Precision::F64 }
+    }
+}
+
+/// A material applied to an element set (None: every element). Later
+/// regions override earlier ones where they overlap.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MaterialRegion {
+    pub element_set: Option<String>,
+    pub material: Material,
+    pub density_kg_m3: f64,
+}
+
+/// The kernel data in the chosen precision.
+#[derive(Debug, Clone)]
+pub enum KernelModel {
+    F32(KernelData<f32>),
+    F64(KernelData<f64>),
+}
+
+/// The constant part of a TLED simulation.
+#[derive(Debug, Clone)]
+pub struct TledModel {
+    mesh: Mesh,
+    options: ModelOptions,
+    critical_time_step_s: f64,
+    critical_element: usize,
+    /// Diagonal of the mesh's bounding box, m (scale of the runaway check).
+    size_m: f64,
+    kernel: KernelModel,
+}
+
+/// Natural-coordinate signs of the H8 nodes (VTK order).
+pub(crate) const H8_CORNERS: [[f64; 3]; 8] = [
+    [-1.0, -1.0, -1.0],
+    [1.0, -1.0, -1.0],
+    [1.0, 1.0, -1.0],
+    [-1.0, 1.0, -1.0],
+    [-1.0, -1.0, 1.0],
+    [1.0, -1.0, 1.0],
+    [1.0, 1.0, 1.0],
+    [-1.0, 1.0, 1.0],
+];
+
+/// The four hourglass base vectors of the H8 (NiftySim's Gamma, node-major).
+const H8_GAMMA: [[f64; 4]; 8] = [
+    [1.0, 1.0, 1.0, -1.0],
+    [-1.0, 1.0, -1.0, 1.0],
+    [1.0, -1.0, -1.0, -1.0],
+    [-1.0, -1.0, 1.0, 1.0],
+    [1.0, -1.0, -1.0, 1.0],
+    [-1.0, -1.0, 1.0, -1.0],
+    [1.0, 1.0, 1.0, 1.0],
+    [-1.0, 1.0, -1.0, -1.0],
+];
+
+/// Quadrilateral faces of the H8 (VTK order).
+pub(crate) const H8_FACES: [[usize; 4]; 6] = [[0, 1, 2, 3], [4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [3, 0, 4, 7]];
+pub(crate) const T4_FACES: [[usize; 3]; 4] = [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]];
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+fn norm(a: [f64; 3]) -> f64 {
+    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
+}
+pub(crate) fn det3(m: &[[f64; 3]; 3]) -> f64 {
+    crate::kernel::element::det3(m)
+}
+fn inverse3(m: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    let d = det3(m);
+    let mut r = [[0.0; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            let (i1, i2) = ((j + 1) % 3, (j + 2) % 3);
+            let (j1, j2) = ((i + 1) % 3, (i + 2) % 3);
+            r[i][j] = (m[i1][j1] * m[i2][j2] - m[i1][j2] * m[i2][j1]) / d;
+        }
+    }
+    r
+}
+
+/// Jacobian dx_j/dxi_i of the trilinear H8 map at natural point `xi`.
+pub(crate) fn h8_jacobian(x: &[[f64; 3]; 8], xi: [f64; 3]) -> [[f64; 3]; 3] {
+    let mut jac = [[0.0; 3]; 3];
+    for (a, s) in H8_CORNERS.iter().enumerate() {
+        let f = [1.0 + s[0] * xi[0], 1.0 + s[1] * xi[1], 1.0 + s[2] * xi[2]];
+        let dn = [s[0] * f[1] * f[2] / 8.0, s[1] * f[0] * f[2] / 8.0, s[2] * f[0] * f[1] / 8.0];
+        for i in 0..3 {
+            for j in 0..3 {
+                jac[i][j] += dn[i] * x[a][j];
+            }
+        }
+    }
+    jac
+}
+
+/// Geometry of one element in the reference configuration.
+pub(crate) struct ElementGeometry {
+    pub shape_derivatives: [[f64; 3]; 8],
+    /// Integration weight of the one-point rule (8 detJ at the centre for H8).
+    pub weight: f64,
+    /// Exact volume, m^3.
+    pub volume: f64,
+    /// Characteristic length for the critical time step, m.
+    pub characteristic_length: f64,
+}
+
+/// H8 geometry; errors on inverted or degenerate elements.
+pub(crate) fn h8_geometry(e: usize, x: &[[f64; 3]; 8]) -> Result<ElementGeometry, FemError> {
+    let g = 1.0 / 3f64.sqrt();
+    let mut volume = 0.0;
+    for s in H8_CORNERS {
+        volume += det3(&h8_jacobian(x, [s[0] * g, s[1] * g, s[2] * g]));
+    }
+    let max_edge = (0..8).flat_map(|a| (0..8).map(move |b| (a, b))).map(|(a, b)| norm(sub(x[a], x[b]))).fold(0.0, f64::max);
+    if volume.abs() <= 1e-9 * max_edge.powi(3) {
+        return Err(FemError::DegenerateElement { element: e, volume_m3: volume });
+    }
+    let min_corner = H8_CORNERS.iter().map(|&s| det3(&h8_jacobian(x, s))).fold(f64::INFINITY, f64::min);
+    if volume < 0.0 || min_corner <= 0.0 {
+        return Err(FemError::InvertedElement { element: e, jacobian: min_corner.min(volume) });
+    }
+    let jac = h8_jacobian(x, [0.0; 3]);
+    let inv = inverse3(&jac);
+    let mut dh = [[0.0; 3]; 8];
+    for (a, s) in H8_CORNERS.iter().enumerate() {
+        for j in 0..3 {
+            dh[a][j] = (0..3).map(|i| s[i] / 8.0 * inv[j][i]).sum();
+        }
+    }
+    // Hallquist, LS-DYNA Theory Manual (2006), sec. 22.1: L_e = V_e / A_e,max for solids.
+    let max_face = H8_FACES
+        .iter()
+        .map(|f| 0.5 * norm(cross(sub(x[f[2]], x[f[0]]), sub(x[f[3]], x[f[1]]))))
+        .fold(0.0, f64::max);
+    Ok(ElementGeometry { shape_derivatives: dh, weight: 8.0 * det3(&jac), volume, characteristic_length: volume / max_face })
+}
+
+/// T4 geometry; errors on inverted or degenerate elements.
+pub(crate) fn t4_geometry(e: usize, x: &[[f64; 3]; 4]) -> Result<ElementGeometry, FemError> {
+    let d = [sub(x[1], x[0]), sub(x[2], x[0]), sub(x[3], x[0])];
+    let volume = det3(&d) / 6.0;
+    let max_edge = (0..4).flat_map(|a| (0..4).map(move |b| (a, b))).map(|(a, b)| norm(sub(x[a], x[b]))).fold(0.0, f64::max);
+    if volume.abs() <= 1e-9 * max_edge.powi(3) {
+        return Err(FemError::DegenerateElement { element: e, volume_m3: volume });
+    }
+    if volume < 0.0 {
+        return Err(FemError::InvertedElement { element: e, jacobian: 6.0 * volume });
+    }
+    let inv = inverse3(&d);
+    const DN: [[f64; 3]; 4] = [[-1.0, -1.0, -1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    let mut dh = [[0.0; 3]; 8];
+    for a in 0..4 {
+        for j in 0..3 {
+            dh[a][j] = (0..3).map(|i| DN[a][i] * inv[j][i]).sum();
+        }
+    }
+    // Minimum altitude 3 V / A_max (LS-DYNA Theory Manual, sec. 22.1, tetrahedra).
+    let max_face = T4_FACES.iter().map(|f| 0.5 * norm(cross(sub(x[f[1]], x[f[0]]), sub(x[f[2]], x[f[0]])))).fold(0.0, f64::max);
+    Ok(ElementGeometry { shape_derivatives: dh, weight: volume, volume, characteristic_length: 3.0 * volume / max_face })
+}
+
+/// H8 hourglass vectors scaled by sqrt(k): s_g,a = sqrt(k) gamma_a,g with
+/// gamma = Gamma - (dh/dx)(x^T Gamma), k = HGKappa V (lambda + 2 mu) sum((dh/dx)^2) / 8
+/// (Flanagan & Belytschko 1981 as in NiftySim; DESIGN.md).
+pub(crate) fn h8_hourglass(x: &[[f64; 3]; 8], g: &ElementGeometry, kappa_hg: f64, lambda: f64, mu: f64) -> [[f64; 8]; 4] {
+    let dh = &g.shape_derivatives;
+    let sum_sq: f64 = dh.iter().flatten().map(|v| v * v).sum();
+    let k = kappa_hg * g.volume * (lambda + 2.0 * mu) * sum_sq / 8.0;
+    let sk = k.max(0.0).sqrt();
+    let mut out = [[0.0; 8]; 4];
+    for m in 0..4 {
+        let xg: [f64; 3] = std::array::from_fn(|j| (0..8).map(|b| x[b][j] * H8_GAMMA[b][m]).sum());
+        for a in 0..8 {
+            let gamma = H8_GAMMA[a][m] - (0..3).map(|j| dh[a][j] * xg[j]).sum::<f64>();
+            out[m][a] = sk * gamma;
+        }
+    }
+    out
+}
+
+impl TledModel {
+    /// Precomputes the model. Fails on inverted or degenerate elements (by
+    /// index), on elements without a material, and on invalid options.
+    pub fn new(mesh: &Mesh, materials: &[MaterialRegion], options: &ModelOptions) -> Result<TledModel, FemError> {
+        let npe = mesh.kind.nodes_per_element();
+        if mesh.connectivity.len() % npe != 0 {
+            return Err(FemError::RaggedConnectivity { len: mesh.connectivity.len(), per_element: npe });
+        }
+        let ne = mesh.element_count();
+        if ne == 0 {
+            return Err(FemError::EmptyMesh);
+        }
+        if !(options.hourglass_coefficient.is_finite() && options.hourglass_coefficient >= 0.0) {
+            return Err(FemError::InvalidOption { option: "hourglass_coefficient", reason: format!("must be >= 0, got {}", options.hourglass_coefficient) });
+        }
+        if !(options.damping_per_s.is_finite() && options.damping_per_s >= 0.0) {
+            return Err(FemError::InvalidOption { option: "damping_per_s", reason: format!("must be >= 0, got {}", options.damping_per_s) });
+        }
+        if let Some(n) = mesh.nodes.iter().position(|p| !p.iter().all(|v| v.is_finite())) {
+            return Err(FemError::NonFiniteNode { node: n });
+        }
+        for (e, el) in mesh.elements().enumerate() {
+            if let Some(&node) = el.iter().find(|&&n| n as usize >= mesh.node_count()) {
+                return Err(FemError::NodeOutOfRange { element: e, node, node_count: mesh.node_count() });
+            }
+        }
+        let region_of = assign_regions(mesh, materials)?;
+        let (kernel, critical_time_step_s, critical_element) = match options.precision {
+            Precision::F64 => {
+                let (k, dt, e) = build_kernel::<f64>(mesh, materials, &region_of, options)?;
+                (KernelModel::F64(k), dt, e)
+            }
+            Precision::F32 => {
+                let (k, dt, e) = build_kernel::<f32>(mesh, materials, &region_of, options)?;
+                (KernelModel::F32(k), dt, e)
+            }
+        };
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for p in &mesh.nodes {
+            for i in 0..3 {
+                lo[i] = lo[i].min(p[i]);
+                hi[i] = hi[i].max(p[i]);
+            }
+        }
+        Ok(TledModel { mesh: mesh.clone(), options: *options, critical_time_step_s, critical_element, size_m: norm(sub(hi, lo)), kernel })
+    }
+
+    /// Critical time step of central differences: min over elements of
+    /// L_e / c_e, with c_e = sqrt((lambda + 2 mu) / rho) the dilatational wave
+    /// speed (Miller et al. 2007, eq. 14) and L_e as in the LS-DYNA Theory
+    /// Manual (V / A_max for H8, minimum altitude for T4).
+    pub fn critical_time_step(&self) -> f64 {
+        self.critical_time_step_s
+    }
+
+    /// The element that sets the critical time step.
+    pub fn critical_element(&self) -> usize {
+        self.critical_element
+    }
+
+    pub fn node_count(&self) -> usize {
+        self.mesh.node_count()
+    }
+
+    pub fn element_count(&self) -> usize {
+        self.mesh.element_count()
+    }
+
+    pub fn mesh(&self) -> &Mesh {
+        &self.mesh
+    }
+
+    pub fn options(&self) -> &ModelOptions {
+        &self.options
+    }
+
+    /// Diagonal of the reference bounding box, m.
+    pub fn size_m(&self) -> f64 {
+        self.size_m
+    }
+
+    /// The kernel arrays (for other backends and benches).
+    pub fn kernel(&self) -> &KernelModel {
+        &self.kernel
+    }
+
+    /// Whether T4ANP is active (a T4 mesh with that formulation).
+    pub fn uses_anp(&self) -> bool {
+        self.mesh.kind == ElementKind::T4 && self.options.tet_formulation == TetFormulation::T4Anp
+    }
+
+    /// Lumped mass of every node, kg.
+    pub fn node_masses_kg(&self) -> Vec<f64> {
+        match &self.kernel {
+            KernelModel::F32(k) => k.nodes.mass.iter().map(|m| m.to_f64()).collect(),
+            KernelModel::F64(k) => k.nodes.mass.clone(),
+        }
+    }
+
+    /// Bytes held by the model (mesh copy plus kernel arrays).
+    pub fn memory_bytes(&self) -> usize {
+        let mesh = self.mesh.nodes.len() * 24 + self.mesh.connectivity.len() * 4;
+        mesh + match &self.kernel {
+            KernelModel::F32(k) => k.bytes(),
+            KernelModel::F64(k) => k.bytes(),
+        }
+    }
+}
+
+/// Region index of every element (later regions win).
+fn assign_regions(mesh: &Mesh, materials: &[MaterialRegion]) -> Result<Vec<u16>, FemError> {
+    const NONE: u16 = u16::MAX;
+    let ne = mesh.element_count();
+    let mut region_of = vec![NONE; ne];
+    for (r, region) in materials.iter().enumerate() {
+        region.material.validate()?;
+        if !(region.density_kg_m3.is_finite() && region.density_kg_m3 > 0.0) {
+            return Err(FemError::InvalidMaterial { reason: format!("density must be positive, got {} kg/m^3", region.density_kg_m3) });
+        }
+        let r = u16::try_from(r).map_err(|_| FemError::InvalidMaterial { reason: "more than 65535 material regions".into() })?;
+        match &region.element_set {
+            None => region_of.fill(r),
+            Some(name) => {
+                let set = mesh.element_sets.get(name).ok_or_else(|| FemError::UnknownElementSet { set: name.clone() })?;
+                for &e in set {
+                    let slot = region_of
+                        .get_mut(e as usize)
+                        .ok_or_else(|| FemError::ElementSetOutOfRange { set: name.clone(), element: e, element_count: ne })?;
+                    *slot = r;
+                }
+            }
+        }
+    }
+    if let Some(e) = region_of.iter().position(|&r| r == NONE) {
+        return Err(FemError::MissingMaterial { element: e });
+    }
+    Ok(region_of)
+}
+
+fn build_kernel<T: Real>(
+    mesh: &Mesh,
+    materials: &[MaterialRegion],
+    region_of: &[u16],
+    options: &ModelOptions,
+) -> Result<(KernelData<T>, f64, usize), FemError> {
+    let npe = mesh.kind.nodes_per_element();
+    let ne = mesh.element_count();
+    let nn = mesh.node_count();
+    let hourglass = mesh.kind == ElementKind::H8 && options.hourglass_coefficient > 0.0;
+    let anp = mesh.kind == ElementKind::T4 && options.tet_formulation == TetFormulation::T4Anp;
+    let mut blocks = ElementBlocks::<T>::new(npe, ne, hourglass, anp);
+    let mut mass = vec![0.0f64; nn];
+    let mut nodal_volume = if anp { vec![0.0f64; nn] } else { Vec::new() };
+    let mut dt_crit = f64::INFINITY;
+    let mut dt_element = 0;
+    for (e, el) in mesh.elements().enumerate() {
+        let region = &materials[region_of[e] as usize];
+        let (lambda, mu) = region.material.lame_parameters();
+        let mut hg = None;
+        let geom = match mesh.kind {
+            ElementKind::H8 => {
+                let x: [[f64; 3]; 8] = std::array::from_fn(|a| mesh.nodes[el[a] as usize]);
+                let g = h8_geometry(e, &x)?;
+                if hourglass {
+                    hg = Some(h8_hourglass(&x, &g, options.hourglass_coefficient, lambda, mu));
+                }
+                g
+            }
+            ElementKind::T4 => {
+                let x: [[f64; 3]; 4] = std::array::from_fn(|a| mesh.nodes[el[a] as usize]);
+                t4_geometry(e, &x)?
+            }
+        };
+        let c = region.material.dilatational_wave_speed(region.density_kg_m3);
+        let dt = geom.characteristic_length / c;
+        if dt < dt_crit {
+            dt_crit = dt;
+            dt_element = e;
+        }
+        let m = region.density_kg_m3 * geom.volume / npe as f64;
+        for &n in el {
+            mass[n as usize] += m;
+            if anp {
+                nodal_volume[n as usize] += geom.volume / 4.0;
+            }
+        }
+        blocks.set(
+            e,
+            &ElementInput {
+                nodes: el,
+                shape_derivatives: &geom.shape_derivatives[..npe],
+                weight: geom.weight,
+                coefficients: region.material.kernel_coefficients(),
+                hourglass: hg.as_ref(),
+                volume: geom.volume,
+            },
+        );
+    }
+    // Node-to-slot table in increasing element order (deterministic gather).
+    let mut slot_start = vec![0u32; nn + 1];
+    for &n in &mesh.connectivity {
+        slot_start[n as usize + 1] += 1;
+    }
+    for i in 0..nn {
+        slot_start[i + 1] += slot_start[i];
+    }
+    let mut fill: Vec<u32> = slot_start[..nn].to_vec();
+    let mut slots = vec![0u32; mesh.connectivity.len()];
+    for (e, el) in mesh.elements().enumerate() {
+        for (a, &n) in el.iter().enumerate() {
+            let f = &mut fill[n as usize];
+            slots[*f as usize] = blocks.force_slot(e, a) as u32;
+            *f += 1;
+        }
+    }
+    let nodes = NodeTable {
+        inv_mass: mass.iter().map(|&m| T::from_f64(if m > 0.0 { 1.0 / m } else { 0.0 })).collect(),
+        mass: mass.iter().map(|&m| T::from_f64(m)).collect(),
+        slot_start,
+        slots,
+        inv_nodal_volume: nodal_volume.iter().map(|&v| T::from_f64(if v > 0.0 { 1.0 / v } else { 0.0 })).collect(),
+    };
+    Ok((KernelData { elements: blocks, nodes }, dt_crit, dt_element))
+}

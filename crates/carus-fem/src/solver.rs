@@ -1,0 +1,591 @@
+//! The TLED time loop: mutable state apart from the constant [`TledModel`].
+//!
+//! One (sub-)step is a fixed sequence of stages:
+//! 1. `apply_loads`      external nodal forces R(t_n) (nodal forces, follower pressure);
+//! 2. `element_forces`   per-element internal forces into force copies
+//!                       (T4ANP first averages the dilatation per node);
+//! 3. `advance_nodes`    gather per node + central difference with damping;
+//! 4. `enforce_constraints` fixed, imposed and coupled displacements at t_{n+1};
+//! 5. commit             rotate the displacement buffers, advance time.
+//!
+//! A failing stage returns before the commit, so the state stays the last
+//! good one. No stage allocates.
+
+use std::sync::Arc;
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::FemError;
+use crate::fields::{self, ElementFields, Energies};
+use crate::kernel::blocks::KernelData;
+use crate::kernel::lanes::{Real, LANES};
+use crate::kernel::passes::{self, Integrator};
+use crate::loads::{BoundaryConditions, LoadShape};
+use crate::model::{KernelModel, TledModel};
+
+/// What to do with a time step above the critical one.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum StepControl {
+    /// Refuse it with an error naming the critical step.
+    #[default]
+    Refuse,
+    /// Split every step into the fewest equal sub-steps at or below the critical step.
+    SubStep,
+}
+
+/// A complete copy of the mutable state: enough to write a frame or to
+/// resume bit for bit.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SolverSnapshot {
+    pub time_s: f64,
+    pub steps: u64,
+    pub substeps: u64,
+    pub displacements_m: Vec<[f64; 3]>,
+    pub previous_displacements_m: Vec<[f64; 3]>,
+    /// Displacements held through the coupling API, by node.
+    pub coupled: Vec<(u32, [f64; 3])>,
+}
+
+/// Boundary conditions resolved to degree-of-freedom lists.
+#[derive(Debug, Clone, Default)]
+struct CompiledLoads {
+    fixed_dofs: Vec<u32>,
+    imposed: Vec<(LoadShape, Vec<(u32, f64)>)>,
+    forces: Vec<(LoadShape, Vec<u32>, [f64; 3])>,
+    pressures: Vec<(LoadShape, f64, Vec<[u32; 3]>)>,
+    /// Nodes whose external force changes in time (zeroed every step).
+    load_nodes: Vec<u32>,
+    gravity: [f64; 3],
+}
+
+fn check_node(what: &'static str, n: u32, nn: usize) -> Result<(), FemError> {
+    if (n as usize) < nn {
+        Ok(())
+    } else {
+        Err(FemError::BoundaryNodeOutOfRange { what, node: n, node_count: nn })
+    }
+}
+
+impl CompiledLoads {
+    fn new(bc: &BoundaryConditions, nn: usize) -> Result<Self, FemError> {
+        let bad = |reason: String| FemError::InvalidBoundaryCondition { reason };
+        let mut out = CompiledLoads::default();
+        for f in &bc.fixed {
+            for &n in &f.nodes {
+                check_node("a fixed-dof set", n, nn)?;
+                for c in 0..3 {
+                    if f.components[c] {
+                        out.fixed_dofs.push(n * 3 + c as u32);
+                    }
+                }
+            }
+        }
+        for d in &bc.displacements {
+            d.shape.validate().map_err(bad)?;
+            let mut dofs = Vec::new();
+            for &n in &d.nodes {
+                check_node("an imposed displacement", n, nn)?;
+                for c in 0..3 {
+                    if let Some(v) = d.components[c] {
+                        if !v.is_finite() {
+                            return Err(bad(format!("imposed displacement of node {n} is not finite")));
+                        }
+                        dofs.push((n * 3 + c as u32, v));
+                    }
+                }
+            }
+            out.imposed.push((d.shape, dofs));
+        }
+        for f in &bc.forces {
+            f.shape.validate().map_err(bad)?;
+            if !f.force_n.iter().all(|v| v.is_finite()) {
+                return Err(bad(format!("nodal force {:?} N is not finite", f.force_n)));
+            }
+            for &n in &f.nodes {
+                check_node("a nodal force", n, nn)?;
+                out.load_nodes.push(n);
+            }
+            out.forces.push((f.shape, f.nodes.clone(), f.force_n));
+        }
+        for p in &bc.pressures {
+            p.shape.validate().map_err(bad)?;
+            if !p.pressure_pa.is_finite() {
+                return Err(bad(format!("surface pressure {} Pa is not finite", p.pressure_pa)));
+            }
+            for t in &p.triangles {
+                for &n in t {
+                    check_node("a pressure triangle", n, nn)?;
+                    out.load_nodes.push(n);
+                }
+            }
+            out.pressures.push((p.shape, p.pressure_pa, p.triangles.clone()));
+        }
+        out.load_nodes.sort_unstable();
+        out.load_nodes.dedup();
+        if let Some(g) = bc.gravity_m_s2 {
+            if !g.iter().all(|v| v.is_finite()) {
+                return Err(bad(format!("gravity {g:?} m/s^2 is not finite")));
+            }
+            out.gravity = g;
+        }
+        Ok(out)
+    }
+}
+
+/// Mutable arrays of the step loop in the kernel precision.
+#[derive(Debug, Clone)]
+struct State<T> {
+    u_prev: Vec<T>,
+    u_curr: Vec<T>,
+    u_next: Vec<T>,
+    external: Vec<T>,
+    forces: Vec<T>,
+    /// T4ANP: J_e V_e / 4 per element and J per node; empty otherwise.
+    volume_shares: Vec<T>,
+    nodal_j: Vec<T>,
+    integrator: Integrator<T>,
+}
+
+#[derive(Debug, Clone)]
+enum StateData {
+    F32(State<f32>),
+    F64(State<f64>),
+}
+
+/// Why a sub-step failed, before it is turned into a [`FemError`] with times.
+enum Failure {
+    Element(usize, f64),
+    Node(usize),
+}
+
+impl<T: Real> State<T> {
+    fn new(k: &KernelData<T>, anp: bool, h: f64, damping: f64, gravity: [f64; 3], runaway_m: f64) -> Self {
+        let nn = k.nodes.mass.len();
+        let half = 0.5 * damping * h;
+        State {
+            u_prev: vec![T::default(); 3 * nn],
+            u_curr: vec![T::default(); 3 * nn],
+            u_next: vec![T::default(); 3 * nn],
+            external: vec![T::default(); 3 * nn],
+            forces: vec![T::default(); k.elements.force_copy_len()],
+            volume_shares: if anp { vec![T::default(); k.elements.block_count * LANES] } else { Vec::new() },
+            nodal_j: if anp { vec![T::from_f64(1.0); nn] } else { Vec::new() },
+            integrator: Integrator {
+                h2: T::from_f64(h * h),
+                previous_factor: T::from_f64(1.0 - half),
+                inv_denominator: T::from_f64(1.0 / (1.0 + half)),
+                gravity: gravity.map(T::from_f64),
+                runaway_m: T::from_f64(runaway_m),
+            },
+        }
+    }
+
+    /// Stage 1: external forces at time t.
+    fn apply_loads(&mut self, loads: &CompiledLoads, reference: &[[f64; 3]], t: f64) {
+        for &n in &loads.load_nodes {
+            for c in 0..3 {
+                self.external[3 * n as usize + c] = T::default();
+            }
+        }
+        for (shape, nodes, f) in &loads.forces {
+            let s = shape.value(t);
+            for &n in nodes {
+                for c in 0..3 {
+                    self.external[3 * n as usize + c] += T::from_f64(s * f[c]);
+                }
+            }
+        }
+        for (shape, p, tris) in &loads.pressures {
+            let p = p * shape.value(t);
+            for tri in tris {
+                let x: [[f64; 3]; 3] = std::array::from_fn(|a| {
+                    let n = tri[a] as usize;
+                    std::array::from_fn(|c| reference[n][c] + self.u_curr[3 * n + c].to_f64())
+                });
+                let e1 = [x[1][0] - x[0][0], x[1][1] - x[0][1], x[1][2] - x[0][2]];
+                let e2 = [x[2][0] - x[0][0], x[2][1] - x[0][1], x[2][2] - x[0][2]];
+                // Area vector A n = (e1 x e2) / 2; each node takes -p A n / 3.
+                let an = [e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]];
+                for &n in tri {
+                    for c in 0..3 {
+                        self.external[3 * n as usize + c] += T::from_f64(-p * an[c] / 6.0);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Stage 2: internal forces of the current displacement into the force copies.
+    fn element_forces(&mut self, k: &KernelData<T>, anp: bool) -> Result<(), Failure> {
+        let nodal_j = if anp {
+            if let Some((e, j)) = passes::element_volume_shares(&k.elements, &self.u_curr, &mut self.volume_shares) {
+                return Err(Failure::Element(e, j));
+            }
+            passes::nodal_dilatation(&k.elements, &k.nodes, &self.volume_shares, &mut self.nodal_j);
+            Some(self.nodal_j.as_slice())
+        } else {
+            None
+        };
+        match passes::element_forces(&k.elements, &self.u_curr, nodal_j, &mut self.forces) {
+            Some((e, j)) => Err(Failure::Element(e, j)),
+            None => Ok(()),
+        }
+    }
+
+    /// Stage 3: gather and central-difference update into u_next.
+    fn advance_nodes(&mut self, k: &KernelData<T>) -> Result<(), Failure> {
+        match passes::advance_nodes(&k.nodes, &self.forces, &self.external, &self.integrator, &self.u_prev, &self.u_curr, &mut self.u_next) {
+            Some(n) => Err(Failure::Node(n)),
+            None => Ok(()),
+        }
+    }
+
+    /// Stage 4: displacement constraints at t_{n+1}.
+    fn enforce_constraints(&mut self, loads: &CompiledLoads, coupled: &[(u32, [f64; 3])], t_next: f64) {
+        for &d in &loads.fixed_dofs {
+            self.u_next[d as usize] = T::default();
+        }
+        for (shape, dofs) in &loads.imposed {
+            let s = shape.value(t_next);
+            for &(d, v) in dofs {
+                self.u_next[d as usize] = T::from_f64(s * v);
+            }
+        }
+        for (n, u) in coupled {
+            for c in 0..3 {
+                self.u_next[3 * *n as usize + c] = T::from_f64(u[c]);
+            }
+        }
+    }
+
+    /// Stage 5: u_{n-1} <- u_n <- u_{n+1}.
+    fn commit(&mut self) {
+        std::mem::swap(&mut self.u_prev, &mut self.u_curr);
+        std::mem::swap(&mut self.u_curr, &mut self.u_next);
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn substep(
+        &mut self,
+        k: &KernelData<T>,
+        anp: bool,
+        loads: &CompiledLoads,
+        coupled: &[(u32, [f64; 3])],
+        reference: &[[f64; 3]],
+        t: f64,
+        t_next: f64,
+    ) -> Result<(), Failure> {
+        self.apply_loads(loads, reference, t);
+        self.element_forces(k, anp)?;
+        self.advance_nodes(k)?;
+        self.enforce_constraints(loads, coupled, t_next);
+        self.commit();
+        Ok(())
+    }
+
+    fn to_vec3(v: &[T]) -> Vec<[f64; 3]> {
+        v.chunks_exact(3).map(|c| [c[0].to_f64(), c[1].to_f64(), c[2].to_f64()]).collect()
+    }
+
+    fn from_vec3(dst: &mut [T], src: &[[f64; 3]]) {
+        for (d, s) in dst.chunks_exact_mut(3).zip(src) {
+            for c in 0..3 {
+                d[c] = T::from_f64(s[c]);
+            }
+        }
+    }
+}
+
+/// Runs `$body` with `$s` bound to the state and `$k` to the kernel data of
+/// the model's precision.
+macro_rules! with_state {
+    ($self:expr, |$k:ident, $s:ident| $body:expr) => {
+        match (&mut $self.state, $self.model.kernel()) {
+            (StateData::F64($s), KernelModel::F64($k)) => $body,
+            (StateData::F32($s), KernelModel::F32($k)) => $body,
+            _ => unreachable!("state precision follows the model's"),
+        }
+    };
+}
+
+macro_rules! with_state_ref {
+    ($self:expr, |$k:ident, $s:ident| $body:expr) => {
+        match (&$self.state, $self.model.kernel()) {
+            (StateData::F64($s), KernelModel::F64($k)) => $body,
+            (StateData::F32($s), KernelModel::F32($k)) => $body,
+            _ => unreachable!("state precision follows the model's"),
+        }
+    };
+}
+
+/// A TLED run: the shared constant model plus this run's state.
+#[derive(Debug, Clone)]
+pub struct TledSolver {
+    model: Arc<TledModel>,
+    loads: CompiledLoads,
+    dt_s: f64,
+    substeps_per_step: u32,
+    h_s: f64,
+    time_s: f64,
+    steps: u64,
+    substeps: u64,
+    coupled: Vec<(u32, [f64; 3])>,
+    state: StateData,
+}
+
+impl TledSolver {
+    /// A solver at rest (zero displacement and velocity) at t = 0.
+    /// `dt_s` above the model's critical step is refused, or split into
+    /// sub-steps with [`StepControl::SubStep`].
+    pub fn new(model: Arc<TledModel>, bcs: &BoundaryConditions, dt_s: f64, control: StepControl) -> Result<Self, FemError> {
+        if !(dt_s.is_finite() && dt_s > 0.0) {
+            return Err(FemError::InvalidTimeStep { dt_s });
+        }
+        let critical = model.critical_time_step();
+        let substeps_per_step = if dt_s <= critical {
+            1
+        } else {
+            match control {
+                StepControl::Refuse => return Err(FemError::TimeStepAboveCritical { dt_s, critical_s: critical }),
+                StepControl::SubStep => {
+                    let n = (dt_s / critical).ceil();
+                    if n > u32::MAX as f64 {
+                        return Err(FemError::TimeStepAboveCritical { dt_s, critical_s: critical });
+                    }
+                    // Guard against rounding leaving dt / n a hair above critical.
+                    let mut n = n as u32;
+                    while dt_s / n as f64 > critical {
+                        n += 1;
+                    }
+                    n
+                }
+            }
+        };
+        let h = dt_s / substeps_per_step as f64;
+        let loads = CompiledLoads::new(bcs, model.node_count())?;
+        let damping = model.options().damping_per_s;
+        let anp = model.uses_anp();
+        // A displacement a hundred times the body's size is a runaway.
+        let runaway = 100.0 * model.size_m();
+        let state = match model.kernel() {
+            KernelModel::F64(k) => StateData::F64(State::new(k, anp, h, damping, loads.gravity, runaway)),
+            KernelModel::F32(k) => StateData::F32(State::new(k, anp, h, damping, loads.gravity, runaway)),
+        };
+        Ok(TledSolver { model, loads, dt_s, substeps_per_step, h_s: h, time_s: 0.0, steps: 0, substeps: 0, coupled: Vec::new(), state })
+    }
+
+    pub fn model(&self) -> &Arc<TledModel> {
+        &self.model
+    }
+
+    /// Requested step, s.
+    pub fn dt_s(&self) -> f64 {
+        self.dt_s
+    }
+
+    /// Step actually integrated (dt / substeps_per_step), s.
+    pub fn substep_s(&self) -> f64 {
+        self.h_s
+    }
+
+    pub fn substeps_per_step(&self) -> u32 {
+        self.substeps_per_step
+    }
+
+    /// Advances by one dt (all of its sub-steps). On error the state is the
+    /// last good sub-step's.
+    pub fn step(&mut self) -> Result<(), FemError> {
+        for _ in 0..self.substeps_per_step {
+            self.substep()?;
+        }
+        self.steps += 1;
+        Ok(())
+    }
+
+    fn substep(&mut self) -> Result<(), FemError> {
+        let t = self.time_s;
+        // Time from the sub-step count, so long runs accumulate no drift.
+        let t_next = (self.substeps + 1) as f64 * self.h_s;
+        let anp = self.model.uses_anp();
+        let model = Arc::clone(&self.model);
+        let reference = &model.mesh().nodes;
+        let (loads, coupled) = (&self.loads, &self.coupled);
+        let result = with_state!(self, |k, s| s.substep(k, anp, loads, coupled, reference, t, t_next));
+        match result {
+            Ok(()) => {
+                self.time_s = t_next;
+                self.substeps += 1;
+                Ok(())
+            }
+            Err(Failure::Element(element, j)) if !j.is_nan() => Err(FemError::ElementInvertedDuringRun { element, jacobian: j, time_s: t }),
+            Err(Failure::Element(element, _)) => {
+                Err(FemError::Diverged { time_s: t, last_good_time_s: t, what: format!("element {element} has a non-finite deformation") })
+            }
+            Err(Failure::Node(node)) => Err(FemError::Diverged {
+                time_s: t_next,
+                last_good_time_s: t,
+                what: format!("node {node} displacement is non-finite or beyond 100 x the model size"),
+            }),
+        }
+    }
+
+    /// Steps until the time reaches `t_s` (within half a step).
+    pub fn advance_to(&mut self, t_s: f64) -> Result<(), FemError> {
+        while self.time_s + 0.5 * self.dt_s < t_s {
+            self.step()?;
+        }
+        Ok(())
+    }
+
+    pub fn time_s(&self) -> f64 {
+        self.time_s
+    }
+
+    /// Completed steps of dt.
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+
+    /// Completed sub-steps.
+    pub fn substeps(&self) -> u64 {
+        self.substeps
+    }
+
+    /// Current displacement of every node, m.
+    pub fn displacements(&self) -> Vec<[f64; 3]> {
+        with_state_ref!(self, |_k, s| State::to_vec3(&s.u_curr))
+    }
+
+    /// Current displacement of one node, m (None if out of range).
+    pub fn displacement(&self, node: u32) -> Option<[f64; 3]> {
+        let n = node as usize;
+        if n >= self.model.node_count() {
+            return None;
+        }
+        Some(with_state_ref!(self, |_k, s| [s.u_curr[3 * n].to_f64(), s.u_curr[3 * n + 1].to_f64(), s.u_curr[3 * n + 2].to_f64()]))
+    }
+
+    /// Holds the given displacements on those nodes from the next step on,
+    /// until [`Self::release_imposed`] (replacing earlier values for the same nodes).
+    pub fn impose_displacements(&mut self, nodes: &[u32], displacements_m: &[[f64; 3]]) -> Result<(), FemError> {
+        if nodes.len() != displacements_m.len() {
+            return Err(FemError::InvalidBoundaryCondition {
+                reason: format!("{} nodes but {} displacements given to impose_displacements", nodes.len(), displacements_m.len()),
+            });
+        }
+        for (&n, d) in nodes.iter().zip(displacements_m) {
+            check_node("impose_displacements", n, self.model.node_count())?;
+            if !d.iter().all(|v| v.is_finite()) {
+                return Err(FemError::InvalidBoundaryCondition { reason: format!("imposed displacement of node {n} is not finite") });
+            }
+            match self.coupled.binary_search_by_key(&n, |&(m, _)| m) {
+                Ok(i) => self.coupled[i].1 = *d,
+                Err(i) => self.coupled.insert(i, (n, *d)),
+            }
+        }
+        Ok(())
+    }
+
+    /// Frees every node held by [`Self::impose_displacements`].
+    pub fn release_imposed(&mut self) {
+        self.coupled.clear();
+    }
+
+    /// Nodes currently held through the coupling API.
+    pub fn imposed(&self) -> &[(u32, [f64; 3])] {
+        &self.coupled
+    }
+
+    /// Recomputes the internal forces at the current displacement (the step
+    /// computes them at the start of each sub-step, i.e. one sub-step behind).
+    pub fn update_internal_forces(&mut self) -> Result<(), FemError> {
+        let anp = self.model.uses_anp();
+        let t = self.time_s;
+        let model = Arc::clone(&self.model);
+        let _ = &model;
+        match with_state!(self, |k, s| s.element_forces(k, anp)) {
+            Ok(()) => Ok(()),
+            Err(Failure::Element(element, jacobian)) => Err(FemError::ElementInvertedDuringRun { element, jacobian, time_s: t }),
+            Err(Failure::Node(_)) => unreachable!("the element pass reports elements only"),
+        }
+    }
+
+    /// Internal nodal forces F(u) at the given nodes, N: the force the
+    /// tissue exerts on whatever holds those nodes is minus this... no: this
+    /// is the force needed to hold them (reaction = F). Evaluated at the
+    /// displacement of the last force evaluation (see [`Self::update_internal_forces`]).
+    pub fn internal_forces(&self, nodes: &[u32]) -> Result<Vec<[f64; 3]>, FemError> {
+        let nn = self.model.node_count();
+        nodes.iter().try_for_each(|&n| check_node("internal_forces", n, nn))?;
+        Ok(with_state_ref!(self, |k, s| nodes
+            .iter()
+            .map(|&n| k.nodes.gather(&s.forces, n as usize).map(|v| v.to_f64()))
+            .collect()))
+    }
+
+    /// Sum of the internal forces over a node set, N (the reaction force of
+    /// supports or imposed displacements on those nodes, at rest).
+    pub fn reaction_force(&self, nodes: &[u32]) -> Result<[f64; 3], FemError> {
+        let f = self.internal_forces(nodes)?;
+        Ok(f.iter().fold([0.0; 3], |acc, v| [acc[0] + v[0], acc[1] + v[1], acc[2] + v[2]]))
+    }
+
+    /// Von Mises stress, maximum principal stretch and J per element.
+    pub fn element_fields(&self) -> ElementFields {
+        let anp = self.model.uses_anp();
+        with_state_ref!(self, |k, s| fields::evaluate(k, anp, &s.u_curr).0)
+    }
+
+    /// Kinetic, strain and hourglass energies of the current state.
+    pub fn energies(&self) -> Energies {
+        let anp = self.model.uses_anp();
+        let h = self.h_s;
+        with_state_ref!(self, |k, s| {
+            let (_, strain_j, hourglass_j) = fields::evaluate(k, anp, &s.u_curr);
+            Energies { kinetic_j: fields::kinetic_energy(k, &s.u_curr, &s.u_prev, h), strain_j, hourglass_j }
+        })
+    }
+
+    /// A copy of the whole mutable state.
+    pub fn snapshot(&self) -> SolverSnapshot {
+        let (displacements_m, previous_displacements_m) = with_state_ref!(self, |_k, s| (State::to_vec3(&s.u_curr), State::to_vec3(&s.u_prev)));
+        SolverSnapshot {
+            time_s: self.time_s,
+            steps: self.steps,
+            substeps: self.substeps,
+            displacements_m,
+            previous_displacements_m,
+            coupled: self.coupled.clone(),
+        }
+    }
+
+    /// The last good state. Failed steps never commit, so after any error
+    /// this is the state at the end of the last successful sub-step.
+    pub fn last_good_state(&self) -> SolverSnapshot {
+        self.snapshot()
+    }
+
+    /// Puts the solver back into a snapshot's state (the same model and
+    /// boundary conditions continue from there bit for bit).
+    pub fn restore(&mut self, snap: &SolverSnapshot) -> Result<(), FemError> {
+        let nn = self.model.node_count();
+        for len in [snap.displacements_m.len(), snap.previous_displacements_m.len()] {
+            if len != nn {
+                return Err(FemError::SnapshotMismatch { got: len, expected: nn });
+            }
+        }
+        for &(n, _) in &snap.coupled {
+            check_node("a snapshot's coupled displacement", n, nn)?;
+        }
+        with_state!(self, |_k, s| {
+            State::from_vec3(&mut s.u_curr, &snap.displacements_m);
+            State::from_vec3(&mut s.u_prev, &snap.previous_displacements_m);
+        });
+        self.time_s = snap.time_s;
+        self.steps = snap.steps;
+        self.substeps = snap.substeps;
+        self.coupled = snap.coupled.clone();
+        Ok(())
+    }
+}
