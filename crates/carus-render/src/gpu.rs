@@ -56,7 +56,7 @@ impl GpuContext {
             .into_iter()
             .min_by_key(|a| preference(a.get_info().device_type))
             .ok_or_else(|| RenderError::NoAdapter {
-                backends: format!("{backends:?}"),
+                backends: backend_names(backends),
             })?;
         let adapter_info = adapter.get_info();
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
@@ -169,6 +169,16 @@ impl GpuContext {
     }
 }
 
+/// "VULKAN, METAL", or a hint when the environment ruled every backend out.
+fn backend_names(backends: wgpu::Backends) -> String {
+    let names: Vec<&str> = backends.iter_names().map(|(name, _)| name).collect();
+    if names.is_empty() {
+        "none: WGPU_BACKEND names no backend built into carus-render (vulkan, metal, dx12)".into()
+    } else {
+        names.join(", ")
+    }
+}
+
 /// Keeps the first message: later ones are usually its consequences.
 fn record(sink: &Mutex<Option<Fault>>, fault: Fault) {
     if let Ok(mut slot) = sink.lock() {
@@ -192,6 +202,12 @@ mod tests {
         kinds.sort_by_key(|k| preference(*k));
         assert_eq!(kinds[0], wgpu::DeviceType::DiscreteGpu);
         assert_eq!(kinds[4], wgpu::DeviceType::Cpu);
+    }
+
+    #[test]
+    fn backends_are_named_for_people() {
+        assert_eq!(backend_names(wgpu::Backends::VULKAN), "VULKAN");
+        assert!(backend_names(wgpu::Backends::empty()).contains("WGPU_BACKEND"));
     }
 
     #[test]

@@ -102,7 +102,7 @@ impl RenderMesh {
         if self.positions.is_empty() || self.indices.is_empty() {
             return Err(fail("has no vertices or no triangles".into()));
         }
-        if self.indices.len() % 3 != 0 {
+        if !self.indices.len().is_multiple_of(3) {
             return Err(fail(format!(
                 "index count {} is not a multiple of 3 (triangles only)",
                 self.indices.len()

@@ -7,22 +7,15 @@ use crate::camera::Camera;
 use crate::colour::srgb_to_linear;
 use crate::error::RenderError;
 use crate::gpu::GpuContext;
-use crate::painter::{MeshPainter, DEPTH_FORMAT};
+use crate::painter::{MeshPainter, TargetFormat};
 use crate::picture::Image;
 use crate::scene::Scene;
-
-/// Colour format of offscreen pictures: 8-bit sRGB, so the bytes read back
-/// are the PNG's bytes and shading happens in linear light.
-pub const PICTURE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
-
-/// Samples per pixel for anti-aliased edges.
-pub const MSAA_SAMPLES: u32 = 4;
 
 /// Draws scenes into RGBA8 pictures.
 pub struct Renderer {
     gpu: GpuContext,
     painter: MeshPainter,
-    sample_count: u32,
+    format: TargetFormat,
     /// Kept between pictures of the same size.
     target: Option<OffscreenTarget>,
 }
@@ -37,16 +30,19 @@ impl Renderer {
 
     /// Draws with a device opened elsewhere.
     pub fn with_context(gpu: GpuContext) -> Result<Self, RenderError> {
-        // Vulkan, Metal and DX12 all multisample 8-bit sRGB and 32-bit depth
-        // 4x (WebGPU requires it); a device that cannot fails in the scope below.
-        let sample_count = MSAA_SAMPLES;
+        Self::with_format(gpu, TargetFormat::PICTURE)
+    }
+
+    /// `format.colour` must be an RGBA8 format: the readback keeps the byte order.
+    fn with_format(gpu: GpuContext, format: TargetFormat) -> Result<Self, RenderError> {
+        // A device that cannot multisample these formats fails in the scope.
         let painter = gpu.scoped("building the mesh pipelines", || {
-            MeshPainter::new(&gpu.device, &gpu.queue, PICTURE_FORMAT, sample_count)
+            MeshPainter::new(&gpu.device, &gpu.queue, format)
         })?;
         Ok(Self {
             gpu,
             painter,
-            sample_count,
+            format,
             target: None,
         })
     }
@@ -79,7 +75,7 @@ impl Renderer {
         {
             Some(target) => target,
             None => self.gpu.scoped("creating the picture target", || {
-                OffscreenTarget::new(&self.gpu.device, width, height, self.sample_count)
+                OffscreenTarget::new(&self.gpu.device, width, height, self.format)
             })?,
         };
         let picture = self.draw(scene, camera, &meshes, &target);
@@ -96,12 +92,20 @@ impl Renderer {
         target: &OffscreenTarget,
     ) -> Result<Image, RenderError> {
         let (width, height) = (target.width, target.height);
+        // The clear colour is written as given: in linear light for an sRGB
+        // target (which encodes it), already encoded for a plain one.
+        let encode = |c: f32| {
+            if self.format.colour.is_srgb() {
+                srgb_to_linear(c) as f64
+            } else {
+                c as f64
+            }
+        };
         let [r, g, b, a] = scene.background;
-        // The clear colour of an sRGB target is given in linear light.
         let clear = wgpu::Color {
-            r: srgb_to_linear(r) as f64,
-            g: srgb_to_linear(g) as f64,
-            b: srgb_to_linear(b) as f64,
+            r: encode(r),
+            g: encode(g),
+            b: encode(b),
             a: a as f64,
         };
         let submission = self.gpu.scoped("drawing the picture", || {
@@ -170,7 +174,7 @@ struct OffscreenTarget {
 }
 
 impl OffscreenTarget {
-    fn new(device: &wgpu::Device, width: u32, height: u32, sample_count: u32) -> Self {
+    fn new(device: &wgpu::Device, width: u32, height: u32, format: TargetFormat) -> Self {
         let size = wgpu::Extent3d {
             width,
             height,
@@ -189,24 +193,24 @@ impl OffscreenTarget {
             })
         };
         let view = |t: &wgpu::Texture| t.create_view(&wgpu::TextureViewDescriptor::default());
-        let multisampled = (sample_count > 1).then(|| {
+        let multisampled = (format.sample_count > 1).then(|| {
             view(&texture(
                 "carus-render multisampled colour",
-                PICTURE_FORMAT,
-                sample_count,
+                format.colour,
+                format.sample_count,
                 wgpu::TextureUsages::RENDER_ATTACHMENT,
             ))
         });
         let resolved_texture = texture(
             "carus-render picture",
-            PICTURE_FORMAT,
+            format.colour,
             1,
             wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
         );
         let depth = view(&texture(
             "carus-render depth",
-            DEPTH_FORMAT,
-            sample_count,
+            format.depth,
+            format.sample_count,
             wgpu::TextureUsages::RENDER_ATTACHMENT,
         ));
         let padded_row = padded_bytes_per_row(width);
@@ -300,6 +304,47 @@ fn padded_bytes_per_row(width: u32) -> u32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn plain_rgba_targets_get_the_same_bytes_as_srgb_ones() {
+        use crate::{Camera, RenderMesh, Scene, View};
+        // A triangle facing the anterior camera, drawn in its flat colour by
+        // ambient light alone, over a mid-grey background.
+        let mesh = RenderMesh::new(
+            "sheet",
+            vec![[-1.0, 0.0, -1.0], [1.0, 0.0, -1.0], [0.0, 0.0, 1.0]],
+            vec![0, 2, 1],
+            [0.2, 0.5, 0.8],
+        );
+        let mut scene = Scene::new(vec![mesh]);
+        scene.lights.key.intensity = 0.0;
+        scene.lights.fill.intensity = 0.0;
+        scene.lights.headlight = 0.0;
+        scene.lights.rim = 0.0;
+        scene.lights.ambient = 1.0;
+        scene.background = [0.5, 0.5, 0.5, 1.0];
+        let camera = Camera::standard(View::Anterior, &scene.bounds().unwrap());
+        let plain = TargetFormat {
+            colour: wgpu::TextureFormat::Rgba8Unorm,
+            ..TargetFormat::PICTURE
+        };
+        let mut pictures = [TargetFormat::PICTURE, plain].map(|format| {
+            let gpu = GpuContext::new_headless().unwrap_or_else(|e| panic!("{e}"));
+            let mut renderer = Renderer::with_format(gpu, format).unwrap();
+            renderer.render(&scene, &camera, 32, 32).unwrap()
+        });
+        let [srgb, plain] = &mut pictures;
+        for (x, y) in [(16, 16), (0, 0)] {
+            let (a, b) = (srgb.pixel(x, y).unwrap(), plain.pixel(x, y).unwrap());
+            assert!(
+                a.iter().zip(b).all(|(p, q)| p.abs_diff(q) <= 2),
+                "({x}, {y}): {a:?} vs {b:?}"
+            );
+        }
+        let near = |p: [u8; 4], q: [u8; 3]| p.iter().zip(q).all(|(a, b)| a.abs_diff(b) <= 1);
+        assert!(near(srgb.pixel(16, 16).unwrap(), [51, 128, 204]));
+        assert!(near(plain.pixel(0, 0).unwrap(), [128, 128, 128]));
+    }
 
     #[test]
     fn rows_are_padded_to_256_bytes() {

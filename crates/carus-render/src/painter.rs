@@ -11,8 +11,29 @@ use crate::error::RenderError;
 use crate::mesh::RenderMesh;
 use crate::scene::{Lights, Scene};
 
-/// Depth buffer format of every pipeline.
-pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+/// The attachments a painter draws into: its pipelines are built for them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct TargetFormat {
+    /// Colour attachment. With an sRGB format the hardware encodes the
+    /// shader's linear light; with a plain one (as egui's window surfaces
+    /// use) the shader encodes it itself.
+    pub colour: wgpu::TextureFormat,
+    /// Depth attachment.
+    pub depth: wgpu::TextureFormat,
+    /// Samples per pixel.
+    pub sample_count: u32,
+}
+
+impl TargetFormat {
+    /// Offscreen pictures: 8-bit sRGB RGBA (the PNG's bytes), 32-bit depth,
+    /// 4x multisampling, which Vulkan, Metal and DX12 all offer for these
+    /// formats (WebGPU requires it).
+    pub const PICTURE: TargetFormat = TargetFormat {
+        colour: wgpu::TextureFormat::Rgba8UnormSrgb,
+        depth: wgpu::TextureFormat::Depth32Float,
+        sample_count: 4,
+    };
+}
 
 /// Per-picture uniforms (camera and lights), laid out as `Frame` in mesh.wgsl.
 #[repr(C)]
@@ -57,14 +78,8 @@ pub struct MeshPainter {
 }
 
 impl MeshPainter {
-    /// Builds the pipelines for targets of `colour_format` (an sRGB format
-    /// gives correct shading) with `sample_count` samples and a `DEPTH_FORMAT` depth buffer.
-    pub fn new(
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        colour_format: wgpu::TextureFormat,
-        sample_count: u32,
-    ) -> Self {
+    /// Builds the pipelines for render passes with the attachments of `target`.
+    pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, target: TargetFormat) -> Self {
         let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("carus-render mesh.wgsl"),
             source: wgpu::ShaderSource::Wgsl(include_str!("shaders/mesh.wgsl").into()),
@@ -145,6 +160,14 @@ impl MeshPainter {
             ],
         });
 
+        let encode_srgb = [(
+            "encode_srgb",
+            if target.colour.is_srgb() { 0.0 } else { 1.0 },
+        )];
+        let fragment_options = wgpu::PipelineCompilationOptions {
+            constants: &encode_srgb,
+            ..Default::default()
+        };
         let pipeline = |label, cull_mode, blend, depth_write| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
@@ -162,22 +185,22 @@ impl MeshPainter {
                     ..Default::default()
                 },
                 depth_stencil: Some(wgpu::DepthStencilState {
-                    format: DEPTH_FORMAT,
+                    format: target.depth,
                     depth_write_enabled: Some(depth_write),
                     depth_compare: Some(wgpu::CompareFunction::Less),
                     stencil: wgpu::StencilState::default(),
                     bias: wgpu::DepthBiasState::default(),
                 }),
                 multisample: wgpu::MultisampleState {
-                    count: sample_count,
+                    count: target.sample_count,
                     ..Default::default()
                 },
                 fragment: Some(wgpu::FragmentState {
                     module: &shader,
                     entry_point: Some("fs_main"),
-                    compilation_options: Default::default(),
+                    compilation_options: fragment_options.clone(),
                     targets: &[Some(wgpu::ColorTargetState {
-                        format: colour_format,
+                        format: target.colour,
                         blend: Some(blend),
                         write_mask: wgpu::ColorWrites::ALL,
                     })],

@@ -1,6 +1,10 @@
 // Lit triangle meshes: Lambert key + fill + headlight, ambient and a rim
 // term, in linear light (the sRGB target encodes the result).
 
+// True when the colour target is not an sRGB format, so the hardware will
+// not encode linear light: the shader does it (egui's window surfaces).
+override encode_srgb: bool = false;
+
 struct Frame {
     view_proj: mat4x4<f32>,
     view: mat4x4<f32>,
@@ -72,5 +76,14 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) ve
         + frame.shading.x * facing;
     let rim = frame.shading.z * pow(1.0 - facing, 3.0);
     let lit = base * diffuse + rim * mix(base, vec3<f32>(1.0), 0.5);
+    if (encode_srgb) {
+        return vec4<f32>(linear_to_srgb(lit), material.colour.a);
+    }
     return vec4<f32>(lit, material.colour.a);
+}
+
+// IEC 61966-2-1, as colour.rs.
+fn linear_to_srgb(c: vec3<f32>) -> vec3<f32> {
+    let x = clamp(c, vec3<f32>(0.0), vec3<f32>(1.0));
+    return select(1.055 * pow(x, vec3<f32>(1.0 / 2.4)) - 0.055, x * 12.92, x <= vec3<f32>(0.0031308));
 }

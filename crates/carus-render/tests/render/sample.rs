@@ -110,6 +110,11 @@ fn sample_scene_from_the_standard_views() {
             256,
         )
         .unwrap();
+    let adapter = &renderer.gpu().adapter_info;
+    eprintln!(
+        "sample drawn on {} ({:?}, {:?})",
+        adapter.name, adapter.backend, adapter.device_type
+    );
     let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"));
     sheet
         .save_png(dir.join("carus-render-sample-sheet.png"))
