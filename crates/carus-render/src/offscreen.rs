@@ -306,7 +306,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn plain_rgba_targets_get_the_same_bytes_as_srgb_ones() {
+    fn plain_and_single_sample_targets_get_the_same_bytes() {
         use crate::{Camera, RenderMesh, Scene, View};
         // A triangle facing the anterior camera, drawn in its flat colour by
         // ambient light alone, over a mid-grey background.
@@ -328,18 +328,24 @@ mod tests {
             colour: wgpu::TextureFormat::Rgba8Unorm,
             ..TargetFormat::PICTURE
         };
-        let mut pictures = [TargetFormat::PICTURE, plain].map(|format| {
+        let single_sample = TargetFormat {
+            sample_count: 1,
+            ..TargetFormat::PICTURE
+        };
+        let pictures = [TargetFormat::PICTURE, plain, single_sample].map(|format| {
             let gpu = GpuContext::new_headless().unwrap_or_else(|e| panic!("{e}"));
             let mut renderer = Renderer::with_format(gpu, format).unwrap();
             renderer.render(&scene, &camera, 32, 32).unwrap()
         });
-        let [srgb, plain] = &mut pictures;
-        for (x, y) in [(16, 16), (0, 0)] {
-            let (a, b) = (srgb.pixel(x, y).unwrap(), plain.pixel(x, y).unwrap());
-            assert!(
-                a.iter().zip(b).all(|(p, q)| p.abs_diff(q) <= 2),
-                "({x}, {y}): {a:?} vs {b:?}"
-            );
+        let [srgb, plain, single] = &pictures;
+        for other in [plain, single] {
+            for (x, y) in [(16, 16), (0, 0)] {
+                let (a, b) = (srgb.pixel(x, y).unwrap(), other.pixel(x, y).unwrap());
+                assert!(
+                    a.iter().zip(b).all(|(p, q)| p.abs_diff(q) <= 2),
+                    "({x}, {y}): {a:?} vs {b:?}"
+                );
+            }
         }
         let near = |p: [u8; 4], q: [u8; 3]| p.iter().zip(q).all(|(a, b)| a.abs_diff(b) <= 1);
         assert!(near(srgb.pixel(16, 16).unwrap(), [51, 128, 204]));

@@ -34,14 +34,14 @@ impl Default for Lights {
         Self {
             key: DirectionalLight {
                 towards_light: [-0.5, 0.6, 0.65],
-                intensity: 0.75,
+                intensity: 0.8,
             },
             fill: DirectionalLight {
                 towards_light: [0.7, -0.2, 0.5],
-                intensity: 0.25,
+                intensity: 0.2,
             },
-            headlight: 0.15,
-            ambient: 0.1,
+            headlight: 0.1,
+            ambient: 0.08,
             rim: 0.25,
         }
     }
