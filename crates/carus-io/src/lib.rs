@@ -12,6 +12,8 @@ pub mod abaqus;
 pub mod gmsh;
 mod text;
 pub mod units;
+pub mod vtk;
+mod vtu_raw;
 
 pub use builder::MeshFile;
 pub use error::{ReadError, WriteError};

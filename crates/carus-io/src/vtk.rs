@@ -1,0 +1,632 @@
+//! VTK input (legacy `.vtk` unstructured grid, XML `.vtu` in ascii, binary
+//! or appended encoding) and VTU frame output, through vtkio (pinned
+//! `=0.7.0-rc2`, DESIGN.md).
+//!
+//! Sets in VTK files: VTK has no named sets, so a one-component integer
+//! cell-data array `A` turns value `v >= 0` into the element set (volume
+//! cells) or surface (triangle and quad cells) `A_v`, and a one-component
+//! integer point-data array `A` makes the node set `A` of the points where
+//! it is not zero. Node and element ids in messages are 0-based VTK point
+//! and cell indices.
+
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::Path;
+
+use carus_fem::{ElementKind, Mesh};
+use vtkio::model::{
+    Attribute, Attributes, ByteOrder, CellType, Cells, DataArray, DataSet, ElementType, IOBuffer, Piece, ScalarType,
+    UnstructuredGridPiece, Version, VertexNumbers, Vtk,
+};
+use vtkio::xml::Compressor;
+
+use crate::builder::{MeshBuilder, MeshFile};
+use crate::error::{ReadError, WriteError};
+use crate::vtu_raw::raw_appended_to_base64;
+
+/// Reads a legacy `.vtk` or XML `.vtu` unstructured grid.
+pub fn read_vtk(path: &Path) -> Result<MeshFile, ReadError> {
+    let piece = load_unstructured(path)?;
+    mesh_from_piece(path, &piece)
+}
+
+/// A data array read back from a VTK file, as `f64`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct VtkArray {
+    /// Components per point or cell (3 for a vector).
+    pub components: usize,
+    /// `components` values per point or cell.
+    pub values: Vec<f64>,
+}
+
+/// The point and cell data arrays of a VTK file by name (for reading
+/// results back, and for tests).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct VtkArrays {
+    pub point: BTreeMap<String, VtkArray>,
+    pub cell: BTreeMap<String, VtkArray>,
+}
+
+/// Reads every point and cell data array of a `.vtk` or `.vtu` file.
+pub fn read_vtk_arrays(path: &Path) -> Result<VtkArrays, ReadError> {
+    let piece = load_unstructured(path)?;
+    Ok(VtkArrays {
+        point: arrays(&piece.data.point),
+        cell: arrays(&piece.data.cell),
+    })
+}
+
+fn content_error(path: &Path, problem: impl Into<String>, fix: &str) -> ReadError {
+    ReadError::Content {
+        path: path.to_path_buf(),
+        problem: problem.into(),
+        fix: fix.to_string(),
+    }
+}
+
+const RESAVE_FIX: &str = "open it in ParaView and save it again as an unstructured grid (.vtu), or check the file is complete";
+
+fn load_unstructured(path: &Path) -> Result<UnstructuredGridPiece, ReadError> {
+    let bytes = std::fs::read(path).map_err(|source| ReadError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let extension = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .unwrap_or_default();
+    let bytes = match extension.as_str() {
+        "vtk" => bytes,
+        "vtu" => raw_appended_to_base64(&bytes)
+            .map_err(|problem| content_error(path, problem, RESAVE_FIX))?
+            .into_owned(),
+        _ => {
+            return Err(ReadError::UnknownFormat {
+                path: path.to_path_buf(),
+                extension,
+            })
+        }
+    };
+    // vtkio 0.7.0-rc2 still slices and unwraps on some malformed input;
+    // a panic there becomes this file's error instead of ending the program.
+    let parsed = std::panic::catch_unwind(|| {
+        if extension == "vtk" {
+            Vtk::parse_legacy_be(&bytes[..])
+        } else {
+            Vtk::parse_xml(&bytes[..])
+        }
+    });
+    let vtk = match parsed {
+        Ok(Ok(vtk)) => vtk,
+        Ok(Err(e)) => return Err(content_error(path, format!("not a readable VTK file ({e})"), RESAVE_FIX)),
+        Err(_) => return Err(content_error(path, "not a readable VTK file (malformed data arrays)", RESAVE_FIX)),
+    };
+    let DataSet::UnstructuredGrid { pieces, .. } = vtk.data else {
+        return Err(content_error(
+            path,
+            format!("the data set is a {}, not an unstructured grid", data_set_name(&vtk.data)),
+            "convert it to an unstructured grid (ParaView: Append Datasets, then save as .vtu)",
+        ));
+    };
+    let piece_count = pieces.len();
+    match pieces.into_iter().next() {
+        Some(Piece::Inline(piece)) if piece_count == 1 => Ok(*piece),
+        Some(Piece::Inline(_)) => Err(content_error(
+            path,
+            format!("the grid has {piece_count} pieces"),
+            "merge them into one (ParaView: Merge Blocks) and save again",
+        )),
+        _ => Err(content_error(
+            path,
+            "the grid's data lives in other files (a parallel or empty data set)",
+            "save it as one serial .vtu file (ParaView: Merge Blocks, then Save Data)",
+        )),
+    }
+}
+
+fn data_set_name(data: &DataSet) -> &'static str {
+    match data {
+        DataSet::ImageData { .. } => "image data",
+        DataSet::StructuredGrid { .. } => "structured grid",
+        DataSet::RectilinearGrid { .. } => "rectilinear grid",
+        DataSet::UnstructuredGrid { .. } => "unstructured grid",
+        DataSet::PolyData { .. } => "poly data (a surface)",
+        DataSet::Field { .. } => "field",
+    }
+}
+
+fn arrays(attributes: &[Attribute]) -> BTreeMap<String, VtkArray> {
+    let mut out = BTreeMap::new();
+    for attribute in attributes {
+        match attribute {
+            Attribute::DataArray(array) => {
+                if let Some(values) = array.data.cast_into::<f64>() {
+                    let components = array.elem.num_comp().max(1) as usize;
+                    out.insert(array.name.clone(), VtkArray { components, values });
+                }
+            }
+            Attribute::Field { data_array, .. } => {
+                for array in data_array {
+                    if let Some(values) = array.data.cast_into::<f64>() {
+                        let components = array.elem.max(1) as usize;
+                        out.insert(array.name.clone(), VtkArray { components, values });
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+/// One-component integer arrays (the ones that can name sets).
+fn integer_arrays(attributes: &[Attribute]) -> Vec<(String, Vec<i64>)> {
+    let is_integer = |t: ScalarType| {
+        matches!(
+            t,
+            ScalarType::U8
+                | ScalarType::I8
+                | ScalarType::U16
+                | ScalarType::I16
+                | ScalarType::U32
+                | ScalarType::I32
+                | ScalarType::U64
+                | ScalarType::I64
+        )
+    };
+    let mut out = Vec::new();
+    let mut take = |name: &str, components: u32, data: &IOBuffer| {
+        if components == 1 && is_integer(data.scalar_type()) {
+            if let Some(values) = data.cast_into::<i64>() {
+                out.push((name.to_string(), values));
+            }
+        }
+    };
+    for attribute in attributes {
+        match attribute {
+            Attribute::DataArray(array) => take(&array.name, array.elem.num_comp(), &array.data),
+            Attribute::Field { data_array, .. } => {
+                for array in data_array {
+                    take(&array.name, array.elem, &array.data);
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Each cell's point indices, checked against the cell count.
+fn cell_points(path: &Path, cells: &Cells) -> Result<Vec<Vec<u64>>, ReadError> {
+    let count = cells.types.len();
+    let mut out = Vec::with_capacity(count);
+    match &cells.cell_verts {
+        VertexNumbers::Legacy { vertices, .. } => {
+            let mut i = 0;
+            while i < vertices.len() {
+                let n = vertices[i] as usize;
+                let Some(points) = vertices.get(i + 1..i + 1 + n) else {
+                    return Err(content_error(
+                        path,
+                        format!("cell {} lists more points than the CELLS section holds", out.len()),
+                        RESAVE_FIX,
+                    ));
+                };
+                out.push(points.iter().map(|&p| p as u64).collect());
+                i += 1 + n;
+            }
+        }
+        VertexNumbers::XML { connectivity, offsets } => {
+            // Offsets end each cell; some writers add a leading zero.
+            let offsets = if offsets.len() == count + 1 && offsets.first() == Some(&0) {
+                &offsets[1..]
+            } else {
+                &offsets[..]
+            };
+            let mut start = 0usize;
+            for &end in offsets {
+                let end = end as usize;
+                let Some(points) = connectivity.get(start..end) else {
+                    return Err(content_error(
+                        path,
+                        format!("cell {} has offset {end}, outside the connectivity array", out.len()),
+                        RESAVE_FIX,
+                    ));
+                };
+                out.push(points.to_vec());
+                start = end;
+            }
+        }
+    }
+    if out.len() != count {
+        return Err(content_error(
+            path,
+            format!("{} cells have point lists but {count} have types", out.len()),
+            RESAVE_FIX,
+        ));
+    }
+    Ok(out)
+}
+
+fn mesh_from_piece(path: &Path, piece: &UnstructuredGridPiece) -> Result<MeshFile, ReadError> {
+    let Some(points) = piece.points.cast_into::<f64>().filter(|p| p.len() % 3 == 0) else {
+        return Err(content_error(path, "the points are not x, y, z numbers", RESAVE_FIX));
+    };
+    let mut builder = MeshBuilder::new(path);
+    for (i, p) in points.chunks_exact(3).enumerate() {
+        builder
+            .add_node(i as u64, [p[0], p[1], p[2]])
+            .map_err(|problem| content_error(path, problem, "fix the point's coordinates"))?;
+    }
+    let cells = cell_points(path, &piece.cells)?;
+    let point_count = (points.len() / 3) as u64;
+    let mut is_surface = vec![false; cells.len()];
+    let mut is_volume = vec![false; cells.len()];
+    for (c, (cell_type, nodes)) in piece.cells.types.iter().zip(&cells).enumerate() {
+        if let Some(&p) = nodes.iter().find(|&&p| p >= point_count) {
+            return Err(content_error(
+                path,
+                format!("cell {c} names point {p}, but the file has {point_count} points"),
+                RESAVE_FIX,
+            ));
+        }
+        let expected = match cell_type {
+            CellType::Hexahedron | CellType::Voxel => 8,
+            CellType::Tetra | CellType::Quad | CellType::Pixel => 4,
+            CellType::Triangle => 3,
+            CellType::Vertex | CellType::PolyVertex | CellType::Line | CellType::PolyLine => {
+                builder.note(format!("skipped {cell_type:?} cells (only volumes and surfaces are read)"));
+                continue;
+            }
+            other => {
+                return Err(content_error(
+                    path,
+                    format!("cell {c} is a {other:?}, which Carus does not solve"),
+                    "mesh with first-order hexahedra or tetrahedra only",
+                ))
+            }
+        };
+        if nodes.len() != expected {
+            return Err(content_error(
+                path,
+                format!("cell {c} ({cell_type:?}) has {} points instead of {expected}", nodes.len()),
+                RESAVE_FIX,
+            ));
+        }
+        let id = c as u64;
+        match cell_type {
+            CellType::Hexahedron => {
+                is_volume[c] = true;
+                builder.add_hexahedron(id, std::array::from_fn(|i| nodes[i]))
+            }
+            // A voxel numbers its top and bottom faces in x-y raster order.
+            CellType::Voxel => {
+                is_volume[c] = true;
+                builder.add_hexahedron(id, [0, 1, 3, 2, 4, 5, 7, 6].map(|i| nodes[i]))
+            }
+            CellType::Tetra => {
+                is_volume[c] = true;
+                builder.add_tetrahedron(id, std::array::from_fn(|i| nodes[i]))
+            }
+            _ => {
+                is_surface[c] = true;
+                builder.ignore_element(id);
+            }
+        }
+    }
+    for (name, values) in integer_arrays(&piece.data.cell) {
+        if values.len() != cells.len() {
+            continue;
+        }
+        for (c, &value) in values.iter().enumerate() {
+            if value < 0 {
+                continue;
+            }
+            let set = format!("{name}_{value}");
+            if is_volume[c] {
+                builder.add_to_element_set(&set, c as u64);
+            } else if is_surface[c] {
+                let nodes = &cells[c];
+                let polygon: Vec<u64> = if piece.cells.types[c] == CellType::Pixel {
+                    [0, 1, 3, 2].map(|i| nodes[i]).to_vec()
+                } else {
+                    nodes.clone()
+                };
+                builder.add_surface_polygon(&set, &polygon);
+            }
+        }
+    }
+    for (name, values) in integer_arrays(&piece.data.point) {
+        if values.len() as u64 != point_count {
+            continue;
+        }
+        for (p, &value) in values.iter().enumerate() {
+            if value != 0 {
+                builder.add_to_node_set(&name, p as u64);
+            }
+        }
+    }
+    builder.finish()
+}
+
+/// The fields of one output frame: per node and per element.
+#[derive(Debug, Clone, Copy)]
+pub struct FrameFields<'a> {
+    /// Nodal displacement from the reference configuration, metres.
+    pub displacement_m: &'a [[f64; 3]],
+    /// Von Mises equivalent Cauchy stress per element, Pa.
+    pub von_mises_pa: &'a [f64],
+    /// Largest principal stretch per element.
+    pub max_principal_stretch: &'a [f64],
+    /// Volume ratio J = det F per element.
+    pub jacobian: &'a [f64],
+}
+
+/// Writes one frame as a `.vtu` (binary, base64 inline): the reference
+/// points with point data `displacement` (so ParaView's Warp By Vector
+/// shows the deformed shape) and cell data `von_mises_pa`,
+/// `max_principal_stretch`, `jacobian`, and, when the mesh has element
+/// sets, `element_set` (index into the set names in sorted order, -1 for
+/// none; the first set in that order where sets overlap).
+pub fn write_vtu(path: &Path, mesh: &Mesh, frame: &FrameFields) -> Result<(), WriteError> {
+    let shape_error = |problem: String| WriteError::Shape {
+        path: path.to_path_buf(),
+        problem,
+    };
+    let elements = mesh.element_count();
+    if frame.displacement_m.len() != mesh.node_count() {
+        return Err(shape_error(format!(
+            "{} displacements for {} nodes",
+            frame.displacement_m.len(),
+            mesh.node_count()
+        )));
+    }
+    for (name, values) in [
+        ("von_mises_pa", frame.von_mises_pa),
+        ("max_principal_stretch", frame.max_principal_stretch),
+        ("jacobian", frame.jacobian),
+    ] {
+        if values.len() != elements {
+            return Err(shape_error(format!("{} values of {name} for {elements} elements", values.len())));
+        }
+    }
+    let per_element = mesh.kind.nodes_per_element();
+    let cell_type = match mesh.kind {
+        ElementKind::H8 => CellType::Hexahedron,
+        ElementKind::T4 => CellType::Tetra,
+    };
+    let points: Vec<f64> = mesh.nodes.iter().flatten().copied().collect();
+    let displacement: Vec<f64> = frame.displacement_m.iter().flatten().copied().collect();
+    let scalar = |name: &str, values: Vec<f64>| {
+        Attribute::DataArray(DataArray {
+            name: name.to_string(),
+            elem: ElementType::Scalars {
+                num_comp: 1,
+                lookup_table: None,
+            },
+            data: IOBuffer::F64(values),
+        })
+    };
+    let mut cell_data = vec![
+        scalar("von_mises_pa", frame.von_mises_pa.to_vec()),
+        scalar("max_principal_stretch", frame.max_principal_stretch.to_vec()),
+        scalar("jacobian", frame.jacobian.to_vec()),
+    ];
+    if !mesh.element_sets.is_empty() {
+        let mut set_index = vec![-1i32; elements];
+        for (index, members) in mesh.element_sets.values().enumerate() {
+            for &e in members {
+                if let Some(slot) = set_index.get_mut(e as usize).filter(|s| **s < 0) {
+                    *slot = index as i32;
+                }
+            }
+        }
+        cell_data.push(Attribute::DataArray(DataArray {
+            name: "element_set".into(),
+            elem: ElementType::Scalars {
+                num_comp: 1,
+                lookup_table: None,
+            },
+            data: IOBuffer::I32(set_index),
+        }));
+    }
+    let vtk = Vtk {
+        version: Version::new_xml(1, 0),
+        title: String::new(),
+        byte_order: ByteOrder::LittleEndian,
+        file_path: None,
+        data: DataSet::inline(UnstructuredGridPiece {
+            points: IOBuffer::F64(points),
+            cells: Cells {
+                cell_verts: VertexNumbers::XML {
+                    connectivity: mesh.connectivity.iter().map(|&n| n as u64).collect(),
+                    offsets: (1..=elements).map(|e| (e * per_element) as u64).collect(),
+                },
+                types: vec![cell_type; elements],
+            },
+            data: Attributes {
+                point: vec![Attribute::DataArray(DataArray {
+                    name: "displacement".into(),
+                    elem: ElementType::Vectors,
+                    data: IOBuffer::F64(displacement),
+                })],
+                cell: cell_data,
+            },
+        }),
+    };
+    let vtk_error = |e: vtkio::Error| WriteError::Vtk {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    };
+    let xml = vtk
+        .try_into_xml_format(Compressor::None, 0)
+        .map_err(|e| vtk_error(e.into()))?;
+    let mut bytes = Vec::new();
+    xml.write(&mut bytes).map_err(|e| vtk_error(e.into()))?;
+    let io_error = |source| WriteError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut file = std::fs::File::create(path).map_err(io_error)?;
+    file.write_all(&bytes).map_err(io_error)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn temp(name: &str) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("carus-io-vtk-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        dir.join(name)
+    }
+
+    const ASCII_VTU: &str = include_str!("../tests/data/tet_ascii.vtu");
+    const LEGACY_VTK: &str = include_str!("../tests/data/tet_surface.vtk");
+
+    #[test]
+    fn reads_an_ascii_vtu_with_sets() {
+        let path = temp("tet_ascii.vtu");
+        std::fs::write(&path, ASCII_VTU).unwrap();
+        let file = read_vtk(&path).unwrap();
+        assert_eq!(file.mesh.kind, ElementKind::T4);
+        assert_eq!(file.mesh.element_count(), 1);
+        assert_eq!(file.mesh.element_sets["region_3"], vec![0]);
+        assert_eq!(file.mesh.surfaces["region_5"].len(), 1);
+        assert_eq!(file.mesh.node_sets["fixed"], vec![0, 1]);
+    }
+
+    #[test]
+    fn reads_a_legacy_vtk_and_skips_lines() {
+        let path = temp("tet_surface.vtk");
+        std::fs::write(&path, LEGACY_VTK).unwrap();
+        let file = read_vtk(&path).unwrap();
+        assert_eq!(file.mesh.kind, ElementKind::T4);
+        assert_eq!(file.mesh.connectivity, vec![0, 1, 2, 3]);
+        assert_eq!(file.mesh.surfaces["tag_1"], vec![[0, 2, 1]]);
+        assert!(file.notes.iter().any(|n| n.contains("Line")), "{:?}", file.notes);
+    }
+
+    #[test]
+    fn reads_an_appended_raw_vtu() {
+        // Built byte by byte: UInt32 size headers, then raw little-endian data.
+        let points: [f64; 12] = [0., 0., 0., 1., 0., 0., 0., 1., 0., 0., 0., 1.];
+        let blocks: Vec<Vec<u8>> = vec![
+            points.iter().flat_map(|v| v.to_le_bytes()).collect(),
+            [0i64, 1, 2, 3].iter().flat_map(|v| v.to_le_bytes()).collect(),
+            4i64.to_le_bytes().to_vec(),
+            vec![10u8],
+        ];
+        let mut offsets = Vec::new();
+        let mut appended = Vec::new();
+        for block in &blocks {
+            offsets.push(appended.len());
+            appended.extend_from_slice(&(block.len() as u32).to_le_bytes());
+            appended.extend_from_slice(block);
+        }
+        let header = format!(
+            r#"<?xml version="1.0"?>
+<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian" header_type="UInt32">
+<UnstructuredGrid><Piece NumberOfPoints="4" NumberOfCells="1">
+<Points><DataArray type="Float64" NumberOfComponents="3" format="appended" offset="{}"/></Points>
+<Cells>
+<DataArray type="Int64" Name="connectivity" format="appended" offset="{}"/>
+<DataArray type="Int64" Name="offsets" format="appended" offset="{}"/>
+<DataArray type="UInt8" Name="types" format="appended" offset="{}"/>
+</Cells></Piece></UnstructuredGrid>
+<AppendedData encoding="raw">
+_"#,
+            offsets[0], offsets[1], offsets[2], offsets[3]
+        );
+        let mut bytes = header.into_bytes();
+        bytes.extend_from_slice(&appended);
+        bytes.extend_from_slice(b"\n</AppendedData>\n</VTKFile>\n");
+        let path = temp("appended.vtu");
+        std::fs::write(&path, &bytes).unwrap();
+        let file = read_vtk(&path).unwrap();
+        assert_eq!(file.mesh.kind, ElementKind::T4);
+        assert_eq!(file.mesh.nodes[3], [0.0, 0.0, 1.0]);
+    }
+
+    #[test]
+    fn frames_round_trip_through_the_reader() {
+        let mut mesh = carus_fem::generate::box_h8([0.1, 0.1, 0.1], [2, 2, 2]);
+        mesh.element_sets.insert("tissue".into(), (0..8).collect());
+        let displacement: Vec<[f64; 3]> = mesh.nodes.iter().map(|p| [0.3 * p[0], -1e-7, p[2] * p[1]]).collect();
+        let von_mises: Vec<f64> = (0..8).map(|e| 1000.0 + e as f64 / 3.0).collect();
+        let stretch: Vec<f64> = (0..8).map(|e| 1.0 + e as f64 * 1e-3).collect();
+        let jacobian = vec![0.999; 8];
+        let frame = FrameFields {
+            displacement_m: &displacement,
+            von_mises_pa: &von_mises,
+            max_principal_stretch: &stretch,
+            jacobian: &jacobian,
+        };
+        let path = temp("frame.vtu");
+        write_vtu(&path, &mesh, &frame).unwrap();
+        let back = read_vtk(&path).unwrap().mesh;
+        assert_eq!(back.nodes, mesh.nodes);
+        assert_eq!(back.connectivity, mesh.connectivity);
+        assert_eq!(back.element_sets["element_set_0"], mesh.element_sets["tissue"]);
+        let arrays = read_vtk_arrays(&path).unwrap();
+        let d = &arrays.point["displacement"];
+        assert_eq!(d.components, 3);
+        assert_eq!(d.values, displacement.iter().flatten().copied().collect::<Vec<_>>());
+        assert_eq!(arrays.cell["von_mises_pa"].values, von_mises);
+        assert_eq!(arrays.cell["max_principal_stretch"].values, stretch);
+        assert_eq!(arrays.cell["jacobian"].values, jacobian);
+    }
+
+    #[test]
+    fn wrong_lengths_are_refused_not_written() {
+        let mesh = carus_fem::generate::box_t4([1.0, 1.0, 1.0], [1, 1, 1]);
+        let frame = FrameFields {
+            displacement_m: &[[0.0; 3]; 2],
+            von_mises_pa: &[],
+            max_principal_stretch: &[],
+            jacobian: &[],
+        };
+        let err = write_vtu(&temp("bad.vtu"), &mesh, &frame).unwrap_err().to_string();
+        assert!(err.contains("2 displacements for 8 nodes"), "{err}");
+    }
+
+    #[test]
+    fn truncated_and_corrupted_files_give_errors_not_panics() {
+        let mesh = carus_fem::generate::box_t4([1.0, 1.0, 1.0], [1, 1, 1]);
+        let zeros = vec![0.0; mesh.element_count()];
+        let frame_path = temp("binary_frame.vtu");
+        let frame = FrameFields {
+            displacement_m: &vec![[0.0; 3]; mesh.node_count()],
+            von_mises_pa: &zeros,
+            max_principal_stretch: &zeros,
+            jacobian: &zeros,
+        };
+        write_vtu(&frame_path, &mesh, &frame).unwrap();
+        let binary = std::fs::read_to_string(&frame_path).unwrap();
+        for (name, text) in [("t.vtu", ASCII_VTU), ("t.vtk", LEGACY_VTK), ("b.vtu", binary.as_str())] {
+            let path = temp(name);
+            let stride = (text.len() / 60).max(1);
+            for cut in (0..text.len()).step_by(stride) {
+                std::fs::write(&path, &text.as_bytes()[..cut]).unwrap();
+                if let Ok(file) = read_vtk(&path) {
+                    assert!(file.mesh.element_count() <= mesh.element_count());
+                }
+            }
+            let mut bytes = text.as_bytes().to_vec();
+            for i in (0..bytes.len()).step_by(stride) {
+                let saved = bytes[i];
+                bytes[i] = b'9';
+                std::fs::write(&path, &bytes).unwrap();
+                let _ = read_vtk(&path);
+                bytes[i] = saved;
+            }
+        }
+    }
+
+    #[test]
+    fn other_data_sets_are_refused_with_the_fix() {
+        let path = temp("poly.vtk");
+        std::fs::write(&path, "# vtk DataFile Version 2.0\nt\nASCII\nDATASET POLYDATA\nPOINTS 3 float\n0 0 0 1 0 0 0 1 0\nPOLYGONS 1 4\n3 0 1 2\n").unwrap();
+        let err = read_vtk(&path).unwrap_err().to_string();
+        assert!(err.contains("poly data (a surface), not an unstructured grid"), "{err}");
+    }
+}

@@ -1,0 +1,163 @@
+//! Re-encodes a `.vtu` whose appended data is raw binary (ParaView's default
+//! when saving) as base64 appended data, the only appended encoding vtkio
+//! 0.7.0-rc2 reads. Each array's block is checked against the file's length
+//! on the way, so a truncated file gives an error naming the array instead
+//! of an out-of-range slice inside vtkio.
+
+use std::borrow::Cow;
+
+use base64::engine::general_purpose::STANDARD;
+use base64::Engine;
+
+/// The file with raw appended data re-encoded, or unchanged when it has none.
+pub(crate) fn raw_appended_to_base64(bytes: &[u8]) -> Result<Cow<'_, [u8]>, String> {
+    let Some(appended_tag) = find(bytes, b"<AppendedData", 0) else {
+        return Ok(Cow::Borrowed(bytes));
+    };
+    let tag_end = find(bytes, b">", appended_tag).ok_or("the <AppendedData> tag is not closed")?;
+    let tag = &bytes[appended_tag..tag_end];
+    if attribute(tag, "encoding").as_deref() != Some("raw") {
+        return Ok(Cow::Borrowed(bytes));
+    }
+    let underscore = find(bytes, b"_", tag_end).ok_or("the appended data has no leading `_`")?;
+    let data_end = rfind(bytes, b"</AppendedData>").unwrap_or(bytes.len()).max(underscore + 1);
+    let data = &bytes[underscore + 1..data_end];
+
+    let head = &bytes[..appended_tag];
+    let file_tag_start = find(head, b"<VTKFile", 0).ok_or("there is no <VTKFile> tag")?;
+    let file_tag = &head[file_tag_start..find(head, b">", file_tag_start).unwrap_or(head.len())];
+    let header_bytes = match attribute(file_tag, "header_type").as_deref() {
+        Some("UInt64") => 8,
+        _ => 4,
+    };
+    let big_endian = attribute(file_tag, "byte_order").as_deref() == Some("BigEndian");
+    let compressed = attribute(file_tag, "compressor").is_some();
+    let read_header = |at: usize| -> Result<usize, String> {
+        let field = data
+            .get(at..at + header_bytes)
+            .ok_or_else(|| format!("the appended data ends inside an array header at byte {at}"))?;
+        let mut value: u64 = 0;
+        for k in 0..header_bytes {
+            let byte = if big_endian { field[k] } else { field[header_bytes - 1 - k] };
+            value = (value << 8) | byte as u64;
+        }
+        usize::try_from(value).map_err(|_| format!("array header at byte {at} is too large"))
+    };
+
+    // Every array's offset, re-encoded block by block.
+    let mut text = String::from_utf8_lossy(head).into_owned();
+    let mut offsets: Vec<usize> = Vec::new();
+    let mut search = 0;
+    while let Some(at) = text[search..].find("offset=\"") {
+        let start = search + at + "offset=\"".len();
+        let end = text[start..].find('"').map(|e| start + e).ok_or("an offset attribute is not closed")?;
+        let offset: usize = text[start..end]
+            .trim()
+            .parse()
+            .map_err(|_| format!("offset {:?} is not a number", &text[start..end]))?;
+        offsets.push(offset);
+        search = end;
+    }
+    let mut unique = offsets.clone();
+    unique.sort_unstable();
+    unique.dedup();
+    let mut encoded = String::new();
+    let mut new_offsets = Vec::with_capacity(unique.len());
+    for &offset in &unique {
+        new_offsets.push(encoded.len());
+        let overflow = || format!("the array at appended offset {offset} is larger than the file");
+        if compressed {
+            let blocks = read_header(offset)?;
+            let header_len = blocks
+                .checked_add(3)
+                .and_then(|n| n.checked_mul(header_bytes))
+                .ok_or_else(overflow)?;
+            let mut payload = 0usize;
+            for b in 0..blocks {
+                let size = read_header(offset + (3 + b) * header_bytes)?;
+                payload = payload.checked_add(size).ok_or_else(overflow)?;
+            }
+            let header = data.get(offset..offset + header_len).ok_or_else(overflow)?;
+            let body_start = offset + header_len;
+            let body = data
+                .get(body_start..body_start.checked_add(payload).ok_or_else(overflow)?)
+                .ok_or_else(overflow)?;
+            encoded.push_str(&STANDARD.encode(header));
+            encoded.push_str(&STANDARD.encode(body));
+        } else {
+            let size = read_header(offset)?;
+            let end = (offset + header_bytes).checked_add(size).ok_or_else(overflow)?;
+            let block = data.get(offset..end).ok_or_else(overflow)?;
+            encoded.push_str(&STANDARD.encode(block));
+        }
+    }
+    // Rewrite the offsets in order of appearance.
+    let mut rewritten = String::with_capacity(text.len());
+    let mut rest = text.as_str();
+    for offset in &offsets {
+        let at = rest.find("offset=\"").unwrap_or(rest.len());
+        let start = at + "offset=\"".len();
+        let end = start + rest[start..].find('"').unwrap_or(0);
+        let index = unique.binary_search(offset).unwrap_or(0);
+        rewritten.push_str(&rest[..start]);
+        rewritten.push_str(&new_offsets[index].to_string());
+        rest = &rest[end..];
+    }
+    rewritten.push_str(rest);
+    text = rewritten;
+    text.push_str("<AppendedData encoding=\"base64\">_");
+    text.push_str(&encoded);
+    text.push_str("</AppendedData></VTKFile>\n");
+    Ok(Cow::Owned(text.into_bytes()))
+}
+
+fn find(haystack: &[u8], needle: &[u8], from: usize) -> Option<usize> {
+    haystack
+        .get(from..)?
+        .windows(needle.len())
+        .position(|w| w == needle)
+        .map(|p| p + from)
+}
+
+fn rfind(haystack: &[u8], needle: &[u8]) -> Option<usize> {
+    haystack.windows(needle.len()).rposition(|w| w == needle)
+}
+
+/// The value of `name="..."` inside one XML tag.
+fn attribute(tag: &[u8], name: &str) -> Option<String> {
+    let tag = String::from_utf8_lossy(tag);
+    let pattern = format!("{name}=\"");
+    let mut search = 0;
+    while let Some(at) = tag[search..].find(&pattern) {
+        let start = search + at;
+        // Whole attribute names only (`offset` inside `xoffset` does not count).
+        let whole = start == 0 || tag.as_bytes()[start - 1].is_ascii_whitespace();
+        let value_start = start + pattern.len();
+        let value_end = value_start + tag[value_start..].find('"')?;
+        if whole {
+            return Some(tag[value_start..value_end].to_string());
+        }
+        search = value_end;
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn files_without_raw_data_pass_unchanged() {
+        let text = b"<VTKFile><AppendedData encoding=\"base64\">_AAAA</AppendedData></VTKFile>";
+        assert!(matches!(raw_appended_to_base64(text).unwrap(), Cow::Borrowed(_)));
+    }
+
+    #[test]
+    fn a_block_running_past_the_end_is_an_error() {
+        let mut bytes = b"<VTKFile header_type=\"UInt32\"><DataArray format=\"appended\" offset=\"0\"/>\n<AppendedData encoding=\"raw\">_".to_vec();
+        bytes.extend_from_slice(&100u32.to_le_bytes());
+        bytes.extend_from_slice(&[0u8; 10]);
+        let err = raw_appended_to_base64(&bytes).unwrap_err();
+        assert!(err.contains("offset 0 is larger than the file"), "{err}");
+    }
+}
