@@ -26,6 +26,7 @@ mod painter;
 mod picture;
 mod png;
 mod scene;
+mod shapes;
 
 pub use camera::{Camera, Projection, View};
 pub use colour::{linear_to_srgb, srgb_to_linear, ColourMap};

@@ -37,37 +37,6 @@ pub fn cuboid(min: [f32; 3], max: [f32; 3]) -> (Vec<[f32; 3]>, Vec<[f32; 3]>, Ve
     (positions, normals, indices)
 }
 
-/// A latitude-longitude sphere.
-pub fn sphere(
-    centre: [f32; 3],
-    radius: f32,
-    rings: u32,
-    segments: u32,
-) -> (Vec<[f32; 3]>, Vec<u32>) {
-    let mut positions = Vec::new();
-    for ring in 0..=rings {
-        let polar = std::f32::consts::PI * ring as f32 / rings as f32;
-        for segment in 0..=segments {
-            let azimuth = std::f32::consts::TAU * segment as f32 / segments as f32;
-            positions.push([
-                centre[0] + radius * polar.sin() * azimuth.cos(),
-                centre[1] + radius * polar.sin() * azimuth.sin(),
-                centre[2] + radius * polar.cos(),
-            ]);
-        }
-    }
-    let mut indices = Vec::new();
-    let row = segments + 1;
-    for ring in 0..rings {
-        for segment in 0..segments {
-            let a = ring * row + segment;
-            let b = a + row;
-            indices.extend([a, b, a + 1, a + 1, b, b + 1]);
-        }
-    }
-    (positions, indices)
-}
-
 /// Columns and rows spanned by pixels that differ from `background`.
 pub fn silhouette(image: &Image, background: [u8; 4]) -> Option<([u32; 2], [u32; 2])> {
     let mut span: Option<([u32; 2], [u32; 2])> = None;

@@ -1,6 +1,6 @@
 //! Single pictures: silhouettes, orientation, colour, light, blending, errors.
 
-use crate::common::{channel_distance, cuboid, renderer, silhouette, sphere};
+use crate::common::{channel_distance, cuboid, renderer, silhouette};
 use carus_render::{
     Bounds, Camera, ColourMap, ContactSheet, Image, Lights, Projection, RenderError, RenderMesh,
     Scene, View, LABEL_STRIP,
@@ -187,11 +187,10 @@ fn flat_colours_come_back_as_the_same_srgb_bytes() {
 #[test]
 fn sphere_is_brighter_towards_the_key_light() {
     let mut renderer = renderer();
-    let (positions, indices) = sphere([0.0; 3], 0.5, 32, 48);
-    let scene = Scene::new(vec![RenderMesh::new(
+    let scene = Scene::new(vec![RenderMesh::sphere(
         "sphere",
-        positions,
-        indices,
+        [0.0; 3],
+        0.5,
         [0.9, 0.85, 0.75],
     )]);
     let camera = roomy_camera(View::Anterior);
@@ -278,8 +277,7 @@ fn scalar_field_follows_the_colour_map() {
 #[test]
 fn transparent_mesh_blends_over_the_opaque_one_behind_it() {
     let mut renderer = renderer();
-    let (positions, indices) = sphere([0.0; 3], 0.9, 24, 32);
-    let shell = RenderMesh::new("shell", positions, indices, [0.2, 0.3, 0.9]).with_opacity(0.35);
+    let shell = RenderMesh::sphere("shell", [0.0; 3], 0.9, [0.2, 0.3, 0.9]).with_opacity(0.35);
     let inner = unit_cube([0.9, 0.1, 0.1]);
     let camera = roomy_camera(View::Anterior);
     let centre_of = |meshes: Vec<RenderMesh>, renderer: &mut carus_render::Renderer| {

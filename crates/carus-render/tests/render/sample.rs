@@ -3,7 +3,7 @@
 
 use carus_render::{Camera, ColourMap, ContactSheet, RenderMesh, Scene, View, LABEL_STRIP};
 
-use crate::common::{renderer, sphere};
+use crate::common::renderer;
 
 /// A ring around the z axis, like a pelvic inlet.
 fn torus(major: f32, minor: f32, rings: u32, segments: u32) -> (Vec<[f32; 3]>, Vec<u32>) {
@@ -68,8 +68,13 @@ fn floor(radius: f32, sag: f32, rings: u32, segments: u32) -> (Vec<[f32; 3]>, Ve
 fn sample_scene_from_the_standard_views() {
     let mut renderer = renderer();
     let (ring, ring_indices) = torus(0.6, 0.16, 64, 24);
-    let (head, head_indices) = sphere([0.05, 0.1, 0.35], 0.42, 32, 48);
     let (sheet, sheet_indices, stretch) = floor(0.62, 0.3, 12, 48);
+    let axis: Vec<[f32; 3]> = (0..=20)
+        .map(|i| {
+            let s = i as f32 / 20.0;
+            [0.0, 0.4 * s * s, 0.9 - 1.6 * s]
+        })
+        .collect();
     let scene = Scene::new(vec![
         RenderMesh::new(
             "pelvis",
@@ -80,7 +85,11 @@ fn sample_scene_from_the_standard_views() {
             [0.89, 0.85, 0.76],
         )
         .with_opacity(0.45),
-        RenderMesh::new("fetal head", head, head_indices, [0.93, 0.72, 0.62]),
+        RenderMesh::sphere("fetal head", [0.05, 0.1, 0.35], 0.42, [0.93, 0.72, 0.62]),
+        // A curved axis through the ring and two landmarks on it.
+        RenderMesh::tube("pelvic axis", &axis, 0.025, [0.15, 0.35, 0.85]),
+        RenderMesh::sphere("right landmark", [0.6, 0.0, -0.1], 0.05, [0.85, 0.1, 0.1]),
+        RenderMesh::sphere("left landmark", [-0.6, 0.0, -0.1], 0.05, [0.1, 0.6, 0.1]),
         RenderMesh::new(
             "pelvic floor",
             sheet
