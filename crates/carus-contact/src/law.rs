@@ -1,0 +1,195 @@
+//! The contact law between the rigid fetus and the rigid bony pelvis:
+//! a penalty pressure on penetration (never pulling) and regularised Coulomb
+//! friction with an elastic stick spring anchored at the stick point.
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{check_non_negative, ContactError};
+
+/// Largest expulsive force of REFERENCE_DATA.md ("over about 70 cm2 of head
+/// this is roughly 70-140 N"), N: the load the default stiffness is sized for.
+pub const DESIGN_EXPULSION_FORCE_N: f64 = 140.0;
+/// Penetration accepted at that force, m: 1 mm, a tenth of the 0.1 mm x 10
+/// tolerance scale of the anatomy and well below the head-pelvis clearances
+/// (several mm) that decide arrest.
+pub const DESIGN_PENETRATION_M: f64 = 1.0e-3;
+/// Radius of a term fetal head, m: half the biparietal diameter (95 mm,
+/// REFERENCE_DATA.md).
+pub const DESIGN_HEAD_RADIUS_M: f64 = 0.0475;
+
+/// Contact law parameters. The penalty stiffness and damping are numerical
+/// parameters (they stand in for the impenetrability of bone), not tissue
+/// properties; the friction coefficient is physical.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactLaw {
+    /// Penalty pressure per metre of penetration, N/m^3 (Pa/m). Each sample
+    /// point carries `stiffness * its area`.
+    pub penalty_stiffness_pa_per_m: f64,
+    /// Kelvin-Voigt time of the normal and tangential dashpots, s: a sample's
+    /// dashpot is its spring stiffness times this time.
+    pub damping_time_s: f64,
+    /// Coulomb friction coefficient; 0 gives frictionless contact.
+    pub friction_coefficient: f64,
+    /// Stiffness of the tangential stick spring relative to the normal one.
+    pub tangential_stiffness_ratio: f64,
+}
+
+impl Default for ContactLaw {
+    fn default() -> Self {
+        ContactLaw {
+            penalty_stiffness_pa_per_m: default_penalty_stiffness(),
+            // About 0.3 of critical damping of the head's contact mode at the
+            // design load (omega ~ 680 rad/s for 0.6 kg on 2 F / d): damps
+            // rebound within a few periods without stiffening the step limit much.
+            damping_time_s: 1.0e-3,
+            // REFERENCE_DATA.md: muscle on bone 0.29-0.36 (Shockey et al. 1985); the seed's 0.35.
+            friction_coefficient: 0.35,
+            // Numerical: the stick spring as stiff as the normal one, so elastic
+            // creep while sticking stays at the scale of the penetration.
+            tangential_stiffness_ratio: 1.0,
+        }
+    }
+}
+
+/// Default penalty stiffness, N/m^3: a rigid sphere of the head's radius R
+/// pressed by the design force F into a flat rigid wall penetrates d when
+/// F = integral of k (d - r^2 / 2R) over the contact cap = k pi R d^2, so
+/// k = F / (pi R d^2) = 140 / (pi 0.0475 1e-6), about 9.4e8 N/m^3.
+pub fn default_penalty_stiffness() -> f64 {
+    DESIGN_EXPULSION_FORCE_N
+        / (std::f64::consts::PI * DESIGN_HEAD_RADIUS_M * DESIGN_PENETRATION_M * DESIGN_PENETRATION_M)
+}
+
+/// What the law gives one penetrating sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactForce {
+    /// Normal force on the body, N (along the pelvis' outward normal).
+    pub normal: DVec3,
+    /// Friction force on the body, N (in the tangent plane).
+    pub friction: DVec3,
+    /// Whether the friction cap was reached (sliding) this step.
+    pub sliding: bool,
+    /// Elastic stretch of the stick spring after this step, m (tangent plane),
+    /// from the anchor to the body point.
+    pub stretch: DVec3,
+}
+
+impl ContactLaw {
+    /// Checks every parameter.
+    pub fn validate(&self) -> Result<(), ContactError> {
+        check_non_negative("penalty_stiffness_pa_per_m", self.penalty_stiffness_pa_per_m, false)?;
+        check_non_negative("damping_time_s", self.damping_time_s, true)?;
+        check_non_negative("friction_coefficient", self.friction_coefficient, true)?;
+        check_non_negative("tangential_stiffness_ratio", self.tangential_stiffness_ratio, false)?;
+        Ok(())
+    }
+
+    /// Forces on one sample of area `area` that penetrates `depth` along the
+    /// unit outward normal `normal`, moving with `velocity` (relative to the
+    /// pelvis), whose stick spring was stretched `stretch` (body point minus
+    /// anchor) at the end of the last step (zero for a new contact).
+    pub fn evaluate(&self, area: f64, depth: f64, normal: DVec3, velocity: DVec3, stretch: DVec3) -> ContactForce {
+        let k = self.penalty_stiffness_pa_per_m * area;
+        let depth_rate = -velocity.dot(normal);
+        // No adhesion: a separating dashpot never pulls the body in.
+        let f_n = (k * (depth + self.damping_time_s * depth_rate)).max(0.0);
+
+        // The old stretch, turned into the current tangent plane (the normal
+        // may have rotated since), plus this step's tangential motion is
+        // already in `stretch` because the anchor is fixed on the pelvis.
+        let tangential = |v: DVec3| v - normal * v.dot(normal);
+        let stretch = tangential(stretch);
+        let k_t = self.tangential_stiffness_ratio * k;
+        let trial = -k_t * (stretch + self.damping_time_s * tangential(velocity));
+        let cap = self.friction_coefficient * f_n;
+        let magnitude = trial.length();
+        if magnitude <= cap {
+            ContactForce { normal: f_n * normal, friction: trial, sliding: false, stretch }
+        } else {
+            // Slip: the force sits on the Coulomb cone and the anchor is
+            // dragged so the spring alone holds the capped force.
+            let friction = if magnitude > 0.0 { trial * (cap / magnitude) } else { DVec3::ZERO };
+            ContactForce { normal: f_n * normal, friction, sliding: true, stretch: -friction / k_t }
+        }
+    }
+
+    /// Stability limit of the semi-implicit Euler step for a body of
+    /// effective mass `effective_mass_kg` held by penalty springs of summed
+    /// stiffness `normal_stiffness_n_per_m` (see
+    /// [`ContactLaw::design_normal_stiffness`] for an estimate before any
+    /// contact exists): `dt < 2 / omega (sqrt(1 + zeta^2) - zeta)` with
+    /// `omega = sqrt(K / m)` and `zeta = omega tau / 2` from the Kelvin-Voigt
+    /// damping. Take a fraction of it (0.2-0.5) for accuracy.
+    pub fn critical_time_step(&self, effective_mass_kg: f64, normal_stiffness_n_per_m: f64) -> f64 {
+        let omega = (normal_stiffness_n_per_m / effective_mass_kg).sqrt();
+        let zeta = 0.5 * omega * self.damping_time_s;
+        2.0 / omega * ((1.0 + zeta * zeta).sqrt() - zeta)
+    }
+
+    /// Tangent stiffness of the contact of a sphere of radius `radius_m`
+    /// carrying `force_n` against a flat wall under this law:
+    /// F = k pi R d^2, so dF/dd = 2 sqrt(pi R k F). The stiffest contact the
+    /// loop should expect, for [`ContactLaw::critical_time_step`].
+    pub fn design_normal_stiffness(&self, radius_m: f64, force_n: f64) -> f64 {
+        2.0 * (std::f64::consts::PI * radius_m * self.penalty_stiffness_pa_per_m * force_n).sqrt()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_penetrates_one_millimetre_at_the_design_force() {
+        let law = ContactLaw::default();
+        let d = DESIGN_PENETRATION_M;
+        let force = law.penalty_stiffness_pa_per_m * std::f64::consts::PI * DESIGN_HEAD_RADIUS_M * d * d;
+        assert!((force - DESIGN_EXPULSION_FORCE_N).abs() < 1e-9);
+        // The design stiffness is the slope 2 F / d of that relation.
+        let k = law.design_normal_stiffness(DESIGN_HEAD_RADIUS_M, DESIGN_EXPULSION_FORCE_N);
+        assert!((k - 2.0 * DESIGN_EXPULSION_FORCE_N / d).abs() < 1e-6 * k);
+        law.validate().unwrap();
+    }
+
+    #[test]
+    fn never_pulls_and_caps_friction_on_the_cone() {
+        let law = ContactLaw { damping_time_s: 1e-3, ..ContactLaw::default() };
+        let n = DVec3::Z;
+        // Separating fast: the dashpot would pull; the force is clipped to zero.
+        let f = law.evaluate(1e-4, 1e-5, n, DVec3::new(0.0, 0.0, 10.0), DVec3::ZERO);
+        assert_eq!(f.normal, DVec3::ZERO);
+        assert_eq!(f.friction, DVec3::ZERO);
+        // Large stretch: friction magnitude equals mu f_n, opposing the stretch.
+        let f = law.evaluate(1e-4, 1e-3, n, DVec3::ZERO, DVec3::new(1.0, 0.0, 0.0));
+        assert!(f.sliding);
+        assert!((f.friction.length() - 0.35 * f.normal.length()).abs() < 1e-12 * f.normal.length());
+        assert!(f.friction.x < 0.0);
+        // Small stretch: elastic, below the cap.
+        let f = law.evaluate(1e-4, 1e-3, n, DVec3::ZERO, DVec3::new(1e-6, 0.0, 0.0));
+        assert!(!f.sliding);
+        assert!(f.friction.length() < 0.35 * f.normal.length());
+        // mu = 0: no friction at all.
+        let free = ContactLaw { friction_coefficient: 0.0, ..law };
+        let f = free.evaluate(1e-4, 1e-3, n, DVec3::X, DVec3::new(1e-3, 0.0, 0.0));
+        assert_eq!(f.friction, DVec3::ZERO);
+    }
+
+    #[test]
+    fn critical_step_of_an_undamped_spring_is_two_over_omega() {
+        let law = ContactLaw { damping_time_s: 0.0, ..ContactLaw::default() };
+        assert!((law.critical_time_step(1.0, 1.0e4) - 0.02).abs() < 1e-15);
+        let damped = ContactLaw::default();
+        assert!(damped.critical_time_step(1.0, 1.0e4) < 0.02);
+    }
+
+    #[test]
+    fn invalid_parameters_are_named() {
+        let law = ContactLaw { friction_coefficient: -0.1, ..ContactLaw::default() };
+        assert!(matches!(
+            law.validate().unwrap_err(),
+            ContactError::InvalidParameter { name: "friction_coefficient", .. }
+        ));
+    }
+}

@@ -1,0 +1,307 @@
+//! The fetal neck: a six-degree-of-freedom spring between the head and the
+//! trunk at the atlanto-occipital pivot, with different stiffness in flexion
+//! and extension and in compression and tension (REFERENCE_DATA.md, from
+//! Lapeer et al. 2019 / Sadulaev 2019).
+
+use glam::{DQuat, DVec3};
+use serde::{Deserialize, Serialize};
+
+use crate::error::{check_non_negative, ContactError};
+use crate::rigid::{RigidBodyModel, RigidBodyState, Wrench};
+
+/// Stiffness and damping of the neck. Angles in degrees as the source gives them.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NeckStiffness {
+    /// REFERENCE_DATA.md: flexion 0.01 N m per degree (Lapeer et al. 2019 / Sadulaev 2019).
+    pub flexion_nm_per_deg: f64,
+    /// REFERENCE_DATA.md: extension 0.04 N m per degree.
+    pub extension_nm_per_deg: f64,
+    /// REFERENCE_DATA.md: lateral bending 0.02 N m per degree.
+    pub lateral_bending_nm_per_deg: f64,
+    /// REFERENCE_DATA.md: axial rotation 0.01 N m per degree.
+    pub axial_rotation_nm_per_deg: f64,
+    /// REFERENCE_DATA.md: compression 1064.5 N/m.
+    pub compression_n_per_m: f64,
+    /// REFERENCE_DATA.md: tension 3361.8 N/m.
+    pub tension_n_per_m: f64,
+    /// Shear across the neck axis, N/m. No source gives it; the tension
+    /// value (the stiffer of the two axial ones) keeps the pivot shared.
+    pub shear_n_per_m: f64,
+    /// Rotational dashpot, N m s/rad. Numerical: about critical damping of
+    /// the flexion mode of a term head (k = 0.573 N m/rad, I ~ 5e-4 kg m^2:
+    /// 2 sqrt(k I) ~ 0.034), so the neck does not ring between contractions.
+    pub rotational_damping_nm_s_per_rad: f64,
+    /// Linear dashpot at the pivot, N s/m. Numerical: about critical for
+    /// the head (0.6 kg) on the compression spring, 2 sqrt(k m) ~ 50.
+    pub linear_damping_n_s_per_m: f64,
+}
+
+impl Default for NeckStiffness {
+    fn default() -> Self {
+        NeckStiffness {
+            flexion_nm_per_deg: 0.01,
+            extension_nm_per_deg: 0.04,
+            lateral_bending_nm_per_deg: 0.02,
+            axial_rotation_nm_per_deg: 0.01,
+            compression_n_per_m: 1064.5,
+            tension_n_per_m: 3361.8,
+            shear_n_per_m: 3361.8,
+            rotational_damping_nm_s_per_rad: 0.034,
+            linear_damping_n_s_per_m: 50.0,
+        }
+    }
+}
+
+/// The head's anatomical axes in the head's body frame (CONVENTIONS.md):
+/// o occipitofrontal, v vertex, b = v x o. Flexion (chin to chest) is a
+/// positive rotation about b, lateral bending a rotation about o, axial
+/// rotation a rotation about v.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HeadAxes {
+    pub occipitofrontal: DVec3,
+    pub vertex: DVec3,
+}
+
+impl HeadAxes {
+    fn biparietal(&self) -> DVec3 {
+        self.vertex.cross(self.occipitofrontal)
+    }
+}
+
+/// A neck joining body `head` and body `trunk` at the atlanto-occipital
+/// pivot. Its rest state is the relative pose the two had when it was made.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Neck {
+    pub head: usize,
+    pub trunk: usize,
+    pub stiffness: NeckStiffness,
+    pivot_in_head: DVec3,
+    pivot_in_trunk: DVec3,
+    axes: HeadAxes,
+    /// Unit neck axis in the trunk frame, from the trunk towards the head
+    /// (minus the trunk axis k of CARDINAL_MOVEMENTS.md).
+    neck_axis_in_trunk: DVec3,
+    /// Rest orientation of the head relative to the trunk.
+    rest: DQuat,
+}
+
+/// The neck's state and what it does to the two bodies.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NeckLoad {
+    pub on_head: Wrench,
+    pub on_trunk: Wrench,
+    /// Flexion (positive) or extension (negative) from rest, degrees.
+    pub flexion_deg: f64,
+    /// Lateral bending about o from rest, degrees.
+    pub lateral_bending_deg: f64,
+    /// Axial rotation about v from rest, degrees (the twist that restitution undoes).
+    pub axial_rotation_deg: f64,
+    /// Compression (positive) or stretch (negative) along the neck axis, m.
+    pub compression_m: f64,
+    /// Elastic moment the neck exerts on the head, world, N m.
+    pub elastic_moment_on_head: DVec3,
+}
+
+impl Neck {
+    /// Joins `head` and `trunk` as they are now in `state`: `pivot` is the
+    /// atlanto-occipital point (world), `axes` the head's axes in its body
+    /// frame, `neck_axis` the world direction from the trunk towards the head.
+    pub fn new(
+        model: &RigidBodyModel,
+        state: &RigidBodyState,
+        head: usize,
+        trunk: usize,
+        pivot: DVec3,
+        axes: HeadAxes,
+        neck_axis: DVec3,
+        stiffness: NeckStiffness,
+    ) -> Result<Self, ContactError> {
+        for b in [head, trunk] {
+            if b >= model.len() {
+                return Err(ContactError::NoSuchBody { body: b, count: model.len() });
+            }
+        }
+        for (name, value) in [
+            ("flexion_nm_per_deg", stiffness.flexion_nm_per_deg),
+            ("extension_nm_per_deg", stiffness.extension_nm_per_deg),
+            ("lateral_bending_nm_per_deg", stiffness.lateral_bending_nm_per_deg),
+            ("axial_rotation_nm_per_deg", stiffness.axial_rotation_nm_per_deg),
+            ("compression_n_per_m", stiffness.compression_n_per_m),
+            ("tension_n_per_m", stiffness.tension_n_per_m),
+            ("shear_n_per_m", stiffness.shear_n_per_m),
+            ("rotational_damping_nm_s_per_rad", stiffness.rotational_damping_nm_s_per_rad),
+            ("linear_damping_n_s_per_m", stiffness.linear_damping_n_s_per_m),
+        ] {
+            check_non_negative(name, value, true)?;
+        }
+        let o = axes.occipitofrontal.normalize_or_zero();
+        let v = axes.vertex.normalize_or_zero();
+        if o == DVec3::ZERO || v == DVec3::ZERO || o.dot(v).abs() > 1e-6 {
+            return Err(ContactError::InvalidParameter {
+                name: "head axes",
+                value: o.dot(v),
+                hint: "occipitofrontal and vertex axes must be non-zero and perpendicular",
+            });
+        }
+        let axis = neck_axis.normalize_or_zero();
+        if axis == DVec3::ZERO {
+            return Err(ContactError::InvalidParameter { name: "neck_axis", value: 0.0, hint: "must be a non-zero direction" });
+        }
+        let (qh, qt) = (state.orientation[head], state.orientation[trunk]);
+        Ok(Neck {
+            head,
+            trunk,
+            stiffness,
+            pivot_in_head: state.pose(head).inverse_transform_point(pivot),
+            pivot_in_trunk: state.pose(trunk).inverse_transform_point(pivot),
+            axes: HeadAxes { occipitofrontal: o, vertex: v },
+            neck_axis_in_trunk: qt.inverse() * axis,
+            rest: (qt.inverse() * qh).normalize(),
+        })
+    }
+
+    /// The atlanto-occipital pivot as carried by the head, world.
+    pub fn pivot_on_head(&self, state: &RigidBodyState) -> DVec3 {
+        state.pose(self.head).transform_point(self.pivot_in_head)
+    }
+
+    /// Spring and dashpot loads on both bodies at the current state.
+    pub fn load(&self, model: &RigidBodyModel, state: &RigidBodyState) -> NeckLoad {
+        let s = &self.stiffness;
+        let (h, t) = (self.head, self.trunk);
+        let (qh, qt) = (state.orientation[h], state.orientation[t]);
+
+        // Rotation of the head away from rest, in the head frame.
+        let mut deviation = (self.rest.inverse() * qt.inverse() * qh).normalize();
+        if deviation.w < 0.0 {
+            deviation = -deviation;
+        }
+        let rotation = deviation.to_scaled_axis();
+        let b = self.axes.biparietal();
+        let (flexion, lateral, axial) =
+            (rotation.dot(b), rotation.dot(self.axes.occipitofrontal), rotation.dot(self.axes.vertex));
+        let per_rad = 180.0 / std::f64::consts::PI;
+        let k_flex = if flexion >= 0.0 { s.flexion_nm_per_deg } else { s.extension_nm_per_deg };
+        let elastic_local = -per_rad
+            * (k_flex * flexion * b
+                + s.lateral_bending_nm_per_deg * lateral * self.axes.occipitofrontal
+                + s.axial_rotation_nm_per_deg * axial * self.axes.vertex);
+        let elastic = qh * elastic_local;
+        let relative_spin = state.angular_velocity(model, h) - state.angular_velocity(model, t);
+        let moment_on_head = elastic - s.rotational_damping_nm_s_per_rad * relative_spin;
+
+        // Linear spring between the two bodies' copies of the pivot.
+        let on_head_point = state.pose(h).transform_point(self.pivot_in_head);
+        let on_trunk_point = state.pose(t).transform_point(self.pivot_in_trunk);
+        let axis = qt * self.neck_axis_in_trunk;
+        let gap = on_trunk_point - on_head_point;
+        let compression = gap.dot(axis);
+        let k_axial = if compression >= 0.0 { s.compression_n_per_m } else { s.tension_n_per_m };
+        let shear = gap - compression * axis;
+        let relative_velocity = state.point_velocity(model, t, on_trunk_point) - state.point_velocity(model, h, on_head_point);
+        let on_trunk = -k_axial * compression * axis - s.shear_n_per_m * shear - s.linear_damping_n_s_per_m * relative_velocity;
+
+        let head_wrench = Wrench::at_point(-on_trunk, on_head_point, state.position[h])
+            + Wrench { force: DVec3::ZERO, torque: moment_on_head };
+        let trunk_wrench = Wrench::at_point(on_trunk, on_trunk_point, state.position[t])
+            + Wrench { force: DVec3::ZERO, torque: -moment_on_head };
+        NeckLoad {
+            on_head: head_wrench,
+            on_trunk: trunk_wrench,
+            flexion_deg: flexion * per_rad,
+            lateral_bending_deg: lateral * per_rad,
+            axial_rotation_deg: axial * per_rad,
+            compression_m: compression,
+            elastic_moment_on_head: elastic,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rigid::{MassProperties, RigidPose};
+    use glam::DMat3;
+
+    /// Head above trunk along z, pivot between them, head axes o = +y, v = +z.
+    fn setup() -> (RigidBodyModel, RigidBodyState, Neck) {
+        let mut model = RigidBodyModel::default();
+        let props = |m: f64| MassProperties { mass_kg: m, inertia_kg_m2: DMat3::from_diagonal(DVec3::splat(1e-3)), rotation_locked: false };
+        let head = model.add(props(0.6)).unwrap();
+        let trunk = model.add(props(2.5)).unwrap();
+        let state = RigidBodyState::at_rest(
+            &model,
+            &[RigidPose::new(DVec3::new(0.0, 0.0, 0.05), DQuat::IDENTITY), RigidPose::new(DVec3::new(0.0, 0.0, -0.1), DQuat::IDENTITY)],
+        )
+        .unwrap();
+        let axes = HeadAxes { occipitofrontal: DVec3::Y, vertex: DVec3::Z };
+        let neck = Neck::new(&model, &state, head, trunk, DVec3::ZERO, axes, DVec3::Z, NeckStiffness::default()).unwrap();
+        (model, state, neck)
+    }
+
+    /// Turns the head by `deg` about the world `axis` through the pivot.
+    fn turn_head(state: &mut RigidBodyState, axis: DVec3, deg: f64) {
+        let q = DQuat::from_axis_angle(axis, deg.to_radians());
+        state.orientation[0] = q * state.orientation[0];
+        state.position[0] = q * state.position[0];
+    }
+
+    #[test]
+    fn torque_angle_slopes_match_the_per_degree_stiffness() {
+        let s = NeckStiffness::default();
+        // b = v x o = z x y = -x: flexion is a positive turn about -x.
+        let cases = [
+            (-DVec3::X, 2.0, s.flexion_nm_per_deg),
+            (-DVec3::X, -2.0, s.extension_nm_per_deg),
+            (DVec3::Y, 2.0, s.lateral_bending_nm_per_deg),
+            (DVec3::Y, -2.0, s.lateral_bending_nm_per_deg),
+            (DVec3::Z, 2.0, s.axial_rotation_nm_per_deg),
+        ];
+        for (axis, deg, k) in cases {
+            let (model, mut state, neck) = setup();
+            turn_head(&mut state, axis, deg);
+            let load = neck.load(&model, &state);
+            let about_axis = load.elastic_moment_on_head.dot(axis);
+            // Restoring, with slope k per degree.
+            assert!((about_axis + k * deg).abs() < 1e-9 * k, "axis {axis} deg {deg}: {about_axis}");
+            // The turn about the pivot leaves the pivot shared: no linear force.
+            assert!(load.on_head.force.length() < 1e-9);
+            // Equal and opposite moments about the pivot (action-reaction).
+            let total = load.on_head.torque + load.on_trunk.torque;
+            assert!(total.length() < 1e-12);
+        }
+        // Asymmetry: extension is four times as stiff as flexion.
+        let (model, mut state, neck) = setup();
+        turn_head(&mut state, -DVec3::X, 5.0);
+        let flex = neck.load(&model, &state);
+        assert!((flex.flexion_deg - 5.0).abs() < 1e-9);
+        let (model2, mut state2, neck2) = setup();
+        turn_head(&mut state2, -DVec3::X, -5.0);
+        let ext = neck2.load(&model2, &state2);
+        let ratio = ext.elastic_moment_on_head.length() / flex.elastic_moment_on_head.length();
+        assert!((ratio - 4.0).abs() < 1e-9, "ratio {ratio}");
+    }
+
+    #[test]
+    fn compression_and_tension_differ() {
+        for (dz, k) in [(1e-3, 1064.5), (-1e-3, 3361.8)] {
+            let (model, mut state, neck) = setup();
+            // Trunk pushed towards the head (dz > 0): compression.
+            state.position[1].z += dz;
+            let load = neck.load(&model, &state);
+            assert!((load.compression_m - dz).abs() < 1e-15);
+            assert!((load.on_trunk.force.z + k * dz).abs() < 1e-9, "{:?}", load.on_trunk.force);
+            assert!((load.on_head.force + load.on_trunk.force).length() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn relative_spin_is_damped() {
+        let (model, mut state, neck) = setup();
+        state.set_angular_velocity(&model, 0, DVec3::new(0.0, 0.0, 2.0));
+        let load = neck.load(&model, &state);
+        let c = NeckStiffness::default().rotational_damping_nm_s_per_rad;
+        assert!((load.on_head.torque.z + 2.0 * c).abs() < 1e-12);
+    }
+}
