@@ -6,15 +6,42 @@
 //! never panics on bad input; every error names the file, the line (or the
 //! file's own node or element id) and the fix.
 
-mod builder;
-pub mod error;
 pub mod abaqus;
+mod builder;
+pub mod csv;
+pub mod error;
 pub mod gmsh;
+pub mod pvd;
 mod text;
 pub mod units;
 pub mod vtk;
 mod vtu_raw;
 
+use std::path::Path;
+
 pub use builder::MeshFile;
+pub use csv::CsvWriter;
 pub use error::{ReadError, WriteError};
+pub use pvd::PvdCollection;
 pub use units::LengthUnit;
+pub use vtk::{write_vtu, FrameFields};
+
+/// Reads a volume mesh, choosing the reader by the file's extension:
+/// `.msh` (Gmsh), `.vtk`/`.vtu` (VTK), `.inp` (Abaqus). Coordinates are
+/// returned as written; see [`MeshFile::to_metres`].
+pub fn read_mesh(path: &Path) -> Result<MeshFile, ReadError> {
+    let extension = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .unwrap_or_default();
+    match extension.as_str() {
+        "msh" => gmsh::read_msh(path),
+        "vtk" | "vtu" => vtk::read_vtk(path),
+        "inp" => abaqus::read_inp(path),
+        _ => Err(ReadError::UnknownFormat {
+            path: path.to_path_buf(),
+            extension,
+        }),
+    }
+}
