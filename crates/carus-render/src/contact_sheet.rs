@@ -72,8 +72,9 @@ impl Renderer {
         let width = count * tile_w + (count + 1) * sheet.gap;
         let height = tile_h + strip + 2 * sheet.gap;
         let mut picture = Image::filled(width, height, background);
+        let uploaded = self.upload(scene)?;
         for (i, (view, camera)) in sheet.views.iter().zip(&cameras).enumerate() {
-            let tile = self.render(scene, camera, tile_w, tile_h)?;
+            let tile = self.render_uploaded(&uploaded, camera, tile_w, tile_h)?;
             let x = sheet.gap + i as u32 * (tile_w + sheet.gap);
             picture.paste(&tile, x, sheet.gap + strip);
             if sheet.labels {

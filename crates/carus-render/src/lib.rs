@@ -34,7 +34,7 @@ pub use contact_sheet::{ContactSheet, LABEL_STRIP};
 pub use error::RenderError;
 pub use gpu::{GpuContext, GPU_TIMEOUT};
 pub use mesh::{Bounds, RenderMesh, ScalarField};
-pub use offscreen::Renderer;
+pub use offscreen::{GpuScene, Renderer};
 pub use painter::{GpuMesh, MeshPainter, TargetFormat};
 pub use picture::Image;
 pub use scene::{DirectionalLight, Lights, Scene};

@@ -7,9 +7,19 @@ use crate::camera::Camera;
 use crate::colour::srgb_to_linear;
 use crate::error::RenderError;
 use crate::gpu::GpuContext;
-use crate::painter::{MeshPainter, TargetFormat};
+use crate::mesh::RenderMesh;
+use crate::painter::{GpuMesh, MeshPainter, TargetFormat};
 use crate::picture::Image;
-use crate::scene::Scene;
+use crate::scene::{check_background, Lights, Scene};
+
+/// A scene whose meshes live on the GPU, ready to be drawn from any camera.
+pub struct GpuScene {
+    meshes: Vec<GpuMesh>,
+    /// Lighting.
+    pub lights: Lights,
+    /// sRGB background colour with alpha.
+    pub background: [f32; 4],
+}
 
 /// Draws scenes into RGBA8 pictures.
 pub struct Renderer {
@@ -60,14 +70,59 @@ impl Renderer {
         width: u32,
         height: u32,
     ) -> Result<Image, RenderError> {
-        let max = self.gpu.device.limits().max_texture_dimension_2d;
-        if width == 0 || height == 0 || width > max || height > max {
-            return Err(RenderError::InvalidSize { width, height, max });
-        }
+        let uploaded = self.upload(scene)?;
+        self.render_uploaded(&uploaded, camera, width, height)
+    }
+
+    /// Uploads a scene once, to draw it many times (several views, or key
+    /// moments where only the fetus moves: see `update_mesh`).
+    pub fn upload(&self, scene: &Scene) -> Result<GpuScene, RenderError> {
         scene.validate()?;
         let meshes = self.gpu.scoped("uploading the meshes", || {
             self.painter.upload_scene(&self.gpu.device, scene)
         })??;
+        Ok(GpuScene {
+            meshes,
+            lights: scene.lights,
+            background: scene.background,
+        })
+    }
+
+    /// Replaces mesh `index` of an uploaded scene by `mesh`, which must have
+    /// as many vertices and triangles (a re-posed or deformed copy).
+    pub fn update_mesh(
+        &self,
+        scene: &mut GpuScene,
+        index: usize,
+        mesh: &RenderMesh,
+    ) -> Result<(), RenderError> {
+        let count = scene.meshes.len();
+        let uploaded = scene
+            .meshes
+            .get_mut(index)
+            .ok_or_else(|| RenderError::InvalidMesh {
+                mesh: index,
+                name: mesh.name.clone(),
+                problem: format!("the uploaded scene has only {count} meshes"),
+            })?;
+        self.gpu.scoped("updating a mesh", || {
+            self.painter.update(&self.gpu.queue, uploaded, mesh, index)
+        })?
+    }
+
+    /// Draws an uploaded scene seen by `camera` into a `width` x `height` picture.
+    pub fn render_uploaded(
+        &mut self,
+        scene: &GpuScene,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+    ) -> Result<Image, RenderError> {
+        let max = self.gpu.device.limits().max_texture_dimension_2d;
+        if width == 0 || height == 0 || width > max || height > max {
+            return Err(RenderError::InvalidSize { width, height, max });
+        }
+        check_background(scene.background)?;
         let target = match self
             .target
             .take()
@@ -78,7 +133,7 @@ impl Renderer {
                 OffscreenTarget::new(&self.gpu.device, width, height, self.format)
             })?,
         };
-        let picture = self.draw(scene, camera, &meshes, &target);
+        let picture = self.draw(scene, camera, &target);
         // Kept for the next picture of the same size even after a failure.
         self.target = Some(target);
         picture
@@ -86,9 +141,8 @@ impl Renderer {
 
     fn draw(
         &self,
-        scene: &Scene,
+        scene: &GpuScene,
         camera: &Camera,
-        meshes: &[crate::painter::GpuMesh],
         target: &OffscreenTarget,
     ) -> Result<Image, RenderError> {
         let (width, height) = (target.width, target.height);
@@ -149,7 +203,7 @@ impl Renderer {
                     occlusion_query_set: None,
                     multiview_mask: None,
                 });
-                self.painter.paint(&mut pass, meshes, camera);
+                self.painter.paint(&mut pass, &scene.meshes, camera);
             }
             target.copy_to_readback(&mut encoder);
             self.gpu.queue.submit([encoder.finish()])

@@ -60,11 +60,55 @@ pub struct GpuMesh {
     normals: wgpu::Buffer,
     scalars: wgpu::Buffer,
     indices: wgpu::Buffer,
+    vertex_count: usize,
     index_count: u32,
+    material_uniform: wgpu::Buffer,
     material: wgpu::BindGroup,
     transparent: bool,
     /// Centre of its bounds: the sort key of transparent meshes.
     centre: Vec3,
+}
+
+/// What the GPU buffers of a mesh hold beyond its positions and indices.
+struct MeshData {
+    normals: Vec<[f32; 3]>,
+    /// One per vertex; zeros when the mesh has no scalar field.
+    scalars: Vec<f32>,
+    material: MaterialUniform,
+    centre: Vec3,
+}
+
+impl MeshData {
+    fn of(mesh: &RenderMesh, index: usize) -> Result<Self, RenderError> {
+        mesh.validate(index)?;
+        let (scalars, scalar) = match &mesh.scalars {
+            Some(field) => {
+                let row = (field.colour_map.row() as f32 + 0.5) / ColourMap::ALL.len() as f32;
+                (
+                    field.values.clone(),
+                    [field.range[0], field.range[1], 1.0, row],
+                )
+            }
+            None => (vec![0.0; mesh.positions.len()], [0.0, 1.0, 0.0, 0.0]),
+        };
+        let centre = mesh
+            .bounds()
+            .map(|b| b.centre())
+            .ok_or_else(|| RenderError::InvalidMesh {
+                mesh: index,
+                name: mesh.name.clone(),
+                problem: "has no vertices".into(),
+            })?;
+        Ok(Self {
+            normals: mesh.vertex_normals(),
+            scalars,
+            material: MaterialUniform {
+                colour: srgba_to_linear(mesh.colour),
+                scalar,
+            },
+            centre,
+        })
+    }
 }
 
 /// Pipelines and shared bindings for one colour format and sample count.
@@ -240,54 +284,42 @@ impl MeshPainter {
         mesh: &RenderMesh,
         index: usize,
     ) -> Result<GpuMesh, RenderError> {
-        mesh.validate(index)?;
-        let vertex_buffer = |label, contents: &[u8]| {
+        let data = MeshData::of(mesh, index)?;
+        let buffer = |label, contents: &[u8], usage| {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(label),
                 contents,
-                usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+                usage: usage | wgpu::BufferUsages::COPY_DST,
             })
         };
-        let scalar_values = match &mesh.scalars {
-            Some(field) => field.values.clone(),
-            None => vec![0.0; mesh.positions.len()],
-        };
-        let scalar = match &mesh.scalars {
-            Some(field) => {
-                let row = (field.colour_map.row() as f32 + 0.5) / ColourMap::ALL.len() as f32;
-                [field.range[0], field.range[1], 1.0, row]
-            }
-            None => [0.0, 1.0, 0.0, 0.0],
-        };
-        let material = MaterialUniform {
-            colour: srgba_to_linear(mesh.colour),
-            scalar,
-        };
-        let material_uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("carus-render material uniform"),
-            contents: bytemuck::bytes_of(&material),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
-        let bounds = mesh.bounds().ok_or_else(|| RenderError::InvalidMesh {
-            mesh: index,
-            name: mesh.name.clone(),
-            problem: "has no vertices".into(),
-        })?;
+        let vertex = wgpu::BufferUsages::VERTEX;
+        let material_uniform = buffer(
+            "carus-render material uniform",
+            bytemuck::bytes_of(&data.material),
+            wgpu::BufferUsages::UNIFORM,
+        );
         Ok(GpuMesh {
-            positions: vertex_buffer(
+            positions: buffer(
                 "carus-render positions",
                 bytemuck::cast_slice(&mesh.positions),
+                vertex,
             ),
-            normals: vertex_buffer(
+            normals: buffer(
                 "carus-render normals",
-                bytemuck::cast_slice(&mesh.vertex_normals()),
+                bytemuck::cast_slice(&data.normals),
+                vertex,
             ),
-            scalars: vertex_buffer("carus-render scalars", bytemuck::cast_slice(&scalar_values)),
-            indices: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("carus-render indices"),
-                contents: bytemuck::cast_slice(&mesh.indices),
-                usage: wgpu::BufferUsages::INDEX,
-            }),
+            scalars: buffer(
+                "carus-render scalars",
+                bytemuck::cast_slice(&data.scalars),
+                vertex,
+            ),
+            indices: buffer(
+                "carus-render indices",
+                bytemuck::cast_slice(&mesh.indices),
+                wgpu::BufferUsages::INDEX,
+            ),
+            vertex_count: mesh.positions.len(),
             index_count: mesh.indices.len() as u32,
             material: device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("carus-render material"),
@@ -297,9 +329,55 @@ impl MeshPainter {
                     resource: material_uniform.as_entire_binding(),
                 }],
             }),
+            material_uniform,
             transparent: mesh.is_transparent(),
-            centre: bounds.centre(),
+            centre: data.centre,
         })
+    }
+
+    /// Replaces an uploaded mesh's vertices, triangles, colour and scalars
+    /// in place (a moving fetus, a deforming pelvic floor), without new
+    /// buffers. The new mesh must have as many vertices and triangles as
+    /// the uploaded one.
+    pub fn update(
+        &self,
+        queue: &wgpu::Queue,
+        uploaded: &mut GpuMesh,
+        mesh: &RenderMesh,
+        index: usize,
+    ) -> Result<(), RenderError> {
+        let data = MeshData::of(mesh, index)?;
+        if mesh.positions.len() != uploaded.vertex_count
+            || mesh.indices.len() != uploaded.index_count as usize
+        {
+            return Err(RenderError::InvalidMesh {
+                mesh: index,
+                name: mesh.name.clone(),
+                problem: format!(
+                    "has {} vertices and {} indices but was uploaded with {} and {}: upload it anew",
+                    mesh.positions.len(),
+                    mesh.indices.len(),
+                    uploaded.vertex_count,
+                    uploaded.index_count
+                ),
+            });
+        }
+        queue.write_buffer(
+            &uploaded.positions,
+            0,
+            bytemuck::cast_slice(&mesh.positions),
+        );
+        queue.write_buffer(&uploaded.normals, 0, bytemuck::cast_slice(&data.normals));
+        queue.write_buffer(&uploaded.scalars, 0, bytemuck::cast_slice(&data.scalars));
+        queue.write_buffer(&uploaded.indices, 0, bytemuck::cast_slice(&mesh.indices));
+        queue.write_buffer(
+            &uploaded.material_uniform,
+            0,
+            bytemuck::bytes_of(&data.material),
+        );
+        uploaded.transparent = mesh.is_transparent();
+        uploaded.centre = data.centre;
+        Ok(())
     }
 
     /// Uploads every mesh of a scene.

@@ -88,12 +88,19 @@ impl Scene {
 
     /// Checks every mesh and the background.
     pub fn validate(&self) -> Result<(), RenderError> {
-        if self.background.iter().any(|c| !(0.0..=1.0).contains(c)) {
-            return Err(RenderError::InvalidBackground(self.background));
-        }
+        check_background(self.background)?;
         self.meshes
             .iter()
             .enumerate()
             .try_for_each(|(i, mesh)| mesh.validate(i))
+    }
+}
+
+/// A background must be an sRGB colour with alpha, every channel in 0..=1.
+pub(crate) fn check_background(background: [f32; 4]) -> Result<(), RenderError> {
+    if background.iter().all(|c| (0.0..=1.0).contains(c)) {
+        Ok(())
+    } else {
+        Err(RenderError::InvalidBackground(background))
     }
 }

@@ -418,3 +418,45 @@ fn rendered_picture_survives_png_round_trip_and_file_write() {
         image
     );
 }
+
+#[test]
+fn uploaded_mesh_moves_in_place_between_pictures() {
+    let mut renderer = renderer();
+    let camera = roomy_camera(View::Anterior);
+    let cube = unit_cube([0.4, 0.6, 0.3]);
+    let mut uploaded = renderer.upload(&Scene::new(vec![cube.clone()])).unwrap();
+    let before = renderer
+        .render_uploaded(&uploaded, &camera, SIZE, SIZE)
+        .unwrap();
+
+    // Half a unit towards the mother's right: leftwards in the anterior view.
+    let mut moved = cube.clone();
+    for p in &mut moved.positions {
+        p[0] += 0.5;
+    }
+    renderer.update_mesh(&mut uploaded, 0, &moved).unwrap();
+    let after = renderer
+        .render_uploaded(&uploaded, &camera, SIZE, SIZE)
+        .unwrap();
+    let shift = camera.project(Vec3::new(0.5, 0.0, 0.0), SIZE, SIZE)[0]
+        - camera.project(Vec3::ZERO, SIZE, SIZE)[0];
+    let ([b0, _], _) = silhouette(&before, WHITE).unwrap();
+    let ([a0, _], _) = silhouette(&after, WHITE).unwrap();
+    assert!(shift < -10.0);
+    assert!(
+        ((a0 as f32 - b0 as f32) - shift).abs() <= 1.5,
+        "moved {} px, expected {shift}",
+        a0 as f32 - b0 as f32
+    );
+
+    // Another vertex count cannot be written into the same buffers.
+    let mut grown = cube;
+    grown.positions.push([0.0; 3]);
+    grown.normals = None;
+    let err = renderer
+        .update_mesh(&mut uploaded, 0, &grown)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("upload it anew"), "{err}");
+    assert!(renderer.update_mesh(&mut uploaded, 3, &moved).is_err());
+}
