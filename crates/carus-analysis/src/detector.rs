@@ -1,0 +1,36 @@
+//! The detector's one entry point: pose history in, [`DetectorReport`] out.
+
+use crate::history::{HistoryError, PoseHistory};
+use crate::measures::Series;
+use crate::movements::{detect_movements, Movement, Movements};
+use crate::outcome::{contraction_period_s, outcome, Outcome};
+use serde::{Deserialize, Serialize};
+
+/// Everything the detector found, as `carus run --json` and the report use
+/// it: the seven movements under their canonical keys, the posterior
+/// rotation (reported apart, never as internal rotation), the outcome, the
+/// contraction period it read off the force, and the per-sample series.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DetectorReport {
+    pub movements: Movements,
+    pub posterior_rotation: Movement,
+    pub outcome: Outcome,
+    pub contraction_period_s: Option<f64>,
+    pub series: Series,
+}
+
+/// Validates the history, measures every sample and applies the rules.
+/// Deterministic: the same history gives the same report, bit for bit.
+pub fn detect(history: &PoseHistory) -> Result<DetectorReport, HistoryError> {
+    history.validate()?;
+    let series = Series::from_history(history);
+    let spines_sigma_mm = history.canal.spines_sigma() * 1000.0;
+    let detected = detect_movements(&series, spines_sigma_mm);
+    Ok(DetectorReport {
+        movements: detected.movements,
+        posterior_rotation: detected.posterior_rotation,
+        outcome: outcome(history, &series, spines_sigma_mm),
+        contraction_period_s: contraction_period_s(&series),
+        series,
+    })
+}

@@ -1,0 +1,270 @@
+//! The pose history: what a run (forward physics, imposed trajectory or
+//! hybrid alike) records, and all the detector ever reads.
+//!
+//! Constant data (head and trunk geometry in their body frames, the canal)
+//! is kept apart from the per-sample state (poses, forces). Everything is SI
+//! and in the pelvis frame of CONVENTIONS.md, except the clinical diameter
+//! `biparietal_mm`, which keeps its canonical name.
+
+use crate::canal::BirthCanal;
+use glam::{DQuat, DVec3};
+use serde::{Deserialize, Serialize};
+
+/// Position and orientation of a rigid body in the pelvis frame: a point `p`
+/// of the body frame lies at `position_m + orientation * p`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RigidPose {
+    /// Where the body frame's origin is, m.
+    pub position_m: DVec3,
+    /// Unit quaternion from the body frame to the pelvis frame (x, y, z, w in JSON).
+    pub orientation: DQuat,
+}
+
+impl RigidPose {
+    /// A body-frame point in the pelvis frame.
+    pub fn point(&self, body_point: DVec3) -> DVec3 {
+        self.position_m + self.orientation * body_point
+    }
+
+    /// A body-frame direction in the pelvis frame.
+    pub fn direction(&self, body_direction: DVec3) -> DVec3 {
+        self.orientation * body_direction
+    }
+}
+
+/// The fetal head in its own body frame (constant over a run).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct HeadGeometry {
+    /// Head centre (the biparietal diameter's midpoint), m.
+    pub centre_m: DVec3,
+    /// Unit occipitofrontal direction `o` (occiput towards forehead).
+    pub occipitofrontal: DVec3,
+    /// Unit vertex direction `v` (foramen magnum towards vertex), orthogonal to `o`.
+    pub vertex: DVec3,
+    /// Biparietal diameter, mm (canonical name of CONVENTIONS.md).
+    pub biparietal_mm: f64,
+    /// Points of the skull surface (or a sampling of it dense enough to
+    /// find the leading point), m.
+    pub skull_points_m: Vec<DVec3>,
+}
+
+/// The fetal trunk in its own body frame (constant over a run).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TrunkGeometry {
+    /// Centre of the trunk (expulsion ends when it passes the outlet), m.
+    pub centre_m: DVec3,
+    /// Tip of the fetal right shoulder (acromion), m.
+    pub right_acromion_m: DVec3,
+    /// Tip of the fetal left shoulder (acromion), m.
+    pub left_acromion_m: DVec3,
+    /// Unit spine direction `k`: from the atlanto-occipital pivot along the
+    /// spine towards the breech.
+    pub spine: DVec3,
+}
+
+/// The part of the mother that carried the largest contact force on the
+/// fetus at a sample (the labour crate classifies its contacts into these).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ContactSite {
+    Symphysis,
+    PubicArch,
+    SacralPromontory,
+    Sacrum,
+    Coccyx,
+    IschialSpines,
+    PelvicSidewall,
+    PelvicFloor,
+}
+
+impl ContactSite {
+    /// The name used in JSON and reports ("sacral_promontory", ...).
+    pub fn name(self) -> &'static str {
+        match self {
+            ContactSite::Symphysis => "symphysis",
+            ContactSite::PubicArch => "pubic_arch",
+            ContactSite::SacralPromontory => "sacral_promontory",
+            ContactSite::Sacrum => "sacrum",
+            ContactSite::Coccyx => "coccyx",
+            ContactSite::IschialSpines => "ischial_spines",
+            ContactSite::PelvicSidewall => "pelvic_sidewall",
+            ContactSite::PelvicFloor => "pelvic_floor",
+        }
+    }
+}
+
+/// One recorded instant.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PoseSample {
+    pub time_s: f64,
+    pub head: RigidPose,
+    /// Present exactly when the history has a [`TrunkGeometry`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub trunk: Option<RigidPose>,
+    /// Expulsion force acting on the fetus, N.
+    pub expulsion_force_n: DVec3,
+    /// Sum of the contact forces of the bony pelvis on the fetus, N.
+    pub bone_contact_force_n: DVec3,
+    /// Sum of the contact forces of the pelvic floor on the fetus, N.
+    pub floor_contact_force_n: DVec3,
+    /// Which part carried the largest contact force, when the run knows.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dominant_contact: Option<ContactSite>,
+}
+
+/// A whole recorded run: constant geometry plus the samples in time order.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PoseHistory {
+    pub head: HeadGeometry,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub trunk: Option<TrunkGeometry>,
+    pub canal: BirthCanal,
+    pub samples: Vec<PoseSample>,
+}
+
+/// What is wrong with a pose history, and where.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum HistoryError {
+    #[error("the pose history has {count} samples; the detector needs at least 2")]
+    TooFewSamples { count: usize },
+    #[error("sample {index}: {field} is not finite; every number must be a real value")]
+    NotFinite { index: usize, field: &'static str },
+    #[error("sample {index}: time_s = {time_s} does not increase on the previous sample's {previous_s}; samples must be in strictly increasing time")]
+    TimeNotIncreasing { index: usize, time_s: f64, previous_s: f64 },
+    #[error("sample {index}: the {body} orientation quaternion has length {length}; give a unit quaternion")]
+    NotUnitQuaternion { index: usize, body: &'static str, length: f64 },
+    #[error("sample {index} has a trunk pose but the history has no trunk geometry; add `trunk` or drop the sample's trunk pose")]
+    TrunkPoseWithoutGeometry { index: usize },
+    #[error("sample {index} has no trunk pose but the history has trunk geometry; record the trunk at every sample or drop `trunk`")]
+    MissingTrunkPose { index: usize },
+    #[error("head geometry: {problem}")]
+    BadHead { problem: String },
+    #[error("trunk geometry: {problem}")]
+    BadTrunk { problem: String },
+    #[error("pose history JSON: {0}")]
+    Json(String),
+}
+
+/// Tolerance on unit lengths and orthogonality of given directions: loose
+/// enough for values written to JSON with a dozen digits.
+const UNIT_TOLERANCE: f64 = 1e-6;
+
+fn check_unit(v: DVec3, what: &str) -> Result<(), String> {
+    if !v.is_finite() || (v.length() - 1.0).abs() > UNIT_TOLERANCE {
+        return Err(format!("{what} must be a unit vector, got {v}"));
+    }
+    Ok(())
+}
+
+impl HeadGeometry {
+    /// Checks the axes, the diameter and the skull points.
+    pub fn validate(&self) -> Result<(), HistoryError> {
+        let bad = |problem: String| HistoryError::BadHead { problem };
+        check_unit(self.occipitofrontal, "occipitofrontal").map_err(bad)?;
+        check_unit(self.vertex, "vertex").map_err(bad)?;
+        if self.occipitofrontal.dot(self.vertex).abs() > UNIT_TOLERANCE {
+            return Err(bad("occipitofrontal and vertex must be orthogonal".into()));
+        }
+        if !self.centre_m.is_finite() {
+            return Err(bad("centre_m is not finite".into()));
+        }
+        if !(self.biparietal_mm.is_finite() && self.biparietal_mm > 0.0) {
+            return Err(bad(format!("biparietal_mm must be positive, got {}", self.biparietal_mm)));
+        }
+        if self.skull_points_m.is_empty() {
+            return Err(bad("skull_points_m is empty; give the skull surface points".into()));
+        }
+        if let Some(i) = self.skull_points_m.iter().position(|p| !p.is_finite()) {
+            return Err(bad(format!("skull point {i} is not finite")));
+        }
+        Ok(())
+    }
+
+    /// `b = v x o`, towards the fetal left, in the body frame.
+    pub fn biparietal_axis(&self) -> DVec3 {
+        self.vertex.cross(self.occipitofrontal)
+    }
+}
+
+impl TrunkGeometry {
+    /// Checks the spine direction and the shoulder points.
+    pub fn validate(&self) -> Result<(), HistoryError> {
+        let bad = |problem: String| HistoryError::BadTrunk { problem };
+        check_unit(self.spine, "spine").map_err(bad)?;
+        for (name, p) in [
+            ("centre_m", self.centre_m),
+            ("right_acromion_m", self.right_acromion_m),
+            ("left_acromion_m", self.left_acromion_m),
+        ] {
+            if !p.is_finite() {
+                return Err(bad(format!("{name} is not finite")));
+            }
+        }
+        if (self.left_acromion_m - self.right_acromion_m).length() < 1e-6 {
+            return Err(bad("the two acromions coincide".into()));
+        }
+        Ok(())
+    }
+}
+
+impl PoseHistory {
+    /// Checks everything the detector relies on, naming the first problem.
+    pub fn validate(&self) -> Result<(), HistoryError> {
+        self.head.validate()?;
+        if let Some(trunk) = &self.trunk {
+            trunk.validate()?;
+        }
+        if self.samples.len() < 2 {
+            return Err(HistoryError::TooFewSamples { count: self.samples.len() });
+        }
+        for (index, s) in self.samples.iter().enumerate() {
+            let finite = [
+                ("time_s", s.time_s.is_finite()),
+                ("head.position_m", s.head.position_m.is_finite()),
+                ("head.orientation", s.head.orientation.is_finite()),
+                ("expulsion_force_n", s.expulsion_force_n.is_finite()),
+                ("bone_contact_force_n", s.bone_contact_force_n.is_finite()),
+                ("floor_contact_force_n", s.floor_contact_force_n.is_finite()),
+                ("trunk.position_m", s.trunk.is_none_or(|t| t.position_m.is_finite())),
+                ("trunk.orientation", s.trunk.is_none_or(|t| t.orientation.is_finite())),
+            ];
+            if let Some((field, _)) = finite.iter().find(|(_, ok)| !ok) {
+                return Err(HistoryError::NotFinite { index, field });
+            }
+            if index > 0 {
+                let previous_s = self.samples[index - 1].time_s;
+                if s.time_s <= previous_s {
+                    return Err(HistoryError::TimeNotIncreasing { index, time_s: s.time_s, previous_s });
+                }
+            }
+            let poses = [("head", Some(s.head)), ("trunk", s.trunk)];
+            for (body, pose) in poses {
+                if let Some(pose) = pose {
+                    let length = pose.orientation.length();
+                    if (length - 1.0).abs() > UNIT_TOLERANCE {
+                        return Err(HistoryError::NotUnitQuaternion { index, body, length });
+                    }
+                }
+            }
+            match (&self.trunk, s.trunk) {
+                (None, Some(_)) => return Err(HistoryError::TrunkPoseWithoutGeometry { index }),
+                (Some(_), None) => return Err(HistoryError::MissingTrunkPose { index }),
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+
+    /// Reads and validates a history from JSON text.
+    pub fn from_json_str(text: &str) -> Result<Self, HistoryError> {
+        let history: PoseHistory =
+            serde_json::from_str(text).map_err(|e| HistoryError::Json(e.to_string()))?;
+        history.validate()?;
+        Ok(history)
+    }
+
+    /// The history as JSON text (the inverse of [`PoseHistory::from_json_str`]).
+    pub fn to_json_string(&self) -> Result<String, HistoryError> {
+        serde_json::to_string(self).map_err(|e| HistoryError::Json(e.to_string()))
+    }
+}

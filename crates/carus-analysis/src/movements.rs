@@ -1,0 +1,382 @@
+//! The seven cardinal movements, detected on a [`Series`] by the rules of
+//! CARDINAL_MOVEMENTS.md ("When a movement counts as observed").
+//!
+//! The table says when a movement is observed; where it is silent (when a
+//! movement starts and ends, what its size is) the choices are the same for
+//! every movement and every run, and docs/DETECTOR.md gives the reasons:
+//!
+//! - size is the change of the movement's own quantity between the reported
+//!   start and end samples (station for engagement and descent, phi for
+//!   flexion and extension, theta for the rotations, the trunk centre's
+//!   distance past the outlet for expulsion), always given as a magnitude;
+//! - start is the last sample at which the quantity was still within a
+//!   small onset tolerance of the level it moved away from, end the first
+//!   sample at which it came within that tolerance of the level it reached.
+
+use crate::measures::{wrap_deg, Series};
+use serde::{Deserialize, Serialize};
+
+/// CARDINAL_MOVEMENTS.md: descent needs a net rise of the station of 30 mm.
+pub const DESCENT_MIN_MM: f64 = 30.0;
+/// CARDINAL_MOVEMENTS.md: flexion needs phi 10 degrees above its start value...
+pub const FLEXION_MIN_DEG: f64 = 10.0;
+/// ...before the leading point reaches station +20 mm.
+pub const FLEXION_BY_STATION_MM: f64 = 20.0;
+/// CARDINAL_MOVEMENTS.md: internal rotation, abs(theta) from at least 45...
+pub const ROTATION_FROM_DEG: f64 = 45.0;
+/// ...to at most 20 degrees...
+pub const ROTATION_TO_DEG: f64 = 20.0;
+/// ...while the leading point is between station -20...
+pub const ROTATION_STATION_MIN_MM: f64 = -20.0;
+/// ...and +50 mm.
+pub const ROTATION_STATION_MAX_MM: f64 = 50.0;
+/// CARDINAL_MOVEMENTS.md: posterior rotation, abs(theta) from at most 135...
+pub const POSTERIOR_FROM_DEG: f64 = 135.0;
+/// ...to at least 160 degrees (direct OP).
+pub const POSTERIOR_TO_DEG: f64 = 160.0;
+/// CARDINAL_MOVEMENTS.md: extension, phi falls by at least 30 degrees...
+pub const EXTENSION_MIN_DEG: f64 = 30.0;
+/// ...while the station is at least +30 mm.
+pub const EXTENSION_FROM_STATION_MM: f64 = 30.0;
+/// CARDINAL_MOVEMENTS.md: restitution, theta turns by at least 30 degrees.
+pub const RESTITUTION_MIN_DEG: f64 = 30.0;
+
+/// Onset tolerance for stations (detector choice, docs/DETECTOR.md): a
+/// movement starts when its quantity leaves its level by more than this;
+/// 1 mm is below clinical resolution and above numerical contact jitter.
+pub const ONSET_MM: f64 = 1.0;
+/// Onset tolerance for angles (detector choice, docs/DETECTOR.md).
+pub const ONSET_DEG: f64 = 1.0;
+/// Within this many degrees of OA (0) or OP (180) the side of the occiput
+/// at engagement is undecided, and restitution may turn either way
+/// (detector choice, docs/DETECTOR.md).
+pub const SIDE_UNDECIDED_DEG: f64 = 10.0;
+
+/// Unit of a movement's size.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Unit {
+    Mm,
+    Deg,
+}
+
+/// One movement as CONVENTIONS.md spells it: start, end and size are null
+/// when the movement was not observed.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Movement {
+    pub observed: bool,
+    pub start_s: Option<f64>,
+    pub end_s: Option<f64>,
+    pub size: Option<f64>,
+    pub unit: Unit,
+}
+
+impl Movement {
+    fn absent(unit: Unit) -> Self {
+        Movement { observed: false, start_s: None, end_s: None, size: None, unit }
+    }
+
+    fn between(series: &Series, span: Span, quantity: &[f64], unit: Unit) -> Self {
+        Movement {
+            observed: true,
+            start_s: Some(series.time_s[span.start]),
+            end_s: Some(series.time_s[span.end]),
+            size: Some((quantity[span.end] - quantity[span.start]).abs()),
+            unit,
+        }
+    }
+}
+
+/// The seven movements under their canonical keys.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Movements {
+    pub engagement: Movement,
+    pub descent: Movement,
+    pub flexion: Movement,
+    pub internal_rotation: Movement,
+    pub extension: Movement,
+    pub external_rotation: Movement,
+    pub expulsion: Movement,
+}
+
+impl Movements {
+    /// Keys and movements in the textbook order.
+    pub fn iter(&self) -> [(&'static str, &Movement); 7] {
+        [
+            ("engagement", &self.engagement),
+            ("descent", &self.descent),
+            ("flexion", &self.flexion),
+            ("internal_rotation", &self.internal_rotation),
+            ("extension", &self.extension),
+            ("external_rotation", &self.external_rotation),
+            ("expulsion", &self.expulsion),
+        ]
+    }
+}
+
+/// Sample indices of a movement's start and end.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Span {
+    start: usize,
+    end: usize,
+}
+
+/// What the detector found: the seven movements and the posterior rotation
+/// reported apart from them.
+pub struct Detected {
+    pub movements: Movements,
+    pub posterior_rotation: Movement,
+}
+
+/// Applies every rule to the series. `spines_sigma_mm` is the arc length of
+/// the ischial-spine plane, to turn stations back into sigma.
+pub fn detect_movements(series: &Series, spines_sigma_mm: f64) -> Detected {
+    let engagement = engagement(series, spines_sigma_mm);
+    let flexion_peak = flexion_peak(series);
+    let abs_theta: Vec<f64> = series.theta_deg.iter().map(|&t| wrap_deg(t).abs()).collect();
+    let rotation_window: Vec<usize> = (0..series.len())
+        .filter(|&i| (ROTATION_STATION_MIN_MM..=ROTATION_STATION_MAX_MM).contains(&series.station_mm[i]))
+        .collect();
+    let internal = fall(&abs_theta, &rotation_window, ROTATION_FROM_DEG, ROTATION_TO_DEG, ONSET_DEG);
+    let neg_abs_theta: Vec<f64> = abs_theta.iter().map(|a| -a).collect();
+    let posterior = fall(&neg_abs_theta, &rotation_window, -POSTERIOR_FROM_DEG, -POSTERIOR_TO_DEG, ONSET_DEG);
+    let rotation = |span: Option<Span>| {
+        span.map_or(Movement::absent(Unit::Deg), |s| Movement::between(series, s, &series.theta_deg, Unit::Deg))
+    };
+    Detected {
+        movements: Movements {
+            engagement: engagement
+                .map_or(Movement::absent(Unit::Mm), |s| Movement::between(series, s, &series.station_mm, Unit::Mm)),
+            descent: descent(series),
+            flexion: flexion(series, flexion_peak),
+            internal_rotation: rotation(internal),
+            extension: extension(series, flexion_peak),
+            external_rotation: external_rotation(series, engagement.map(|s| s.end)),
+            expulsion: expulsion(series),
+        },
+        posterior_rotation: rotation(posterior),
+    }
+}
+
+/// Both parietal eminences below the inlet plane.
+fn engaged(series: &Series, i: usize) -> bool {
+    series.left_parietal_below_inlet_mm[i].min(series.right_parietal_below_inlet_mm[i]) > 0.0
+}
+
+/// Engagement: the head enters the inlet. End: the first sample with both
+/// eminences below the inlet plane (not so at the first sample). Start: the
+/// sample from which the leading point stayed below the inlet (sigma > 0)
+/// up to the end. Size: the station gained in between.
+fn engagement(series: &Series, spines_sigma_mm: f64) -> Option<Span> {
+    if engaged(series, 0) {
+        return None;
+    }
+    let end = (1..series.len()).find(|&i| engaged(series, i))?;
+    let leading_sigma = |i: usize| series.station_mm[i] + spines_sigma_mm;
+    let start = (0..end).rev().find(|&i| leading_sigma(i) <= 0.0).map_or(0, |i| (i + 1).min(end));
+    Some(Span { start, end })
+}
+
+/// Index of the first sample at which the head is delivered, if any.
+fn delivery(series: &Series) -> Option<usize> {
+    series.head_delivered.iter().position(|&d| d)
+}
+
+/// Descent: the station's upper envelope (running maximum) over the samples
+/// up to the head's delivery, so backward drift between contractions
+/// neither counts against it nor is counted twice when regained. Observed
+/// when the envelope ends at least 30 mm above the first station. Start:
+/// the last sample before the envelope first rose more than the onset
+/// tolerance; end: the first sample within the tolerance of the envelope's
+/// final value.
+fn descent(series: &Series) -> Movement {
+    let last = delivery(series).unwrap_or(series.len() - 1);
+    let station = &series.station_mm[..=last];
+    let s0 = station[0];
+    let top = station.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    if top - s0 < DESCENT_MIN_MM {
+        return Movement::absent(Unit::Mm);
+    }
+    let first_rise = station.iter().position(|&s| s > s0 + ONSET_MM).unwrap_or(0);
+    let start = first_rise.saturating_sub(1);
+    let end = station.iter().position(|&s| s >= top - ONSET_MM).unwrap_or(last);
+    Movement::between(series, Span { start, end }, &series.station_mm, Unit::Mm)
+}
+
+/// The flexion peak: the first sample of greatest phi before the leading
+/// point first reaches station +30 mm (where extension may begin), or over
+/// the whole run if it never does.
+fn flexion_peak(series: &Series) -> usize {
+    let limit = series.station_mm.iter().position(|&s| s >= EXTENSION_FROM_STATION_MM).unwrap_or(series.len());
+    first_argmax(&series.phi_deg[..limit.max(1)])
+}
+
+fn first_argmax(values: &[f64]) -> usize {
+    let mut best = 0;
+    for (i, &v) in values.iter().enumerate() {
+        if v > values[best] {
+            best = i;
+        }
+    }
+    best
+}
+
+/// Flexion: phi at least 10 degrees above its first value at some sample
+/// before the leading point first reaches station +20 mm. Start: the last
+/// sample, before that crossing, with phi within the onset tolerance of its
+/// first value; end: the flexion peak.
+fn flexion(series: &Series, peak: usize) -> Movement {
+    let phi = &series.phi_deg;
+    let limit = series.station_mm.iter().position(|&s| s >= FLEXION_BY_STATION_MM).unwrap_or(series.len());
+    let Some(crossing) = (0..limit).find(|&i| phi[i] >= phi[0] + FLEXION_MIN_DEG) else {
+        return Movement::absent(Unit::Deg);
+    };
+    let start = (0..=crossing).rev().find(|&i| phi[i] <= phi[0] + ONSET_DEG).unwrap_or(0);
+    Movement::between(series, Span { start, end: peak.max(crossing) }, phi, Unit::Deg)
+}
+
+/// Extension: after the flexion peak, among the samples at station +30 mm
+/// or deeper, the largest fall of phi from an earlier value; observed when
+/// it is at least 30 degrees and the head is delivered during the run.
+fn extension(series: &Series, peak: usize) -> Movement {
+    if delivery(series).is_none() {
+        return Movement::absent(Unit::Deg);
+    }
+    let window: Vec<usize> =
+        (peak..series.len()).filter(|&i| series.station_mm[i] >= EXTENSION_FROM_STATION_MM).collect();
+    let neg_phi: Vec<f64> = series.phi_deg.iter().map(|p| -p).collect();
+    match largest_rise(&neg_phi, &window, ONSET_DEG) {
+        Some((span, fall)) if fall >= EXTENSION_MIN_DEG => {
+            Movement::between(series, span, &series.phi_deg, Unit::Deg)
+        }
+        _ => Movement::absent(Unit::Deg),
+    }
+}
+
+/// External rotation (restitution): after the head's delivery, the largest
+/// turn of theta towards the side the occiput had at engagement (its sign
+/// at the engagement sample, or at the first sample if the head did not
+/// engage during the run); either way when that side was within 10 degrees
+/// of OA or OP. Observed when the turn is at least 30 degrees.
+fn external_rotation(series: &Series, engagement_end: Option<usize>) -> Movement {
+    let Some(delivered) = delivery(series) else {
+        return Movement::absent(Unit::Deg);
+    };
+    let window: Vec<usize> = (delivered..series.len()).collect();
+    let side_theta = wrap_deg(series.theta_deg[engagement_end.unwrap_or(0)]);
+    let sides: &[f64] = if side_theta.abs() < SIDE_UNDECIDED_DEG || side_theta.abs() > 180.0 - SIDE_UNDECIDED_DEG {
+        &[1.0, -1.0]
+    } else {
+        &[side_theta.signum()]
+    };
+    let best = sides
+        .iter()
+        .filter_map(|&side| {
+            let toward: Vec<f64> = series.theta_deg.iter().map(|t| side * t).collect();
+            largest_rise(&toward, &window, ONSET_DEG)
+        })
+        .fold(None::<(Span, f64)>, |best, candidate| match best {
+            Some(b) if b.1 >= candidate.1 => Some(b),
+            _ => Some(candidate),
+        });
+    match best {
+        Some((span, turn)) if turn >= RESTITUTION_MIN_DEG => {
+            Movement::between(series, span, &series.theta_deg, Unit::Deg)
+        }
+        _ => Movement::absent(Unit::Deg),
+    }
+}
+
+/// Expulsion: the bisacromial midpoint passes the outlet plane (start: the
+/// first sample past it, not the first sample of the run), then the trunk
+/// centre does (end). Size: the trunk centre's travel along the outlet
+/// normal in between. Needs a modelled trunk.
+fn expulsion(series: &Series) -> Movement {
+    let (Some(shoulders), Some(trunk)) = (&series.shoulders_below_outlet_mm, &series.trunk_below_outlet_mm) else {
+        return Movement::absent(Unit::Mm);
+    };
+    let Some(start) = shoulders.iter().position(|&d| d > 0.0).filter(|&i| i > 0) else {
+        return Movement::absent(Unit::Mm);
+    };
+    let Some(end) = (start..trunk.len()).find(|&i| trunk[i] > 0.0) else {
+        return Movement::absent(Unit::Mm);
+    };
+    Movement::between(series, Span { start, end }, trunk, Unit::Mm)
+}
+
+/// The first fall of `q` (over the samples `window`, in time order) to at
+/// most `to` from an earlier value of at least `from`. Start: the last
+/// window sample before the fall's end within `tolerance` of the highest
+/// earlier value; end: the first sample of the stretch at or below `to`
+/// within `tolerance` of that stretch's lowest value.
+fn fall(q: &[f64], window: &[usize], from: f64, to: f64, tolerance: f64) -> Option<Span> {
+    let mut seen_from = false;
+    let reach = window.iter().position(|&i| {
+        let hit = seen_from && q[i] <= to;
+        seen_from |= q[i] >= from;
+        hit
+    })?;
+    let before = &window[..reach];
+    let high = before.iter().map(|&i| q[i]).fold(f64::NEG_INFINITY, f64::max);
+    let start = *before.iter().rev().find(|&&i| q[i] >= high - tolerance)?;
+    let stretch: Vec<usize> = window[reach..].iter().copied().take_while(|&i| q[i] <= to).collect();
+    let low = stretch.iter().map(|&i| q[i]).fold(f64::INFINITY, f64::min);
+    let end = *stretch.iter().find(|&&i| q[i] <= low + tolerance)?;
+    Some(Span { start, end })
+}
+
+/// The largest rise of `q` from an earlier to a later sample of `window`
+/// (time order), with its size. Start: the last sample before the top that
+/// is within `tolerance` of the lowest value preceding it; end: the first
+/// sample from the start within `tolerance` of the top.
+fn largest_rise(q: &[f64], window: &[usize], tolerance: f64) -> Option<(Span, f64)> {
+    let first = *window.first()?;
+    let (mut low, mut best) = (q[first], None::<(usize, f64, f64)>);
+    for &i in window {
+        low = low.min(q[i]);
+        let rise = q[i] - low;
+        if rise > best.map_or(0.0, |b| b.1) {
+            best = Some((i, rise, low));
+        }
+    }
+    let (top, rise, low) = best?;
+    let start_pos = window.iter().rposition(|&i| i < top && q[i] <= low + tolerance)?;
+    let end = *window[start_pos..].iter().find(|&&i| q[i] >= q[top] - tolerance)?;
+    Some((Span { start: window[start_pos], end }, rise))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_fall_reports_its_onset_and_its_settling() {
+        let q = [90.0, 90.0, 89.8, 70.0, 40.0, 10.0, 2.0, 0.5, 0.2, 0.3];
+        let window: Vec<usize> = (0..q.len()).collect();
+        let span = fall(&q, &window, 45.0, 20.0, 1.0).unwrap();
+        assert_eq!(span, Span { start: 2, end: 7 });
+    }
+
+    #[test]
+    fn a_fall_needs_its_starting_level_inside_the_window() {
+        let q = [90.0, 90.0, 30.0, 10.0];
+        assert_eq!(fall(&q, &[2, 3], 45.0, 20.0, 1.0), None);
+        assert!(fall(&q, &[1, 2, 3], 45.0, 20.0, 1.0).is_some());
+    }
+
+    #[test]
+    fn the_largest_rise_ignores_an_earlier_smaller_one() {
+        let q = [0.0, 5.0, 1.0, 2.0, 40.0, 39.5, 10.0];
+        let window: Vec<usize> = (0..q.len()).collect();
+        let (span, rise) = largest_rise(&q, &window, 1.0).unwrap();
+        assert_eq!(rise, 40.0);
+        // The rise's onset is the last sample near the low before the top.
+        assert_eq!(span, Span { start: 2, end: 4 });
+    }
+
+    #[test]
+    fn a_falling_series_has_no_rise() {
+        let q = [3.0, 2.0, 1.0];
+        assert_eq!(largest_rise(&q, &[0, 1, 2], 1.0), None);
+    }
+}

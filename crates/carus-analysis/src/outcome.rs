@@ -1,0 +1,128 @@
+//! The labour outcome: delivered, or arrested (where, and against what).
+//!
+//! "No progress" is judged over a final window of the run at least two
+//! contraction periods long (the period read off the expulsion force) and
+//! at least a quarter of the run: the fetus is arrested when, in that
+//! window, the leading part got less than [`ARREST_PROGRESS_MM`] further
+//! than it had ever been before the window. An undelivered fetus that is
+//! still progressing is neither delivered nor arrested (`arrest: null`):
+//! the run ended too soon to tell.
+
+use crate::history::PoseHistory;
+use crate::measures::Series;
+use serde::{Deserialize, Serialize};
+
+/// Less progress than this over the final window is an arrest (detector
+/// choice, docs/DETECTOR.md: a few mm, well above contact jitter and well
+/// below the ~5-10 mm a head gains per effective contraction in the
+/// second stage).
+pub const ARREST_PROGRESS_MM: f64 = 3.0;
+/// The final window spans at least this many contraction periods.
+pub const ARREST_WINDOW_PERIODS: f64 = 2.0;
+/// The final window spans at least this fraction of the run.
+pub const ARREST_WINDOW_FRACTION: f64 = 0.25;
+
+/// Where the fetus stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ArrestStage {
+    /// The head never engaged: both parietal eminences not below the inlet.
+    #[serde(rename = "inlet")]
+    Inlet,
+    /// Engaged, but the head centre (biparietal plane) above the spines.
+    #[serde(rename = "mid-pelvis")]
+    MidPelvis,
+    /// The head centre past the spines but not past the outlet.
+    #[serde(rename = "outlet")]
+    Outlet,
+    /// The head delivered, the trunk not.
+    #[serde(rename = "shoulders")]
+    Shoulders,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Arrest {
+    pub stage: ArrestStage,
+    /// Station of the head's leading point where it stopped (the deepest
+    /// reached in the final window); for stage `shoulders`, the bisacromial
+    /// midpoint's sigma minus the spines' sigma.
+    pub station_mm: f64,
+    /// The part that carried the largest contact force in the final window
+    /// (at its sample of greatest total contact force), or "unknown".
+    pub against: String,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Outcome {
+    pub delivered: bool,
+    pub arrest: Option<Arrest>,
+}
+
+/// The contraction period, read off the expulsion force as the median time
+/// between the peaks of its excursions above the mid-level between its
+/// extremes; `None` for a force with fewer than three such peaks.
+pub fn contraction_period_s(series: &Series) -> Option<f64> {
+    let force = &series.expulsion_force_n;
+    let (low, high) = force.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &f| (l.min(f), h.max(f)));
+    if !(high - low > 1e-9 * high.abs().max(1.0)) {
+        return None;
+    }
+    let mid = 0.5 * (low + high);
+    let mut peaks = Vec::new();
+    let mut current: Option<usize> = None;
+    for (i, &f) in force.iter().enumerate() {
+        if f > mid {
+            current = Some(match current {
+                Some(best) if force[best] >= f => best,
+                _ => i,
+            });
+        } else if let Some(best) = current.take() {
+            peaks.push(series.time_s[best]);
+        }
+    }
+    // An excursion still open at the end of the run has no known peak.
+    let mut gaps: Vec<f64> = peaks.windows(2).map(|w| w[1] - w[0]).collect();
+    if gaps.len() < 2 {
+        return None;
+    }
+    gaps.sort_by(f64::total_cmp);
+    Some(gaps[gaps.len() / 2])
+}
+
+/// Judges the outcome of the run that `series` was measured from.
+pub fn outcome(history: &PoseHistory, series: &Series, spines_sigma_mm: f64) -> Outcome {
+    let last = series.len() - 1;
+    let head_out = series.head_delivered[last];
+    let delivered = head_out && series.trunk_below_outlet_mm.as_ref().is_none_or(|trunk| trunk[last] > 0.0);
+    if delivered {
+        return Outcome { delivered, arrest: None };
+    }
+    // The part whose progress counts: the shoulders once the head is out.
+    let progress: Vec<f64> = match (head_out, &series.shoulders_sigma_mm) {
+        (true, Some(shoulders)) => shoulders.iter().map(|s| s - spines_sigma_mm).collect(),
+        _ => series.station_mm.clone(),
+    };
+    let duration = series.time_s[last] - series.time_s[0];
+    let span = (ARREST_WINDOW_FRACTION * duration)
+        .max(contraction_period_s(series).map_or(0.0, |p| ARREST_WINDOW_PERIODS * p));
+    let window_start = series.time_s.iter().position(|&t| t >= series.time_s[last] - span).unwrap_or(0);
+    let max_of = |range: std::ops::Range<usize>| progress[range].iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let reached = max_of(window_start..last + 1);
+    let before = if window_start == 0 { progress[0] } else { max_of(0..window_start) };
+    if reached - before >= ARREST_PROGRESS_MM {
+        return Outcome { delivered, arrest: None };
+    }
+    let stage = if head_out {
+        ArrestStage::Shoulders
+    } else if series.left_parietal_below_inlet_mm[last].min(series.right_parietal_below_inlet_mm[last]) <= 0.0 {
+        ArrestStage::Inlet
+    } else if series.head_sigma_mm[last] < spines_sigma_mm {
+        ArrestStage::MidPelvis
+    } else {
+        ArrestStage::Outlet
+    };
+    let hardest = (window_start..=last)
+        .max_by(|&a, &b| series.contact_force_n[a].total_cmp(&series.contact_force_n[b]))
+        .unwrap_or(last);
+    let against = history.samples[hardest].dominant_contact.map_or("unknown", |site| site.name()).to_string();
+    Outcome { delivered, arrest: Some(Arrest { stage, station_mm: reached, against }) }
+}
