@@ -237,6 +237,8 @@ pub fn pelvis_contacts(
     } else {
         (0..samples.len())
             .into_par_iter()
+            // Queries are ~1 us: hand rayon chunks big enough to pay for a split.
+            .with_min_len(128)
             .map(|i| {
                 let p = world[i];
                 let Some(hit) = pelvis.surface.closest_point(p, band).filter(|h| h.signed_distance < 0.0) else {
@@ -281,4 +283,247 @@ pub fn pelvis_contacts(
         }
     }
     Ok(report)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::collider::tests::uv_sphere;
+    use crate::rigid::{MassProperties, RigidBodyModel, RigidBodyState};
+    use glam::{DMat3, DQuat};
+
+    const G: f64 = 9.81;
+
+    /// A 10 m square plane through the origin, tilted by `tilt` about x,
+    /// outward normal up the tilted z, with two region labels.
+    fn plane(tilt: DQuat) -> PelvisCollider {
+        let v: Vec<DVec3> = [(-5.0, -5.0), (5.0, -5.0), (5.0, 5.0), (-5.0, 5.0)]
+            .map(|(x, y)| tilt * DVec3::new(x, y, 0.0))
+            .to_vec();
+        let regions = RegionTable { names: vec!["sacrum".into(), "symphysis".into()], labels: vec![0, 1] };
+        PelvisCollider::new(&v, &[[0, 1, 2], [0, 2, 3]], Some(regions)).unwrap()
+    }
+
+    struct Slope {
+        law: ContactLaw,
+        tilt: DQuat,
+        pelvis: PelvisCollider,
+        samples: SurfaceSamples,
+        model: RigidBodyModel,
+        state: RigidBodyState,
+        anchors: FrictionAnchors,
+    }
+
+    /// A 5 cm, 1 kg sphere resting on the plane tilted by `angle_deg`, its
+    /// rotation locked (the reference g (sin a - mu cos a) is that of a
+    /// sliding block; a free sphere would roll), its bottom pole sunk to the
+    /// surface (the load is eased in by `Slope::run`).
+    fn slope(angle_deg: f64, mu: f64) -> Slope {
+        let law = ContactLaw { friction_coefficient: mu, ..ContactLaw::default() };
+        let tilt = DQuat::from_rotation_x(angle_deg.to_radians());
+        let (r, m) = (0.05, 1.0);
+        let (v, t) = uv_sphere(r, 12, 24);
+        let samples = SurfaceSamples::from_vertices("sphere", &v, &t).unwrap();
+        let mut model = RigidBodyModel::default();
+        model
+            .add(MassProperties { mass_kg: m, inertia_kg_m2: DMat3::from_diagonal(DVec3::splat(0.4 * m * r * r)), rotation_locked: true })
+            .unwrap();
+        let state = RigidBodyState::at_rest(&model, &[RigidPose::new(tilt * DVec3::new(0.0, 0.0, r), tilt)]).unwrap();
+        let anchors = FrictionAnchors::new(&samples);
+        Slope { law, tilt, pelvis: plane(tilt), samples, model, state, anchors }
+    }
+
+    impl Slope {
+        fn downhill(&self) -> DVec3 {
+            let n = self.tilt * DVec3::Z;
+            let g = DVec3::new(0.0, 0.0, -G);
+            (g - n * g.dot(n)).normalize()
+        }
+
+        /// Runs for `duration` s at step `dt`; returns (t, downhill displacement)
+        /// per step. Gravity is eased in over the first 0.1 s (smoothstep), as
+        /// a body is set down gently, then held.
+        fn run(&mut self, duration: f64, dt: f64) -> Vec<(f64, f64)> {
+            let start = self.state.position[0];
+            let down = self.downhill();
+            let steps = (duration / dt).round() as usize;
+            let mut track = Vec::with_capacity(steps);
+            for k in 0..steps {
+                let motion = BodyMotion {
+                    pose: self.state.pose(0),
+                    linear_velocity: self.state.linear_velocity[0],
+                    angular_velocity: self.state.angular_velocity(&self.model, 0),
+                };
+                let report = pelvis_contacts(&self.pelvis, &self.law, &self.samples, &motion, motion.pose.position, &mut self.anchors).unwrap();
+                let ease = (k as f64 * dt / 0.1).min(1.0);
+                let weight = G * self.model.mass_kg[0] * ease * ease * (3.0 - 2.0 * ease);
+                let gravity = Wrench { force: DVec3::new(0.0, 0.0, -weight), torque: DVec3::ZERO };
+                self.state.step(&self.model, &[gravity + report.wrench()], dt).unwrap();
+                track.push(((k + 1) as f64 * dt, (self.state.position[0] - start).dot(down)));
+            }
+            track
+        }
+    }
+
+    /// Least-squares fit of x = x0 + v0 t + a t^2 / 2 over the samples with
+    /// t >= `from`; returns a.
+    fn fitted_acceleration(track: &[(f64, f64)], from: f64) -> f64 {
+        let pts: Vec<(f64, f64)> = track.iter().copied().filter(|(t, _)| *t >= from).collect();
+        // Normal equations for the basis (1, t, t^2).
+        let mut m = [[0.0f64; 3]; 3];
+        let mut rhs = [0.0f64; 3];
+        for (t, x) in &pts {
+            let b = [1.0, *t, t * t];
+            for i in 0..3 {
+                for j in 0..3 {
+                    m[i][j] += b[i] * b[j];
+                }
+                rhs[i] += b[i] * x;
+            }
+        }
+        let mat = DMat3::from_cols_array_2d(&m).transpose();
+        let c = mat.inverse() * DVec3::from_array(rhs);
+        2.0 * c.z
+    }
+
+    const DT: f64 = 5e-4;
+
+    #[test]
+    fn c1_slides_above_the_friction_angle_with_the_coulomb_acceleration() {
+        let mu: f64 = 0.35;
+        let threshold = mu.atan().to_degrees(); // 19.29 deg
+        for angle in [threshold + 2.0, 30.0, 45.0] {
+            let mut s = slope(angle, mu);
+            let track = s.run(1.0, DT);
+            let a = fitted_acceleration(&track, 0.2);
+            let rad = angle.to_radians();
+            let expected = G * (rad.sin() - mu * rad.cos());
+            let error = (a - expected).abs() / expected;
+            eprintln!("C1 slide mu {mu} angle {angle:.2} deg: a {a:.5} m/s^2, expected {expected:.5} (relative error {:+.1e})", (a - expected) / expected);
+            assert!(error < 0.02, "angle {angle:.2}: a = {a:.4}, expected {expected:.4} ({:.2} %)", 100.0 * error);
+        }
+    }
+
+    #[test]
+    fn c1_frictionless_slides_at_g_sin_a() {
+        for angle in [5.0f64, 30.0] {
+            let mut s = slope(angle, 0.0);
+            let a = fitted_acceleration(&s.run(1.0, DT), 0.2);
+            let expected = G * angle.to_radians().sin();
+            eprintln!("C1 slide mu 0 angle {angle:.2} deg: a {a:.5} m/s^2, expected {expected:.5} (relative error {:+.1e})", (a - expected) / expected);
+            assert!((a - expected).abs() / expected < 0.02, "angle {angle}: a = {a}, expected {expected}");
+        }
+    }
+
+    #[test]
+    fn c1_sticks_below_the_friction_angle() {
+        let mu: f64 = 0.35;
+        let threshold = mu.atan().to_degrees();
+        for angle in [10.0, threshold - 2.0] {
+            let mut s = slope(angle, mu);
+            let track = s.run(1.0, DT);
+            // Largest elastic stretch of the stick spring before it slips:
+            // mu m g cos a / k_t. Sticking means the body never leaves that
+            // elastic range and stops there.
+            let k_t = s.law.tangential_stiffness_ratio * s.law.penalty_stiffness_pa_per_m * s.samples.areas[0];
+            let stretch_cap = mu * G * angle.to_radians().cos() / k_t;
+            let (_, end) = track[track.len() - 1];
+            let (_, mid) = track[track.len() / 2];
+            eprintln!("C1 stick mu {mu} angle {angle:.2} deg: displacement {end:.3e} m (elastic cap {stretch_cap:.3e} m), creep over the last 0.5 s {:.1e} m", end - mid);
+            assert!(end.abs() < stretch_cap, "angle {angle:.2}: moved {end:e} m, cap {stretch_cap:e} m");
+            assert!((end - mid).abs() < 1e-9, "angle {angle:.2}: still creeping ({:e} m in 0.5 s)", end - mid);
+            assert!(s.anchors.active() == 1);
+        }
+    }
+
+    #[test]
+    fn moment_about_a_pivot_is_r_cross_f() {
+        let pelvis = plane(DQuat::IDENTITY);
+        let law = ContactLaw::default();
+        // A square plate of four samples, 1 cm^2 each, sunk 0.5 mm.
+        let samples = SurfaceSamples {
+            points: vec![DVec3::new(-0.01, -0.01, 0.0), DVec3::new(0.01, -0.01, 0.0), DVec3::new(0.01, 0.01, 0.0), DVec3::new(-0.01, 0.01, 0.0)],
+            areas: vec![1e-4; 4],
+        };
+        let motion = BodyMotion {
+            pose: RigidPose::new(DVec3::new(0.0, 0.0, -5e-4), DQuat::IDENTITY),
+            linear_velocity: DVec3::ZERO,
+            angular_velocity: DVec3::ZERO,
+        };
+        let e = 0.03;
+        let pivot = DVec3::new(e, 0.0, 0.05);
+        let mut anchors = FrictionAnchors::new(&samples);
+        let report = pelvis_contacts(&pelvis, &law, &samples, &motion, pivot, &mut anchors).unwrap();
+        assert_eq!(report.contacts.len(), 4);
+        let f = 4.0 * law.penalty_stiffness_pa_per_m * 1e-4 * 5e-4;
+        assert!((report.force - DVec3::new(0.0, 0.0, f)).length() < 1e-9 * f);
+        // Centre of pressure under the centre of mass, pivot e to the side:
+        // moment (centroid - pivot) x F = (0, e F, 0); none about the centre.
+        assert!((report.moment_about_pivot - DVec3::new(0.0, e * f, 0.0)).length() < 1e-9 * f);
+        assert!(report.torque_about_com.length() < 1e-9 * f);
+        let summed: DVec3 = report.contacts.iter().map(|c| c.moment_about(pivot)).sum();
+        assert!((summed - report.moment_about_pivot).length() < 1e-12);
+        assert!((report.normal_stiffness_n_per_m - 4.0 * law.penalty_stiffness_pa_per_m * 1e-4).abs() < 1e-6);
+        // The plate sits across both triangles of the plane: the diagonal
+        // y = x splits it, samples 1 (x > y) on "sacrum", 3 on "symphysis".
+        assert_eq!(report.contacts[1].region, Some(0));
+        assert_eq!(report.contacts[3].region, Some(1));
+        assert_eq!(pelvis.region_name(1), Some("symphysis"));
+    }
+
+    #[test]
+    fn main_region_is_the_one_pressed_hardest() {
+        let pelvis = plane(DQuat::IDENTITY);
+        let law = ContactLaw::default();
+        // Deeper on the symphysis side (x < y), shallower on the sacrum side.
+        let samples = SurfaceSamples {
+            points: vec![DVec3::new(0.02, -0.02, 0.0), DVec3::new(-0.02, 0.02, -5e-4)],
+            areas: vec![1e-4; 2],
+        };
+        let motion = BodyMotion { pose: RigidPose::new(DVec3::new(0.0, 0.0, -1e-4), DQuat::IDENTITY), linear_velocity: DVec3::ZERO, angular_velocity: DVec3::ZERO };
+        let mut anchors = FrictionAnchors::new(&samples);
+        let report = pelvis_contacts(&pelvis, &law, &samples, &motion, DVec3::ZERO, &mut anchors).unwrap();
+        assert_eq!(report.main_region(2), Some(1));
+        let by_region = report.force_by_region(2);
+        assert!(by_region[1].z > by_region[0].z && by_region[0].z > 0.0);
+    }
+
+    #[test]
+    fn bad_region_tables_are_refused() {
+        let v = vec![DVec3::ZERO, DVec3::X, DVec3::Y];
+        let short = RegionTable { names: vec!["sacrum".into()], labels: vec![] };
+        assert!(matches!(PelvisCollider::new(&v, &[[0, 1, 2]], Some(short)), Err(ContactError::RegionTableLength { .. })));
+        let unnamed = RegionTable { names: vec!["sacrum".into()], labels: vec![3] };
+        assert!(matches!(
+            PelvisCollider::new(&v, &[[0, 1, 2]], Some(unnamed)),
+            Err(ContactError::RegionLabelOutOfRange { triangle: 0, label: 3, names: 1 })
+        ));
+    }
+
+    /// A spinning sphere (rotation free) dropped onto the slope: contacts
+    /// come and go over many samples, friction turns the spin. Two runs give
+    /// the same bits.
+    #[test]
+    fn runs_are_bit_identical() {
+        let run = || {
+            let mut s = slope(25.0, 0.35);
+            s.model = RigidBodyModel::default();
+            s.model
+                .add(MassProperties { mass_kg: 1.0, inertia_kg_m2: DMat3::from_diagonal(DVec3::new(1e-3, 1.2e-3, 0.9e-3)), rotation_locked: false })
+                .unwrap();
+            s.state.position[0] += s.tilt * DVec3::new(0.0, 0.0, 0.01);
+            s.state.set_angular_velocity(&s.model, 0, DVec3::new(5.0, -3.0, 8.0));
+            s.run(0.3, DT);
+            (s.state.clone(), s.anchors.clone())
+        };
+        let (a, b) = (run(), run());
+        let bits = |s: &RigidBodyState| {
+            s.position.iter().chain(&s.linear_velocity).chain(&s.angular_momentum).flat_map(|v| v.to_array()).map(f64::to_bits).collect::<Vec<_>>()
+        };
+        assert_eq!(bits(&a.0), bits(&b.0));
+        assert_eq!(a.0.orientation[0].to_array().map(f64::to_bits), b.0.orientation[0].to_array().map(f64::to_bits));
+        assert_eq!(a.1, b.1);
+        // It did tumble into contact.
+        assert!(a.1.active() > 0 || a.0.linear_velocity[0].length() > 0.1);
+    }
 }
