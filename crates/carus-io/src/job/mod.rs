@@ -1,0 +1,80 @@
+//! `carus solve`: a soft-tissue model described by a TOML job file (mesh
+//! file, materials per element set, boundary conditions on named sets,
+//! time stepping, output), run with the TLED solver of carus-fem and
+//! written as VTU frames, a PVD series, a CSV history and a summary.
+//!
+//! The command-line module only parses flags and prints; everything else
+//! lives here so that it is testable without the binary.
+
+mod load;
+mod run;
+pub mod spec;
+
+use std::path::PathBuf;
+
+pub use load::{load_job, mesh_path, parse_job};
+pub use run::{run_job, JobReport, Progress, RunOptions};
+pub use spec::JobSpec;
+
+use crate::error::{ReadError, WriteError};
+
+/// Why a job could not run (a solver failure mid-run is not one of these:
+/// it ends in a [`JobReport`] whose `failure` says what happened).
+#[derive(Debug, thiserror::Error)]
+pub enum JobError {
+    /// The job file could not be read.
+    #[error("{}: cannot read the job file: {source}; fix: check the path", path.display())]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// TOML syntax, an unknown key or a value of the wrong type or unit.
+    #[error("{}:{line}:{column}: {}{message}; hint: {hint}", path.display(), if key.is_empty() { String::new() } else { format!("`{key}`: ") })]
+    Syntax {
+        path: PathBuf,
+        line: usize,
+        column: usize,
+        /// Dotted path of the key (`solver.time_step_s`, `material[1].law`).
+        key: String,
+        message: String,
+        hint: String,
+    },
+    /// A value that cannot be right (a negative modulus, a missing pair).
+    #[error("{}: `{key}`: {problem}; fix: {fix}", path.display())]
+    Invalid {
+        path: PathBuf,
+        key: String,
+        problem: String,
+        fix: String,
+    },
+    /// A set the job names is not in the mesh.
+    #[error("{}: `{key}` names the {kind} {name:?}, which the mesh does not have; fix: use one of: {}", path.display(), if available.is_empty() { "(the mesh has none; define it in the mesh file)".to_string() } else { available.join(", ") })]
+    UnknownSet {
+        path: PathBuf,
+        key: String,
+        kind: &'static str,
+        name: String,
+        available: Vec<String>,
+    },
+    /// The mesh file could not be read.
+    #[error(transparent)]
+    Mesh(#[from] ReadError),
+    /// The solver refused the model or its loads (message names the
+    /// element by index and by the mesh file's own id).
+    #[error("{}: {message}", path.display())]
+    Model { path: PathBuf, message: String },
+    /// The output folder holds an earlier run.
+    #[error("{}: the output folder exists and is not empty; fix: choose another --out, or pass --force to replace the run in it", dir.display())]
+    OutDirExists { dir: PathBuf },
+    /// The output folder could not be prepared.
+    #[error("{}: cannot prepare the output folder: {source}; fix: check the path and its permissions", dir.display())]
+    OutDir {
+        dir: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// A result file could not be written.
+    #[error(transparent)]
+    Write(#[from] WriteError),
+}

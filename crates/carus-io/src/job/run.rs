@@ -1,0 +1,471 @@
+//! Building the model from a checked job and running it to the end (or to
+//! the first solver failure), writing frames and history on the way.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+
+use carus_fem::{
+    BoundaryConditions, FemError, FixedDofs, ImposedDisplacement, LoadShape, Material, MaterialRegion, Mesh,
+    ModelOptions, MooneyRivlin, NeoHookean, NodalForce, Precision, StepControl, SurfacePressure, TetFormulation,
+    TledModel, TledSolver,
+};
+use serde::Serialize;
+
+use super::load::{load_job, mesh_path};
+use super::spec::{JobSpec, Law, LoadSpec, PrecisionSpec, TetSpec, TimeStep, AUTO_TIME_STEP_FRACTION};
+use super::JobError;
+use crate::builder::MeshFile;
+use crate::csv::CsvWriter;
+use crate::pvd::PvdCollection;
+use crate::vtk::{write_vtu, FrameFields};
+
+/// Options of a run that are not part of the job.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct RunOptions {
+    /// Replace an earlier run in the output folder.
+    pub force: bool,
+}
+
+/// Where a run stands, reported after every frame.
+#[derive(Debug, Clone, Copy)]
+pub struct Progress {
+    pub time_s: f64,
+    pub end_time_s: f64,
+    pub steps: u64,
+    pub frames: usize,
+}
+
+/// What a run did: printed by `carus solve` (one JSON object with `--json`)
+/// and written to `summary.json`.
+#[derive(Debug, Clone, Serialize)]
+pub struct JobReport {
+    pub out_dir: String,
+    /// Frames written (VTU files in `frames/`).
+    pub frames: usize,
+    /// Steps of `dt_s` taken.
+    pub steps: u64,
+    pub simulated_s: f64,
+    pub wall_s: f64,
+    pub critical_dt_s: f64,
+    pub dt_s: f64,
+    /// Sub-steps per step (above 1 only with `sub_stepping = true`).
+    pub substeps_per_step: u32,
+    /// Largest nodal displacement magnitude at the end of the run, m.
+    pub max_displacement_m: f64,
+    /// Force the supports exert on the tissue at the end (sum of internal
+    /// nodal forces), per fixed or displaced node set, N.
+    pub reactions_n: BTreeMap<String, [f64; 3]>,
+    pub element_kind: &'static str,
+    pub elements: usize,
+    pub nodes: usize,
+    /// Why the run stopped early (the last frame holds the last good
+    /// state), or null.
+    pub failure: Option<String>,
+    /// What the mesh reader skipped on purpose, for the log.
+    #[serde(skip)]
+    pub mesh_notes: Vec<String>,
+}
+
+fn load_shape(load: &LoadSpec) -> LoadShape {
+    match *load {
+        LoadSpec::Step => LoadShape::Step,
+        LoadSpec::Ramp { duration_s } => LoadShape::Ramp { duration_s },
+        LoadSpec::RampHold { ramp_s } => LoadShape::RampHold { ramp_s },
+        LoadSpec::Smooth345 { duration_s } => LoadShape::Smooth345 { duration_s },
+    }
+}
+
+/// The solver's message with the mesh file's own id of the element it names.
+fn describe(error: &FemError, file: &MeshFile) -> String {
+    let element = match error {
+        FemError::InvertedElement { element, .. }
+        | FemError::DegenerateElement { element, .. }
+        | FemError::ElementInvertedDuringRun { element, .. }
+        | FemError::MissingMaterial { element } => Some(*element),
+        _ => None,
+    };
+    match element.and_then(|e| file.element_id(e).map(|id| (e, id))) {
+        Some((e, id)) => format!("{error} [element {e} is element {id} of {}]", file.source.display()),
+        None => error.to_string(),
+    }
+}
+
+struct Sets<'a> {
+    job: &'a Path,
+    mesh: &'a Mesh,
+}
+
+impl Sets<'_> {
+    fn nodes(&self, key: String, name: &str) -> Result<Vec<u32>, JobError> {
+        match self.mesh.node_sets.get(name) {
+            Some(nodes) if !nodes.is_empty() => Ok(nodes.clone()),
+            Some(_) => Err(JobError::Invalid {
+                path: self.job.to_path_buf(),
+                key,
+                problem: format!("node set {name:?} is empty"),
+                fix: "name a set with nodes on the meshed volume".into(),
+            }),
+            None => Err(JobError::UnknownSet {
+                path: self.job.to_path_buf(),
+                key,
+                kind: "node set",
+                name: name.to_string(),
+                available: self.mesh.node_sets.keys().cloned().collect(),
+            }),
+        }
+    }
+
+    fn surface(&self, key: String, name: &str) -> Result<Vec<[u32; 3]>, JobError> {
+        self.mesh.surfaces.get(name).cloned().ok_or_else(|| JobError::UnknownSet {
+            path: self.job.to_path_buf(),
+            key,
+            kind: "surface",
+            name: name.to_string(),
+            available: self.mesh.surfaces.keys().cloned().collect(),
+        })
+    }
+
+    fn check_element_set(&self, key: String, name: &str) -> Result<(), JobError> {
+        if self.mesh.element_sets.contains_key(name) {
+            return Ok(());
+        }
+        Err(JobError::UnknownSet {
+            path: self.job.to_path_buf(),
+            key,
+            kind: "element set",
+            name: name.to_string(),
+            available: self.mesh.element_sets.keys().cloned().collect(),
+        })
+    }
+}
+
+fn materials(spec: &JobSpec, sets: &Sets) -> Result<Vec<MaterialRegion>, JobError> {
+    let mut regions = Vec::with_capacity(spec.materials.len());
+    for (i, m) in spec.materials.iter().enumerate() {
+        if let Some(set) = &m.element_set {
+            sets.check_element_set(format!("material[{i}].element_set"), set)?;
+        }
+        // The loader checked that exactly one parameter set is present.
+        let material = match (m.law, m.shear_modulus_pa, m.bulk_modulus_pa, m.young_modulus_pa, m.poisson_ratio) {
+            (Law::NeoHookean, Some(mu), Some(kappa), _, _) => Material::neo_hookean(mu, kappa),
+            (Law::NeoHookean, _, _, Some(e), Some(nu)) => Material::NeoHookean(
+                NeoHookean::from_young_poisson(e, nu).map_err(|err| JobError::Invalid {
+                    path: sets.job.to_path_buf(),
+                    key: format!("material[{i}]"),
+                    problem: err.to_string(),
+                    fix: "give valid moduli".into(),
+                })?,
+            ),
+            _ => Material::MooneyRivlin(MooneyRivlin {
+                c10_pa: m.c10_pa.unwrap_or_default(),
+                c01_pa: m.c01_pa.unwrap_or_default(),
+                bulk_modulus_pa: m.bulk_modulus_pa.unwrap_or_default(),
+            }),
+        };
+        regions.push(MaterialRegion {
+            element_set: m.element_set.clone(),
+            material,
+            density_kg_m3: m.density_kg_m3,
+        });
+    }
+    Ok(regions)
+}
+
+/// Boundary conditions, and the node sets whose reaction is reported.
+fn boundary_conditions(spec: &JobSpec, sets: &Sets) -> Result<(BoundaryConditions, Vec<(String, Vec<u32>)>), JobError> {
+    let mut bcs = BoundaryConditions::default();
+    let mut supports: Vec<(String, Vec<u32>)> = Vec::new();
+    let mut support = |name: &str, nodes: &[u32]| {
+        if !supports.iter().any(|(n, _)| n == name) {
+            supports.push((name.to_string(), nodes.to_vec()));
+        }
+    };
+    for (i, f) in spec.fixed.iter().enumerate() {
+        let nodes = sets.nodes(format!("fixed[{i}].node_set"), &f.node_set)?;
+        let mut components = [f.components.is_none(); 3];
+        for axis in f.components.iter().flatten() {
+            components[*axis as usize] = true;
+        }
+        support(&f.node_set, &nodes);
+        bcs.fixed.push(FixedDofs { nodes, components });
+    }
+    for (i, d) in spec.displacements.iter().enumerate() {
+        let nodes = sets.nodes(format!("displacement[{i}].node_set"), &d.node_set)?;
+        support(&d.node_set, &nodes);
+        bcs.displacements.push(ImposedDisplacement {
+            nodes,
+            components: [d.x_m, d.y_m, d.z_m],
+            shape: load_shape(&d.load),
+        });
+    }
+    for (i, f) in spec.forces.iter().enumerate() {
+        let nodes = sets.nodes(format!("force[{i}].node_set"), &f.node_set)?;
+        let force_n = match (f.force_per_node_n, f.total_force_n) {
+            (Some(per_node), _) => per_node,
+            (None, Some(total)) => total.map(|v| v / nodes.len() as f64),
+            (None, None) => [0.0; 3],
+        };
+        bcs.forces.push(NodalForce {
+            nodes,
+            force_n,
+            shape: load_shape(&f.load),
+        });
+    }
+    for (i, p) in spec.pressures.iter().enumerate() {
+        bcs.pressures.push(SurfacePressure {
+            triangles: sets.surface(format!("pressure[{i}].surface"), &p.surface)?,
+            pressure_pa: p.pressure_pa,
+            shape: load_shape(&p.load),
+        });
+    }
+    bcs.gravity_m_s2 = spec.gravity.as_ref().map(|g| g.acceleration_m_s2);
+    Ok((bcs, supports))
+}
+
+/// Whether `dir` exists and holds anything.
+fn occupied(dir: &Path) -> bool {
+    std::fs::read_dir(dir).is_ok_and(|mut entries| entries.next().is_some())
+}
+
+/// Makes `dir/frames`; a non-empty `dir` needs `force`, which then removes
+/// only the files a run writes.
+fn prepare_out_dir(dir: &Path, force: bool) -> Result<(), JobError> {
+    let io = |source| JobError::OutDir {
+        dir: dir.to_path_buf(),
+        source,
+    };
+    if dir.exists() {
+        if occupied(dir) && !force {
+            return Err(JobError::OutDirExists { dir: dir.to_path_buf() });
+        }
+        let frames = dir.join("frames");
+        if frames.is_dir() {
+            for entry in std::fs::read_dir(&frames).map_err(io)? {
+                let path = entry.map_err(io)?.path();
+                let is_frame = path.file_name().and_then(|n| n.to_str()).is_some_and(|n| n.starts_with("frame_") && n.ends_with(".vtu"));
+                if is_frame {
+                    std::fs::remove_file(&path).map_err(io)?;
+                }
+            }
+        }
+    }
+    std::fs::create_dir_all(dir.join("frames")).map_err(io)
+}
+
+/// A column name from a set name (letters, digits and `_` only).
+fn column(name: &str) -> String {
+    name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '_' { c } else { '_' }).collect()
+}
+
+fn max_norm(u: &[[f64; 3]]) -> f64 {
+    u.iter().map(|d| (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()).fold(0.0, f64::max)
+}
+
+/// Frames, PVD and history of a running job.
+struct Recorder {
+    out_dir: PathBuf,
+    pvd: PvdCollection,
+    history: CsvWriter,
+    supports: Vec<(String, Vec<u32>)>,
+    last_frame_time_s: Option<f64>,
+    reactions: BTreeMap<String, [f64; 3]>,
+}
+
+impl Recorder {
+    fn frame(&mut self, solver: &TledSolver, mesh: &Mesh) -> Result<(), JobError> {
+        let name = format!("frames/frame_{:05}.vtu", self.pvd.frames().len());
+        let displacement = solver.displacements();
+        let fields = solver.element_fields();
+        write_vtu(
+            &self.out_dir.join(&name),
+            mesh,
+            &FrameFields {
+                displacement_m: &displacement,
+                von_mises_pa: &fields.von_mises_pa,
+                max_principal_stretch: &fields.max_principal_stretch,
+                jacobian: &fields.jacobian,
+            },
+        )?;
+        self.pvd.push(solver.time_s(), name);
+        self.pvd.write(&self.out_dir.join("solution.pvd"))?;
+        self.last_frame_time_s = Some(solver.time_s());
+        Ok(())
+    }
+
+    fn history(&mut self, solver: &mut TledSolver) -> Result<(), JobError> {
+        let energies = solver.energies();
+        let forces_ok = solver.update_internal_forces().is_ok();
+        let mut row = vec![
+            solver.time_s(),
+            solver.steps() as f64,
+            max_norm(&solver.displacements()),
+            energies.kinetic_j,
+            energies.strain_j,
+            energies.hourglass_j,
+        ];
+        for (name, nodes) in &self.supports {
+            let reaction = match solver.reaction_force(nodes) {
+                Ok(r) if forces_ok => r,
+                _ => [f64::NAN; 3],
+            };
+            self.reactions.insert(name.clone(), reaction);
+            row.extend_from_slice(&reaction);
+        }
+        self.history.row(&row)?;
+        Ok(())
+    }
+}
+
+/// Runs the job file at `job_path`, writing into `out_dir`:
+/// `frames/frame_NNNNN.vtu`, `solution.pvd`, `history.csv` and
+/// `summary.json`. A solver failure mid-run still writes the last good
+/// state as the final frame and returns a report whose `failure` is set.
+pub fn run_job(
+    job_path: &Path,
+    out_dir: &Path,
+    options: &RunOptions,
+    progress: &mut dyn FnMut(&Progress),
+) -> Result<JobReport, JobError> {
+    let start = Instant::now();
+    let spec = load_job(job_path)?;
+    // Refuse an occupied folder before the (possibly long) model build.
+    if !options.force && occupied(out_dir) {
+        return Err(JobError::OutDirExists { dir: out_dir.to_path_buf() });
+    }
+    let file = crate::read_mesh(&mesh_path(job_path, &spec))?.to_metres(spec.mesh.length_unit);
+    let mesh = &file.mesh;
+    let sets = Sets { job: job_path, mesh };
+    let regions = materials(&spec, &sets)?;
+    let (bcs, supports) = boundary_conditions(&spec, &sets)?;
+    let solver_spec = &spec.solver;
+    let model_options = ModelOptions {
+        tet_formulation: match solver_spec.tet_formulation {
+            TetSpec::T4 => TetFormulation::T4,
+            TetSpec::T4anp => TetFormulation::T4Anp,
+        },
+        hourglass_coefficient: solver_spec.hourglass_coefficient,
+        damping_per_s: solver_spec.damping_per_s,
+        precision: match solver_spec.precision {
+            PrecisionSpec::F64 => Precision::F64,
+            PrecisionSpec::F32 => Precision::F32,
+        },
+    };
+    let model_error = |e: FemError| JobError::Model {
+        path: file.source.clone(),
+        message: describe(&e, &file),
+    };
+    let model = TledModel::new(mesh, &regions, &model_options).map_err(model_error)?;
+    let critical_dt_s = model.critical_time_step();
+    let (dt_s, control) = match solver_spec.time_step_s {
+        TimeStep::Auto => (AUTO_TIME_STEP_FRACTION * critical_dt_s, StepControl::Refuse),
+        TimeStep::Seconds(dt) if solver_spec.sub_stepping => (dt, StepControl::SubStep),
+        TimeStep::Seconds(dt) => (dt, StepControl::Refuse),
+    };
+    let mut solver = TledSolver::new(Arc::new(model), &bcs, dt_s, control).map_err(|e| match e {
+        FemError::TimeStepAboveCritical { .. } => JobError::Invalid {
+            path: job_path.to_path_buf(),
+            key: "solver.time_step_s".into(),
+            problem: e.to_string(),
+            fix: "lower time_step_s, set it to \"auto\", or set sub_stepping = true".into(),
+        },
+        other => model_error(other),
+    })?;
+
+    prepare_out_dir(out_dir, options.force)?;
+    let end_s = solver_spec.end_time_s;
+    let frame_interval_s = spec.output.frame_interval_s.unwrap_or(end_s / 20.0);
+    let history_interval_s = spec.output.history_interval_s.unwrap_or(frame_interval_s / 10.0);
+    let mut header: Vec<String> = ["time_s", "step", "max_displacement_m", "kinetic_j", "strain_j", "hourglass_j"]
+        .map(String::from)
+        .to_vec();
+    for (name, _) in &supports {
+        for axis in ["x", "y", "z"] {
+            header.push(format!("reaction_{}_{axis}_n", column(name)));
+        }
+    }
+    let header: Vec<&str> = header.iter().map(String::as_str).collect();
+    let mut recorder = Recorder {
+        out_dir: out_dir.to_path_buf(),
+        pvd: PvdCollection::new(),
+        history: CsvWriter::create(&out_dir.join("history.csv"), &header)?,
+        supports,
+        last_frame_time_s: None,
+        reactions: BTreeMap::new(),
+    };
+    recorder.frame(&solver, mesh)?;
+    recorder.history(&mut solver)?;
+    let (mut next_frame, mut next_history) = (1u64, 1u64);
+    let mut failure = None;
+    // Half a step of slack: the run ends on the step nearest end_time_s.
+    while solver.time_s() + 0.5 * dt_s < end_s {
+        if let Err(e) = solver.step() {
+            failure = Some(format!(
+                "{} (step {} of dt = {dt_s:.3e} s; the last frame holds the state at t = {:.6e} s)",
+                describe(&e, &file),
+                solver.steps() + 1,
+                solver.time_s()
+            ));
+            break;
+        }
+        let t = solver.time_s() + 0.5 * dt_s;
+        if t >= next_history as f64 * history_interval_s {
+            recorder.history(&mut solver)?;
+            next_history = (t / history_interval_s).floor() as u64 + 1;
+        }
+        if t >= next_frame as f64 * frame_interval_s {
+            recorder.frame(&solver, mesh)?;
+            next_frame = (t / frame_interval_s).floor() as u64 + 1;
+            progress(&Progress {
+                time_s: solver.time_s(),
+                end_time_s: end_s,
+                steps: solver.steps(),
+                frames: recorder.pvd.frames().len(),
+            });
+        }
+    }
+    if recorder.last_frame_time_s != Some(solver.time_s()) {
+        recorder.frame(&solver, mesh)?;
+        recorder.history(&mut solver)?;
+    }
+    recorder.history.flush()?;
+    let report = JobReport {
+        out_dir: out_dir.display().to_string(),
+        frames: recorder.pvd.frames().len(),
+        steps: solver.steps(),
+        simulated_s: solver.time_s(),
+        wall_s: start.elapsed().as_secs_f64(),
+        critical_dt_s,
+        dt_s,
+        substeps_per_step: solver.substeps_per_step(),
+        max_displacement_m: max_norm(&solver.displacements()),
+        reactions_n: recorder.reactions.clone(),
+        element_kind: mesh.kind.name(),
+        elements: mesh.element_count(),
+        nodes: mesh.node_count(),
+        failure,
+        mesh_notes: file.notes.clone(),
+    };
+    let summary = out_dir.join("summary.json");
+    let json = serde_json::to_string_pretty(&report).unwrap_or_default();
+    std::fs::write(&summary, json + "\n").map_err(|source| crate::WriteError::Io { path: summary, source })?;
+    Ok(report)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::spec::Axis;
+    use super::*;
+
+    #[test]
+    fn set_names_become_csv_columns() {
+        assert_eq!(column("x0"), "x0");
+        assert_eq!(column("left face,1"), "left_face_1");
+    }
+
+    #[test]
+    fn the_axis_order_matches_the_component_order() {
+        assert_eq!([Axis::X as usize, Axis::Y as usize, Axis::Z as usize], [0, 1, 2]);
+    }
+}

@@ -1,0 +1,162 @@
+//! End to end: the shipped example job (VALIDATION.md V3 at n = 5, from a
+//! Gmsh file) run through `carus_io::job`, checked against the same cube
+//! built directly with carus-fem's API, and its outputs read back.
+
+use std::path::{Path, PathBuf};
+
+use carus_fem::validation::cube::{simulate, CubeElement, CubeSetup, CubeVariant};
+use carus_io::job::{run_job, JobError, RunOptions};
+use carus_io::vtk::read_vtk_arrays;
+use carus_io::PvdCollection;
+
+fn example() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cube_extension.toml")
+}
+
+fn fresh_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("carus-io-e2e-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+#[test]
+fn the_example_job_matches_the_direct_api_and_writes_readable_results() {
+    let out = fresh_dir("cube");
+    let mut progress_calls = 0;
+    let report = run_job(&example(), &out, &RunOptions::default(), &mut |_| progress_calls += 1).unwrap();
+    assert!(report.failure.is_none(), "{:?}", report.failure);
+    assert_eq!((report.elements, report.nodes, report.element_kind), (125, 216, "h8"));
+    assert_eq!(report.steps, 5000);
+    assert!((report.simulated_s - 10.0).abs() < 1e-9);
+    assert_eq!(report.frames, 21, "t = 0, every 0.5 s to 10 s");
+    assert!(progress_calls >= 20);
+    assert!(report.dt_s <= report.critical_dt_s);
+
+    // The same model through carus-fem directly (the V3 set-up, n = 5).
+    let direct = simulate(&CubeSetup::miller(5, CubeElement::H8, CubeVariant::Clamped)).unwrap();
+    let frames = PvdCollection::parse(&std::fs::read_to_string(out.join("solution.pvd")).unwrap()).unwrap();
+    assert_eq!(frames.frames().len(), 21);
+    let (last_time, last_file) = frames.frames().last().unwrap().clone();
+    assert!((last_time - 10.0).abs() < 1e-9);
+    let last = out.join(&last_file);
+    let mesh = carus_io::read_mesh(&last).unwrap().mesh;
+    let arrays = read_vtk_arrays(&last).unwrap();
+    let displacement = &arrays.point["displacement"].values;
+    let reference = CubeSetup::miller(5, CubeElement::H8, CubeVariant::Clamped).mesh();
+    let mut worst = 0.0f64;
+    for (node, x) in mesh.nodes.iter().enumerate() {
+        let twin = reference
+            .nodes
+            .iter()
+            .position(|y| (0..3).all(|k| (x[k] - y[k]).abs() < 1e-9))
+            .expect("every node of the Gmsh cube is a node of the generated cube");
+        for k in 0..3 {
+            worst = worst.max((displacement[3 * node + k] - direct.displacements_m[twin][k]).abs());
+        }
+    }
+    assert!(worst < 1e-9, "job and direct API differ by {worst} m");
+    let reaction = report.reactions_n["x0"];
+    let direct_reaction = direct.reaction_fixed_face_n;
+    assert!((reaction[0] - direct_reaction[0]).abs() < 1e-6 * direct_reaction[0].abs(), "{reaction:?} vs {direct_reaction:?}");
+    assert!(reaction[0] < 0.0, "the fixed face holds the cube back along -x");
+    assert!((report.reactions_n["x1"][0] + reaction[0]).abs() < 0.01 * reaction[0].abs(), "at rest the two supports balance");
+    assert!((report.max_displacement_m - 0.03).abs() < 1e-9);
+    assert!(arrays.cell["von_mises_pa"].values.iter().all(|v| v.is_finite() && *v > 0.0));
+    assert!(arrays.cell["jacobian"].values.iter().all(|j| *j > 0.5 && *j < 1.5));
+
+    let history = std::fs::read_to_string(out.join("history.csv")).unwrap();
+    let mut lines = history.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(&header[..3], ["time_s", "step", "max_displacement_m"]);
+    assert!(header.contains(&"reaction_x0_x_n"));
+    assert_eq!(lines.count(), 201, "t = 0 and every 0.05 s");
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["steps"], 5000);
+
+    // A second run into the same folder is refused unless forced.
+    let again = run_job(&example(), &out, &RunOptions::default(), &mut |_| {});
+    assert!(matches!(again, Err(JobError::OutDirExists { .. })));
+    std::fs::remove_dir_all(&out).unwrap();
+}
+
+fn write_job(dir: &Path, body: &str) -> PathBuf {
+    std::fs::create_dir_all(dir).unwrap();
+    std::fs::copy(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cube_n5.msh"), dir.join("cube_n5.msh")).unwrap();
+    let path = dir.join("job.toml");
+    std::fs::write(&path, body).unwrap();
+    path
+}
+
+const BASE: &str = r#"
+[mesh]
+file = "cube_n5.msh"
+length_unit = "mm"
+
+[[material]]
+law = "neo_hookean"
+young_modulus_pa = 3000.0
+poisson_ratio = 0.45
+density_kg_m3 = 1000.0
+
+[[fixed]]
+node_set = "x0"
+"#;
+
+#[test]
+fn a_run_that_inverts_an_element_stops_with_its_last_good_frame() {
+    // The cube read in millimetres (0.1 mm) and crushed by 0.3 mm in 1 ms: it inverts.
+    let dir = fresh_dir("invert");
+    let body = format!(
+        "{BASE}\n[[displacement]]\nnode_set = \"x1\"\nx_m = -3e-4\nload = {{ shape = \"ramp\", duration_s = 1e-3 }}\n\n[solver]\nend_time_s = 0.01\ntime_step_s = \"auto\"\n"
+    );
+    let job = write_job(&dir, &body);
+    let out = dir.join("out");
+    let report = run_job(&job, &out, &RunOptions::default(), &mut |_| {}).unwrap();
+    let failure = report.failure.clone().expect("the crushed cube must fail");
+    assert!(failure.contains("element") && failure.contains("step"), "{failure}");
+    assert!(failure.contains("cube_n5.msh"), "names the element's id in the mesh file: {failure}");
+    let frames = PvdCollection::parse(&std::fs::read_to_string(out.join("solution.pvd")).unwrap()).unwrap();
+    assert_eq!(frames.frames().len(), report.frames);
+    let (time, file) = frames.frames().last().unwrap();
+    assert!((time - report.simulated_s).abs() < 1e-15, "the last frame is the last good state");
+    assert!(out.join(file).exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn job_errors_name_the_key_the_line_and_the_fix() {
+    let dir = fresh_dir("errors");
+    let cases: [(&str, &str); 6] = [
+        (
+            "\n[solver]\nend_time_s = 1.0\ntime_stepp_s = 1e-3\n",
+            "job.toml:17:1: `solver.time_stepp_s`: unknown field `time_stepp_s`",
+        ),
+        ("\n[solver]\nend_time_s = -1.0\n", "`solver.end_time_s`: -1 must be positive"),
+        (
+            "\n[[displacement]]\nnode_set = \"x9\"\nx_m = 0.001\nload = { shape = \"step\" }\n[solver]\nend_time_s = 1.0\n",
+            "`displacement[0].node_set` names the node set \"x9\", which the mesh does not have; fix: use one of: x0, x1",
+        ),
+        (
+            "\n[solver]\nend_time_s = 1.0\ntime_step_s = 0.5\n",
+            "`solver.time_step_s`: time step 5.000000e-1 s is above the critical time step",
+        ),
+        (
+            "\n[[pressure]]\nsurface = \"x1\"\npressure_pa = 10.0\nload = { shape = \"ramp_hold\", ramp = 1.0 }\n[solver]\nend_time_s = 1.0\n",
+            "`pressure[0].load`: unknown field `ramp`",
+        ),
+        ("\n[solver]\nend_time_s = 1.0\nhourglass_coefficient = \"high\"\n", "`solver.hourglass_coefficient`: invalid type"),
+    ];
+    for (extra, expected) in cases {
+        let job = write_job(&dir, &format!("{BASE}{extra}"));
+        let err = run_job(&job, &dir.join("out"), &RunOptions::default(), &mut |_| {}).unwrap_err().to_string();
+        assert!(err.contains(expected), "{err}\n  expected: {expected}");
+        assert!(err.contains("fix:") || err.contains("hint:"), "{err}");
+    }
+    let unit = write_job(&dir, &BASE.replace("\"mm\"", "\"cm\""));
+    let err = run_job(&unit, &dir.join("out"), &RunOptions::default(), &mut |_| {}).unwrap_err().to_string();
+    assert!(err.contains("`mesh.length_unit`") && err.contains("expected `m` or `mm`"), "{err}");
+    let typo = write_job(&dir, &format!("{BASE}\n[solver]\nend_time_s = 1.0\ndamping_pers = 1.0\n"));
+    let err = run_job(&typo, &dir.join("out"), &RunOptions::default(), &mut |_| {}).unwrap_err().to_string();
+    assert!(err.contains("did you mean `damping_per_s`?"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
