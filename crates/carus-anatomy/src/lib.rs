@@ -2,6 +2,8 @@
 //! or imported from real meshes, in the pelvis frame of CONVENTIONS.md.
 
 pub mod axis;
+pub mod fetus;
+pub mod import;
 pub mod pelvis;
 pub mod surface;
 

@@ -1,0 +1,242 @@
+//! The fetal trunk: neck, shoulders, chest, abdomen and hips as a closed
+//! surface of superellipse rings, built from the bisacromial and
+//! bitrochanteric diameters.
+//!
+//! Trunk frame (metres): origin at the atlanto-occipital pivot, where the
+//! trunk carries the head; x ventral, y towards the fetal left, z cranial, so
+//! that with the neck straight it is the head frame moved to the pivot. The
+//! spine axis k (CARDINAL_MOVEMENTS.md: from the pivot towards the breech)
+//! is -z.
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use crate::surface::TriSurface;
+
+/// Shoulder and hip widths of the fetus, millimetres, canonical names of
+/// CONVENTIONS.md.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TrunkDiameters {
+    /// Between the acromions. REFERENCE_DATA.md: bisacromial about 120 mm
+    /// (neonatal mean 124, sd 10); the textbook 120 mm is taken.
+    pub bisacromial_mm: f64,
+    /// Between the greater trochanters. Engineering estimate: 95 mm, the
+    /// figure of about 9.5 cm quoted in obstetric texts for the term breech;
+    /// not yet in REFERENCE_DATA.md.
+    pub bitrochanteric_mm: f64,
+}
+
+impl Default for TrunkDiameters {
+    fn default() -> Self {
+        TrunkDiameters { bisacromial_mm: 120.0, bitrochanteric_mm: 95.0 }
+    }
+}
+
+/// Why a trunk cannot be built.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum TrunkError {
+    #[error("{name} = {value} mm: trunk diameters must be positive, finite lengths")]
+    NotPositive { name: &'static str, value: f64 },
+}
+
+impl TrunkDiameters {
+    pub fn validate(&self) -> Result<(), TrunkError> {
+        for (name, value) in [("bisacromial_mm", self.bisacromial_mm), ("bitrochanteric_mm", self.bitrochanteric_mm)] {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(TrunkError::NotPositive { name, value });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Points along the ring, a multiple of 4 so that the sideways extremes
+/// (acromions, trochanters) are ring vertices.
+const RING_POINTS: usize = 48;
+/// Superellipse exponent of the cross-sections: a rounded, boxy torso.
+const SECTION_EXPONENT: f64 = 2.5;
+
+/// One cross-section of the trunk: height, half-width (along y), half-depth
+/// (along x) and the ventral offset of its centre from the spine line.
+#[derive(Debug, Clone, Copy)]
+struct Section {
+    z: f64,
+    half_width: f64,
+    half_depth: f64,
+    centre_x: f64,
+}
+
+/// Cross-sections from the neck down, as fractions of the bisacromial
+/// diameter S (engineering estimates shaped on a term neonate: neck about
+/// 48 mm thick, chest about 108 x 88 mm and abdomen about 100 x 92 mm, i.e.
+/// circumferences near 31-33 cm, sitting height of the trunk about 1.75 S),
+/// except the shoulder and hip widths, which are the diameters themselves.
+fn sections(d: &TrunkDiameters) -> [Section; 8] {
+    let s = d.bisacromial_mm * 1e-3;
+    let t = d.bitrochanteric_mm * 1e-3;
+    let section = |z: f64, half_width: f64, half_depth: f64, centre: f64| Section {
+        z: z * s,
+        half_width,
+        half_depth: half_depth * s,
+        centre_x: centre * s,
+    };
+    [
+        section(0.0, 0.18 * s, 0.18, 0.05),
+        section(-0.20, 0.20 * s, 0.19, 0.06),
+        section(-0.32, 0.5 * s, 0.28, 0.12),
+        section(-0.55, 0.45 * s, 0.37, 0.20),
+        section(-0.95, 0.42 * s, 0.38, 0.22),
+        section(-1.35, 0.5 * t, 0.33, 0.18),
+        section(-1.62, 0.36 * t, 0.22, 0.12),
+        section(-1.75, 0.12 * t, 0.08, 0.08),
+    ]
+}
+
+/// Index of the shoulder (acromion) and hip (trochanter) sections.
+const SHOULDER: usize = 2;
+const HIP: usize = 5;
+
+/// Named points of the trunk, metres, trunk frame.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TrunkLandmarks {
+    /// Where the trunk carries the head: the atlanto-occipital pivot (origin).
+    pub neck: DVec3,
+    pub acromion_left: DVec3,
+    pub acromion_right: DVec3,
+    /// Midpoint of the bisacromial diameter (CARDINAL_MOVEMENTS.md, expulsion).
+    pub bisacromial_midpoint: DVec3,
+    pub trochanter_left: DVec3,
+    pub trochanter_right: DVec3,
+    /// Centre of the trunk: midway between the bisacromial and bitrochanteric midpoints.
+    pub centre: DVec3,
+    /// Lowest point of the buttocks, on the spine axis side.
+    pub breech: DVec3,
+}
+
+/// The trunk: diameters, closed outward surface, landmarks and spine axis.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Trunk {
+    pub diameters: TrunkDiameters,
+    pub surface: TriSurface,
+    pub landmarks: TrunkLandmarks,
+    /// Unit spine axis k, from the pivot towards the breech (trunk frame).
+    pub spine_axis: DVec3,
+}
+
+/// Point at parameter `theta` on a section: theta = 0 is the fetal left
+/// (+y), pi/2 ventral (+x).
+fn ring_point(s: &Section, theta: f64) -> DVec3 {
+    let p = 2.0 / SECTION_EXPONENT;
+    let (sin, cos) = theta.sin_cos();
+    // Exact zeros at the quarter points keep the extremes exact.
+    let shaped = |c: f64| if c.abs() < 1e-12 { 0.0 } else { c.signum() * c.abs().powf(p) };
+    DVec3::new(s.centre_x + s.half_depth * shaped(sin), s.half_width * shaped(cos), s.z)
+}
+
+impl Trunk {
+    pub fn new(d: &TrunkDiameters) -> Result<Self, TrunkError> {
+        d.validate()?;
+        let sections = sections(d);
+        let n = RING_POINTS;
+        let mut vertices = Vec::with_capacity(sections.len() * n + 2);
+        for s in &sections {
+            vertices.extend((0..n).map(|k| ring_point(s, std::f64::consts::TAU * k as f64 / n as f64)));
+        }
+        let top = vertices.len() as u32;
+        let first = sections[0];
+        vertices.push(DVec3::new(first.centre_x, 0.0, first.z));
+        let last = sections[sections.len() - 1];
+        let breech = DVec3::new(last.centre_x, 0.0, last.z - 0.5 * last.half_depth);
+        vertices.push(breech);
+        let bottom = top + 1;
+
+        let ring = |r: usize, k: usize| (r * n + k % n) as u32;
+        let mut triangles = Vec::with_capacity(2 * n * sections.len());
+        // Rings run clockwise seen from above (left -> ventral -> right), so
+        // going down, (upper k, lower k + 1, lower k) faces outwards.
+        for r in 0..sections.len() - 1 {
+            for k in 0..n {
+                triangles.push([ring(r, k), ring(r + 1, k + 1), ring(r + 1, k)]);
+                triangles.push([ring(r, k), ring(r, k + 1), ring(r + 1, k + 1)]);
+            }
+        }
+        let lowest = sections.len() - 1;
+        for k in 0..n {
+            triangles.push([top, ring(0, k + 1), ring(0, k)]);
+            triangles.push([bottom, ring(lowest, k), ring(lowest, k + 1)]);
+        }
+
+        let at = |section: usize, quarter: usize| vertices[ring(section, quarter * n / 4) as usize];
+        let acromion_left = at(SHOULDER, 0);
+        let acromion_right = at(SHOULDER, 2);
+        let trochanter_left = at(HIP, 0);
+        let trochanter_right = at(HIP, 2);
+        let bisacromial_midpoint = 0.5 * (acromion_left + acromion_right);
+        let landmarks = TrunkLandmarks {
+            neck: DVec3::ZERO,
+            acromion_left,
+            acromion_right,
+            bisacromial_midpoint,
+            trochanter_left,
+            trochanter_right,
+            centre: 0.5 * (bisacromial_midpoint + 0.5 * (trochanter_left + trochanter_right)),
+            breech,
+        };
+        Ok(Trunk { diameters: *d, surface: TriSurface::new(vertices, triangles), landmarks, spine_axis: -DVec3::Z })
+    }
+
+    /// The trunk measured back, millimetres.
+    pub fn measure(&self) -> TrunkMeasurement {
+        let l = &self.landmarks;
+        let (lo, hi) = self.surface.bounds().unwrap_or_default();
+        TrunkMeasurement {
+            bisacromial_mm: l.acromion_left.distance(l.acromion_right) * 1e3,
+            bitrochanteric_mm: l.trochanter_left.distance(l.trochanter_right) * 1e3,
+            width_mm: (hi.y - lo.y) * 1e3,
+            length_mm: (hi.z - lo.z) * 1e3,
+        }
+    }
+}
+
+/// Trunk diameters measured between landmarks and the trunk's extents, mm.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TrunkMeasurement {
+    pub bisacromial_mm: f64,
+    pub bitrochanteric_mm: f64,
+    /// Extent from side to side (the wider of shoulders and hips).
+    pub width_mm: f64,
+    /// Extent along the spine, neck to breech.
+    pub length_mm: f64,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(32))]
+        #[test]
+        fn trunks_are_closed_and_measure_back(s in 90.0..160.0f64, t in 70.0..120.0f64) {
+            let d = TrunkDiameters { bisacromial_mm: s, bitrochanteric_mm: t };
+            let trunk = Trunk::new(&d).unwrap();
+            trunk.surface.check_closed().unwrap();
+            let m = trunk.measure();
+            prop_assert!((m.bisacromial_mm - s).abs() < 0.1);
+            prop_assert!((m.bitrochanteric_mm - t).abs() < 0.1);
+            prop_assert!((m.width_mm - s.max(t)).abs() < 0.1);
+        }
+    }
+
+    #[test]
+    fn defaults_and_errors() {
+        let trunk = Trunk::new(&TrunkDiameters::default()).unwrap();
+        let l = trunk.landmarks;
+        assert!(l.acromion_left.y > 0.0 && l.acromion_right.y < 0.0);
+        assert!(l.breech.z < l.trochanter_left.z && l.trochanter_left.z < l.acromion_left.z);
+        assert!((trunk.spine_axis - (l.breech - l.neck).normalize()).length() < 0.2);
+        let bad = TrunkDiameters { bitrochanteric_mm: 0.0, ..Default::default() };
+        assert!(Trunk::new(&bad).unwrap_err().to_string().contains("bitrochanteric_mm"));
+    }
+}
