@@ -8,9 +8,16 @@
 //! pelvis, so a measured value means the same thing for a generated and an
 //! imported one.
 
+mod diameters;
+mod generate;
+mod interpolate;
 mod landmarks;
+mod layout;
+pub mod measure;
 
+pub use diameters::{DiameterError, PelvisDiameters};
 pub use landmarks::{PelvisLandmarks, LANDMARK_NAMES};
+pub use measure::{measure, PelvisMeasurement, PlaneMeasurement};
 
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -27,6 +34,8 @@ pub enum PelvisError {
     DegeneratePlane { plane: &'static str, posterior: &'static str, anterior: &'static str },
     #[error("the pelvic axis cannot be built: {0}")]
     Axis(#[from] AxisError),
+    #[error("impossible pelvis diameters: {0}")]
+    Diameters(#[from] DiameterError),
 }
 
 /// The four obstetric planes, each with its centre and caudal unit normal.
@@ -127,9 +136,108 @@ impl Pelvis {
         Ok(Pelvis { surface, landmarks, planes, axis })
     }
 
+    /// Generates a pelvis from its obstetric diameters: landmarks placed so
+    /// every diameter measures back exactly, and the bony canal's surface
+    /// through them (docs/ANATOMY.md).
+    pub fn generate(diameters: &PelvisDiameters) -> Result<Self, PelvisError> {
+        let layout = layout::layout(diameters)?;
+        let surface = generate::canal_surface(&layout);
+        Pelvis::from_landmarks(layout.landmarks, surface)
+    }
+
     /// Arc length of each plane along the axis: inlet, greatest, mid, outlet.
     pub fn plane_sigmas(&self) -> [f64; 4] {
         let s = self.axis.plane_sigmas();
         [s[0], s[1], s[2], s[3]]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn assert_measures_back(requested: &PelvisDiameters, pelvis: &Pelvis) {
+        let measured = measure::diameters_from_landmarks(&pelvis.landmarks);
+        let pairs = requested.sizes().into_iter().zip(measured.sizes());
+        for ((key, want), (_, got)) in pairs {
+            assert!((want - got).abs() < 0.1, "{key}: requested {want} mm, measured {got} mm");
+        }
+        assert!((requested.subpubic_angle_deg - measured.subpubic_angle_deg).abs() < 0.1);
+    }
+
+    #[test]
+    fn the_default_pelvis_is_closed_and_measures_back() {
+        let d = PelvisDiameters::default();
+        let pelvis = Pelvis::generate(&d).unwrap();
+        pelvis.surface.check_closed().unwrap();
+        assert_measures_back(&d, &pelvis);
+        let m = measure(&pelvis);
+        assert!(m.landmark_surface_gap_mm < 1e-9, "a landmark is {} mm off the surface", m.landmark_surface_gap_mm);
+        // The canal is widest at the inlet and narrowest at the spines.
+        let greatest = m.planes["greatest_dimensions"].transverse_mm.unwrap();
+        assert!(greatest < d.inlet_transverse_mm && greatest > d.interspinous_mm, "greatest transverse {greatest}");
+        // The axis is the C-shaped curve of Carus: it turns forward.
+        let outlet = m.planes["outlet"].tilt_from_inlet_deg;
+        assert!(outlet > m.planes["mid"].tilt_from_inlet_deg && outlet > 30.0);
+        assert!(pelvis.axis.point(pelvis.axis.length()).y > 0.01);
+    }
+
+    #[test]
+    fn conflicts_found_by_the_geometry_are_named() {
+        let far = PelvisDiameters { mid_ap_mm: 190.0, ..Default::default() };
+        let message = Pelvis::generate(&far).unwrap_err().to_string();
+        assert!(message.contains("mid_ap_mm") && message.contains("between"), "{message}");
+        let coccyx = PelvisDiameters { outlet_ap_mm: 160.0, ..Default::default() };
+        assert!(Pelvis::generate(&coccyx).unwrap_err().to_string().contains("outlet_ap_mm"));
+        let oblique = PelvisDiameters { inlet_oblique_mm: 160.0, ..Default::default() };
+        assert!(Pelvis::generate(&oblique).unwrap_err().to_string().contains("inlet_oblique_mm"));
+        let ligament = PelvisDiameters { outlet_oblique_mm: 130.0, ..Default::default() };
+        assert!(Pelvis::generate(&ligament).unwrap_err().to_string().contains("outlet_oblique_mm"));
+    }
+
+    /// Random clinical diameter sets, from contracted to generous pelvises.
+    fn diameter_sets() -> impl Strategy<Value = PelvisDiameters> {
+        (
+            (85.0..125.0f64, 115.0..145.0f64, 0.0..1.0f64, 100.0..130.0f64, 0.0..1.0f64, 0.85..1.08f64),
+            (95.0..125.0f64, 0.0..1.0f64, 35.0..55.0f64, 90.0..120.0f64, 90.0..120.0f64, 12.0..30.0f64),
+        )
+            .prop_map(|((ap, t, oblique, mid_ap, spines, outlet_ap), (outlet_t, outlet_oblique, symphysis, sacrum, angle, depth))| {
+                let hypotenuse = ap.hypot(t);
+                let low = (ap.min(t) / hypotenuse).max(0.62);
+                PelvisDiameters {
+                    inlet_ap_mm: ap,
+                    inlet_transverse_mm: t,
+                    inlet_oblique_mm: hypotenuse * (low + oblique * (0.85 - low)),
+                    mid_ap_mm: mid_ap,
+                    interspinous_mm: 85.0 + spines * (t - 100.0),
+                    outlet_ap_mm: outlet_ap * mid_ap,
+                    outlet_transverse_mm: outlet_t,
+                    outlet_oblique_mm: 0.78 * outlet_t + outlet_oblique * 0.12 * outlet_t,
+                    symphysis_length_mm: symphysis,
+                    sacral_length_mm: sacrum,
+                    subpubic_angle_deg: angle,
+                    sacral_depth_mm: depth,
+                }
+            })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
+        #[test]
+        fn generated_pelvises_measure_back_and_are_closed(d in diameter_sets()) {
+            let pelvis = match Pelvis::generate(&d) {
+                Ok(p) => p,
+                Err(PelvisError::Diameters(DiameterError::OutOfReach { .. })) => { return Err(TestCaseError::reject("out of reach"))
+                }
+                Err(e) => return Err(TestCaseError::fail(e.to_string())),
+            };
+            pelvis.surface.check_closed().map_err(|e| TestCaseError::fail(e.to_string()))?;
+            assert_measures_back(&d, &pelvis);
+            for (name, p) in pelvis.landmarks.named() {
+                let nearest = pelvis.surface.vertices.iter().map(|v| (*v - p).length()).fold(f64::INFINITY, f64::min);
+                prop_assert!(nearest < 1e-12, "{} is off the surface", name);
+            }
+        }
     }
 }

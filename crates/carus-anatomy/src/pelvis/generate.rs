@@ -1,0 +1,399 @@
+//! The surface of a generated pelvis: a thick bony shell swept down the
+//! birth canal through ring cross-sections, with the landmarks as vertices.
+//!
+//! The inner (canal) wall is a grid: columns go once round the canal
+//! (counter-clockwise seen from above, column 0 at the front midline) and
+//! rows go down it through seven key rings: iliac crest, iliac fossa, inlet,
+//! plane of greatest dimensions, mid-pelvis, sacral apex, outlet. Each key
+//! ring passes through its landmarks; rows between them are Catmull-Rom
+//! blends down each column. A cell mask cuts out what is not bone (the front
+//! of the false pelvis, the pubic arch, the obturator foramina, the sciatic
+//! notches between sacrum and ischium, the gap between the posterior iliac
+//! spines), the outer bone surface is the wall pushed outwards by a smooth
+//! bone thickness, and walls along the mask's edges close the shell.
+
+use glam::{DVec2, DVec3};
+
+use super::interpolate::catmull_rom;
+use super::layout::{point, Layout};
+use super::PelvisLandmarks;
+use crate::surface::TriSurface;
+
+/// Grid columns per 1/64 of a turn round the canal.
+const RESOLUTION: usize = 2;
+/// Positions round the canal are in 1/64 turns, `da` = distance from the
+/// front midline (0 front, 16 side, 32 back).
+const HALF_TURN: f64 = 32.0;
+/// Key rings, top to bottom; rows are measured in these units (`kappa`).
+const INLET: usize = 2;
+const GREATEST: usize = 3;
+const MID: usize = 4;
+const APEX: usize = 5;
+const OUTLET: usize = 6;
+/// Grid rows between consecutive key rings (times RESOLUTION).
+const ROWS_BETWEEN: [usize; 6] = [3, 3, 5, 5, 5, 5];
+
+/// A ring that is a superellipse in x and a bent line in (y, z): through
+/// `front` and `back` on the midline and `(+-half_width, lateral)` at the sides.
+struct SuperRing {
+    front: DVec2,
+    back: DVec2,
+    lateral: DVec2,
+    half_width: f64,
+    exponent: f64,
+}
+
+impl SuperRing {
+    /// Point at signed turn position `s` (1/64 turns, positive towards the mother's left).
+    fn at(&self, s: f64) -> DVec3 {
+        let theta = std::f64::consts::FRAC_PI_2 + std::f64::consts::PI * s / HALF_TURN;
+        let power = |c: f64| c.signum() * c.abs().powf(2.0 / self.exponent);
+        let (sin, cos) = theta.sin_cos();
+        let share = power(sin).abs();
+        let end = if sin > 0.0 { self.front } else { self.back };
+        point(self.half_width * power(cos), self.lateral + share * (end - self.lateral))
+    }
+}
+
+/// A ring through control points given on the mother's left side at
+/// distances `da` from the front midline, mirrored to the right.
+struct ControlRing {
+    knots: Vec<f64>,
+    points: Vec<DVec3>,
+}
+
+impl ControlRing {
+    /// `(da, |x|, (y, z))` from the front (da = 0) to the back (da = 32).
+    fn new(left: &[(f64, f64, DVec2)]) -> Self {
+        let mut pairs: Vec<(f64, DVec3)> = Vec::new();
+        for &(da, half_width, sagittal) in left {
+            if da <= 0.0 || da >= HALF_TURN {
+                let s = if da <= 0.0 { 0.0 } else { -HALF_TURN };
+                pairs.push((s, point(0.0, sagittal)));
+            } else {
+                pairs.push((da, point(-half_width, sagittal)));
+                pairs.push((-da, point(half_width, sagittal)));
+            }
+        }
+        pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+        ControlRing { knots: pairs.iter().map(|p| p.0).collect(), points: pairs.iter().map(|p| p.1).collect() }
+    }
+
+    fn at(&self, s: f64) -> DVec3 {
+        catmull_rom(&self.knots, &self.points, Some(2.0 * HALF_TURN), s)
+    }
+}
+
+enum Ring {
+    Super(SuperRing),
+    Control(ControlRing),
+}
+
+impl Ring {
+    fn at(&self, s: f64) -> DVec3 {
+        match self {
+            Ring::Super(r) => r.at(s),
+            Ring::Control(r) => r.at(s),
+        }
+    }
+}
+
+fn yz(p: DVec3) -> DVec2 {
+    DVec2::new(p.y, p.z)
+}
+
+/// The seven key rings of a pelvis laid out by [`super::layout::layout`].
+fn key_rings(layout: &Layout) -> [Ring; 7] {
+    let l = &layout.landmarks;
+    let a = (l.symphysis_upper - l.sacral_promontory).length();
+    let t = (l.iliopectineal_right - l.iliopectineal_left).length();
+    let y_t = layout.inlet_transverse_y;
+    let ot = (l.ischial_tuberosity_right - l.ischial_tuberosity_left).length();
+    let i = (l.ischial_spine_right - l.ischial_spine_left).length();
+    let tuberosity = layout.tuberosity;
+    let forward = DVec2::new(1.0, 0.0);
+    // False pelvis: the iliac fossae flare out to the crests (intercristal
+    // width about twice the inlet transverse; engineering proportions).
+    let crest_height = 0.55 * a;
+    let crest = SuperRing {
+        front: DVec2::new(0.75 * a, 0.6 * crest_height),
+        back: DVec2::new(-0.8 * a, 0.85 * crest_height),
+        lateral: DVec2::new(y_t + 0.1 * a, crest_height),
+        half_width: 0.95 * t,
+        exponent: 2.5,
+    };
+    let fossa = SuperRing {
+        front: DVec2::new(0.65 * a, 0.25 * a),
+        back: DVec2::new(-0.62 * a, 0.2 * a),
+        lateral: DVec2::new(y_t + 0.05 * a, 0.22 * a),
+        half_width: 0.72 * t,
+        exponent: 2.3,
+    };
+    let inlet = SuperRing {
+        front: yz(l.symphysis_upper),
+        back: yz(l.sacral_promontory),
+        lateral: DVec2::new(y_t, 0.0),
+        half_width: 0.5 * t,
+        exponent: layout.inlet_exponent,
+    };
+    let greatest = SuperRing {
+        front: yz(l.symphysis_middle()),
+        back: yz(l.sacrum_s2_s3),
+        lateral: layout.greatest_lateral,
+        half_width: layout.greatest_half_width,
+        exponent: 2.2,
+    };
+    let mid = SuperRing {
+        front: yz(l.symphysis_lower),
+        back: yz(l.sacrum_s4_s5),
+        lateral: layout.spine,
+        half_width: 0.5 * i,
+        exponent: 2.2,
+    };
+    let junction = yz(l.ischiopubic_left);
+    let border = l.sacral_border_left;
+    let ischium = 0.5 * (layout.spine + tuberosity);
+    let ischium_half_width = 0.25 * (i + ot) + 0.004;
+    let apex = ControlRing::new(&[
+        (0.0, 0.0, junction + 0.02 * forward),
+        (8.0, -l.ischiopubic_left.x, junction),
+        (16.0, ischium_half_width, ischium),
+        (22.0, 0.5 * (ischium_half_width - border.x), 0.5 * (ischium + yz(border))),
+        (28.0, -border.x, yz(border)),
+        (32.0, 0.0, yz(l.sacral_apex)),
+    ]);
+    let coccyx = yz(l.coccyx_tip);
+    let outlet = ControlRing::new(&[
+        (0.0, 0.0, tuberosity + 0.3 * ot * forward),
+        (8.0, 0.35 * ot, tuberosity + 0.21 * ot * forward),
+        (16.0, 0.5 * ot, tuberosity),
+        (24.0, 0.3 * ot, 0.5 * (tuberosity + coccyx)),
+        (29.0, 0.008, coccyx + 0.004 * (yz(l.sacral_apex) - coccyx).normalize()),
+        (32.0, 0.0, coccyx),
+    ]);
+    [
+        Ring::Super(crest),
+        Ring::Super(fossa),
+        Ring::Super(inlet),
+        Ring::Super(greatest),
+        Ring::Super(mid),
+        Ring::Control(apex),
+        Ring::Control(outlet),
+    ]
+}
+
+/// Where each landmark sits on the grid: (signed turn position, key ring).
+fn landmark_sites(l: &PelvisLandmarks) -> [(f64, usize, DVec3); 21] {
+    [
+        (0.0, INLET, l.symphysis_upper),
+        (32.0, INLET, l.sacral_promontory),
+        (16.0, INLET, l.iliopectineal_left),
+        (-16.0, INLET, l.iliopectineal_right),
+        (8.0, INLET, l.iliopubic_eminence_left),
+        (-8.0, INLET, l.iliopubic_eminence_right),
+        (24.0, INLET, l.sacroiliac_left),
+        (-24.0, INLET, l.sacroiliac_right),
+        (32.0, GREATEST, l.sacrum_s2_s3),
+        (0.0, MID, l.symphysis_lower),
+        (32.0, MID, l.sacrum_s4_s5),
+        (16.0, MID, l.ischial_spine_left),
+        (-16.0, MID, l.ischial_spine_right),
+        (8.0, APEX, l.ischiopubic_left),
+        (-8.0, APEX, l.ischiopubic_right),
+        (28.0, APEX, l.sacral_border_left),
+        (-28.0, APEX, l.sacral_border_right),
+        (32.0, APEX, l.sacral_apex),
+        (32.0, OUTLET, l.coccyx_tip),
+        (16.0, OUTLET, l.ischial_tuberosity_left),
+        (-16.0, OUTLET, l.ischial_tuberosity_right),
+    ]
+}
+
+/// Which cells are bone, by distance `da` from the front midline and depth
+/// `kappa` in key-ring units (engineering shapes of the bony outline).
+fn is_bone(da: f64, kappa: f64) -> bool {
+    let inlet = INLET as f64;
+    if kappa < inlet {
+        // Iliac wings: from the anterior superior iliac spine (moving forward
+        // as the wing descends to the pubis) back to the posterior iliac spine.
+        let front = 4.0 + 1.5 * (inlet - kappa);
+        return da > front && da < 27.0;
+    }
+    let mid = MID as f64;
+    let apex = APEX as f64;
+    // Pubic arch: opens from the lower symphysis border (mid ring, front)
+    // through the ischiopubic junctions (apex ring, da 8) to the tuberosities
+    // (outlet ring, da 16).
+    let arch = if kappa <= mid { 0.0 } else { 8.0 * (kappa - mid) };
+    if da < arch {
+        return false;
+    }
+    // Sciatic notches between the ischium and the sacrum, with the ischial
+    // spine a tooth reaching back to da 16 at the mid ring.
+    if kappa > inlet + 0.5 {
+        let sacrum_edge = if kappa <= apex { 24.0 + 4.0 * (kappa - inlet - 0.5) / 2.5 } else { 28.0 + 2.0 * (kappa - apex) };
+        let ischium_back = if (kappa - mid).abs() < 0.2 {
+            16.0
+        } else if kappa < mid {
+            22.0 - 8.0 * ((kappa - inlet - 0.5) / 1.2).min(1.0)
+        } else {
+            14.5 + 5.5 * (kappa - mid - 0.2) / 1.8
+        };
+        if da > ischium_back && da < sacrum_edge {
+            return false;
+        }
+    }
+    // Obturator foramen, kept two units clear of the arch.
+    let (u, v) = ((da - 9.5) / 3.5, (kappa - 3.6) / 0.45);
+    !(u * u + v * v < 1.0 && da - arch > 2.0)
+}
+
+/// Bone thickness (inner to outer surface), m: engineering values, thicker
+/// at the sacrum's base and the tuberosities, thin in the iliac blades.
+fn thickness(da: f64, kappa: f64) -> f64 {
+    let smooth = |lo: f64, hi: f64, x: f64| {
+        let s = ((x - lo) / (hi - lo)).clamp(0.0, 1.0);
+        s * s * (3.0 - 2.0 * s)
+    };
+    let blade = 0.006 + 0.004 * smooth(1.0, 2.0, kappa);
+    let sacrum = 0.02 * smooth(22.0, 28.0, da) * smooth(1.5, 2.2, kappa) * (1.0 - smooth(2.0, 6.0, kappa));
+    let tuberosity = 0.008 * smooth(4.5, 5.5, kappa) * (1.0 - smooth(20.0, 24.0, da)) * smooth(10.0, 14.0, da);
+    blade + sacrum + tuberosity
+}
+
+/// Builds the closed, outward-facing bone surface of a laid-out pelvis.
+pub(crate) fn canal_surface(layout: &Layout) -> TriSurface {
+    let rings = key_rings(layout);
+    let columns = 2 * HALF_TURN as usize * RESOLUTION;
+    let mut kappa = Vec::new();
+    for (k, &between) in ROWS_BETWEEN.iter().enumerate() {
+        let n = between * RESOLUTION;
+        kappa.extend((0..n).map(|s| k as f64 + s as f64 / n as f64));
+    }
+    kappa.push(OUTLET as f64);
+    let rows = kappa.len();
+    let key_row = |k: usize| kappa.iter().position(|&x| x == k as f64).expect("key rings are rows");
+    let signed = |i: usize| {
+        let s = i as f64 / RESOLUTION as f64;
+        if s <= HALF_TURN {
+            s
+        } else {
+            s - 2.0 * HALF_TURN
+        }
+    };
+    let column = |s: f64| ((s * RESOLUTION as f64).round() as isize).rem_euclid(columns as isize) as usize;
+
+    // Inner wall: key rings round each column, blended down it.
+    let key_knots: Vec<f64> = (0..rings.len()).map(|k| k as f64).collect();
+    let mut inner = vec![DVec3::ZERO; rows * columns];
+    for i in 0..columns {
+        let keys: Vec<DVec3> = rings.iter().map(|r| r.at(signed(i))).collect();
+        for (r, &k) in kappa.iter().enumerate() {
+            inner[r * columns + i] = catmull_rom(&key_knots, &keys, None, k);
+        }
+    }
+    for (s, ring, p) in landmark_sites(&layout.landmarks) {
+        inner[key_row(ring) * columns + column(s)] = p;
+    }
+
+    // Bone cells, with diagonal-only contacts filled so every vertex is manifold.
+    let da = |i: f64| {
+        let s = (i / RESOLUTION as f64).rem_euclid(2.0 * HALF_TURN);
+        s.min(2.0 * HALF_TURN - s)
+    };
+    let mut bone = vec![false; (rows - 1) * columns];
+    for r in 0..rows - 1 {
+        for i in 0..columns {
+            bone[r * columns + i] = is_bone(da(i as f64 + 0.5), 0.5 * (kappa[r] + kappa[r + 1]));
+        }
+    }
+    fill_pinches(&mut bone, rows - 1, columns);
+
+    // Outer surface: the wall pushed away from the canal by the bone thickness.
+    let at = |i: isize, r: usize| inner[r * columns + i.rem_euclid(columns as isize) as usize];
+    let mut outer = vec![DVec3::ZERO; rows * columns];
+    for r in 0..rows {
+        for i in 0..columns {
+            let ii = i as isize;
+            let around = at(ii + 1, r) - at(ii - 1, r);
+            let down = at(ii, (r + 1).min(rows - 1)) - at(ii, r.saturating_sub(1));
+            let away = down.cross(around).normalize_or_zero();
+            outer[r * columns + i] = inner[r * columns + i] + thickness(da(i as f64), kappa[r]) * away;
+        }
+    }
+    assemble(&inner, &outer, &bone, rows, columns)
+}
+
+/// Makes bone any void cell that sits between two bone cells touching only
+/// at a corner (such a vertex would pinch the surface).
+fn fill_pinches(bone: &mut [bool], cell_rows: usize, columns: usize) {
+    let cell = |bone: &[bool], r: usize, i: usize| bone[r * columns + i % columns];
+    loop {
+        let mut changed = false;
+        for r in 0..cell_rows.saturating_sub(1) {
+            for i in 0..columns {
+                let (a, b) = (cell(bone, r, i), cell(bone, r, i + 1));
+                let (c, d) = (cell(bone, r + 1, i), cell(bone, r + 1, i + 1));
+                if a && d && !b && !c {
+                    bone[r * columns + (i + 1) % columns] = true;
+                    changed = true;
+                } else if b && c && !a && !d {
+                    bone[r * columns + i] = true;
+                    changed = true;
+                }
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+}
+
+/// Triangulates the bone cells: inner wall facing the canal, outer wall
+/// facing away, and side walls along every edge between bone and void.
+fn assemble(inner: &[DVec3], outer: &[DVec3], bone: &[bool], rows: usize, columns: usize) -> TriSurface {
+    let n = rows * columns;
+    let index = |r: usize, i: usize| (r * columns + i % columns) as u32;
+    let is_bone = |r: isize, i: usize| r >= 0 && (r as usize) < rows - 1 && bone[r as usize * columns + i % columns];
+    let mut triangles = Vec::new();
+    for r in 0..rows - 1 {
+        for i in 0..columns {
+            if !bone[r * columns + i] {
+                continue;
+            }
+            let (a, b, c, d) = (index(r, i), index(r, i + 1), index(r + 1, i + 1), index(r + 1, i));
+            let off = n as u32;
+            triangles.push([a, b, c]);
+            triangles.push([a, c, d]);
+            triangles.push([a + off, c + off, b + off]);
+            triangles.push([a + off, d + off, c + off]);
+            let ri = r as isize;
+            let edges = [
+                (a, b, is_bone(ri - 1, i)),
+                (b, c, is_bone(ri, i + 1)),
+                (c, d, is_bone(ri + 1, i)),
+                (d, a, is_bone(ri, i + columns - 1)),
+            ];
+            for (p, q, neighbour) in edges {
+                if !neighbour {
+                    triangles.push([q, p, p + off]);
+                    triangles.push([q, p + off, q + off]);
+                }
+            }
+        }
+    }
+    // Keep only the vertices the triangles use.
+    let mut remap = vec![u32::MAX; 2 * n];
+    let mut vertices = Vec::new();
+    for t in &mut triangles {
+        for v in t.iter_mut() {
+            if remap[*v as usize] == u32::MAX {
+                remap[*v as usize] = vertices.len() as u32;
+                let k = *v as usize;
+                vertices.push(if k < n { inner[k] } else { outer[k - n] });
+            }
+            *v = remap[*v as usize];
+        }
+    }
+    TriSurface::new(vertices, triangles)
+}
