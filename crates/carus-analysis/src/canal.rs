@@ -84,55 +84,24 @@ impl BirthCanal {
         self.axis.plane_sigmas()[3]
     }
 
-    /// The largest arc length reached by any of `points`, i.e. the sigma of
-    /// the deepest point along the axis, starting the search at `start_sigma`
-    /// (a sigma no deeper than the answer, e.g. that of the body's centre).
+    /// The leading point of a body whose centre lies at arc length
+    /// `centre_sigma`: of `points`, the one furthest along the canal
+    /// tangent there, and its arc length.
     ///
-    /// The cross-sections of the canal are the axis's normal planes, and
-    /// `project(p)` is the sigma whose normal plane holds `p`. The deepest
-    /// point is therefore the last normal plane that still has a point on its
-    /// caudal side: the root of `g(sigma) = max_i (p_i - r(sigma)) . t(sigma)`,
-    /// found by bisection. That costs one axis frame and one pass over the
-    /// points per step, instead of one projection per point (the projection
-    /// searches the whole axis and would dominate the detector's run time).
-    pub fn deepest_sigma(&self, points: &[DVec3], start_sigma: f64) -> f64 {
-        let beyond = |sigma: f64| {
-            let (r, t) = (self.axis.point(sigma), self.axis.tangent(sigma));
-            points.iter().map(|&p| (p - r).dot(t)).fold(f64::NEG_INFINITY, f64::max)
-        };
-        if points.is_empty() {
-            return start_sigma;
-        }
-        // Bracket the root: g(lo) > 0 >= g(hi), widening by doubling steps.
-        let (mut lo, mut hi) = (start_sigma, start_sigma);
-        let g_start = beyond(start_sigma);
-        let mut step = g_start.abs().max(1e-3);
-        for _ in 0..64 {
-            if g_start > 0.0 {
-                hi = lo + step;
-                if beyond(hi) <= 0.0 {
-                    break;
-                }
-                lo = hi;
-            } else {
-                lo = hi - step;
-                if beyond(lo) > 0.0 {
-                    break;
-                }
-                hi = lo;
-            }
-            step *= 2.0;
-        }
-        // 1e-7 m is far below any clinical resolution (stations are read in mm).
-        while hi - lo > 1e-7 {
-            let mid = 0.5 * (lo + hi);
-            if beyond(mid) > 0.0 {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        0.5 * (lo + hi)
+    /// CARDINAL_MOVEMENTS.md asks for the "deepest point along the axis".
+    /// Taken literally (the largest projected sigma of any point) it is
+    /// ill-conditioned: the canal's cross-sections (the axis's normal planes)
+    /// fan out around the curve of Carus and meet near the symphysis, so
+    /// points on the anterior side of the head get arc lengths far beyond
+    /// the vertex's (20-25 mm at the mid-pelvis of the reference canal),
+    /// and the station would jump as the head turns. Depth is therefore
+    /// judged along the tangent at the head, where the canal is locally
+    /// straight, and the chosen point's own sigma is reported
+    /// (docs/DETECTOR.md).
+    pub fn leading_point(&self, points: &[DVec3], centre_sigma: f64) -> Option<(DVec3, f64)> {
+        let tangent = self.axis.tangent(centre_sigma);
+        let leading = points.iter().copied().max_by(|a, b| a.dot(tangent).total_cmp(&b.dot(tangent)))?;
+        Some((leading, self.axis.project(leading)))
     }
 }
 

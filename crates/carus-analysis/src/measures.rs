@@ -20,8 +20,9 @@ const FORCE_DIRECTION_MIN_N: f64 = 1e-6;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Series {
     pub time_s: Vec<f64>,
-    /// Sigma of the head's leading point minus sigma of the ischial-spine
-    /// plane (clinical station, positive below the spines).
+    /// Sigma of the head's leading point (the skull point furthest along
+    /// the canal tangent at the head centre) minus sigma of the
+    /// ischial-spine plane: clinical station, positive below the spines.
     pub station_mm: Vec<f64>,
     /// Occiput position: 0 = OA, +90 = ROT, -90 = LOT, +-180 = OP;
     /// unwrapped, so it runs on continuously past +-180.
@@ -143,8 +144,8 @@ impl Series {
             for (world, &body) in skull.iter_mut().zip(&head.skull_points_m) {
                 *world = sample.head.point(body);
             }
-            let leading = canal.deepest_sigma(&skull, sigma);
-            series.station_mm.push((leading - canal.spines_sigma()) * MM_PER_M);
+            let (_, leading_sigma) = canal.leading_point(&skull, sigma).unwrap_or((h.centre, sigma));
+            series.station_mm.push((leading_sigma - canal.spines_sigma()) * MM_PER_M);
             let frame = axis.frame(sigma);
             series.theta_deg.push(cross_section_angle_deg(-h.o, frame.anterior, frame.transverse));
             series.phi_deg.push(signed_angle_about_deg(-k, h.v, h.b));
@@ -308,6 +309,239 @@ fn trunk_axes(history: &PoseHistory, head_sigma: &[f64]) -> Vec<DVec3> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::history::{RigidPose, TrunkGeometry};
+    use crate::synthetic::{ellipsoid_head, head_orientation, reference_canal, simple_trunk};
+    use glam::{DMat3, DQuat};
+    use proptest::prelude::*;
+
+    /// A two-sample history holding the given head pose (and trunk pose)
+    /// twice, with the force pushing down the canal at the inlet.
+    fn still(head: RigidPose, trunk: Option<(TrunkGeometry, RigidPose)>) -> PoseHistory {
+        let trunk_pose = trunk.as_ref().map(|t| t.1);
+        let sample = |time_s| PoseSample {
+            time_s,
+            head,
+            trunk: trunk_pose,
+            expulsion_force_n: DVec3::new(0.0, 0.0, -50.0),
+            bone_contact_force_n: DVec3::ZERO,
+            floor_contact_force_n: DVec3::ZERO,
+            dominant_contact: None,
+        };
+        PoseHistory {
+            head: ellipsoid_head(),
+            trunk: trunk.map(|t| t.0),
+            canal: reference_canal(),
+            samples: vec![sample(0.0), sample(1.0)],
+        }
+    }
+
+    /// The synthetic head's body axes are o = +x, b = +y, v = +z; this is the
+    /// rotation taking them to the given pelvis-frame o and v.
+    fn axes(o: DVec3, v: DVec3) -> DQuat {
+        DQuat::from_mat3(&DMat3::from_cols(o, v.cross(o), v))
+    }
+
+    fn at_inlet(orientation: DQuat) -> RigidPose {
+        RigidPose { position_m: DVec3::new(0.0, 0.0, 0.01), orientation }
+    }
+
+    fn first(history: &PoseHistory) -> (f64, f64, f64) {
+        history.validate().unwrap();
+        let s = Series::from_history(history);
+        (s.station_mm[0], s.theta_deg[0], s.phi_deg[0])
+    }
+
+    #[test]
+    fn occiput_to_the_mothers_left_is_minus_ninety() {
+        // Occiput (-o) towards -x, vertex down the canal (-z).
+        let (_, theta, _) = first(&still(at_inlet(axes(DVec3::X, DVec3::NEG_Z)), None));
+        assert!((theta + 90.0).abs() < 1e-9, "LOT gave {theta}");
+    }
+
+    #[test]
+    fn occiput_positions_at_the_inlet() {
+        for (occiput, expected) in [(DVec3::Y, 0.0), (DVec3::X, 90.0), (DVec3::NEG_Y, 180.0)] {
+            let (_, theta, _) = first(&still(at_inlet(axes(-occiput, DVec3::NEG_Z)), None));
+            assert!((wrap_deg(theta).abs() - expected).abs() < 1e-9, "occiput {occiput} gave {theta}");
+        }
+    }
+
+    #[test]
+    fn chin_to_chest_is_positive_phi() {
+        // OA head: face (o) posterior, -y. Flexing by 20 degrees turns the
+        // forehead up towards the trunk (+z) and the vertex towards the
+        // face side (-y); the trunk lies above, spine k = +z.
+        let a = 20f64.to_radians();
+        let o = DVec3::new(0.0, -a.cos(), a.sin());
+        let v = DVec3::new(0.0, -a.sin(), -a.cos());
+        let trunk = simple_trunk();
+        // Trunk body: chest +x, left +y, head +z; here chest -y, head -z, left -x.
+        let orientation = DQuat::from_mat3(&DMat3::from_cols(DVec3::NEG_Y, DVec3::NEG_X, DVec3::NEG_Z));
+        let trunk_pose = RigidPose { position_m: DVec3::new(0.0, 0.0, 0.16), orientation };
+        let history = still(at_inlet(axes(o, v)), Some((trunk, trunk_pose)));
+        let (_, theta, phi) = first(&history);
+        assert!((phi - 20.0).abs() < 1e-9, "flexion gave phi = {phi}");
+        assert!(theta.abs() < 1e-9, "OA gave theta = {theta}");
+        // Without a trunk, k comes from the force (pushing down -z): the same phi.
+        let (_, _, phi) = first(&still(at_inlet(axes(o, v)), None));
+        assert!((phi - 20.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn station_by_hand_above_the_inlet() {
+        // Vertex leading, centre 60 mm above the inlet on the straight part
+        // of the axis: the leading point (the synthetic head's 50 mm vertex
+        // semi-axis; the lattice's point nearest the pole lies 0.1 mm inside
+        // it) is 10 mm above the inlet.
+        let pose = RigidPose { position_m: DVec3::new(0.0, 0.0, 0.06), orientation: axes(DVec3::X, DVec3::NEG_Z) };
+        let history = still(pose, None);
+        let (station, _, _) = first(&history);
+        let expected = (-0.01 - history.canal.spines_sigma()) * 1000.0;
+        assert!((station - expected).abs() < 0.11, "station {station}, expected {expected}");
+    }
+
+    #[test]
+    fn eminences_and_delivery_by_hand() {
+        // LOT, b along -y, lies in the inlet plane: both eminences 10 mm above it.
+        let history = still(at_inlet(axes(DVec3::X, DVec3::NEG_Z)), None);
+        let s = Series::from_history(&history);
+        assert!((s.left_parietal_below_inlet_mm[0] + 10.0).abs() < 1e-9);
+        assert!((s.right_parietal_below_inlet_mm[0] + 10.0).abs() < 1e-9);
+        assert!(!s.head_delivered[0]);
+        // Tilted 10 degrees about o (asynclitism): the fetal left eminence
+        // (-y side) goes down, the right one up, by BPD/2 sin(10 deg).
+        let tilt = DQuat::from_rotation_x(10f64.to_radians());
+        let history = still(at_inlet(tilt * axes(DVec3::X, DVec3::NEG_Z)), None);
+        let s = Series::from_history(&history);
+        let shift = 47.5 * 10f64.to_radians().sin();
+        assert!((s.left_parietal_below_inlet_mm[0] - (shift - 10.0)).abs() < 1e-9);
+        assert!((s.right_parietal_below_inlet_mm[0] - (-shift - 10.0)).abs() < 1e-9);
+        // Centre just past the outlet plane: delivered.
+        let outlet = *history.canal.outlet();
+        let pose = RigidPose { position_m: outlet.centre + 1e-4 * outlet.normal, orientation: DQuat::IDENTITY };
+        assert!(Series::from_history(&still(pose, None)).head_delivered[0]);
+    }
+
+    #[test]
+    fn shoulders_align_with_the_occiput_when_the_neck_is_untwisted() {
+        // Trunk body: chest +x, left +y, head +z. Back towards the mother's
+        // left (-x) like a LOT occiput: chest +x, head down -z, left = -z x x = -y.
+        let trunk = simple_trunk();
+        let orientation = DQuat::from_mat3(&DMat3::from_cols(DVec3::X, DVec3::NEG_Y, DVec3::NEG_Z));
+        let pose = RigidPose { position_m: DVec3::new(0.0, 0.0, 0.16), orientation };
+        let history = still(at_inlet(axes(DVec3::X, DVec3::NEG_Z)), Some((trunk, pose)));
+        let s = Series::from_history(&history);
+        let shoulders = s.shoulders_theta_deg.as_ref().unwrap()[0];
+        assert!((shoulders + 90.0).abs() < 1e-9, "shoulders at {shoulders}");
+        assert!((s.theta_deg[0] - shoulders).abs() < 1e-9);
+        assert!((s.shoulders_sigma_mm.as_ref().unwrap()[0] + 90.0).abs() < 1e-9);
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+
+        /// Spinning the head by alpha about the canal tangent through its
+        /// centre turns theta by +alpha (a = x cross t, so a positive turn
+        /// about t takes a towards x) and leaves phi alone.
+        #[test]
+        fn spin_about_the_tangent_offsets_theta(
+            sigma_mm in -50.0f64..150.0,
+            theta in -170.0f64..170.0,
+            phi in -40.0f64..40.0,
+            alpha in -150.0f64..150.0,
+        ) {
+            let canal = reference_canal();
+            let f = canal.axis().frame(sigma_mm / 1000.0);
+            let q = head_orientation(f.tangent, f.anterior, f.transverse, theta, phi);
+            let spun = DQuat::from_axis_angle(f.tangent, alpha.to_radians()) * q;
+            let pose = |orientation| RigidPose { position_m: f.point, orientation };
+            let mut before = still(pose(q), None);
+            let mut after = still(pose(spun), None);
+            for h in [&mut before, &mut after] {
+                for s in &mut h.samples {
+                    s.expulsion_force_n = 50.0 * f.tangent;
+                }
+            }
+            let (_, t0, p0) = first(&before);
+            let (_, t1, p1) = first(&after);
+            prop_assert!((t0 - theta).abs() < 1e-6);
+            prop_assert!(wrap_deg(t1 - t0 - alpha).abs() < 1e-6);
+            prop_assert!((p0 - phi).abs() < 1e-6 && (p1 - phi).abs() < 1e-6);
+        }
+
+        /// phi depends only on the head's orientation relative to the trunk:
+        /// any common rigid motion of both leaves it unchanged.
+        #[test]
+        fn phi_ignores_a_common_rigid_motion(
+            axis in (-1.0f64..1.0, -1.0f64..1.0, 0.1f64..1.0),
+            angle in -3.0f64..3.0,
+            shift in (-0.05f64..0.05, -0.05f64..0.05, -0.05f64..0.05),
+            phi in -40.0f64..40.0,
+        ) {
+            let head = head_orientation(DVec3::NEG_Z, DVec3::Y, DVec3::X, 30.0, phi);
+            let trunk_pose = RigidPose { position_m: DVec3::new(0.0, 0.0, 0.16), orientation: DQuat::IDENTITY };
+            let moved = DQuat::from_axis_angle(DVec3::new(axis.0, axis.1, axis.2).normalize(), angle);
+            let offset = DVec3::new(shift.0, shift.1, shift.2);
+            let original = still(at_inlet(head), Some((simple_trunk(), RigidPose {
+                position_m: trunk_pose.position_m,
+                orientation: DQuat::from_mat3(&DMat3::from_cols(DVec3::NEG_Y, DVec3::NEG_X, DVec3::NEG_Z)),
+            })));
+            let mut shifted = original.clone();
+            for s in &mut shifted.samples {
+                for pose in [Some(&mut s.head), s.trunk.as_mut()].into_iter().flatten() {
+                    pose.position_m = moved * pose.position_m + offset;
+                    pose.orientation = moved * pose.orientation;
+                }
+            }
+            let (_, _, p0) = first(&original);
+            let (_, _, p1) = first(&shifted);
+            prop_assert!((p0 - phi).abs() < 1e-6, "phi {} expected {}", p0, phi);
+            prop_assert!((p1 - p0).abs() < 1e-6);
+        }
+
+    }
+
+    proptest! {
+        // Each case projects all 500 skull points: keep the count small.
+        #![proptest_config(ProptestConfig::with_cases(16))]
+
+        /// Where the canal is straight over the whole head (above the inlet),
+        /// the leading point found along the tangent is the literal deepest
+        /// skull point along the axis: the largest projected sigma.
+        #[test]
+        fn station_is_the_deepest_sigma_where_the_canal_is_straight(
+            depth_mm in -200.0f64..-70.0,
+            rotation in (-1.0f64..1.0, -1.0f64..1.0, -1.0f64..1.0, -1.0f64..1.0),
+        ) {
+            let q = DQuat::from_xyzw(rotation.0, rotation.1, rotation.2, rotation.3);
+            prop_assume!(q.length() > 0.1);
+            let pose = RigidPose { position_m: DVec3::new(0.0, 0.0, -depth_mm / 1000.0), orientation: q.normalize() };
+            let history = still(pose, None);
+            let (station, _, _) = first(&history);
+            let deepest = history.head.skull_points_m.iter()
+                .map(|&p| history.canal.axis().project(pose.point(p)))
+                .fold(f64::NEG_INFINITY, f64::max);
+            prop_assert!((station - (deepest - history.canal.spines_sigma()) * 1000.0).abs() < 1e-6);
+        }
+
+    }
+
+    proptest! {
+        /// A quaternion and its negative are the same rotation: same series.
+        #[test]
+        fn quaternion_sign_does_not_matter(
+            rotation in (-1.0f64..1.0, -1.0f64..1.0, -1.0f64..1.0, -1.0f64..1.0),
+        ) {
+            let q = DQuat::from_xyzw(rotation.0, rotation.1, rotation.2, rotation.3);
+            prop_assume!(q.length() > 0.1);
+            let q = q.normalize();
+            let a = Series::from_history(&still(at_inlet(q), None));
+            let b = Series::from_history(&still(at_inlet(-q), None));
+            prop_assert!((a.station_mm[0] - b.station_mm[0]).abs() < 1e-9);
+            prop_assert!(wrap_deg(a.theta_deg[0] - b.theta_deg[0]).abs() < 1e-9);
+            prop_assert!((a.phi_deg[0] - b.phi_deg[0]).abs() < 1e-9);
+        }
+    }
 
     #[test]
     fn unwrapping_follows_the_shortest_turn() {
@@ -322,30 +556,5 @@ mod tests {
         assert_eq!(wrap_deg(540.0), 180.0);
         assert_eq!(wrap_deg(-270.0), 90.0);
         assert_eq!(wrap_deg(45.0), 45.0);
-    }
-
-    #[test]
-    fn cross_section_angles_follow_the_clinical_positions() {
-        // At the inlet a = +y, x = +x.
-        let (a, x) = (DVec3::Y, DVec3::X);
-        assert!((cross_section_angle_deg(DVec3::Y, a, x) - 0.0).abs() < 1e-12); // OA
-        assert!((cross_section_angle_deg(DVec3::X, a, x) - 90.0).abs() < 1e-12); // ROT
-        assert!((cross_section_angle_deg(-DVec3::X, a, x) + 90.0).abs() < 1e-12); // LOT
-        assert!((cross_section_angle_deg(-DVec3::Y, a, x).abs() - 180.0).abs() < 1e-12); // OP
-    }
-
-    #[test]
-    fn flexion_is_a_positive_rotation_of_the_vertex_about_b() {
-        // Head frame (o, b, v) = (x, y, z) is right-handed: o x b = v.
-        let (o, b, v) = (DVec3::X, DVec3::Y, DVec3::Z);
-        assert!((v.cross(o) - b).length() < 1e-15);
-        // Trunk along -v (neutral attitude): phi = 0.
-        let k = -v;
-        assert!(signed_angle_about_deg(-k, v, b).abs() < 1e-12);
-        // Chin to chest: the forehead turns towards the trunk, so the
-        // vertex tilts towards the face: v -> v cos + o sin.
-        let angle = 20f64.to_radians();
-        let flexed_v = v * angle.cos() + o * angle.sin();
-        assert!((signed_angle_about_deg(-k, flexed_v, b) - 20.0).abs() < 1e-9);
     }
 }
