@@ -1,0 +1,227 @@
+//! The detector on hand-built pose histories (issue 4, "The bar it must
+//! clear": a textbook trajectory shows all seven movements, a straight push
+//! only engagement and descent), plus the arrest and posterior cases.
+
+use carus_analysis::synthetic::{self, reference_canal};
+use carus_analysis::{detect, ArrestStage, DetectorReport, Movement, PoseHistory, Unit};
+use std::sync::OnceLock;
+
+fn textbook() -> &'static (PoseHistory, DetectorReport) {
+    static CELL: OnceLock<(PoseHistory, DetectorReport)> = OnceLock::new();
+    CELL.get_or_init(|| {
+        let history = synthetic::textbook(&reference_canal());
+        let report = detect(&history).unwrap();
+        (history, report)
+    })
+}
+
+fn observed(m: &Movement) -> (f64, f64, f64) {
+    assert!(m.observed, "{m:?}");
+    let (start, end, size) = (m.start_s.unwrap(), m.end_s.unwrap(), m.size.unwrap());
+    assert!(start <= end, "{m:?}");
+    (start, end, size)
+}
+
+fn absent(m: &Movement) {
+    assert!(!m.observed && m.start_s.is_none() && m.end_s.is_none() && m.size.is_none(), "{m:?}");
+}
+
+#[test]
+fn the_textbook_labour_shows_all_seven_in_order() {
+    let (_, r) = textbook();
+    let m = &r.movements;
+    for (key, movement) in m.iter() {
+        assert!(movement.observed, "{key} not observed");
+    }
+    let engagement = observed(&m.engagement);
+    let descent = observed(&m.descent);
+    let flexion = observed(&m.flexion);
+    let internal = observed(&m.internal_rotation);
+    let extension = observed(&m.extension);
+    let external = observed(&m.external_rotation);
+    let expulsion = observed(&m.expulsion);
+
+    // Sizes: the plan flexes 25 degrees, rotates 90 (LOT to OA), extends 70,
+    // restitutes and turns externally 90; the leading point enters the inlet
+    // about 50-60 mm before the biparietal plane does.
+    assert!((flexion.2 - 25.0).abs() < 2.0, "flexion {flexion:?}");
+    assert!((internal.2 - 90.0).abs() < 3.0, "internal rotation {internal:?}");
+    assert!((extension.2 - 70.0).abs() < 3.0, "extension {extension:?}");
+    assert!((external.2 - 90.0).abs() < 3.0, "external rotation {external:?}");
+    assert!((45.0..70.0).contains(&engagement.2), "engagement {engagement:?}");
+    assert!(descent.2 > 100.0, "descent {descent:?}");
+    assert!(expulsion.2 > 0.0);
+    assert_eq!(m.engagement.unit, Unit::Mm);
+    assert_eq!(m.internal_rotation.unit, Unit::Deg);
+
+    // Textbook order: flexion before internal rotation, internal rotation
+    // before extension, extension before restitution, which comes before
+    // the trunk is out; engagement ends before internal rotation starts.
+    assert!(flexion.1 <= internal.0);
+    assert!(engagement.1 <= internal.0);
+    assert!(internal.1 <= extension.0);
+    assert!(extension.1 <= external.0);
+    assert!(expulsion.1 > external.0);
+    // Descent runs until the head is delivered.
+    let delivered_at = r.series.time_s[r.series.head_delivered.iter().position(|&d| d).unwrap()];
+    assert!(descent.1 <= delivered_at);
+    assert!(r.outcome.delivered && r.outcome.arrest.is_none());
+    absent(&r.posterior_rotation);
+    assert!((r.contraction_period_s.unwrap() - 10.0).abs() < 0.11);
+}
+
+#[test]
+fn the_internal_rotation_happens_between_the_stations_of_the_rule() {
+    let (_, r) = textbook();
+    let s = &r.series;
+    let (start, end, _) = observed(&r.movements.internal_rotation);
+    for (i, &t) in s.time_s.iter().enumerate() {
+        if t == start || t == end {
+            assert!((-20.0..=50.0).contains(&s.station_mm[i]), "station {} at {t}", s.station_mm[i]);
+        }
+    }
+}
+
+#[test]
+fn a_straight_push_shows_only_engagement_and_descent() {
+    let r = detect(&synthetic::straight_push(&reference_canal())).unwrap();
+    let m = &r.movements;
+    observed(&m.engagement);
+    let descent = observed(&m.descent);
+    assert!(descent.2 >= 30.0);
+    for movement in [&m.flexion, &m.internal_rotation, &m.extension, &m.external_rotation, &m.expulsion] {
+        absent(movement);
+    }
+    absent(&r.posterior_rotation);
+    // Phi never moves; theta only by the 5 degrees of flexion seen in the
+    // cross-section as the canal tilts forward (5 sin(tilt) < 2 degrees).
+    for (&theta, &phi) in r.series.theta_deg.iter().zip(&r.series.phi_deg) {
+        assert!((theta + 90.0).abs() < 2.0 && (phi - 5.0).abs() < 1e-6, "theta {theta} phi {phi}");
+    }
+    // Still descending when the run stops: neither delivered nor arrested.
+    assert!(!r.outcome.delivered && r.outcome.arrest.is_none());
+}
+
+#[test]
+fn a_head_held_above_the_inlet_is_an_inlet_arrest() {
+    let r = detect(&synthetic::inlet_arrest(&reference_canal())).unwrap();
+    absent(&r.movements.engagement);
+    absent(&r.movements.descent);
+    assert!(!r.outcome.delivered);
+    let arrest = r.outcome.arrest.as_ref().expect("arrest");
+    assert_eq!(arrest.stage, ArrestStage::Inlet);
+    assert_eq!(arrest.against, "symphysis");
+    // The deepest station of the final window, not the last sample's.
+    let max = r.series.station_mm.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    assert!(arrest.station_mm <= max && arrest.station_mm > max - 1.0);
+}
+
+#[test]
+fn a_rotation_to_direct_op_is_posterior_not_internal() {
+    let r = detect(&synthetic::direct_occiput_posterior(&reference_canal())).unwrap();
+    absent(&r.movements.internal_rotation);
+    let posterior = observed(&r.posterior_rotation);
+    assert!((posterior.2 - 90.0).abs() < 3.0, "{posterior:?}");
+    assert_eq!(r.posterior_rotation.unit, Unit::Deg);
+}
+
+#[test]
+fn the_json_shape_is_the_canonical_one() {
+    let (_, r) = textbook();
+    let json = serde_json::to_value(r).unwrap();
+    for key in ["engagement", "descent", "flexion", "internal_rotation", "extension", "external_rotation", "expulsion"] {
+        let m = &json["movements"][key];
+        for field in ["observed", "start_s", "end_s", "size", "unit"] {
+            assert!(m.get(field).is_some(), "{key}.{field} missing");
+        }
+    }
+    assert_eq!(json["movements"]["descent"]["unit"], "mm");
+    assert_eq!(json["movements"]["flexion"]["unit"], "deg");
+    assert_eq!(json["posterior_rotation"]["start_s"], serde_json::Value::Null);
+    assert_eq!(json["outcome"]["delivered"], true);
+    assert_eq!(json["outcome"]["arrest"], serde_json::Value::Null);
+    assert!(json["series"]["station_mm"].as_array().unwrap().len() > 100);
+
+    let arrest = detect(&synthetic::inlet_arrest(&reference_canal())).unwrap();
+    let json = serde_json::to_value(&arrest.outcome).unwrap();
+    assert_eq!(json["arrest"]["stage"], "inlet");
+    assert_eq!(json["arrest"]["against"], "symphysis");
+    assert!(json["arrest"]["station_mm"].is_number());
+}
+
+#[test]
+fn history_and_report_survive_a_json_round_trip() {
+    let (history, report) = textbook();
+    let text = history.to_json_string().unwrap();
+    let back = PoseHistory::from_json_str(&text).unwrap();
+    assert!(back == *history, "the history changed in the JSON round trip");
+    let report_back: DetectorReport = serde_json::from_str(&serde_json::to_string(report).unwrap()).unwrap();
+    assert!(report_back == *report, "the report changed in the JSON round trip");
+}
+
+#[test]
+fn the_detector_is_deterministic() {
+    let (history, report) = textbook();
+    let again = detect(history).unwrap();
+    assert_eq!(serde_json::to_string(&again).unwrap(), serde_json::to_string(report).unwrap());
+}
+
+#[test]
+fn moving_the_time_origin_moves_every_movement_with_it() {
+    let history = synthetic::direct_occiput_posterior(&reference_canal());
+    let base = detect(&history).unwrap();
+    let mut shifted = history.clone();
+    let offset = 1234.5;
+    for s in &mut shifted.samples {
+        s.time_s += offset;
+    }
+    let moved = detect(&shifted).unwrap();
+    let pairs = base.movements.iter().into_iter().zip(moved.movements.iter()).map(|((_, a), (_, b))| (*a, *b));
+    for (a, b) in pairs.chain([(base.posterior_rotation, moved.posterior_rotation)]) {
+        assert_eq!(a.observed, b.observed);
+        assert_eq!(a.size, b.size);
+        if let (Some(x), Some(y)) = (a.start_s, b.start_s) {
+            assert!((y - x - offset).abs() < 1e-9);
+        }
+        if let (Some(x), Some(y)) = (a.end_s, b.end_s) {
+            assert!((y - x - offset).abs() < 1e-9);
+        }
+    }
+    assert_eq!(base.outcome, moved.outcome);
+}
+
+#[test]
+fn the_series_table_has_one_row_per_sample() {
+    let (history, report) = textbook();
+    let (columns, rows) = report.series.table();
+    assert_eq!(rows.len(), history.samples.len());
+    assert!(rows.iter().all(|r| r.len() == columns.len()));
+    assert_eq!(&columns[..4], &["time_s", "station_mm", "theta_deg", "phi_deg"]);
+    // The straight push has no trunk: its shoulder columns are empty.
+    let push = detect(&synthetic::straight_push(&reference_canal())).unwrap();
+    let (columns, rows) = push.series.table();
+    let shoulders = columns.iter().position(|&c| c == "shoulders_sigma_mm").unwrap();
+    assert!(rows.iter().all(|r| r[shoulders].is_none()));
+}
+
+#[test]
+fn bad_histories_are_refused_with_the_sample_named() {
+    let (history, _) = textbook();
+    let mut h = history.clone();
+    h.samples[7].time_s = h.samples[6].time_s;
+    let err = detect(&h).unwrap_err().to_string();
+    assert!(err.contains("sample 7"), "{err}");
+    let mut h = history.clone();
+    h.samples[3].head.orientation = h.samples[3].head.orientation * 2.0;
+    assert!(detect(&h).unwrap_err().to_string().contains("sample 3"));
+    let mut h = history.clone();
+    h.samples[5].trunk = None;
+    assert!(detect(&h).unwrap_err().to_string().contains("sample 5"));
+    let mut h = history.clone();
+    h.samples.truncate(1);
+    assert!(detect(&h).is_err());
+    let mut h = history.clone();
+    h.samples[2].expulsion_force_n.x = f64::NAN;
+    assert!(detect(&h).unwrap_err().to_string().contains("expulsion_force_n"));
+    assert!(PoseHistory::from_json_str("{\"head\": 1}").is_err());
+}
