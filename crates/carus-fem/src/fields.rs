@@ -87,6 +87,8 @@ fn evaluate_element<T: Real, const N: usize>(k: &KernelData<T>, e: usize, u: &[T
     let c = right_cauchy_green(&f);
     let j_vol = nodal_j.map_or(j, |nj| (0..N).map(|a| nj[eb.node(e, a)]).sum::<f64>() / N as f64);
     let s = second_piola_kirchhoff(&c, j, j_vol, &co);
+    // T4ANP stores its volumetric energy per node (see `anp_nodal_state`).
+    let energy_co = if nodal_j.is_some() { Coefficients { kappa: 0.0, ..co } } else { co };
     let hourglass_j = if eb.hourglass.is_empty() || N != 8 {
         0.0
     } else {
@@ -101,13 +103,16 @@ fn evaluate_element<T: Real, const N: usize>(k: &KernelData<T>, e: usize, u: &[T
         von_mises: von_mises(&cauchy(&f, &s, j)),
         stretch: largest_eigenvalue(&c).max(0.0).sqrt(),
         jacobian: j,
-        strain_j: w * strain_energy_density(&c, j, j_vol, &co),
+        strain_j: w * strain_energy_density(&c, j, j_vol, &energy_co),
         hourglass_j,
     }
 }
 
-/// Nodal dilatation of T4ANP in f64 (the step loop's passes, unvectorised).
-fn anp_nodal_j<T: Real>(k: &KernelData<T>, u: &[T]) -> Vec<f64> {
+/// T4ANP in f64: the nodal dilatation J_n and the volumetric energy
+/// sum_n V_n kappa_n / 2 (J_n - 1)^2, of which the ANP forces are exactly the
+/// gradient for one material (kappa_n: volume-weighted mean over the node's
+/// elements).
+fn anp_nodal_state<T: Real>(k: &KernelData<T>, u: &[T]) -> (Vec<f64>, f64) {
     let eb = &k.elements;
     let nn = k.nodes.mass.len();
     let shares: Vec<f64> = (0..eb.element_count)
@@ -118,21 +123,35 @@ fn anp_nodal_j<T: Real>(k: &KernelData<T>, u: &[T]) -> Vec<f64> {
             det3(&deformation_gradient(&ue, &dh)) * eb.quarter_volume[e].to_f64()
         })
         .collect();
-    (0..nn)
+    let per_node: Vec<(f64, f64)> = (0..nn)
         .map(|n| {
             let inv = k.nodes.inv_nodal_volume[n].to_f64();
-            if inv > 0.0 {
-                k.nodes.slots_of(n).iter().map(|&s| shares[eb.slot_element(s as usize)]).sum::<f64>() * inv
-            } else {
-                1.0
+            if inv <= 0.0 {
+                return (1.0, 0.0);
             }
+            let slots = k.nodes.slots_of(n);
+            let j = slots.iter().map(|&s| shares[eb.slot_element(s as usize)]).sum::<f64>() * inv;
+            let kappa_v: f64 = slots
+                .iter()
+                .map(|&s| {
+                    let e = eb.slot_element(s as usize);
+                    eb.coefficient(e, 2) * eb.quarter_volume[e].to_f64()
+                })
+                .sum();
+            (j, 0.5 * kappa_v * (j - 1.0) * (j - 1.0))
         })
-        .collect()
+        .collect();
+    (per_node.iter().map(|p| p.0).collect(), per_node.iter().map(|p| p.1).sum())
 }
 
 /// Fields and element energies (strain, hourglass) of displacement `u`.
 pub(crate) fn evaluate<T: Real>(k: &KernelData<T>, anp: bool, u: &[T]) -> (ElementFields, f64, f64) {
-    let nodal_j = if anp { Some(anp_nodal_j(k, u)) } else { None };
+    let (nodal_j, volumetric_j) = if anp {
+        let (j, energy) = anp_nodal_state(k, u);
+        (Some(j), energy)
+    } else {
+        (None, 0.0)
+    };
     let nj = nodal_j.as_deref();
     let results: Vec<ElementResult> = (0..k.elements.element_count)
         .into_par_iter()
@@ -146,7 +165,7 @@ pub(crate) fn evaluate<T: Real>(k: &KernelData<T>, anp: bool, u: &[T]) -> (Eleme
         max_principal_stretch: results.iter().map(|r| r.stretch).collect(),
         jacobian: results.iter().map(|r| r.jacobian).collect(),
     };
-    (fields, results.iter().map(|r| r.strain_j).sum(), results.iter().map(|r| r.hourglass_j).sum())
+    (fields, volumetric_j + results.iter().map(|r| r.strain_j).sum::<f64>(), results.iter().map(|r| r.hourglass_j).sum())
 }
 
 /// Kinetic energy with velocity (u - u_prev) / h.

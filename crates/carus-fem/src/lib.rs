@@ -7,6 +7,8 @@
 pub mod baseline;
 pub mod error;
 pub mod fields;
+#[cfg(feature = "gpu")]
+pub mod gpu;
 pub mod generate;
 pub mod kernel;
 pub mod loads;
@@ -15,6 +17,7 @@ pub mod mesh;
 pub mod model;
 pub mod quality;
 pub mod solver;
+pub mod validation;
 
 pub use error::FemError;
 pub use fields::{ElementFields, Energies};

@@ -152,7 +152,7 @@ mod tests {
             p[0] += 0.95; // heavy shear
         }
         let mesh = Mesh::new(ElementKind::H8, nodes, (0..8).collect());
-        let r = check_quality(&mesh, 0.5).unwrap();
+        let r = check_quality(&mesh, 0.8).unwrap();
         assert_eq!(r.below_threshold, vec![0]);
         assert!(r.require().is_err());
     }

@@ -589,3 +589,149 @@ impl TledSolver {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::generate::{box_h8, box_t4};
+    use crate::material::Material;
+    use crate::mesh::Mesh;
+    use crate::model::{MaterialRegion, ModelOptions, Precision, TetFormulation};
+
+    fn region() -> MaterialRegion {
+        MaterialRegion { element_set: None, material: Material::neo_hookean(1006.711409, 50_000.0), density_kg_m3: 1000.0 }
+    }
+
+    fn model(mesh: &Mesh, options: ModelOptions) -> Arc<TledModel> {
+        Arc::new(TledModel::new(mesh, &[region()], &options).unwrap())
+    }
+
+    /// A smooth pseudo-random displacement field, a few per cent of the size.
+    fn wavy(mesh: &Mesh, amp: f64) -> Vec<[f64; 3]> {
+        mesh.nodes
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let s = (i as f64 * 12.9898).sin() * 0.3;
+                [amp * (3.0 * p[1] + s).sin(), amp * (2.0 * p[2] - s).cos() * 0.5, amp * (p[0] * 4.0 + s).sin() * 0.7]
+            })
+            .collect()
+    }
+
+    fn set_displacement(solver: &mut TledSolver, u: &[[f64; 3]]) {
+        let mut snap = solver.snapshot();
+        snap.displacements_m = u.to_vec();
+        snap.previous_displacements_m = u.to_vec();
+        solver.restore(&snap).unwrap();
+    }
+
+    fn total_energy(solver: &TledSolver) -> f64 {
+        let e = solver.energies();
+        e.strain_j + e.hourglass_j
+    }
+
+    /// The internal forces are the gradient of the stored energy (strain plus
+    /// hourglass) for H8, T4 and T4ANP.
+    #[test]
+    fn internal_forces_are_the_energy_gradient() {
+        let cases = [
+            (box_h8([0.1, 0.08, 0.06], [2, 2, 2]), TetFormulation::T4),
+            (box_t4([0.1, 0.08, 0.06], [2, 1, 1]), TetFormulation::T4),
+            (box_t4([0.1, 0.08, 0.06], [2, 2, 1]), TetFormulation::T4Anp),
+        ];
+        for (mesh, tet_formulation) in cases {
+            let m = model(&mesh, ModelOptions { hourglass_coefficient: 0.3, tet_formulation, ..ModelOptions::default() });
+            let mut solver = TledSolver::new(m, &BoundaryConditions::default(), 1e-4, StepControl::Refuse).unwrap();
+            let u = wavy(&mesh, 0.01);
+            set_displacement(&mut solver, &u);
+            solver.update_internal_forces().unwrap();
+            let all: Vec<u32> = (0..mesh.node_count() as u32).collect();
+            let f = solver.internal_forces(&all).unwrap();
+            let h = 1e-7;
+            let scale = f.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
+            for n in [0usize, 4, mesh.node_count() / 2, mesh.node_count() - 1] {
+                for c in 0..3 {
+                    let mut up = u.clone();
+                    let mut um = u.clone();
+                    up[n][c] += h;
+                    um[n][c] -= h;
+                    set_displacement(&mut solver, &up);
+                    let ep = total_energy(&solver);
+                    set_displacement(&mut solver, &um);
+                    let em = total_energy(&solver);
+                    let fd = (ep - em) / (2.0 * h);
+                    assert!((fd - f[n][c]).abs() < 1e-5 * scale, "{:?} node {n} comp {c}: fd {fd} vs {}", mesh.kind, f[n][c]);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn f32_forces_match_f64() {
+        let mesh = box_h8([0.1, 0.1, 0.1], [3, 3, 3]);
+        let u = wavy(&mesh, 0.01);
+        let all: Vec<u32> = (0..mesh.node_count() as u32).collect();
+        let forces = |precision| {
+            let m = model(&mesh, ModelOptions { precision, ..ModelOptions::default() });
+            let mut s = TledSolver::new(m, &BoundaryConditions::default(), 1e-4, StepControl::Refuse).unwrap();
+            set_displacement(&mut s, &u);
+            s.update_internal_forces().unwrap();
+            s.internal_forces(&all).unwrap()
+        };
+        let (a, b) = (forces(Precision::F64), forces(Precision::F32));
+        let scale = a.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+        for (x, y) in a.iter().flatten().zip(b.iter().flatten()) {
+            assert!((x - y).abs() < 1e-4 * scale, "{x} vs {y}");
+        }
+    }
+
+    #[test]
+    fn anp_equals_t4_for_a_uniform_dilatation() {
+        // Homogeneous deformation: every element and node has the same J, so
+        // averaging changes nothing.
+        let mesh = box_t4([0.1, 0.1, 0.1], [2, 2, 2]);
+        let u: Vec<[f64; 3]> = mesh.nodes.iter().map(|p| [0.05 * p[0] + 0.02 * p[1], -0.03 * p[1], 0.04 * p[2]]).collect();
+        let all: Vec<u32> = (0..mesh.node_count() as u32).collect();
+        let forces = |tet_formulation| {
+            let m = model(&mesh, ModelOptions { tet_formulation, ..ModelOptions::default() });
+            let mut s = TledSolver::new(m, &BoundaryConditions::default(), 1e-4, StepControl::Refuse).unwrap();
+            set_displacement(&mut s, &u);
+            s.update_internal_forces().unwrap();
+            s.internal_forces(&all).unwrap()
+        };
+        let (a, b) = (forces(TetFormulation::T4), forces(TetFormulation::T4Anp));
+        for (x, y) in a.iter().flatten().zip(b.iter().flatten()) {
+            assert!((x - y).abs() < 1e-9 * (1.0 + x.abs()), "{x} vs {y}");
+        }
+    }
+
+    #[test]
+    fn time_step_above_critical_is_refused_or_substepped() {
+        let mesh = box_h8([0.1, 0.1, 0.1], [4, 4, 4]);
+        let m = model(&mesh, ModelOptions::default());
+        let crit = m.critical_time_step();
+        // H8 cube: L = h = 0.025 m, c = sqrt((kappa + 4 mu / 3) / rho).
+        let c = ((50_000.0 + 4.0 * 1006.711409 / 3.0) / 1000.0f64).sqrt();
+        assert!((m.element_time_step() - 0.025 / c).abs() < 1e-12 * crit);
+        assert!(crit < m.element_time_step());
+        match TledSolver::new(m.clone(), &BoundaryConditions::default(), 2.5 * crit, StepControl::Refuse) {
+            Err(FemError::TimeStepAboveCritical { critical_s, .. }) => assert_eq!(critical_s, crit),
+            other => panic!("expected refusal, got {other:?}"),
+        }
+        let mut s = TledSolver::new(m, &BoundaryConditions::default(), 2.5 * crit, StepControl::SubStep).unwrap();
+        assert_eq!(s.substeps_per_step(), 3);
+        s.step().unwrap();
+        assert_eq!((s.steps(), s.substeps()), (1, 3));
+        assert!((s.time_s() - 2.5 * crit).abs() < 1e-15);
+    }
+
+    #[test]
+    fn t4_critical_step_uses_minimum_altitude() {
+        let mesh = box_t4([0.1, 0.1, 0.1], [1, 1, 1]);
+        let m = model(&mesh, ModelOptions::default());
+        let c = ((50_000.0 + 4.0 * 1006.711409 / 3.0) / 1000.0f64).sqrt();
+        // Each tetrahedron of the six-tet split: V = h^3/6, largest face sqrt(2) h^2 / 2.
+        let altitude = 3.0 * (0.1f64.powi(3) / 6.0) / (2f64.sqrt() / 2.0 * 0.01);
+        assert!((m.element_time_step() - altitude / c).abs() < 1e-12);
+    }
+}

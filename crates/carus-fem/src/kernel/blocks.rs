@@ -20,7 +20,7 @@ pub struct ElementBlocks<T> {
     pub connectivity: Vec<u32>,
     /// `[((b * npe + a) * 3 + i) * LANES + l]`: dh_a/dX_i in the reference configuration.
     pub shape_derivatives: Vec<T>,
-    /// `[b * LANES + l]`: integration weight (8 detJ at the centre for H8, V for T4).
+    /// `[b * LANES + l]`: integration weight, the element volume.
     pub weight: Vec<T>,
     /// `[(b * 3 + k) * LANES + l]`: c10, c01, kappa of the isotropic kernel.
     pub coefficients: Vec<T>,
@@ -96,6 +96,12 @@ impl<T: Real> ElementBlocks<T> {
     #[inline]
     pub fn slot_element(&self, slot: usize) -> usize {
         (slot / (self.nodes_per_element * 3 * LANES)) * LANES + slot % LANES
+    }
+
+    /// Local node of a force slot.
+    #[inline]
+    pub fn slot_local_node(&self, slot: usize) -> usize {
+        (slot / (3 * LANES)) % self.nodes_per_element
     }
 
     /// Length of the per-element force-copy array.

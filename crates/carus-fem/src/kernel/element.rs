@@ -163,8 +163,8 @@ pub fn strain_energy_density<S: Num>(c: &Sym<S>, j: S, j_vol: S, k: &Coefficient
     k.c10 * (y2 * i1 - three) + k.c01 * (y2 * y2 * i2 - three) + S::splat(0.5) * k.kappa * dv * dv
 }
 
-/// Nodal forces f_a = w F S dh_a (NiftySim: Fe = 8 detJ X S dh^T for H8,
-/// w = V for T4).
+/// Nodal forces f_a = w F S dh_a, w the element volume (NiftySim:
+/// Fe = 8 detJ X S dh^T, the same on parallelepipeds).
 #[inline(always)]
 pub fn stress_forces<S: Num, const N: usize>(f: &[[S; 3]; 3], s: &Sym<S>, dh: &[[S; 3]; N], w: S) -> [[S; 3]; N] {
     let sr = s.to_rows();

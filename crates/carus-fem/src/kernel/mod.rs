@@ -7,3 +7,4 @@ pub mod blocks;
 pub mod element;
 pub mod lanes;
 pub mod passes;
+pub mod stability;
