@@ -16,6 +16,7 @@
 
 use glam::DVec3;
 
+use crate::clearance::{Clearance, DEFAULT_SKIN_M};
 use crate::collider::TriangleCollider;
 use crate::error::{check_non_negative, ContactError};
 use crate::rigid::{RigidPose, Wrench};
@@ -59,6 +60,10 @@ pub struct TissueContact {
     /// m: the deepest penetration searched for, and the widest gap a held,
     /// pushing node may open to the body and still be kept on it.
     reach_m: f64,
+    /// Query skin beyond the reach, m (cost only; results do not depend on it).
+    skin_m: f64,
+    /// Per node, in the body frame: how far it may move before a new query.
+    clearance: Clearance,
     /// Scratch: which nodes are kept from the last step (indexed by node).
     kept: Vec<bool>,
 }
@@ -73,8 +78,17 @@ impl TissueContact {
             held: Vec::new(),
             pulling: Vec::new(),
             reach_m: check_non_negative("reach_m", reach_m, false)?,
+            skin_m: DEFAULT_SKIN_M,
+            clearance: Clearance::new(0),
             kept: Vec::new(),
         })
+    }
+
+    /// Sets the query skin, m: nodes clear of the body are not queried
+    /// again until they have moved this far relative to it.
+    pub fn with_skin(mut self, skin_m: f64) -> Result<Self, ContactError> {
+        self.skin_m = check_non_negative("skin_m", skin_m, true)?;
+        Ok(self)
     }
 
     /// The nodes held at the last update, in ascending node order.
@@ -96,20 +110,23 @@ impl TissueContact {
                 self.kept[h.node as usize] = true;
             }
         }
-        let (lo, hi) = body.bounds();
-        let margin = DVec3::splat(self.reach_m);
-        let (lo, hi) = (lo - margin, hi + margin);
+        if self.clearance.len() != nodes.len() {
+            self.clearance = Clearance::new(nodes.len());
+        }
+        let searched = self.reach_m + self.skin_m;
         let rotation = pose.orientation;
 
         self.held.clear();
         for (i, &x) in nodes.iter().enumerate() {
             let local = pose.inverse_transform_point(x);
-            // Broad phase: the node against the body's own bounds.
-            if local.cmplt(lo).any() || local.cmpgt(hi).any() {
+            let kept = self.kept[i];
+            if !kept && self.clearance.is_clear(i, local) {
                 continue;
             }
-            let Some(hit) = body.closest_point(local, self.reach_m) else { continue };
-            if hit.signed_distance < 0.0 || self.kept[i] {
+            let found = body.closest_point(local, searched);
+            self.clearance.record(i, local, found.as_ref(), self.reach_m, searched);
+            let Some(hit) = found.filter(|h| h.signed_distance.abs() <= self.reach_m) else { continue };
+            if hit.signed_distance < 0.0 || kept {
                 self.held.push(HeldNode {
                     node: i as u32,
                     target: pose.transform_point(hit.point),

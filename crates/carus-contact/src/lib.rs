@@ -9,6 +9,7 @@
 //! says "in body frame"; body frames have their origin at the centre of mass.
 //! Units SI.
 
+mod clearance;
 mod collider;
 mod coupling;
 mod error;
@@ -20,6 +21,7 @@ mod rigid;
 mod sampling;
 mod tri_tri;
 
+pub use clearance::DEFAULT_SKIN_M;
 pub use collider::{SurfacePoint, TriangleCollider};
 pub use coupling::{HeldNode, TissueContact, TissueReaction};
 pub use error::ContactError;
@@ -30,7 +32,7 @@ pub use law::{
 pub use neck::{HeadAxes, Neck, NeckLoad, NeckStiffness};
 pub use overlap::overlapping_triangles;
 pub use pelvis::{
-    pelvis_contacts, BodyMotion, Contact, ContactReport, FrictionAnchors, PelvisCollider, RegionTable,
+    pelvis_contacts, BodyContactState, BodyMotion, Contact, ContactReport, PelvisCollider, RegionTable,
     DEFAULT_SEARCH_DEPTH_M,
 };
 pub use rigid::{MassProperties, RigidBodyModel, RigidBodyState, RigidPose, Wrench};

@@ -9,7 +9,8 @@ use glam::DVec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::collider::TriangleCollider;
+use crate::clearance::{Clearance, DEFAULT_SKIN_M};
+use crate::collider::{SurfacePoint, TriangleCollider};
 use crate::error::{check_non_negative, ContactError};
 use crate::law::{ContactLaw, DESIGN_PENETRATION_M};
 use crate::rigid::{RigidPose, Wrench};
@@ -29,6 +30,7 @@ pub struct PelvisCollider {
     surface: TriangleCollider,
     regions: Option<RegionTable>,
     search_depth_m: f64,
+    skin_m: f64,
 }
 
 /// Default depth down to which penetration is searched, m: five times the
@@ -59,12 +61,20 @@ impl PelvisCollider {
                 return Err(ContactError::RegionLabelOutOfRange { triangle, label, names: table.names.len() });
             }
         }
-        Ok(PelvisCollider { surface, regions, search_depth_m: DEFAULT_SEARCH_DEPTH_M })
+        Ok(PelvisCollider { surface, regions, search_depth_m: DEFAULT_SEARCH_DEPTH_M, skin_m: DEFAULT_SKIN_M })
     }
 
     /// Sets how deep below the bone surface a sample is still found, m.
     pub fn with_search_depth(mut self, depth_m: f64) -> Result<Self, ContactError> {
         self.search_depth_m = check_non_negative("search_depth_m", depth_m, false)?;
+        Ok(self)
+    }
+
+    /// Sets the query skin, m: how far beyond the search depth a query
+    /// looks, so that samples clear of the bone are skipped until they have
+    /// moved that far (results are the same for any skin; only cost changes).
+    pub fn with_skin(mut self, skin_m: f64) -> Result<Self, ContactError> {
+        self.skin_m = check_non_negative("skin_m", skin_m, true)?;
         Ok(self)
     }
 
@@ -95,16 +105,19 @@ pub struct BodyMotion {
     pub angular_velocity: DVec3,
 }
 
-/// Friction memory of one body: per sample, the anchor of its stick spring
-/// on the pelvis (pelvis frame), or none when the sample is not in contact.
+/// What one body's contact remembers between steps: per sample, the anchor
+/// of its friction stick spring on the pelvis (pelvis frame; none when the
+/// sample is not in contact), and how far it may move before it must be
+/// queried again.
 #[derive(Debug, Clone, PartialEq)]
-pub struct FrictionAnchors {
+pub struct BodyContactState {
     anchors: Vec<Option<DVec3>>,
+    clearance: Clearance,
 }
 
-impl FrictionAnchors {
+impl BodyContactState {
     pub fn new(samples: &SurfaceSamples) -> Self {
-        FrictionAnchors { anchors: vec![None; samples.len()] }
+        BodyContactState { anchors: vec![None; samples.len()], clearance: Clearance::new(samples.len()) }
     }
 
     /// Number of samples currently in contact.
@@ -204,65 +217,60 @@ impl ContactReport {
 
 /// Finds the contacts of a body's samples with the pelvis, applies the law
 /// (updating the body's friction anchors) and sums forces and moments.
-/// Deterministic: the samples are queried in parallel but gathered and
-/// summed in sample order.
+/// Samples that have not moved out of their clearance since their last
+/// query are skipped (see the clearance module: exact). Deterministic: the
+/// samples are queried in parallel but gathered and summed in sample order.
 pub fn pelvis_contacts(
     pelvis: &PelvisCollider,
     law: &ContactLaw,
     samples: &SurfaceSamples,
     motion: &BodyMotion,
     pivot: DVec3,
-    anchors: &mut FrictionAnchors,
+    memory: &mut BodyContactState,
 ) -> Result<ContactReport, ContactError> {
-    if anchors.anchors.len() != samples.len() {
+    if memory.anchors.len() != samples.len() || memory.clearance.len() != samples.len() {
         return Err(ContactError::LengthMismatch {
-            what: "friction anchors (one per sample)",
+            what: "body contact state (one entry per sample)",
             expected: samples.len(),
-            got: anchors.anchors.len(),
+            got: memory.anchors.len(),
         });
     }
     let com = motion.pose.position;
     let band = pelvis.search_depth_m;
+    let searched = band + pelvis.skin_m;
 
-    // Broad phase for the whole body: its world bounds against the pelvis'.
-    let world: Vec<DVec3> = samples.points.iter().map(|&p| motion.pose.transform_point(p)).collect();
-    let (body_min, body_max) = world
-        .iter()
-        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
-    let (pelvis_min, pelvis_max) = pelvis.surface.bounds();
-    let apart = (body_min - pelvis_max).max_element() > band || (pelvis_min - body_max).max_element() > band;
-
-    let results: Vec<(Option<Contact>, Option<DVec3>)> = if apart {
-        vec![(None, None); samples.len()]
-    } else {
-        (0..samples.len())
-            .into_par_iter()
-            // Queries are ~1 us: hand rayon chunks big enough to pay for a split.
-            .with_min_len(128)
-            .map(|i| {
-                let p = world[i];
-                let Some(hit) = pelvis.surface.closest_point(p, band).filter(|h| h.signed_distance < 0.0) else {
-                    return (None, None);
-                };
-                let velocity = motion.linear_velocity + motion.angular_velocity.cross(p - com);
-                let stretch = anchors.anchors[i].map_or(DVec3::ZERO, |a| p - a);
-                let f = law.evaluate(samples.areas[i], -hit.signed_distance, hit.normal, velocity, stretch);
-                let contact = Contact {
-                    sample: i as u32,
-                    body_point: p,
-                    pelvis_point: hit.point,
-                    normal: hit.normal,
-                    depth: -hit.signed_distance,
-                    triangle: hit.triangle,
-                    region: pelvis.region_of(hit.triangle),
-                    normal_force: f.normal,
-                    friction_force: f.friction,
-                    sliding: f.sliding,
-                };
-                (Some(contact), Some(p - f.stretch))
-            })
-            .collect()
-    };
+    let memory_in = &*memory;
+    let results: Vec<(Option<Contact>, Option<DVec3>, Option<Option<SurfacePoint>>)> = (0..samples.len())
+        .into_par_iter()
+        // Queries are ~1 us: hand rayon chunks big enough to pay for a split.
+        .with_min_len(128)
+        .map(|i| {
+            let p = motion.pose.transform_point(samples.points[i]);
+            if memory_in.clearance.is_clear(i, p) {
+                return (None, None, None);
+            }
+            let found = pelvis.surface.closest_point(p, searched);
+            let Some(hit) = found.filter(|h| h.signed_distance < 0.0 && -h.signed_distance <= band) else {
+                return (None, None, Some(found));
+            };
+            let velocity = motion.linear_velocity + motion.angular_velocity.cross(p - com);
+            let stretch = memory_in.anchors[i].map_or(DVec3::ZERO, |a| p - a);
+            let f = law.evaluate(samples.areas[i], -hit.signed_distance, hit.normal, velocity, stretch);
+            let contact = Contact {
+                sample: i as u32,
+                body_point: p,
+                pelvis_point: hit.point,
+                normal: hit.normal,
+                depth: -hit.signed_distance,
+                triangle: hit.triangle,
+                region: pelvis.region_of(hit.triangle),
+                normal_force: f.normal,
+                friction_force: f.friction,
+                sliding: f.sliding,
+            };
+            (Some(contact), Some(p - f.stretch), Some(found))
+        })
+        .collect();
 
     let mut report = ContactReport {
         contacts: Vec::new(),
@@ -272,8 +280,12 @@ pub fn pelvis_contacts(
         moment_about_pivot: DVec3::ZERO,
         normal_stiffness_n_per_m: 0.0,
     };
-    for (i, (contact, anchor)) in results.into_iter().enumerate() {
-        anchors.anchors[i] = anchor;
+    for (i, (contact, anchor, query)) in results.into_iter().enumerate() {
+        memory.anchors[i] = anchor;
+        if let Some(found) = query {
+            let p = motion.pose.transform_point(samples.points[i]);
+            memory.clearance.record(i, p, found.as_ref(), band, searched);
+        }
         if let Some(c) = contact {
             report.force += c.force();
             report.torque_about_com += (c.body_point - com).cross(c.force());
@@ -311,7 +323,7 @@ mod tests {
         samples: SurfaceSamples,
         model: RigidBodyModel,
         state: RigidBodyState,
-        anchors: FrictionAnchors,
+        anchors: BodyContactState,
     }
 
     /// A 5 cm, 1 kg sphere resting on the plane tilted by `angle_deg`, its
@@ -329,7 +341,7 @@ mod tests {
             .add(MassProperties { mass_kg: m, inertia_kg_m2: DMat3::from_diagonal(DVec3::splat(0.4 * m * r * r)), rotation_locked: true })
             .unwrap();
         let state = RigidBodyState::at_rest(&model, &[RigidPose::new(tilt * DVec3::new(0.0, 0.0, r), tilt)]).unwrap();
-        let anchors = FrictionAnchors::new(&samples);
+        let anchors = BodyContactState::new(&samples);
         Slope { law, tilt, pelvis: plane(tilt), samples, model, state, anchors }
     }
 
@@ -452,7 +464,7 @@ mod tests {
         };
         let e = 0.03;
         let pivot = DVec3::new(e, 0.0, 0.05);
-        let mut anchors = FrictionAnchors::new(&samples);
+        let mut anchors = BodyContactState::new(&samples);
         let report = pelvis_contacts(&pelvis, &law, &samples, &motion, pivot, &mut anchors).unwrap();
         assert_eq!(report.contacts.len(), 4);
         let f = 4.0 * law.penalty_stiffness_pa_per_m * 1e-4 * 5e-4;
@@ -481,7 +493,7 @@ mod tests {
             areas: vec![1e-4; 2],
         };
         let motion = BodyMotion { pose: RigidPose::new(DVec3::new(0.0, 0.0, -1e-4), DQuat::IDENTITY), linear_velocity: DVec3::ZERO, angular_velocity: DVec3::ZERO };
-        let mut anchors = FrictionAnchors::new(&samples);
+        let mut anchors = BodyContactState::new(&samples);
         let report = pelvis_contacts(&pelvis, &law, &samples, &motion, DVec3::ZERO, &mut anchors).unwrap();
         assert_eq!(report.main_region(2), Some(1));
         let by_region = report.force_by_region(2);
@@ -501,29 +513,48 @@ mod tests {
     }
 
     /// A spinning sphere (rotation free) dropped onto the slope: contacts
-    /// come and go over many samples, friction turns the spin. Two runs give
-    /// the same bits.
+    /// come and go over many samples, friction turns the spin.
+    fn tumble(skin: f64) -> (RigidBodyState, BodyContactState) {
+        let mut s = slope(25.0, 0.35);
+        s.pelvis = plane(s.tilt).with_skin(skin).unwrap();
+        s.model = RigidBodyModel::default();
+        s.model
+            .add(MassProperties { mass_kg: 1.0, inertia_kg_m2: DMat3::from_diagonal(DVec3::new(1e-3, 1.2e-3, 0.9e-3)), rotation_locked: false })
+            .unwrap();
+        s.state.position[0] += s.tilt * DVec3::new(0.0, 0.0, 0.01);
+        s.state.set_angular_velocity(&s.model, 0, DVec3::new(5.0, -3.0, 8.0));
+        s.run(0.3, DT);
+        (s.state, s.anchors)
+    }
+
+    fn bits(s: &RigidBodyState) -> Vec<u64> {
+        s.position
+            .iter()
+            .chain(&s.linear_velocity)
+            .chain(&s.angular_momentum)
+            .flat_map(|v| v.to_array())
+            .chain(s.orientation.iter().flat_map(|q| q.to_array()))
+            .map(f64::to_bits)
+            .collect()
+    }
+
     #[test]
     fn runs_are_bit_identical() {
-        let run = || {
-            let mut s = slope(25.0, 0.35);
-            s.model = RigidBodyModel::default();
-            s.model
-                .add(MassProperties { mass_kg: 1.0, inertia_kg_m2: DMat3::from_diagonal(DVec3::new(1e-3, 1.2e-3, 0.9e-3)), rotation_locked: false })
-                .unwrap();
-            s.state.position[0] += s.tilt * DVec3::new(0.0, 0.0, 0.01);
-            s.state.set_angular_velocity(&s.model, 0, DVec3::new(5.0, -3.0, 8.0));
-            s.run(0.3, DT);
-            (s.state.clone(), s.anchors.clone())
-        };
-        let (a, b) = (run(), run());
-        let bits = |s: &RigidBodyState| {
-            s.position.iter().chain(&s.linear_velocity).chain(&s.angular_momentum).flat_map(|v| v.to_array()).map(f64::to_bits).collect::<Vec<_>>()
-        };
+        let (a, b) = (tumble(DEFAULT_SKIN_M), tumble(DEFAULT_SKIN_M));
         assert_eq!(bits(&a.0), bits(&b.0));
-        assert_eq!(a.0.orientation[0].to_array().map(f64::to_bits), b.0.orientation[0].to_array().map(f64::to_bits));
         assert_eq!(a.1, b.1);
-        // It did tumble into contact.
-        assert!(a.1.active() > 0 || a.0.linear_velocity[0].length() > 0.1);
+        // It did come down onto the plane and move.
+        assert!(a.0.linear_velocity[0].length() > 0.1);
+    }
+
+    /// The clearance skin saves queries without changing any result.
+    #[test]
+    fn results_do_not_depend_on_the_skin() {
+        let reference = tumble(0.0);
+        for skin in [1e-3, 0.05] {
+            let other = tumble(skin);
+            assert_eq!(bits(&reference.0), bits(&other.0), "skin {skin}");
+            assert_eq!(reference.1.anchors, other.1.anchors, "skin {skin}");
+        }
     }
 }

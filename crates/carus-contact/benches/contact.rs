@@ -1,0 +1,60 @@
+//! Cost of one contact pass at labour-loop sizes: a fetal head of ~3k
+//! samples against a ~50k-triangle bony surface, and the tissue coupling
+//! query for a 10k-node pelvic floor.
+
+use carus_contact::{
+    pelvis_contacts, BodyMotion, ContactLaw, BodyContactState, PelvisCollider, RigidPose, SurfaceSamples, TissueContact,
+    TriangleCollider,
+};
+use criterion::{criterion_group, criterion_main, Criterion};
+use glam::{DQuat, DVec3};
+use parry3d_f64::shape::Ball;
+
+/// A ball as a triangle surface (parry's tessellation), outward normals.
+fn ball(radius: f64, theta: u32, phi: u32) -> (Vec<DVec3>, Vec<[u32; 3]>) {
+    Ball::new(radius).to_trimesh(theta, phi)
+}
+
+fn contact_pass(c: &mut Criterion) {
+    // The canal: the inside of a 6 cm hollow ball (winding reversed, so the
+    // bone lies outside it), about 50k triangles.
+    let (v, mut t) = ball(0.06, 250, 100);
+    for tri in &mut t {
+        tri.swap(1, 2);
+    }
+    let pelvis = PelvisCollider::new(&v, &t, None).unwrap();
+    // The head: radius 4.75 cm, pressed 0.5 mm into the wall on one side.
+    let (hv, ht) = ball(0.0475, 80, 40);
+    let samples = SurfaceSamples::from_vertices("head", &hv, &ht).unwrap();
+    let motion = BodyMotion {
+        pose: RigidPose::new(DVec3::new(0.0130, 0.0, 0.0), DQuat::IDENTITY),
+        linear_velocity: DVec3::new(0.01, 0.0, -0.02),
+        angular_velocity: DVec3::new(0.0, 0.5, 0.0),
+    };
+    let law = ContactLaw::default();
+    let mut anchors = BodyContactState::new(&samples);
+    let report = pelvis_contacts(&pelvis, &law, &samples, &motion, DVec3::ZERO, &mut anchors).unwrap();
+    eprintln!(
+        "pelvis {} triangles, head {} samples, {} contacts, force {:.1} N",
+        pelvis.surface().triangle_count(),
+        samples.len(),
+        report.contacts.len(),
+        report.force.length()
+    );
+    c.bench_function("pelvis_contacts head 3k samples vs 50k triangles", |b| {
+        b.iter(|| pelvis_contacts(&pelvis, &law, &samples, &motion, DVec3::ZERO, &mut anchors).unwrap())
+    });
+
+    // Tissue: a 100 x 100 sheet of nodes, 1.5 mm apart, cut by the head.
+    let head = TriangleCollider::new("head", &hv, &ht).unwrap();
+    let nodes: Vec<DVec3> = (0..100 * 100)
+        .map(|k| DVec3::new((k % 100) as f64 * 1.5e-3 - 0.075, (k / 100) as f64 * 1.5e-3 - 0.075, -0.045))
+        .collect();
+    let mut tissue = TissueContact::new(2e-3).unwrap();
+    let pose = RigidPose::IDENTITY;
+    eprintln!("tissue {} nodes, {} held", nodes.len(), tissue.update(&head, &pose, &nodes).len());
+    c.bench_function("tissue update 10k nodes vs head", |b| b.iter(|| tissue.update(&head, &pose, &nodes).len()));
+}
+
+criterion_group!(benches, contact_pass);
+criterion_main!(benches);
