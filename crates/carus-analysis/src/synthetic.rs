@@ -64,8 +64,9 @@ pub fn ellipsoid_head() -> HeadGeometry {
     }
 }
 
-/// Trunk centre's distance behind the head centre along the path (m).
-const TRUNK_BEHIND_HEAD_M: f64 = 0.15;
+/// The bisacromial midpoint's arc length behind the head centre (m); the
+/// synthetic fetus keeps it on the axis.
+const SHOULDERS_BEHIND_HEAD_M: f64 = 0.08;
 
 /// A trunk with a 120 mm bisacromial diameter (REFERENCE_DATA.md), the
 /// shoulders 70 mm from the trunk centre towards the head. Body frame:
@@ -101,14 +102,20 @@ fn ramped(initial: f64, ramps: &[Ramp], sigma_mm: f64) -> f64 {
 }
 
 /// A planned run. The head centre's sigma is
-/// `start + advance t - drift sin(2 pi t / period)` (mm), which goes back
-/// between contractions when `drift * 2 pi / period > advance`; the
+/// `min(start + advance t, hold) - drift sin(2 pi t / period)` (mm), which
+/// goes back between contractions when `drift * 2 pi / period > advance`
+/// and only rocks once it is held; the
 /// expulsion force along the spine is `force_mean - force_swing cos(2 pi t / period)`,
 /// greatest when the head advances fastest.
 #[derive(Debug, Clone)]
 pub struct Plan {
     pub start_sigma_mm: f64,
+    /// The run ends when the head centre first reaches this sigma...
     pub end_sigma_mm: f64,
+    /// ...or at this time, whichever comes first.
+    pub duration_s: f64,
+    /// The head centre advances no further than this (an arrest).
+    pub hold_sigma_mm: f64,
     pub advance_mm_per_s: f64,
     pub drift_mm: f64,
     pub period_s: f64,
@@ -128,7 +135,7 @@ pub struct Plan {
 impl Plan {
     fn sigma_mm(&self, t: f64) -> f64 {
         let w = 2.0 * std::f64::consts::PI / self.period_s;
-        self.start_sigma_mm + self.advance_mm_per_s * t - self.drift_mm * (w * t).sin()
+        (self.start_sigma_mm + self.advance_mm_per_s * t).min(self.hold_sigma_mm) - self.drift_mm * (w * t).sin()
     }
 
     fn force_n(&self, t: f64) -> f64 {
@@ -136,7 +143,8 @@ impl Plan {
         self.force_mean_n - self.force_swing_n * (w * t).cos()
     }
 
-    /// Samples the plan until the head centre first reaches `end_sigma_mm`.
+    /// Samples the plan until the head centre first reaches `end_sigma_mm`
+    /// or the time reaches `duration_s`.
     pub fn history(&self, canal: &BirthCanal) -> PoseHistory {
         let head = ellipsoid_head();
         let trunk = self.shoulders.as_ref().map(|_| simple_trunk());
@@ -145,7 +153,7 @@ impl Plan {
             let t = step as f64 * self.sample_interval_s;
             let sigma_mm = self.sigma_mm(t);
             samples.push(self.sample(canal, t, sigma_mm));
-            if sigma_mm >= self.end_sigma_mm {
+            if sigma_mm >= self.end_sigma_mm || t >= self.duration_s {
                 break;
             }
         }
@@ -168,9 +176,12 @@ impl Plan {
             // Chest forwards (-back), fetal left = towards-head x chest, towards the head = t.
             let chest = -back;
             let left = frame.tangent.cross(chest);
+            let orientation = DQuat::from_mat3(&DMat3::from_cols(chest, left, frame.tangent));
+            let body = simple_trunk();
+            let shoulders_body = 0.5 * (body.left_acromion_m + body.right_acromion_m);
             RigidPose {
-                position_m: axis.point(sigma - TRUNK_BEHIND_HEAD_M),
-                orientation: DQuat::from_mat3(&DMat3::from_cols(chest, left, frame.tangent)),
+                position_m: axis.point(sigma - SHOULDERS_BEHIND_HEAD_M) - orientation * shoulders_body,
+                orientation,
             }
         });
         // Spine k = -t; the force pushes along -k, down the canal.
@@ -216,10 +227,12 @@ fn contractions(start_sigma_mm: f64, end_sigma_mm: f64) -> Plan {
     Plan {
         start_sigma_mm,
         end_sigma_mm,
+        duration_s: f64::INFINITY,
+        hold_sigma_mm: f64::INFINITY,
         advance_mm_per_s: 3.0,
         drift_mm: 8.0,
         period_s: 10.0,
-        sample_interval_s: 0.1,
+        sample_interval_s: 0.2,
         force_mean_n: 40.0,
         force_swing_n: 60.0,
         theta_deg: -90.0,
@@ -238,6 +251,12 @@ fn contractions(start_sigma_mm: f64, end_sigma_mm: f64) -> Plan {
 /// past the outlet, restitutes to -45 after delivery, then turns with the
 /// shoulders to -90 (external rotation), and the trunk passes the outlet.
 pub fn textbook(canal: &BirthCanal) -> PoseHistory {
+    textbook_plan(canal).history(canal)
+}
+
+/// The plan of [`textbook`], to derive variants from (an arrest is the
+/// same plan with `hold_sigma_mm` and `duration_s` set).
+pub fn textbook_plan(canal: &BirthCanal) -> Plan {
     let outlet = canal.outlet_sigma() / M_PER_MM;
     let at_station = |s: f64| centre_sigma_at_station(canal, s);
     let mut plan = contractions(-60.0, outlet + 170.0);
@@ -259,7 +278,7 @@ pub fn textbook(canal: &BirthCanal) -> PoseHistory {
         ],
     ));
     plan.contact = Some(ContactSite::PelvicFloor);
-    plan.history(canal)
+    plan
 }
 
 /// A straight push: the head, LOT and 5 degrees flexed, is pushed straight
@@ -296,17 +315,24 @@ pub fn straight_push(canal: &BirthCanal) -> PoseHistory {
 /// contractions without gaining ground, pressed against the symphysis.
 pub fn inlet_arrest(canal: &BirthCanal) -> PoseHistory {
     let mut plan = contractions(-35.0, f64::INFINITY);
-    plan.advance_mm_per_s = 0.0;
+    plan.hold_sigma_mm = -35.0;
     plan.drift_mm = 5.0;
+    plan.duration_s = 10.0 * plan.period_s;
     plan.contact = Some(ContactSite::Symphysis);
-    let duration_s = 10.0 * plan.period_s;
-    let samples = (0..=(duration_s / plan.sample_interval_s).round() as usize)
-        .map(|step| {
-            let t = step as f64 * plan.sample_interval_s;
-            plan.sample(canal, t, plan.sigma_mm(t))
-        })
-        .collect();
-    PoseHistory { head: ellipsoid_head(), trunk: None, canal: canal.clone(), samples }
+    plan.history(canal)
+}
+
+/// Shoulder arrest (large shoulders): the textbook labour held once the
+/// head centre is 60 mm past the outlet, the head born and restituted but
+/// the bisacromial midpoint still inside, rocking for five contractions
+/// with the anterior shoulder against the symphysis.
+pub fn shoulder_arrest(canal: &BirthCanal) -> PoseHistory {
+    let mut plan = textbook_plan(canal);
+    plan.hold_sigma_mm = canal.outlet_sigma() / M_PER_MM + 60.0;
+    let reach_s = (plan.hold_sigma_mm - plan.start_sigma_mm) / plan.advance_mm_per_s;
+    plan.duration_s = reach_s + 5.0 * plan.period_s;
+    plan.contact = Some(ContactSite::Symphysis);
+    plan.history(canal)
 }
 
 /// Rotation to direct occiput posterior: as the textbook labour up to the

@@ -225,3 +225,59 @@ fn bad_histories_are_refused_with_the_sample_named() {
     assert!(detect(&h).unwrap_err().to_string().contains("expulsion_force_n"));
     assert!(PoseHistory::from_json_str("{\"head\": 1}").is_err());
 }
+
+/// The textbook labour held with the head centre at `hold_mm` sigma for
+/// four contractions, pressing on `site`.
+fn held(hold_mm: f64, site: carus_analysis::ContactSite) -> DetectorReport {
+    let canal = reference_canal();
+    let mut plan = synthetic::textbook_plan(&canal);
+    plan.hold_sigma_mm = hold_mm;
+    plan.duration_s = (hold_mm - plan.start_sigma_mm) / plan.advance_mm_per_s + 4.0 * plan.period_s;
+    plan.contact = Some(site);
+    detect(&plan.history(&canal)).unwrap()
+}
+
+#[test]
+fn arrests_are_placed_by_where_the_head_stopped() {
+    use carus_analysis::ContactSite;
+    let canal = reference_canal();
+    let spines = canal.spines_sigma() * 1000.0;
+    let cases = [
+        (spines - 20.0, ContactSite::IschialSpines, ArrestStage::MidPelvis, "ischial_spines"),
+        (spines + 15.0, ContactSite::Coccyx, ArrestStage::Outlet, "coccyx"),
+    ];
+    for (hold, site, stage, against) in cases {
+        let r = held(hold, site);
+        assert!(!r.outcome.delivered);
+        let arrest = r.outcome.arrest.as_ref().unwrap_or_else(|| panic!("no arrest held at {hold}"));
+        assert_eq!(arrest.stage, stage);
+        assert_eq!(arrest.against, against);
+        observed(&r.movements.engagement);
+        absent(&r.movements.extension);
+    }
+}
+
+#[test]
+fn large_shoulders_deliver_the_head_then_arrest() {
+    let r = detect(&synthetic::shoulder_arrest(&reference_canal())).unwrap();
+    assert!(r.series.head_delivered.last().copied().unwrap());
+    assert!(!r.outcome.delivered);
+    let arrest = r.outcome.arrest.as_ref().expect("shoulder arrest");
+    assert_eq!(arrest.stage, ArrestStage::Shoulders);
+    assert_eq!(arrest.against, "symphysis");
+    // The shoulders' station: above the outlet, below the spines.
+    let outlet = reference_canal().outlet_sigma() - reference_canal().spines_sigma();
+    assert!(arrest.station_mm > 0.0 && arrest.station_mm < outlet * 1000.0, "{arrest:?}");
+    observed(&r.movements.extension);
+    absent(&r.movements.expulsion);
+}
+
+#[test]
+fn an_undelivered_head_without_a_contact_record_is_against_unknown() {
+    let mut history = synthetic::inlet_arrest(&reference_canal());
+    for s in &mut history.samples {
+        s.dominant_contact = None;
+    }
+    let r = detect(&history).unwrap();
+    assert_eq!(r.outcome.arrest.unwrap().against, "unknown");
+}
