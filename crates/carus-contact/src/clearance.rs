@@ -6,6 +6,7 @@
 //! skipped queries would all have answered "no contact".
 
 use glam::DVec3;
+use serde::{Deserialize, Serialize};
 
 use crate::collider::SurfacePoint;
 
@@ -16,7 +17,7 @@ use crate::collider::SurfacePoint;
 pub const DEFAULT_SKIN_M: f64 = 0.01;
 
 /// Per point: where it was last queried and how far it may move from there.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub(crate) struct Clearance {
     checked_at: Vec<DVec3>,
     free_travel: Vec<f64>,

@@ -15,6 +15,7 @@
 //! next update; it is caught again only if it penetrates again.
 
 use glam::DVec3;
+use serde::{Deserialize, Serialize};
 
 use crate::clearance::{Clearance, DEFAULT_SKIN_M};
 use crate::collider::TriangleCollider;
@@ -22,7 +23,7 @@ use crate::error::{check_non_negative, ContactError};
 use crate::rigid::{RigidPose, Wrench};
 
 /// A tissue node held on the body surface this step.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct HeldNode {
     pub node: u32,
     /// Where the node is put: its closest point on the body surface, world, m.
@@ -50,8 +51,9 @@ impl TissueReaction {
     }
 }
 
-/// Contact state between one rigid body and one tissue mesh.
-#[derive(Debug, Clone, PartialEq)]
+/// Contact state between one rigid body and one tissue mesh (serializable
+/// for checkpoints).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TissueContact {
     held: Vec<HeldNode>,
     /// Per held node: its reaction pulled the body at the last reading.

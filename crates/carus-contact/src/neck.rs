@@ -57,7 +57,7 @@ impl Default for NeckStiffness {
 /// o occipitofrontal, v vertex, b = v x o. Flexion (chin to chest) is a
 /// positive rotation about b, lateral bending a rotation about o, axial
 /// rotation a rotation about v.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct HeadAxes {
     pub occipitofrontal: DVec3,
     pub vertex: DVec3,
@@ -71,7 +71,8 @@ impl HeadAxes {
 
 /// A neck joining body `head` and body `trunk` at the atlanto-occipital
 /// pivot. Its rest state is the relative pose the two had when it was made.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// Serializable: its rest pose is part of a run's checkpoint.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Neck {
     pub head: usize,
     pub trunk: usize,

@@ -109,7 +109,8 @@ pub struct BodyMotion {
 /// of its friction stick spring on the pelvis (pelvis frame; none when the
 /// sample is not in contact), and how far it may move before it must be
 /// queried again.
-#[derive(Debug, Clone, PartialEq)]
+/// Serializable, so a checkpoint can resume a run bit for bit.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct BodyContactState {
     anchors: Vec<Option<DVec3>>,
     clearance: Clearance,

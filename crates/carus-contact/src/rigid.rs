@@ -13,11 +13,12 @@
 
 use glam::{DMat3, DQuat, DVec3};
 use parry3d_f64::math::SymmetricEigen3;
+use serde::{Deserialize, Serialize};
 
 use crate::error::{check_non_negative, ContactError};
 
 /// Position of the body's reference point and orientation (body to world).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct RigidPose {
     pub position: DVec3,
     pub orientation: DQuat,
@@ -42,7 +43,7 @@ impl RigidPose {
 }
 
 /// A force through the centre of mass and a torque, world frame.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct Wrench {
     pub force: DVec3,
     pub torque: DVec3,
@@ -69,7 +70,7 @@ impl std::ops::AddAssign for Wrench {
 }
 
 /// Mass properties of one body, its body frame centred on its centre of mass.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct MassProperties {
     pub mass_kg: f64,
     /// Inertia tensor about the centre of mass in the body frame, kg m^2.
@@ -80,7 +81,7 @@ pub struct MassProperties {
 }
 
 /// Constant data of all bodies (structure of arrays).
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct RigidBodyModel {
     pub mass_kg: Vec<f64>,
     inverse_mass: Vec<f64>,
@@ -90,8 +91,8 @@ pub struct RigidBodyModel {
     inverse_principal_inertia: Vec<DVec3>,
 }
 
-/// Mutable state of all bodies (structure of arrays).
-#[derive(Debug, Clone, Default, PartialEq)]
+/// Mutable state of all bodies (structure of arrays); serializable for checkpoints.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct RigidBodyState {
     /// Centre of mass, world, m.
     pub position: Vec<DVec3>,
@@ -278,11 +279,12 @@ mod tests {
             state.step(&model, &[Wrench::default()], 1e-3).unwrap();
             worst = worst.max((state.kinetic_energy(&model, 0) - e0).abs() / e0);
         }
+        eprintln!("torque-free top: 20000 steps of 1 ms, worst relative energy error {worst:.2e}");
         // Momentum exactly (the torque-free step never touches it).
         assert_eq!(state.angular_momentum[0], l0);
         // Energy: bounded oscillation of order (omega dt)^2, no drift; the
         // body turned about 60 times over the run (20 rad/s for 20 s).
-        assert!(worst < 2e-3, "energy error {worst}");
+        assert!(worst < 1e-4, "energy error {worst}");
         // The motion did happen (the orientation moved far from the start).
         assert!(state.orientation[0].angle_between(DQuat::IDENTITY) > 0.1);
     }
@@ -300,6 +302,7 @@ mod tests {
             worst
         };
         let (coarse, fine) = (run(4e-3), run(2e-3));
+        eprintln!("torque-free top: worst energy error {coarse:.2e} at 4 ms, {fine:.2e} at 2 ms");
         // Second order: halving the step quarters the error (within a margin).
         assert!(fine < 0.35 * coarse, "coarse {coarse} fine {fine}");
     }
