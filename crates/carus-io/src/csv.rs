@@ -55,7 +55,8 @@ impl CsvWriter {
                 problem: format!("a row of {} values under a header of {} columns", values.len(), self.columns),
             });
         }
-        let line = values.iter().map(f64::to_string).collect::<Vec<_>>().join(",");
+        // Debug is the shortest exact form, with an exponent for tiny or huge values.
+        let line = values.iter().map(|v| format!("{v:?}")).collect::<Vec<_>>().join(",");
         self.write_line(&line)
     }
 

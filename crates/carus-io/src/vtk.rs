@@ -506,45 +506,115 @@ mod tests {
         assert!(file.notes.iter().any(|n| n.contains("Line")), "{:?}", file.notes);
     }
 
-    #[test]
-    fn reads_an_appended_raw_vtu() {
-        // Built byte by byte: UInt32 size headers, then raw little-endian data.
+    /// Four points and one tetrahedron as (name, VTK type, bytes) arrays.
+    fn tet_arrays() -> Vec<(&'static str, &'static str, u32, Vec<u8>)> {
         let points: [f64; 12] = [0., 0., 0., 1., 0., 0., 0., 1., 0., 0., 0., 1.];
-        let blocks: Vec<Vec<u8>> = vec![
-            points.iter().flat_map(|v| v.to_le_bytes()).collect(),
-            [0i64, 1, 2, 3].iter().flat_map(|v| v.to_le_bytes()).collect(),
-            4i64.to_le_bytes().to_vec(),
-            vec![10u8],
-        ];
+        vec![
+            ("", "Float64", 3, points.iter().flat_map(|v| v.to_le_bytes()).collect()),
+            ("connectivity", "Int64", 1, [0i64, 1, 2, 3].iter().flat_map(|v| v.to_le_bytes()).collect()),
+            ("offsets", "Int64", 1, 4i64.to_le_bytes().to_vec()),
+            ("types", "UInt8", 1, vec![10u8]),
+        ]
+    }
+
+    /// A `.vtu` with raw appended data as ParaView writes it, compressed
+    /// (VTK's block header: count, block size, last size, compressed sizes).
+    fn appended_raw_vtu(compress: bool) -> Vec<u8> {
+        let arrays = tet_arrays();
         let mut offsets = Vec::new();
         let mut appended = Vec::new();
-        for block in &blocks {
+        for (_, _, _, block) in &arrays {
             offsets.push(appended.len());
-            appended.extend_from_slice(&(block.len() as u32).to_le_bytes());
-            appended.extend_from_slice(block);
+            if compress {
+                use std::io::Write as _;
+                let mut encoder = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::default());
+                encoder.write_all(block).unwrap();
+                let packed = encoder.finish().unwrap();
+                for header in [1u64, block.len() as u64, block.len() as u64, packed.len() as u64] {
+                    appended.extend_from_slice(&header.to_le_bytes());
+                }
+                appended.extend_from_slice(&packed);
+            } else {
+                appended.extend_from_slice(&(block.len() as u64).to_le_bytes());
+                appended.extend_from_slice(block);
+            }
         }
-        let header = format!(
+        let array = |i: usize| {
+            let (name, kind, components, _) = &arrays[i];
+            format!(
+                r#"<DataArray type="{kind}" Name="{name}" NumberOfComponents="{components}" format="appended" offset="{}"/>"#,
+                offsets[i]
+            )
+        };
+        let compressor = if compress { r#" compressor="vtkZLibDataCompressor""# } else { "" };
+        let mut bytes = format!(
             r#"<?xml version="1.0"?>
-<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian" header_type="UInt32">
+<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian" header_type="UInt64"{compressor}>
 <UnstructuredGrid><Piece NumberOfPoints="4" NumberOfCells="1">
-<Points><DataArray type="Float64" NumberOfComponents="3" format="appended" offset="{}"/></Points>
-<Cells>
-<DataArray type="Int64" Name="connectivity" format="appended" offset="{}"/>
-<DataArray type="Int64" Name="offsets" format="appended" offset="{}"/>
-<DataArray type="UInt8" Name="types" format="appended" offset="{}"/>
-</Cells></Piece></UnstructuredGrid>
+<Points>{}</Points>
+<Cells>{}{}{}</Cells></Piece></UnstructuredGrid>
 <AppendedData encoding="raw">
-_"#,
-            offsets[0], offsets[1], offsets[2], offsets[3]
-        );
-        let mut bytes = header.into_bytes();
+   _"#,
+            array(0),
+            array(1),
+            array(2),
+            array(3)
+        )
+        .into_bytes();
         bytes.extend_from_slice(&appended);
         bytes.extend_from_slice(b"\n</AppendedData>\n</VTKFile>\n");
-        let path = temp("appended.vtu");
+        bytes
+    }
+
+    #[test]
+    fn reads_appended_raw_vtu_plain_and_zlib_compressed() {
+        for compress in [false, true] {
+            let path = temp(&format!("appended_{compress}.vtu"));
+            std::fs::write(&path, appended_raw_vtu(compress)).unwrap();
+            let file = read_vtk(&path).unwrap();
+            assert_eq!(file.mesh.kind, ElementKind::T4);
+            assert_eq!(file.mesh.nodes[3], [0.0, 0.0, 1.0]);
+        }
+    }
+
+    #[test]
+    fn truncated_raw_appended_data_is_an_error() {
+        let bytes = appended_raw_vtu(true);
+        let path = temp("appended_cut.vtu");
+        let stride = (bytes.len() / 60).max(1);
+        for cut in (0..bytes.len() - 30).step_by(stride) {
+            std::fs::write(&path, &bytes[..cut]).unwrap();
+            assert!(read_vtk(&path).is_err(), "cut at {cut} accepted");
+        }
+    }
+
+    #[test]
+    fn reads_binary_legacy_vtk() {
+        let mesh = carus_fem::generate::box_t4([1.0, 2.0, 3.0], [1, 1, 1]);
+        let vtk = Vtk {
+            version: Version::new_legacy(4, 2),
+            title: "binary".into(),
+            byte_order: ByteOrder::BigEndian,
+            file_path: None,
+            data: DataSet::inline(UnstructuredGridPiece {
+                points: IOBuffer::F64(mesh.nodes.iter().flatten().copied().collect()),
+                cells: Cells {
+                    cell_verts: VertexNumbers::Legacy {
+                        num_cells: mesh.element_count() as u32,
+                        vertices: mesh.elements().flat_map(|e| std::iter::once(4).chain(e.iter().copied())).collect(),
+                    },
+                    types: vec![CellType::Tetra; mesh.element_count()],
+                },
+                data: Attributes::new(),
+            }),
+        };
+        let mut bytes = Vec::new();
+        vtk.write_legacy(&mut bytes).unwrap();
+        let path = temp("binary.vtk");
         std::fs::write(&path, &bytes).unwrap();
-        let file = read_vtk(&path).unwrap();
-        assert_eq!(file.mesh.kind, ElementKind::T4);
-        assert_eq!(file.mesh.nodes[3], [0.0, 0.0, 1.0]);
+        let back = read_vtk(&path).unwrap().mesh;
+        assert_eq!(back.nodes, mesh.nodes);
+        assert_eq!(back.connectivity, mesh.connectivity);
     }
 
     #[test]
