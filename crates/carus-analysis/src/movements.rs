@@ -203,22 +203,15 @@ fn descent(series: &Series) -> Movement {
     Movement::between(series, Span { start, end }, &series.station_mm, Unit::Mm)
 }
 
-/// The flexion peak: the first sample of greatest phi before the leading
-/// point first reaches station +30 mm (where extension may begin), or over
-/// the whole run if it never does.
+/// The flexion peak: the first sample within the onset tolerance of the
+/// greatest phi before the leading point first reaches station +30 mm
+/// (where extension may begin), or over the whole run if it never does.
+/// (The tolerance keeps rounding noise on a plateau from moving the peak.)
 fn flexion_peak(series: &Series) -> usize {
     let limit = series.station_mm.iter().position(|&s| s >= EXTENSION_FROM_STATION_MM).unwrap_or(series.len());
-    first_argmax(&series.phi_deg[..limit.max(1)])
-}
-
-fn first_argmax(values: &[f64]) -> usize {
-    let mut best = 0;
-    for (i, &v) in values.iter().enumerate() {
-        if v > values[best] {
-            best = i;
-        }
-    }
-    best
+    let phi = &series.phi_deg[..limit.max(1)];
+    let top = phi.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    phi.iter().position(|&p| p >= top - ONSET_DEG).unwrap_or(0)
 }
 
 /// Flexion: phi at least 10 degrees above its first value at some sample
