@@ -505,3 +505,102 @@ fn build_kernel<T: Real>(
     };
     Ok((KernelData { elements: blocks, nodes }, dt_crit, dt_element))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::generate::box_h8;
+    use proptest::prelude::*;
+
+    fn region() -> MaterialRegion {
+        MaterialRegion { element_set: None, material: Material::neo_hookean(1000.0, 50_000.0), density_kg_m3: 1000.0 }
+    }
+
+    fn unit_hex() -> [[f64; 3]; 8] {
+        std::array::from_fn(|a| H8_CORNERS[a].map(|s| (s + 1.0) / 2.0))
+    }
+
+    proptest! {
+        /// Hourglass vectors are orthogonal to constant and linear fields on
+        /// any (distorted) hexahedron, so they never resist rigid motion or
+        /// homogeneous strain.
+        #[test]
+        fn hourglass_vectors_are_orthogonal_to_linear_fields(d in proptest::array::uniform24(-0.15f64..0.15)) {
+            let mut x = unit_hex();
+            for a in 0..8 {
+                for i in 0..3 {
+                    x[a][i] += d[a * 3 + i];
+                }
+            }
+            let g = h8_geometry(0, &x).unwrap();
+            let hg = h8_hourglass(&x, &g, 0.1, 4e4, 1e3);
+            for v in &hg {
+                prop_assert!(v.iter().sum::<f64>().abs() < 1e-12);
+                for j in 0..3 {
+                    prop_assert!((0..8).map(|a| v[a] * x[a][j]).sum::<f64>().abs() < 1e-12);
+                }
+            }
+            // The uniform gradient reproduces linear fields exactly.
+            for j in 0..3 {
+                for k in 0..3 {
+                    let grad: f64 = (0..8).map(|a| x[a][j] * g.shape_derivatives[a][k]).sum();
+                    let identity = if j == k { 1.0 } else { 0.0 };
+                    prop_assert!((grad - identity).abs() < 1e-12);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn volumes_and_masses_of_a_box() {
+        let mesh = box_h8([0.2, 0.1, 0.05], [4, 2, 1]);
+        let m = TledModel::new(&mesh, &[region()], &ModelOptions::default()).unwrap();
+        let total: f64 = m.node_masses_kg().iter().sum();
+        assert!((total - 1000.0 * 0.2 * 0.1 * 0.05).abs() < 1e-12);
+        assert!(m.critical_time_step() > 0.0 && m.critical_time_step() <= m.element_time_step());
+    }
+
+    #[test]
+    fn inverted_input_element_is_reported_by_index() {
+        let mut mesh = box_h8([0.1; 3], [3, 1, 1]);
+        // Swap bottom and top faces of element 2.
+        let el: Vec<u32> = mesh.element(2).to_vec();
+        for a in 0..4 {
+            mesh.connectivity[2 * 8 + a] = el[a + 4];
+            mesh.connectivity[2 * 8 + a + 4] = el[a];
+        }
+        match TledModel::new(&mesh, &[region()], &ModelOptions::default()) {
+            Err(FemError::InvertedElement { element, .. }) => assert_eq!(element, 2),
+            other => panic!("expected an inverted element, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn degenerate_and_unmaterialled_elements_are_reported() {
+        let mut mesh = box_h8([0.1; 3], [2, 1, 1]);
+        let flat: Vec<u32> = mesh.element(1)[..4].to_vec();
+        for a in 0..4 {
+            mesh.connectivity[8 + 4 + a] = flat[a];
+        }
+        assert!(matches!(TledModel::new(&mesh, &[region()], &ModelOptions::default()), Err(FemError::DegenerateElement { element: 1, .. })));
+
+        let mut mesh = box_h8([0.1; 3], [2, 1, 1]);
+        mesh.element_sets.insert("left".into(), vec![0]);
+        let only_left = MaterialRegion { element_set: Some("left".into()), ..region() };
+        assert!(matches!(TledModel::new(&mesh, &[only_left], &ModelOptions::default()), Err(FemError::MissingMaterial { element: 1 })));
+        let unknown = MaterialRegion { element_set: Some("nope".into()), ..region() };
+        assert!(matches!(TledModel::new(&mesh, &[region(), unknown], &ModelOptions::default()), Err(FemError::UnknownElementSet { .. })));
+    }
+
+    #[test]
+    fn later_regions_override_earlier_ones() {
+        let mut mesh = box_h8([0.1; 3], [2, 1, 1]);
+        mesh.element_sets.insert("right".into(), vec![1]);
+        let stiff = MaterialRegion { element_set: Some("right".into()), material: Material::neo_hookean(4000.0, 90_000.0), density_kg_m3: 1000.0 };
+        let m = TledModel::new(&mesh, &[region(), stiff], &ModelOptions::default()).unwrap();
+        let KernelModel::F64(k) = m.kernel() else { panic!("f64 model") };
+        assert_eq!(k.elements.coefficient(0, 0), 500.0);
+        assert_eq!(k.elements.coefficient(1, 0), 2000.0);
+        assert_eq!(k.elements.coefficient(1, 2), 90_000.0);
+    }
+}

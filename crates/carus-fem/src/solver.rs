@@ -265,6 +265,12 @@ impl<T: Real> State<T> {
         std::mem::swap(&mut self.u_curr, &mut self.u_next);
     }
 
+    /// Undoes the last commit: the third buffer still holds u_{n-2}.
+    fn roll_back(&mut self) {
+        std::mem::swap(&mut self.u_curr, &mut self.u_next);
+        std::mem::swap(&mut self.u_prev, &mut self.u_curr);
+    }
+
     #[allow(clippy::too_many_arguments)]
     fn substep(
         &mut self,
@@ -331,6 +337,8 @@ pub struct TledSolver {
     steps: u64,
     substeps: u64,
     coupled: Vec<(u32, [f64; 3])>,
+    /// Whether the buffers still hold the state before the last commit.
+    can_roll_back: bool,
     state: StateData,
 }
 
@@ -372,7 +380,7 @@ impl TledSolver {
             KernelModel::F64(k) => StateData::F64(State::new(k, anp, h, damping, loads.gravity, runaway)),
             KernelModel::F32(k) => StateData::F32(State::new(k, anp, h, damping, loads.gravity, runaway)),
         };
-        Ok(TledSolver { model, loads, dt_s, substeps_per_step, h_s: h, time_s: 0.0, steps: 0, substeps: 0, coupled: Vec::new(), state })
+        Ok(TledSolver { model, loads, dt_s, substeps_per_step, h_s: h, time_s: 0.0, steps: 0, substeps: 0, coupled: Vec::new(), can_roll_back: false, state })
     }
 
     pub fn model(&self) -> &Arc<TledModel> {
@@ -394,12 +402,11 @@ impl TledSolver {
     }
 
     /// Advances by one dt (all of its sub-steps). On error the state is the
-    /// last good sub-step's.
+    /// last good sub-step's: every element with J > 0, every value finite.
     pub fn step(&mut self) -> Result<(), FemError> {
         for _ in 0..self.substeps_per_step {
             self.substep()?;
         }
-        self.steps += 1;
         Ok(())
     }
 
@@ -416,11 +423,25 @@ impl TledSolver {
             Ok(()) => {
                 self.time_s = t_next;
                 self.substeps += 1;
+                self.steps = self.substeps / self.substeps_per_step as u64;
+                self.can_roll_back = true;
                 Ok(())
             }
-            Err(Failure::Element(element, j)) if !j.is_nan() => Err(FemError::ElementInvertedDuringRun { element, jacobian: j, time_s: t }),
-            Err(Failure::Element(element, _)) => {
-                Err(FemError::Diverged { time_s: t, last_good_time_s: t, what: format!("element {element} has a non-finite deformation") })
+            Err(Failure::Element(element, j)) => {
+                // The state at t produced the bad element: go back to t - h,
+                // whose elements were all checked.
+                if self.can_roll_back {
+                    with_state!(self, |_k, s| s.roll_back());
+                    self.substeps -= 1;
+                    self.steps = self.substeps / self.substeps_per_step as u64;
+                    self.time_s = self.substeps as f64 * self.h_s;
+                    self.can_roll_back = false;
+                }
+                if j.is_nan() {
+                    Err(FemError::Diverged { time_s: t, last_good_time_s: self.time_s, what: format!("element {element} has a non-finite deformation") })
+                } else {
+                    Err(FemError::ElementInvertedDuringRun { element, jacobian: j, time_s: t })
+                }
             }
             Err(Failure::Node(node)) => Err(FemError::Diverged {
                 time_s: t_next,
@@ -560,8 +581,9 @@ impl TledSolver {
         }
     }
 
-    /// The last good state. Failed steps never commit, so after any error
-    /// this is the state at the end of the last successful sub-step.
+    /// The last good state. Failed sub-steps never commit, and an element
+    /// found inverted rolls the state back to the sub-step before, so after
+    /// any error this is a state with every element valid and values finite.
     pub fn last_good_state(&self) -> SolverSnapshot {
         self.snapshot()
     }
@@ -586,6 +608,7 @@ impl TledSolver {
         self.steps = snap.steps;
         self.substeps = snap.substeps;
         self.coupled = snap.coupled.clone();
+        self.can_roll_back = false;
         Ok(())
     }
 }
@@ -733,5 +756,147 @@ mod tests {
         // Each tetrahedron of the six-tet split: V = h^3/6, largest face sqrt(2) h^2 / 2.
         let altitude = 3.0 * (0.1f64.powi(3) / 6.0) / (2f64.sqrt() / 2.0 * 0.01);
         assert!((m.element_time_step() - altitude / c).abs() < 1e-12);
+    }
+}
+
+#[cfg(test)]
+mod run_tests {
+    use super::*;
+    use crate::generate::box_h8;
+    use crate::loads::{ImposedDisplacement, SurfacePressure};
+    use crate::material::Material;
+    use crate::model::{MaterialRegion, ModelOptions};
+
+    fn model(n: usize, options: ModelOptions) -> (crate::mesh::Mesh, Arc<TledModel>) {
+        let mesh = box_h8([0.1; 3], [n; 3]);
+        let region = MaterialRegion { element_set: None, material: Material::neo_hookean(1000.0, 20_000.0), density_kg_m3: 1000.0 };
+        let m = Arc::new(TledModel::new(&mesh, &[region], &options).unwrap());
+        (mesh, m)
+    }
+
+    fn pull(mesh: &crate::mesh::Mesh, ux: f64) -> BoundaryConditions {
+        let mut bc = BoundaryConditions::default();
+        bc.fix_nodes(&mesh.node_sets["x0"]);
+        bc.displacements.push(ImposedDisplacement {
+            nodes: mesh.node_sets["x1"].clone(),
+            components: [Some(ux), Some(0.0), Some(0.0)],
+            shape: LoadShape::Smooth345 { duration_s: 0.05 },
+        });
+        bc
+    }
+
+    #[test]
+    fn results_do_not_depend_on_the_thread_count() {
+        let (mesh, m) = model(4, ModelOptions { damping_per_s: 5.0, ..ModelOptions::default() });
+        let run = |threads| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| {
+                let mut s = TledSolver::new(m.clone(), &pull(&mesh, 0.02), 0.9 * m.critical_time_step(), StepControl::Refuse).unwrap();
+                for _ in 0..200 {
+                    s.step().unwrap();
+                }
+                s.displacements()
+            })
+        };
+        let (a, b) = (run(1), run(2));
+        assert!(a.iter().flatten().zip(b.iter().flatten()).all(|(x, y)| x.to_bits() == y.to_bits()));
+        assert!(a.iter().flatten().any(|v| v.abs() > 1e-3));
+    }
+
+    #[test]
+    fn snapshot_restore_resumes_bit_for_bit() {
+        let (mesh, m) = model(3, ModelOptions { damping_per_s: 2.0, ..ModelOptions::default() });
+        let dt = 0.9 * m.critical_time_step();
+        let mut a = TledSolver::new(m.clone(), &pull(&mesh, 0.02), dt, StepControl::Refuse).unwrap();
+        for _ in 0..50 {
+            a.step().unwrap();
+        }
+        let snap = a.snapshot();
+        for _ in 0..50 {
+            a.step().unwrap();
+        }
+        let mut b = TledSolver::new(m, &pull(&mesh, 0.02), dt, StepControl::Refuse).unwrap();
+        b.restore(&snap).unwrap();
+        for _ in 0..50 {
+            b.step().unwrap();
+        }
+        assert_eq!(a.snapshot(), b.snapshot());
+    }
+
+    #[test]
+    fn inversion_during_a_run_names_the_element_and_keeps_the_last_good_state() {
+        let (mesh, m) = model(2, ModelOptions::default());
+        let mut bc = BoundaryConditions::default();
+        bc.fix_nodes(&mesh.node_sets["x0"]);
+        // A huge sudden compression of the far face.
+        bc.displacements.push(ImposedDisplacement { nodes: mesh.node_sets["x1"].clone(), components: [Some(-0.09), None, None], shape: LoadShape::Step });
+        let mut s = TledSolver::new(m, &bc, 0.5 * 1e-4, StepControl::SubStep).unwrap();
+        let mut failure = None;
+        for _ in 0..100 {
+            let before = s.snapshot();
+            if let Err(e) = s.step() {
+                failure = Some(e);
+                // Only whole sub-steps commit: the state is a valid earlier one.
+                assert!(s.time_s() <= before.time_s + s.dt_s());
+                assert!(s.element_fields().jacobian.iter().all(|&j| j > 0.0));
+                break;
+            }
+        }
+        match failure {
+            Some(FemError::ElementInvertedDuringRun { element, jacobian, .. }) => {
+                assert!(element < 8);
+                assert!(jacobian <= 0.0);
+            }
+            other => panic!("expected an inversion, got {other:?}"),
+        }
+    }
+
+    /// Loads and reactions balance at rest: gravity (a dead load) against
+    /// the fixed base, and a small follower pressure on the top face.
+    #[test]
+    fn gravity_and_pressure_are_carried_to_the_supports() {
+        let (mesh, m) = model(2, ModelOptions { damping_per_s: 60.0, ..ModelOptions::default() });
+        let base = mesh.node_sets["z0"].clone();
+        let masses = m.node_masses_kg();
+        let base_mass: f64 = base.iter().map(|&n| masses[n as usize]).sum();
+        for (gravity, pressure_pa) in [(Some([0.0, 0.0, -9.81]), 0.0), (None, 2.0)] {
+            let mut bc = BoundaryConditions::default();
+            bc.fix_nodes(&base);
+            bc.gravity_m_s2 = gravity;
+            bc.pressures.push(SurfacePressure { triangles: mesh.surfaces["z1"].clone(), pressure_pa, shape: LoadShape::RampHold { ramp_s: 0.05 } });
+            let mut s = TledSolver::new(m.clone(), &bc, 0.9 * m.critical_time_step(), StepControl::Refuse).unwrap();
+            s.advance_to(1.0).unwrap();
+            s.update_internal_forces().unwrap();
+            let r = s.reaction_force(&base).unwrap();
+            // The internal forces of the base balance the loads on the other nodes.
+            let expected = if gravity.is_some() { (1.0 - base_mass) * 9.81 } else { pressure_pa * 0.01 };
+            let tolerance = if gravity.is_some() { 1e-6 } else { 2e-3 };
+            assert!((r[2] - expected).abs() < tolerance * expected, "{r:?} vs {expected}");
+            assert!(r[0].abs() < 1e-9 && r[1].abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn coupling_holds_and_releases_nodes() {
+        let (mesh, m) = model(2, ModelOptions { damping_per_s: 30.0, ..ModelOptions::default() });
+        let mut bc = BoundaryConditions::default();
+        bc.fix_nodes(&mesh.node_sets["x0"]);
+        let mut s = TledSolver::new(m.clone(), &bc, 0.9 * m.critical_time_step(), StepControl::Refuse).unwrap();
+        let held = mesh.node_sets["x1"].clone();
+        let push = vec![[0.01, 0.0, 0.0]; held.len()];
+        assert!(s.impose_displacements(&held, &push[1..]).is_err());
+        s.impose_displacements(&held, &push).unwrap();
+        s.advance_to(0.5).unwrap();
+        for &n in &held {
+            assert_eq!(s.displacement(n).unwrap(), [0.01, 0.0, 0.0]);
+        }
+        s.update_internal_forces().unwrap();
+        let pull = s.reaction_force(&held).unwrap();
+        let support = s.reaction_force(&mesh.node_sets["x0"]).unwrap();
+        assert!(pull[0] > 0.0 && (pull[0] + support[0]).abs() < 1e-2 * pull[0], "{pull:?} {support:?}");
+        s.release_imposed();
+        s.advance_to(3.0).unwrap();
+        let back = s.displacement(held[0]).unwrap();
+        assert!(back[0].abs() < 1e-4, "{back:?}");
     }
 }

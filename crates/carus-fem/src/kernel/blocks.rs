@@ -157,7 +157,8 @@ impl<T: Real> NodeTable<T> {
         &self.slots[self.slot_start[n] as usize..self.slot_start[n + 1] as usize]
     }
 
-    /// Sum of the element force copies at node n (f64 result, same order as the step).
+    /// Sum of the element force copies at node n, in the fixed slot order.
+    #[inline(always)]
     pub fn gather(&self, forces: &[T], n: usize) -> [T; 3] {
         let mut f = [T::default(); 3];
         for &s in self.slots_of(n) {

@@ -80,27 +80,42 @@ fn element_task_body<T: Real, const N: usize>(
         let b = first_block + bi;
         let conn = &eb.connectivity[b * N * LANES..(b + 1) * N * LANES];
         let ue = gather_displacements::<T, N>(conn, u);
-        let sd = &eb.shape_derivatives[b * N * 3 * LANES..];
-        let dh: [[Lanes<T>; 3]; N] = std::array::from_fn(|a| std::array::from_fn(|i| Lanes::load(&sd[(a * 3 + i) * LANES..])));
+        // Plain loops, not array::from_fn: closures called through a library
+        // function would leave the AVX2 context un-inlined.
+        let sd = &eb.shape_derivatives[b * N * 3 * LANES..(b + 1) * N * 3 * LANES];
+        let mut dh = [[Lanes([T::default(); LANES]); 3]; N];
+        for a in 0..N {
+            for i in 0..3 {
+                dh[a][i] = Lanes::load(&sd[(a * 3 + i) * LANES..]);
+            }
+        }
         let w = Lanes::load(&eb.weight[b * LANES..]);
         let co = &eb.coefficients[b * 3 * LANES..];
         let k = Coefficients { c10: Lanes::load(co), c01: Lanes::load(&co[LANES..]), kappa: Lanes::load(&co[2 * LANES..]) };
-        let j_vol = nodal_j.map(|nj| {
-            let mut s = [T::default(); LANES];
-            for (l, sl) in s.iter_mut().enumerate() {
-                let mut acc = T::default();
-                for a in 0..N {
-                    acc += nj[conn[a * LANES + l] as usize];
+        let j_vol = match nodal_j {
+            Some(nj) => {
+                let mut s = [T::default(); LANES];
+                for (l, sl) in s.iter_mut().enumerate() {
+                    let mut acc = T::default();
+                    for a in 0..N {
+                        acc += nj[conn[a * LANES + l] as usize];
+                    }
+                    *sl = acc * T::from_f64(1.0 / N as f64);
                 }
-                *sl = acc * T::from_f64(1.0 / N as f64);
+                Some(Lanes(s))
             }
-            Lanes(s)
-        });
+            None => None,
+        };
         let (f, j) = if eb.hourglass.is_empty() || N != 8 {
             internal_forces::<Lanes<T>, N>(&ue, &dh, w, &k, j_vol, None)
         } else {
-            let hgs = &eb.hourglass[b * 4 * N * LANES..];
-            let hg: [[Lanes<T>; N]; 4] = std::array::from_fn(|g| std::array::from_fn(|a| Lanes::load(&hgs[(g * N + a) * LANES..])));
+            let hgs = &eb.hourglass[b * 4 * N * LANES..(b + 1) * 4 * N * LANES];
+            let mut hg = [[Lanes([T::default(); LANES]); N]; 4];
+            for g in 0..4 {
+                for a in 0..N {
+                    hg[g][a] = Lanes::load(&hgs[(g * N + a) * LANES..]);
+                }
+            }
             internal_forces::<Lanes<T>, N>(&ue, &dh, w, &k, j_vol, Some(&hg))
         };
         for a in 0..N {
@@ -193,7 +208,12 @@ pub fn element_volume_shares<T: Real>(eb: &ElementBlocks<T>, u: &[T], shares: &m
                 let conn = &eb.connectivity[b * 4 * LANES..(b + 1) * 4 * LANES];
                 let ue = gather_displacements::<T, 4>(conn, u);
                 let sd = &eb.shape_derivatives[b * 4 * 3 * LANES..];
-                let dh: [[Lanes<T>; 3]; 4] = std::array::from_fn(|a| std::array::from_fn(|i| Lanes::load(&sd[(a * 3 + i) * LANES..])));
+                let mut dh = [[Lanes([T::default(); LANES]); 3]; 4];
+                for a in 0..4 {
+                    for i in 0..3 {
+                        dh[a][i] = Lanes::load(&sd[(a * 3 + i) * LANES..]);
+                    }
+                }
                 let f = super::element::deformation_gradient(&ue, &dh);
                 let j = super::element::det3(&f);
                 (j * Lanes::load(&eb.quarter_volume[b * LANES..])).store(ob);
