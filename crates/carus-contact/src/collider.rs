@@ -187,7 +187,7 @@ pub(crate) fn validate_surface(
         let [a, b, c] = t.map(|i| vertices[i as usize]);
         let twice_area = (b - a).cross(c - a).length();
         let extent = (b - a).length().max((c - a).length());
-        if !(twice_area > 1e-14 * extent * extent) {
+        if twice_area.is_nan() || twice_area <= 1e-14 * extent * extent {
             return Err(ContactError::DegenerateTriangle { what, triangle });
         }
     }

@@ -69,6 +69,19 @@ impl HeadAxes {
     }
 }
 
+/// Where the neck sits: the two bodies, the atlanto-occipital pivot
+/// (world), the head's axes in its body frame, and the world direction of
+/// the neck from the trunk towards the head (minus the trunk axis k of
+/// CARDINAL_MOVEMENTS.md).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct NeckGeometry {
+    pub head: usize,
+    pub trunk: usize,
+    pub pivot: DVec3,
+    pub axes: HeadAxes,
+    pub neck_axis: DVec3,
+}
+
 /// A neck joining body `head` and body `trunk` at the atlanto-occipital
 /// pivot. Its rest state is the relative pose the two had when it was made.
 /// Serializable: its rest pose is part of a run's checkpoint.
@@ -105,19 +118,14 @@ pub struct NeckLoad {
 }
 
 impl Neck {
-    /// Joins `head` and `trunk` as they are now in `state`: `pivot` is the
-    /// atlanto-occipital point (world), `axes` the head's axes in its body
-    /// frame, `neck_axis` the world direction from the trunk towards the head.
+    /// Joins the head and the trunk of `geometry` as they are now in `state`.
     pub fn new(
         model: &RigidBodyModel,
         state: &RigidBodyState,
-        head: usize,
-        trunk: usize,
-        pivot: DVec3,
-        axes: HeadAxes,
-        neck_axis: DVec3,
+        geometry: NeckGeometry,
         stiffness: NeckStiffness,
     ) -> Result<Self, ContactError> {
+        let NeckGeometry { head, trunk, pivot, axes, neck_axis } = geometry;
         for b in [head, trunk] {
             if b >= model.len() {
                 return Err(ContactError::NoSuchBody { body: b, count: model.len() });
@@ -237,7 +245,8 @@ mod tests {
         )
         .unwrap();
         let axes = HeadAxes { occipitofrontal: DVec3::Y, vertex: DVec3::Z };
-        let neck = Neck::new(&model, &state, head, trunk, DVec3::ZERO, axes, DVec3::Z, NeckStiffness::default()).unwrap();
+        let geometry = NeckGeometry { head, trunk, pivot: DVec3::ZERO, axes, neck_axis: DVec3::Z };
+        let neck = Neck::new(&model, &state, geometry, NeckStiffness::default()).unwrap();
         (model, state, neck)
     }
 

@@ -241,7 +241,10 @@ pub fn pelvis_contacts(
     let searched = band + pelvis.skin_m;
 
     let memory_in = &*memory;
-    let results: Vec<(Option<Contact>, Option<DVec3>, Option<Option<SurfacePoint>>)> = (0..samples.len())
+    // Per sample: the contact, the new friction anchor, and the query made
+    // (none when the clearance skipped it).
+    type Outcome = (Option<Contact>, Option<DVec3>, Option<Option<SurfacePoint>>);
+    let results: Vec<Outcome> = (0..samples.len())
         .into_par_iter()
         // Queries are ~1 us: hand rayon chunks big enough to pay for a split.
         .with_min_len(128)

@@ -123,7 +123,7 @@ impl RigidBodyModel {
             axes.z_axis = -axes.z_axis;
         }
         let moments = eigen.eigenvalues;
-        if let Some(&bad) = moments.to_array().iter().find(|&&m| !(m > 0.0)) {
+        if let Some(&bad) = moments.to_array().iter().find(|&&m| m.is_nan() || m <= 0.0) {
             return Err(ContactError::InvalidParameter {
                 name: "inertia_kg_m2",
                 value: bad,
@@ -249,7 +249,7 @@ fn free_rotation(q: DQuat, axes: DQuat, inverse_inertia: DVec3, l: DVec3, dt: f6
     for (axis, h) in [(0, 0.5), (1, 0.5), (2, 1.0), (1, 0.5), (0, 0.5)] {
         let l_principal = principal.inverse() * l;
         let angle = h * dt * l_principal[axis] * inverse_inertia[axis];
-        principal = principal * DQuat::from_axis_angle(DVec3::AXES[axis], angle);
+        principal *= DQuat::from_axis_angle(DVec3::AXES[axis], angle);
     }
     (principal * axes.inverse()).normalize()
 }
