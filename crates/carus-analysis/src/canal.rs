@@ -37,7 +37,12 @@ impl BirthCanal {
     /// Builds the axis through the plane centres, inlet first.
     pub fn new(planes: CanalPlanes) -> Result<Self, AxisError> {
         let axis = PelvicAxis::new(
-            &[planes.inlet, planes.greatest_dimensions, planes.spines, planes.outlet],
+            &[
+                planes.inlet,
+                planes.greatest_dimensions,
+                planes.spines,
+                planes.outlet,
+            ],
             planes.right,
         )?;
         Ok(BirthCanal { planes, axis })
@@ -49,8 +54,13 @@ impl BirthCanal {
     pub fn from_pelvis(pelvis: &Pelvis) -> Result<Self, AxisError> {
         let p = &pelvis.planes;
         let right = pelvis.landmarks.iliopectineal_right - pelvis.landmarks.iliopectineal_left;
-        let planes =
-            CanalPlanes { inlet: p.inlet, greatest_dimensions: p.greatest, spines: p.mid, outlet: p.outlet, right };
+        let planes = CanalPlanes {
+            inlet: p.inlet,
+            greatest_dimensions: p.greatest,
+            spines: p.mid,
+            outlet: p.outlet,
+            right,
+        };
         BirthCanal::new(planes)
     }
 
@@ -100,7 +110,10 @@ impl BirthCanal {
     /// (docs/DETECTOR.md).
     pub fn leading_point(&self, points: &[DVec3], centre_sigma: f64) -> Option<(DVec3, f64)> {
         let tangent = self.axis.tangent(centre_sigma);
-        let leading = points.iter().copied().max_by(|a, b| a.dot(tangent).total_cmp(&b.dot(tangent)))?;
+        let leading = points
+            .iter()
+            .copied()
+            .max_by(|a, b| a.dot(tangent).total_cmp(&b.dot(tangent)))?;
         Some((leading, self.axis.project(leading)))
     }
 }

@@ -130,9 +130,17 @@ pub enum HistoryError {
     #[error("sample {index}: {field} is not finite; every number must be a real value")]
     NotFinite { index: usize, field: &'static str },
     #[error("sample {index}: time_s = {time_s} does not increase on the previous sample's {previous_s}; samples must be in strictly increasing time")]
-    TimeNotIncreasing { index: usize, time_s: f64, previous_s: f64 },
+    TimeNotIncreasing {
+        index: usize,
+        time_s: f64,
+        previous_s: f64,
+    },
     #[error("sample {index}: the {body} orientation quaternion has length {length}; give a unit quaternion")]
-    NotUnitQuaternion { index: usize, body: &'static str, length: f64 },
+    NotUnitQuaternion {
+        index: usize,
+        body: &'static str,
+        length: f64,
+    },
     #[error("sample {index} has a trunk pose but the history has no trunk geometry; add `trunk` or drop the sample's trunk pose")]
     TrunkPoseWithoutGeometry { index: usize },
     #[error("sample {index} has no trunk pose but the history has trunk geometry; record the trunk at every sample or drop `trunk`")]
@@ -169,10 +177,15 @@ impl HeadGeometry {
             return Err(bad("centre_m is not finite".into()));
         }
         if !(self.biparietal_mm.is_finite() && self.biparietal_mm > 0.0) {
-            return Err(bad(format!("biparietal_mm must be positive, got {}", self.biparietal_mm)));
+            return Err(bad(format!(
+                "biparietal_mm must be positive, got {}",
+                self.biparietal_mm
+            )));
         }
         if self.skull_points_m.is_empty() {
-            return Err(bad("skull_points_m is empty; give the skull surface points".into()));
+            return Err(bad(
+                "skull_points_m is empty; give the skull surface points".into(),
+            ));
         }
         if let Some(i) = self.skull_points_m.iter().position(|p| !p.is_finite()) {
             return Err(bad(format!("skull point {i} is not finite")));
@@ -215,7 +228,9 @@ impl PoseHistory {
             trunk.validate()?;
         }
         if self.samples.len() < 2 {
-            return Err(HistoryError::TooFewSamples { count: self.samples.len() });
+            return Err(HistoryError::TooFewSamples {
+                count: self.samples.len(),
+            });
         }
         for (index, s) in self.samples.iter().enumerate() {
             let finite = [
@@ -225,8 +240,14 @@ impl PoseHistory {
                 ("expulsion_force_n", s.expulsion_force_n.is_finite()),
                 ("bone_contact_force_n", s.bone_contact_force_n.is_finite()),
                 ("floor_contact_force_n", s.floor_contact_force_n.is_finite()),
-                ("trunk.position_m", s.trunk.is_none_or(|t| t.position_m.is_finite())),
-                ("trunk.orientation", s.trunk.is_none_or(|t| t.orientation.is_finite())),
+                (
+                    "trunk.position_m",
+                    s.trunk.is_none_or(|t| t.position_m.is_finite()),
+                ),
+                (
+                    "trunk.orientation",
+                    s.trunk.is_none_or(|t| t.orientation.is_finite()),
+                ),
             ];
             if let Some((field, _)) = finite.iter().find(|(_, ok)| !ok) {
                 return Err(HistoryError::NotFinite { index, field });
@@ -234,7 +255,11 @@ impl PoseHistory {
             if index > 0 {
                 let previous_s = self.samples[index - 1].time_s;
                 if s.time_s <= previous_s {
-                    return Err(HistoryError::TimeNotIncreasing { index, time_s: s.time_s, previous_s });
+                    return Err(HistoryError::TimeNotIncreasing {
+                        index,
+                        time_s: s.time_s,
+                        previous_s,
+                    });
                 }
             }
             let poses = [("head", Some(s.head)), ("trunk", s.trunk)];
@@ -242,7 +267,11 @@ impl PoseHistory {
                 if let Some(pose) = pose {
                     let length = pose.orientation.length();
                     if (length - 1.0).abs() > UNIT_TOLERANCE {
-                        return Err(HistoryError::NotUnitQuaternion { index, body, length });
+                        return Err(HistoryError::NotUnitQuaternion {
+                            index,
+                            body,
+                            length,
+                        });
                     }
                 }
             }

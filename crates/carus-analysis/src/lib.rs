@@ -21,7 +21,9 @@ pub mod synthetic;
 
 pub use canal::{BirthCanal, CanalPlanes};
 pub use detector::{detect, DetectorReport};
-pub use history::{ContactSite, HeadGeometry, HistoryError, PoseHistory, PoseSample, RigidPose, TrunkGeometry};
+pub use history::{
+    ContactSite, HeadGeometry, HistoryError, PoseHistory, PoseSample, RigidPose, TrunkGeometry,
+};
 pub use measures::Series;
 pub use movements::{Movement, Movements, Unit};
 pub use outcome::{Arrest, ArrestStage, Outcome};

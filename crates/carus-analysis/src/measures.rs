@@ -71,7 +71,10 @@ struct HeadState {
 /// local anterior axis `a` and transverse axis `x`, measured from `a`
 /// towards `x` (the mother's right): theta's convention.
 pub fn cross_section_angle_deg(direction: DVec3, anterior: DVec3, transverse: DVec3) -> f64 {
-    direction.dot(transverse).atan2(direction.dot(anterior)).to_degrees()
+    direction
+        .dot(transverse)
+        .atan2(direction.dot(anterior))
+        .to_degrees()
 }
 
 /// Signed angle in degrees from `from` to `to` about `axis` (right-hand
@@ -144,10 +147,18 @@ impl Series {
             for (world, &body) in skull.iter_mut().zip(&head.skull_points_m) {
                 *world = sample.head.point(body);
             }
-            let (_, leading_sigma) = canal.leading_point(&skull, sigma).unwrap_or((h.centre, sigma));
-            series.station_mm.push((leading_sigma - canal.spines_sigma()) * MM_PER_M);
+            let (_, leading_sigma) = canal
+                .leading_point(&skull, sigma)
+                .unwrap_or((h.centre, sigma));
+            series
+                .station_mm
+                .push((leading_sigma - canal.spines_sigma()) * MM_PER_M);
             let frame = axis.frame(sigma);
-            series.theta_deg.push(cross_section_angle_deg(-h.o, frame.anterior, frame.transverse));
+            series.theta_deg.push(cross_section_angle_deg(
+                -h.o,
+                frame.anterior,
+                frame.transverse,
+            ));
             series.phi_deg.push(signed_angle_about_deg(-k, h.v, h.b));
             let inlet = canal.inlet();
             series
@@ -156,8 +167,12 @@ impl Series {
             series
                 .right_parietal_below_inlet_mm
                 .push(inlet.signed_distance(h.centre - half_bpd_m * h.b) * MM_PER_M);
-            series.head_delivered.push(canal.outlet().signed_distance(h.centre) > 0.0);
-            series.expulsion_force_n.push(sample.expulsion_force_n.dot(-k));
+            series
+                .head_delivered
+                .push(canal.outlet().signed_distance(h.centre) > 0.0);
+            series
+                .expulsion_force_n
+                .push(sample.expulsion_force_n.dot(-k));
             series
                 .contact_force_n
                 .push((sample.bone_contact_force_n + sample.floor_contact_force_n).length());
@@ -174,8 +189,10 @@ impl Series {
             unwrap_deg(&mut theta);
             series.shoulders_sigma_mm = Some(shoulders.iter().map(|s| s.sigma_mm).collect());
             series.shoulders_theta_deg = Some(theta);
-            series.shoulders_below_outlet_mm = Some(shoulders.iter().map(|s| s.below_outlet_mm).collect());
-            series.trunk_below_outlet_mm = Some(shoulders.iter().map(|s| s.trunk_below_outlet_mm).collect());
+            series.shoulders_below_outlet_mm =
+                Some(shoulders.iter().map(|s| s.below_outlet_mm).collect());
+            series.trunk_below_outlet_mm =
+                Some(shoulders.iter().map(|s| s.trunk_below_outlet_mm).collect());
         }
         series
     }
@@ -193,21 +210,41 @@ impl Series {
     pub fn table(&self) -> (Vec<&'static str>, Vec<Vec<Option<f64>>>) {
         let mut columns: Vec<(&'static str, Vec<Option<f64>>)> = vec![
             ("time_s", self.time_s.iter().copied().map(Some).collect()),
-            ("station_mm", self.station_mm.iter().copied().map(Some).collect()),
-            ("theta_deg", self.theta_deg.iter().copied().map(Some).collect()),
+            (
+                "station_mm",
+                self.station_mm.iter().copied().map(Some).collect(),
+            ),
+            (
+                "theta_deg",
+                self.theta_deg.iter().copied().map(Some).collect(),
+            ),
             ("phi_deg", self.phi_deg.iter().copied().map(Some).collect()),
-            ("head_sigma_mm", self.head_sigma_mm.iter().copied().map(Some).collect()),
+            (
+                "head_sigma_mm",
+                self.head_sigma_mm.iter().copied().map(Some).collect(),
+            ),
             (
                 "left_parietal_below_inlet_mm",
-                self.left_parietal_below_inlet_mm.iter().copied().map(Some).collect(),
+                self.left_parietal_below_inlet_mm
+                    .iter()
+                    .copied()
+                    .map(Some)
+                    .collect(),
             ),
             (
                 "right_parietal_below_inlet_mm",
-                self.right_parietal_below_inlet_mm.iter().copied().map(Some).collect(),
+                self.right_parietal_below_inlet_mm
+                    .iter()
+                    .copied()
+                    .map(Some)
+                    .collect(),
             ),
             (
                 "head_delivered",
-                self.head_delivered.iter().map(|&d| Some(if d { 1.0 } else { 0.0 })).collect(),
+                self.head_delivered
+                    .iter()
+                    .map(|&d| Some(if d { 1.0 } else { 0.0 }))
+                    .collect(),
             ),
         ];
         let optional = [
@@ -223,10 +260,18 @@ impl Series {
             };
             columns.push((name, column));
         }
-        columns.push(("expulsion_force_n", self.expulsion_force_n.iter().copied().map(Some).collect()));
-        columns.push(("contact_force_n", self.contact_force_n.iter().copied().map(Some).collect()));
+        columns.push((
+            "expulsion_force_n",
+            self.expulsion_force_n.iter().copied().map(Some).collect(),
+        ));
+        columns.push((
+            "contact_force_n",
+            self.contact_force_n.iter().copied().map(Some).collect(),
+        ));
         let names = columns.iter().map(|(name, _)| *name).collect();
-        let rows = (0..self.len()).map(|i| columns.iter().map(|(_, c)| c[i]).collect()).collect();
+        let rows = (0..self.len())
+            .map(|i| columns.iter().map(|(_, c)| c[i]).collect())
+            .collect();
         (names, rows)
     }
 }
@@ -255,7 +300,8 @@ fn shoulder_state(
         sigma_mm: sigma * MM_PER_M,
         theta_deg: cross_section_angle_deg(back, frame.anterior, frame.transverse),
         below_outlet_mm: canal.outlet().signed_distance(midpoint) * MM_PER_M,
-        trunk_below_outlet_mm: canal.outlet().signed_distance(pose.point(trunk.centre_m)) * MM_PER_M,
+        trunk_below_outlet_mm: canal.outlet().signed_distance(pose.point(trunk.centre_m))
+            * MM_PER_M,
     }
 }
 
@@ -342,7 +388,10 @@ mod tests {
     }
 
     fn at_inlet(orientation: DQuat) -> RigidPose {
-        RigidPose { position_m: DVec3::new(0.0, 0.0, 0.01), orientation }
+        RigidPose {
+            position_m: DVec3::new(0.0, 0.0, 0.01),
+            orientation,
+        }
     }
 
     fn first(history: &PoseHistory) -> (f64, f64, f64) {
@@ -362,7 +411,10 @@ mod tests {
     fn occiput_positions_at_the_inlet() {
         for (occiput, expected) in [(DVec3::Y, 0.0), (DVec3::X, 90.0), (DVec3::NEG_Y, 180.0)] {
             let (_, theta, _) = first(&still(at_inlet(axes(-occiput, DVec3::NEG_Z)), None));
-            assert!((wrap_deg(theta).abs() - expected).abs() < 1e-9, "occiput {occiput} gave {theta}");
+            assert!(
+                (wrap_deg(theta).abs() - expected).abs() < 1e-9,
+                "occiput {occiput} gave {theta}"
+            );
         }
     }
 
@@ -376,8 +428,12 @@ mod tests {
         let v = DVec3::new(0.0, -a.sin(), -a.cos());
         let trunk = simple_trunk();
         // Trunk body: chest +x, left +y, head +z; here chest -y, head -z, left -x.
-        let orientation = DQuat::from_mat3(&DMat3::from_cols(DVec3::NEG_Y, DVec3::NEG_X, DVec3::NEG_Z));
-        let trunk_pose = RigidPose { position_m: DVec3::new(0.0, 0.0, 0.16), orientation };
+        let orientation =
+            DQuat::from_mat3(&DMat3::from_cols(DVec3::NEG_Y, DVec3::NEG_X, DVec3::NEG_Z));
+        let trunk_pose = RigidPose {
+            position_m: DVec3::new(0.0, 0.0, 0.16),
+            orientation,
+        };
         let history = still(at_inlet(axes(o, v)), Some((trunk, trunk_pose)));
         let (_, theta, phi) = first(&history);
         assert!((phi - 20.0).abs() < 1e-9, "flexion gave phi = {phi}");
@@ -393,11 +449,17 @@ mod tests {
         // of the axis: the leading point (the synthetic head's 50 mm vertex
         // semi-axis; the lattice's point nearest the pole lies 0.1 mm inside
         // it) is 10 mm above the inlet.
-        let pose = RigidPose { position_m: DVec3::new(0.0, 0.0, 0.06), orientation: axes(DVec3::X, DVec3::NEG_Z) };
+        let pose = RigidPose {
+            position_m: DVec3::new(0.0, 0.0, 0.06),
+            orientation: axes(DVec3::X, DVec3::NEG_Z),
+        };
         let history = still(pose, None);
         let (station, _, _) = first(&history);
         let expected = (-0.01 - history.canal.spines_sigma()) * 1000.0;
-        assert!((station - expected).abs() < 0.11, "station {station}, expected {expected}");
+        assert!(
+            (station - expected).abs() < 0.11,
+            "station {station}, expected {expected}"
+        );
     }
 
     #[test]
@@ -418,7 +480,10 @@ mod tests {
         assert!((s.right_parietal_below_inlet_mm[0] - (-shift - 10.0)).abs() < 1e-9);
         // Centre just past the outlet plane: delivered.
         let outlet = *history.canal.outlet();
-        let pose = RigidPose { position_m: outlet.centre + 1e-4 * outlet.normal, orientation: DQuat::IDENTITY };
+        let pose = RigidPose {
+            position_m: outlet.centre + 1e-4 * outlet.normal,
+            orientation: DQuat::IDENTITY,
+        };
         assert!(Series::from_history(&still(pose, None)).head_delivered[0]);
     }
 
@@ -428,7 +493,10 @@ mod tests {
         // left (-x) like a LOT occiput: chest +x, head down -z, left = -z x x = -y.
         let trunk = simple_trunk();
         let orientation = DQuat::from_mat3(&DMat3::from_cols(DVec3::X, DVec3::NEG_Y, DVec3::NEG_Z));
-        let pose = RigidPose { position_m: DVec3::new(0.0, 0.0, 0.16), orientation };
+        let pose = RigidPose {
+            position_m: DVec3::new(0.0, 0.0, 0.16),
+            orientation,
+        };
         let history = still(at_inlet(axes(DVec3::X, DVec3::NEG_Z)), Some((trunk, pose)));
         let s = Series::from_history(&history);
         let shoulders = s.shoulders_theta_deg.as_ref().unwrap()[0];

@@ -73,7 +73,13 @@ pub struct Movement {
 
 impl Movement {
     fn absent(unit: Unit) -> Self {
-        Movement { observed: false, start_s: None, end_s: None, size: None, unit }
+        Movement {
+            observed: false,
+            start_s: None,
+            end_s: None,
+            size: None,
+            unit,
+        }
     }
 
     fn between(series: &Series, span: Span, quantity: &[f64], unit: Unit) -> Self {
@@ -133,20 +139,41 @@ pub struct Detected {
 pub fn detect_movements(series: &Series, spines_sigma_mm: f64) -> Detected {
     let engagement = engagement(series, spines_sigma_mm);
     let flexion_peak = flexion_peak(series);
-    let abs_theta: Vec<f64> = series.theta_deg.iter().map(|&t| wrap_deg(t).abs()).collect();
-    let rotation_window: Vec<usize> = (0..series.len())
-        .filter(|&i| (ROTATION_STATION_MIN_MM..=ROTATION_STATION_MAX_MM).contains(&series.station_mm[i]))
+    let abs_theta: Vec<f64> = series
+        .theta_deg
+        .iter()
+        .map(|&t| wrap_deg(t).abs())
         .collect();
-    let internal = fall(&abs_theta, &rotation_window, ROTATION_FROM_DEG, ROTATION_TO_DEG, ONSET_DEG);
+    let rotation_window: Vec<usize> = (0..series.len())
+        .filter(|&i| {
+            (ROTATION_STATION_MIN_MM..=ROTATION_STATION_MAX_MM).contains(&series.station_mm[i])
+        })
+        .collect();
+    let internal = fall(
+        &abs_theta,
+        &rotation_window,
+        ROTATION_FROM_DEG,
+        ROTATION_TO_DEG,
+        ONSET_DEG,
+    );
     let neg_abs_theta: Vec<f64> = abs_theta.iter().map(|a| -a).collect();
-    let posterior = fall(&neg_abs_theta, &rotation_window, -POSTERIOR_FROM_DEG, -POSTERIOR_TO_DEG, ONSET_DEG);
+    let posterior = fall(
+        &neg_abs_theta,
+        &rotation_window,
+        -POSTERIOR_FROM_DEG,
+        -POSTERIOR_TO_DEG,
+        ONSET_DEG,
+    );
     let rotation = |span: Option<Span>| {
-        span.map_or(Movement::absent(Unit::Deg), |s| Movement::between(series, s, &series.theta_deg, Unit::Deg))
+        span.map_or(Movement::absent(Unit::Deg), |s| {
+            Movement::between(series, s, &series.theta_deg, Unit::Deg)
+        })
     };
     Detected {
         movements: Movements {
-            engagement: engagement
-                .map_or(Movement::absent(Unit::Mm), |s| Movement::between(series, s, &series.station_mm, Unit::Mm)),
+            engagement: engagement.map_or(Movement::absent(Unit::Mm), |s| {
+                Movement::between(series, s, &series.station_mm, Unit::Mm)
+            }),
             descent: descent(series),
             flexion: flexion(series, flexion_peak),
             internal_rotation: rotation(internal),
@@ -173,7 +200,10 @@ fn engagement(series: &Series, spines_sigma_mm: f64) -> Option<Span> {
     }
     let end = (1..series.len()).find(|&i| engaged(series, i))?;
     let leading_sigma = |i: usize| series.station_mm[i] + spines_sigma_mm;
-    let start = (0..end).rev().find(|&i| leading_sigma(i) <= 0.0).map_or(0, |i| (i + 1).min(end));
+    let start = (0..end)
+        .rev()
+        .find(|&i| leading_sigma(i) <= 0.0)
+        .map_or(0, |i| (i + 1).min(end));
     Some(Span { start, end })
 }
 
@@ -199,7 +229,10 @@ fn descent(series: &Series) -> Movement {
     }
     let first_rise = station.iter().position(|&s| s > s0 + ONSET_MM).unwrap_or(0);
     let start = first_rise.saturating_sub(1);
-    let end = station.iter().position(|&s| s >= top - ONSET_MM).unwrap_or(last);
+    let end = station
+        .iter()
+        .position(|&s| s >= top - ONSET_MM)
+        .unwrap_or(last);
     Movement::between(series, Span { start, end }, &series.station_mm, Unit::Mm)
 }
 
@@ -208,7 +241,11 @@ fn descent(series: &Series) -> Movement {
 /// (where extension may begin), or over the whole run if it never does.
 /// (The tolerance keeps rounding noise on a plateau from moving the peak.)
 fn flexion_peak(series: &Series) -> usize {
-    let limit = series.station_mm.iter().position(|&s| s >= EXTENSION_FROM_STATION_MM).unwrap_or(series.len());
+    let limit = series
+        .station_mm
+        .iter()
+        .position(|&s| s >= EXTENSION_FROM_STATION_MM)
+        .unwrap_or(series.len());
     let phi = &series.phi_deg[..limit.max(1)];
     let top = phi.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     phi.iter().position(|&p| p >= top - ONSET_DEG).unwrap_or(0)
@@ -220,12 +257,27 @@ fn flexion_peak(series: &Series) -> usize {
 /// first value; end: the flexion peak.
 fn flexion(series: &Series, peak: usize) -> Movement {
     let phi = &series.phi_deg;
-    let limit = series.station_mm.iter().position(|&s| s >= FLEXION_BY_STATION_MM).unwrap_or(series.len());
+    let limit = series
+        .station_mm
+        .iter()
+        .position(|&s| s >= FLEXION_BY_STATION_MM)
+        .unwrap_or(series.len());
     let Some(crossing) = (0..limit).find(|&i| phi[i] >= phi[0] + FLEXION_MIN_DEG) else {
         return Movement::absent(Unit::Deg);
     };
-    let start = (0..=crossing).rev().find(|&i| phi[i] <= phi[0] + ONSET_DEG).unwrap_or(0);
-    Movement::between(series, Span { start, end: peak.max(crossing) }, phi, Unit::Deg)
+    let start = (0..=crossing)
+        .rev()
+        .find(|&i| phi[i] <= phi[0] + ONSET_DEG)
+        .unwrap_or(0);
+    Movement::between(
+        series,
+        Span {
+            start,
+            end: peak.max(crossing),
+        },
+        phi,
+        Unit::Deg,
+    )
 }
 
 /// Extension: after the flexion peak, among the samples at station +30 mm
@@ -235,8 +287,9 @@ fn extension(series: &Series, peak: usize) -> Movement {
     if delivery(series).is_none() {
         return Movement::absent(Unit::Deg);
     }
-    let window: Vec<usize> =
-        (peak..series.len()).filter(|&i| series.station_mm[i] >= EXTENSION_FROM_STATION_MM).collect();
+    let window: Vec<usize> = (peak..series.len())
+        .filter(|&i| series.station_mm[i] >= EXTENSION_FROM_STATION_MM)
+        .collect();
     let neg_phi: Vec<f64> = series.phi_deg.iter().map(|p| -p).collect();
     match largest_rise(&neg_phi, &window, ONSET_DEG) {
         Some((span, fall)) if fall >= EXTENSION_MIN_DEG => {
@@ -257,11 +310,12 @@ fn external_rotation(series: &Series, engagement_end: Option<usize>) -> Movement
     };
     let window: Vec<usize> = (delivered..series.len()).collect();
     let side_theta = wrap_deg(series.theta_deg[engagement_end.unwrap_or(0)]);
-    let sides: &[f64] = if side_theta.abs() < SIDE_UNDECIDED_DEG || side_theta.abs() > 180.0 - SIDE_UNDECIDED_DEG {
-        &[1.0, -1.0]
-    } else {
-        &[side_theta.signum()]
-    };
+    let sides: &[f64] =
+        if side_theta.abs() < SIDE_UNDECIDED_DEG || side_theta.abs() > 180.0 - SIDE_UNDECIDED_DEG {
+            &[1.0, -1.0]
+        } else {
+            &[side_theta.signum()]
+        };
     let best = sides
         .iter()
         .filter_map(|&side| {
@@ -285,7 +339,10 @@ fn external_rotation(series: &Series, engagement_end: Option<usize>) -> Movement
 /// centre does (end). Size: the trunk centre's travel along the outlet
 /// normal in between. Needs a modelled trunk.
 fn expulsion(series: &Series) -> Movement {
-    let (Some(shoulders), Some(trunk)) = (&series.shoulders_below_outlet_mm, &series.trunk_below_outlet_mm) else {
+    let (Some(shoulders), Some(trunk)) = (
+        &series.shoulders_below_outlet_mm,
+        &series.trunk_below_outlet_mm,
+    ) else {
         return Movement::absent(Unit::Mm);
     };
     let Some(start) = shoulders.iter().position(|&d| d > 0.0).filter(|&i| i > 0) else {
@@ -310,9 +367,16 @@ fn fall(q: &[f64], window: &[usize], from: f64, to: f64, tolerance: f64) -> Opti
         hit
     })?;
     let before = &window[..reach];
-    let high = before.iter().map(|&i| q[i]).fold(f64::NEG_INFINITY, f64::max);
+    let high = before
+        .iter()
+        .map(|&i| q[i])
+        .fold(f64::NEG_INFINITY, f64::max);
     let start = *before.iter().rev().find(|&&i| q[i] >= high - tolerance)?;
-    let stretch: Vec<usize> = window[reach..].iter().copied().take_while(|&i| q[i] <= to).collect();
+    let stretch: Vec<usize> = window[reach..]
+        .iter()
+        .copied()
+        .take_while(|&i| q[i] <= to)
+        .collect();
     let low = stretch.iter().map(|&i| q[i]).fold(f64::INFINITY, f64::min);
     let end = *stretch.iter().find(|&&i| q[i] <= low + tolerance)?;
     Some(Span { start, end })
@@ -333,9 +397,19 @@ fn largest_rise(q: &[f64], window: &[usize], tolerance: f64) -> Option<(Span, f6
         }
     }
     let (top, rise, low) = best?;
-    let start_pos = window.iter().rposition(|&i| i < top && q[i] <= low + tolerance)?;
-    let end = *window[start_pos..].iter().find(|&&i| q[i] >= q[top] - tolerance)?;
-    Some((Span { start: window[start_pos], end }, rise))
+    let start_pos = window
+        .iter()
+        .rposition(|&i| i < top && q[i] <= low + tolerance)?;
+    let end = *window[start_pos..]
+        .iter()
+        .find(|&&i| q[i] >= q[top] - tolerance)?;
+    Some((
+        Span {
+            start: window[start_pos],
+            end,
+        },
+        rise,
+    ))
 }
 
 #[cfg(test)]

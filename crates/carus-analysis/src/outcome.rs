@@ -62,8 +62,13 @@ pub struct Outcome {
 /// extremes; `None` for a force with fewer than three such peaks.
 pub fn contraction_period_s(series: &Series) -> Option<f64> {
     let force = &series.expulsion_force_n;
-    let (low, high) = force.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &f| (l.min(f), h.max(f)));
-    if !(high - low > 1e-9 * high.abs().max(1.0)) {
+    let (low, high) = force
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &f| {
+            (l.min(f), h.max(f))
+        });
+    // A constant force (or a single sample) has no contractions to time.
+    if high - low <= 1e-9 * high.abs().max(1.0) {
         return None;
     }
     let mid = 0.5 * (low + high);
@@ -92,9 +97,16 @@ pub fn contraction_period_s(series: &Series) -> Option<f64> {
 pub fn outcome(history: &PoseHistory, series: &Series, spines_sigma_mm: f64) -> Outcome {
     let last = series.len() - 1;
     let head_out = series.head_delivered[last];
-    let delivered = head_out && series.trunk_below_outlet_mm.as_ref().is_none_or(|trunk| trunk[last] > 0.0);
+    let delivered = head_out
+        && series
+            .trunk_below_outlet_mm
+            .as_ref()
+            .is_none_or(|trunk| trunk[last] > 0.0);
     if delivered {
-        return Outcome { delivered, arrest: None };
+        return Outcome {
+            delivered,
+            arrest: None,
+        };
     }
     // The part whose progress counts: the shoulders once the head is out.
     let progress: Vec<f64> = match (head_out, &series.shoulders_sigma_mm) {
@@ -104,16 +116,35 @@ pub fn outcome(history: &PoseHistory, series: &Series, spines_sigma_mm: f64) -> 
     let duration = series.time_s[last] - series.time_s[0];
     let span = (ARREST_WINDOW_FRACTION * duration)
         .max(contraction_period_s(series).map_or(0.0, |p| ARREST_WINDOW_PERIODS * p));
-    let window_start = series.time_s.iter().position(|&t| t >= series.time_s[last] - span).unwrap_or(0);
-    let max_of = |range: std::ops::Range<usize>| progress[range].iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let window_start = series
+        .time_s
+        .iter()
+        .position(|&t| t >= series.time_s[last] - span)
+        .unwrap_or(0);
+    let max_of = |range: std::ops::Range<usize>| {
+        progress[range]
+            .iter()
+            .copied()
+            .fold(f64::NEG_INFINITY, f64::max)
+    };
     let reached = max_of(window_start..last + 1);
-    let before = if window_start == 0 { progress[0] } else { max_of(0..window_start) };
+    let before = if window_start == 0 {
+        progress[0]
+    } else {
+        max_of(0..window_start)
+    };
     if reached - before >= ARREST_PROGRESS_MM {
-        return Outcome { delivered, arrest: None };
+        return Outcome {
+            delivered,
+            arrest: None,
+        };
     }
     let stage = if head_out {
         ArrestStage::Shoulders
-    } else if series.left_parietal_below_inlet_mm[last].min(series.right_parietal_below_inlet_mm[last]) <= 0.0 {
+    } else if series.left_parietal_below_inlet_mm[last]
+        .min(series.right_parietal_below_inlet_mm[last])
+        <= 0.0
+    {
         ArrestStage::Inlet
     } else if series.head_sigma_mm[last] < spines_sigma_mm {
         ArrestStage::MidPelvis
@@ -123,6 +154,16 @@ pub fn outcome(history: &PoseHistory, series: &Series, spines_sigma_mm: f64) -> 
     let hardest = (window_start..=last)
         .max_by(|&a, &b| series.contact_force_n[a].total_cmp(&series.contact_force_n[b]))
         .unwrap_or(last);
-    let against = history.samples[hardest].dominant_contact.map_or("unknown", |site| site.name()).to_string();
-    Outcome { delivered, arrest: Some(Arrest { stage, station_mm: reached, against }) }
+    let against = history.samples[hardest]
+        .dominant_contact
+        .map_or("unknown", |site| site.name())
+        .to_string();
+    Outcome {
+        delivered,
+        arrest: Some(Arrest {
+            stage,
+            station_mm: reached,
+            against,
+        }),
+    }
 }

@@ -10,7 +10,9 @@
 //! read them; the poses produced are SI.
 
 use crate::canal::{BirthCanal, CanalPlanes};
-use crate::history::{ContactSite, HeadGeometry, PoseHistory, PoseSample, RigidPose, TrunkGeometry};
+use crate::history::{
+    ContactSite, HeadGeometry, PoseHistory, PoseSample, RigidPose, TrunkGeometry,
+};
 use carus_anatomy::axis::Plane;
 use glam::{DMat3, DQuat, DVec3};
 
@@ -29,10 +31,22 @@ pub fn reference_canal() -> BirthCanal {
         DVec3::new(0.0, r.sin(), -r.cos())
     };
     let planes = CanalPlanes {
-        inlet: Plane { centre: DVec3::ZERO, normal: DVec3::NEG_Z },
-        greatest_dimensions: Plane { centre: DVec3::new(0.0, -0.004, -0.035), normal: tilted(15.0) },
-        spines: Plane { centre: DVec3::new(0.0, 0.0, -0.065), normal: tilted(35.0) },
-        outlet: Plane { centre: DVec3::new(0.0, 0.02, -0.095), normal: tilted(65.0) },
+        inlet: Plane {
+            centre: DVec3::ZERO,
+            normal: DVec3::NEG_Z,
+        },
+        greatest_dimensions: Plane {
+            centre: DVec3::new(0.0, -0.004, -0.035),
+            normal: tilted(15.0),
+        },
+        spines: Plane {
+            centre: DVec3::new(0.0, 0.0, -0.065),
+            normal: tilted(35.0),
+        },
+        outlet: Plane {
+            centre: DVec3::new(0.0, 0.02, -0.095),
+            normal: tilted(65.0),
+        },
         right: DVec3::X,
     };
     BirthCanal::new(planes).expect("the reference planes are ordered and finite")
@@ -135,7 +149,8 @@ pub struct Plan {
 impl Plan {
     fn sigma_mm(&self, t: f64) -> f64 {
         let w = 2.0 * std::f64::consts::PI / self.period_s;
-        (self.start_sigma_mm + self.advance_mm_per_s * t).min(self.hold_sigma_mm) - self.drift_mm * (w * t).sin()
+        (self.start_sigma_mm + self.advance_mm_per_s * t).min(self.hold_sigma_mm)
+            - self.drift_mm * (w * t).sin()
     }
 
     fn force_n(&self, t: f64) -> f64 {
@@ -157,7 +172,12 @@ impl Plan {
                 break;
             }
         }
-        PoseHistory { head, trunk, canal: canal.clone(), samples }
+        PoseHistory {
+            head,
+            trunk,
+            canal: canal.clone(),
+            samples,
+        }
     }
 
     fn sample(&self, canal: &BirthCanal, t: f64, sigma_mm: f64) -> PoseSample {
@@ -168,7 +188,13 @@ impl Plan {
         let phi = ramped(self.phi_deg, &self.phi_ramps, sigma_mm);
         let head = RigidPose {
             position_m: axis.point(sigma),
-            orientation: head_orientation(frame.tangent, frame.anterior, frame.transverse, theta, phi),
+            orientation: head_orientation(
+                frame.tangent,
+                frame.anterior,
+                frame.transverse,
+                theta,
+                phi,
+            ),
         };
         let trunk = self.shoulders.as_ref().map(|(initial, ramps)| {
             let back = ramped(*initial, ramps, sigma_mm).to_radians();
@@ -180,7 +206,8 @@ impl Plan {
             let body = simple_trunk();
             let shoulders_body = 0.5 * (body.left_acromion_m + body.right_acromion_m);
             RigidPose {
-                position_m: axis.point(sigma - SHOULDERS_BEHIND_HEAD_M) - orientation * shoulders_body,
+                position_m: axis.point(sigma - SHOULDERS_BEHIND_HEAD_M)
+                    - orientation * shoulders_body,
                 orientation,
             }
         });
@@ -203,7 +230,13 @@ impl Plan {
 /// `theta_deg` and attitude `phi_deg` relative to a trunk along `-tangent`:
 /// the occiput points along `cos(theta) a + sin(theta) x`, the vertex down
 /// the canal, then the head turns by phi about b (flexion positive).
-pub fn head_orientation(tangent: DVec3, anterior: DVec3, transverse: DVec3, theta_deg: f64, phi_deg: f64) -> DQuat {
+pub fn head_orientation(
+    tangent: DVec3,
+    anterior: DVec3,
+    transverse: DVec3,
+    theta_deg: f64,
+    phi_deg: f64,
+) -> DQuat {
     let (theta, phi) = (theta_deg.to_radians(), phi_deg.to_radians());
     let o0 = -(theta.cos() * anterior + theta.sin() * transverse);
     let v0 = tangent;
@@ -261,20 +294,48 @@ pub fn textbook_plan(canal: &BirthCanal) -> Plan {
     let at_station = |s: f64| centre_sigma_at_station(canal, s);
     let mut plan = contractions(-60.0, outlet + 170.0);
     plan.phi_ramps = vec![
-        Ramp { from_mm: -55.0, to_mm: -25.0, by: 25.0 },
-        Ramp { from_mm: at_station(35.0), to_mm: outlet + 5.0, by: -70.0 },
+        Ramp {
+            from_mm: -55.0,
+            to_mm: -25.0,
+            by: 25.0,
+        },
+        Ramp {
+            from_mm: at_station(35.0),
+            to_mm: outlet + 5.0,
+            by: -70.0,
+        },
     ];
     let rotation = (at_station(0.0), at_station(40.0));
     plan.theta_ramps = vec![
-        Ramp { from_mm: rotation.0, to_mm: rotation.1, by: 90.0 },
-        Ramp { from_mm: outlet + 10.0, to_mm: outlet + 30.0, by: -45.0 },
-        Ramp { from_mm: outlet + 50.0, to_mm: outlet + 80.0, by: -45.0 },
+        Ramp {
+            from_mm: rotation.0,
+            to_mm: rotation.1,
+            by: 90.0,
+        },
+        Ramp {
+            from_mm: outlet + 10.0,
+            to_mm: outlet + 30.0,
+            by: -45.0,
+        },
+        Ramp {
+            from_mm: outlet + 50.0,
+            to_mm: outlet + 80.0,
+            by: -45.0,
+        },
     ];
     plan.shoulders = Some((
         -90.0,
         vec![
-            Ramp { from_mm: rotation.0, to_mm: rotation.1, by: 45.0 },
-            Ramp { from_mm: outlet + 50.0, to_mm: outlet + 80.0, by: -45.0 },
+            Ramp {
+                from_mm: rotation.0,
+                to_mm: rotation.1,
+                by: 45.0,
+            },
+            Ramp {
+                from_mm: outlet + 50.0,
+                to_mm: outlet + 80.0,
+                by: -45.0,
+            },
         ],
     ));
     plan.contact = Some(ContactSite::PelvicFloor);
@@ -287,7 +348,13 @@ pub fn textbook_plan(canal: &BirthCanal) -> Plan {
 /// from the force. Only engagement and descent may be detected.
 pub fn straight_push(canal: &BirthCanal) -> PoseHistory {
     let plan = contractions(-60.0, 30.0);
-    let orientation = head_orientation(DVec3::NEG_Z, DVec3::Y, DVec3::X, plan.theta_deg, plan.phi_deg);
+    let orientation = head_orientation(
+        DVec3::NEG_Z,
+        DVec3::Y,
+        DVec3::X,
+        plan.theta_deg,
+        plan.phi_deg,
+    );
     let head = ellipsoid_head();
     let mut samples = Vec::new();
     for step in 0.. {
@@ -296,7 +363,10 @@ pub fn straight_push(canal: &BirthCanal) -> PoseHistory {
         let force = plan.force_n(t) * DVec3::NEG_Z;
         samples.push(PoseSample {
             time_s: t,
-            head: RigidPose { position_m: DVec3::new(0.0, 0.0, -depth_mm * M_PER_MM), orientation },
+            head: RigidPose {
+                position_m: DVec3::new(0.0, 0.0, -depth_mm * M_PER_MM),
+                orientation,
+            },
             trunk: None,
             expulsion_force_n: force,
             bone_contact_force_n: 0.5 * plan.force_n(t).max(0.0) * DVec3::Z,
@@ -307,7 +377,12 @@ pub fn straight_push(canal: &BirthCanal) -> PoseHistory {
             break;
         }
     }
-    PoseHistory { head, trunk: None, canal: canal.clone(), samples }
+    PoseHistory {
+        head,
+        trunk: None,
+        canal: canal.clone(),
+        samples,
+    }
 }
 
 /// Arrest above the inlet (as in a contracted inlet): the head, LOT, rocks
@@ -341,7 +416,15 @@ pub fn shoulder_arrest(canal: &BirthCanal) -> PoseHistory {
 pub fn direct_occiput_posterior(canal: &BirthCanal) -> PoseHistory {
     let at_station = |s: f64| centre_sigma_at_station(canal, s);
     let mut plan = contractions(-60.0, at_station(40.0));
-    plan.phi_ramps = vec![Ramp { from_mm: -55.0, to_mm: -25.0, by: 25.0 }];
-    plan.theta_ramps = vec![Ramp { from_mm: at_station(-10.0), to_mm: at_station(30.0), by: -90.0 }];
+    plan.phi_ramps = vec![Ramp {
+        from_mm: -55.0,
+        to_mm: -25.0,
+        by: 25.0,
+    }];
+    plan.theta_ramps = vec![Ramp {
+        from_mm: at_station(-10.0),
+        to_mm: at_station(30.0),
+        by: -90.0,
+    }];
     plan.history(canal)
 }

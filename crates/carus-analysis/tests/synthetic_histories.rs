@@ -23,7 +23,10 @@ fn observed(m: &Movement) -> (f64, f64, f64) {
 }
 
 fn absent(m: &Movement) {
-    assert!(!m.observed && m.start_s.is_none() && m.end_s.is_none() && m.size.is_none(), "{m:?}");
+    assert!(
+        !m.observed && m.start_s.is_none() && m.end_s.is_none() && m.size.is_none(),
+        "{m:?}"
+    );
 }
 
 #[test]
@@ -45,10 +48,19 @@ fn the_textbook_labour_shows_all_seven_in_order() {
     // restitutes and turns externally 90; the leading point enters the inlet
     // about 50-60 mm before the biparietal plane does.
     assert!((flexion.2 - 25.0).abs() < 2.0, "flexion {flexion:?}");
-    assert!((internal.2 - 90.0).abs() < 3.0, "internal rotation {internal:?}");
+    assert!(
+        (internal.2 - 90.0).abs() < 3.0,
+        "internal rotation {internal:?}"
+    );
     assert!((extension.2 - 70.0).abs() < 3.0, "extension {extension:?}");
-    assert!((external.2 - 90.0).abs() < 3.0, "external rotation {external:?}");
-    assert!((45.0..70.0).contains(&engagement.2), "engagement {engagement:?}");
+    assert!(
+        (external.2 - 90.0).abs() < 3.0,
+        "external rotation {external:?}"
+    );
+    assert!(
+        (45.0..70.0).contains(&engagement.2),
+        "engagement {engagement:?}"
+    );
     assert!(descent.2 > 100.0, "descent {descent:?}");
     assert!(expulsion.2 > 0.0);
     assert_eq!(m.engagement.unit, Unit::Mm);
@@ -77,7 +89,11 @@ fn the_internal_rotation_happens_between_the_stations_of_the_rule() {
     let (start, end, _) = observed(&r.movements.internal_rotation);
     for (i, &t) in s.time_s.iter().enumerate() {
         if t == start || t == end {
-            assert!((-20.0..=50.0).contains(&s.station_mm[i]), "station {} at {t}", s.station_mm[i]);
+            assert!(
+                (-20.0..=50.0).contains(&s.station_mm[i]),
+                "station {} at {t}",
+                s.station_mm[i]
+            );
         }
     }
 }
@@ -89,14 +105,23 @@ fn a_straight_push_shows_only_engagement_and_descent() {
     observed(&m.engagement);
     let descent = observed(&m.descent);
     assert!(descent.2 >= 30.0);
-    for movement in [&m.flexion, &m.internal_rotation, &m.extension, &m.external_rotation, &m.expulsion] {
+    for movement in [
+        &m.flexion,
+        &m.internal_rotation,
+        &m.extension,
+        &m.external_rotation,
+        &m.expulsion,
+    ] {
         absent(movement);
     }
     absent(&r.posterior_rotation);
     // Phi never moves; theta only by the 5 degrees of flexion seen in the
     // cross-section as the canal tilts forward (5 sin(tilt) < 2 degrees).
     for (&theta, &phi) in r.series.theta_deg.iter().zip(&r.series.phi_deg) {
-        assert!((theta + 90.0).abs() < 2.0 && (phi - 5.0).abs() < 1e-6, "theta {theta} phi {phi}");
+        assert!(
+            (theta + 90.0).abs() < 2.0 && (phi - 5.0).abs() < 1e-6,
+            "theta {theta} phi {phi}"
+        );
     }
     // Still descending when the run stops: neither delivered nor arrested.
     assert!(!r.outcome.delivered && r.outcome.arrest.is_none());
@@ -112,7 +137,12 @@ fn a_head_held_above_the_inlet_is_an_inlet_arrest() {
     assert_eq!(arrest.stage, ArrestStage::Inlet);
     assert_eq!(arrest.against, "symphysis");
     // The deepest station of the final window, not the last sample's.
-    let max = r.series.station_mm.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let max = r
+        .series
+        .station_mm
+        .iter()
+        .copied()
+        .fold(f64::NEG_INFINITY, f64::max);
     assert!(arrest.station_mm <= max && arrest.station_mm > max - 1.0);
 }
 
@@ -129,7 +159,15 @@ fn a_rotation_to_direct_op_is_posterior_not_internal() {
 fn the_json_shape_is_the_canonical_one() {
     let (_, r) = textbook();
     let json = serde_json::to_value(r).unwrap();
-    for key in ["engagement", "descent", "flexion", "internal_rotation", "extension", "external_rotation", "expulsion"] {
+    for key in [
+        "engagement",
+        "descent",
+        "flexion",
+        "internal_rotation",
+        "extension",
+        "external_rotation",
+        "expulsion",
+    ] {
         let m = &json["movements"][key];
         for field in ["observed", "start_s", "end_s", "size", "unit"] {
             assert!(m.get(field).is_some(), "{key}.{field} missing");
@@ -137,7 +175,10 @@ fn the_json_shape_is_the_canonical_one() {
     }
     assert_eq!(json["movements"]["descent"]["unit"], "mm");
     assert_eq!(json["movements"]["flexion"]["unit"], "deg");
-    assert_eq!(json["posterior_rotation"]["start_s"], serde_json::Value::Null);
+    assert_eq!(
+        json["posterior_rotation"]["start_s"],
+        serde_json::Value::Null
+    );
     assert_eq!(json["outcome"]["delivered"], true);
     assert_eq!(json["outcome"]["arrest"], serde_json::Value::Null);
     assert!(json["series"]["station_mm"].as_array().unwrap().len() > 100);
@@ -154,16 +195,26 @@ fn history_and_report_survive_a_json_round_trip() {
     let (history, report) = textbook();
     let text = history.to_json_string().unwrap();
     let back = PoseHistory::from_json_str(&text).unwrap();
-    assert!(back == *history, "the history changed in the JSON round trip");
-    let report_back: DetectorReport = serde_json::from_str(&serde_json::to_string(report).unwrap()).unwrap();
-    assert!(report_back == *report, "the report changed in the JSON round trip");
+    assert!(
+        back == *history,
+        "the history changed in the JSON round trip"
+    );
+    let report_back: DetectorReport =
+        serde_json::from_str(&serde_json::to_string(report).unwrap()).unwrap();
+    assert!(
+        report_back == *report,
+        "the report changed in the JSON round trip"
+    );
 }
 
 #[test]
 fn the_detector_is_deterministic() {
     let (history, report) = textbook();
     let again = detect(history).unwrap();
-    assert_eq!(serde_json::to_string(&again).unwrap(), serde_json::to_string(report).unwrap());
+    assert_eq!(
+        serde_json::to_string(&again).unwrap(),
+        serde_json::to_string(report).unwrap()
+    );
 }
 
 #[test]
@@ -176,7 +227,12 @@ fn moving_the_time_origin_moves_every_movement_with_it() {
         s.time_s += offset;
     }
     let moved = detect(&shifted).unwrap();
-    let pairs = base.movements.iter().into_iter().zip(moved.movements.iter()).map(|((_, a), (_, b))| (*a, *b));
+    let pairs = base
+        .movements
+        .iter()
+        .into_iter()
+        .zip(moved.movements.iter())
+        .map(|((_, a), (_, b))| (*a, *b));
     for (a, b) in pairs.chain([(base.posterior_rotation, moved.posterior_rotation)]) {
         assert_eq!(a.observed, b.observed);
         assert_eq!(a.size, b.size);
@@ -196,11 +252,17 @@ fn the_series_table_has_one_row_per_sample() {
     let (columns, rows) = report.series.table();
     assert_eq!(rows.len(), history.samples.len());
     assert!(rows.iter().all(|r| r.len() == columns.len()));
-    assert_eq!(&columns[..4], &["time_s", "station_mm", "theta_deg", "phi_deg"]);
+    assert_eq!(
+        &columns[..4],
+        &["time_s", "station_mm", "theta_deg", "phi_deg"]
+    );
     // The straight push has no trunk: its shoulder columns are empty.
     let push = detect(&synthetic::straight_push(&reference_canal())).unwrap();
     let (columns, rows) = push.series.table();
-    let shoulders = columns.iter().position(|&c| c == "shoulders_sigma_mm").unwrap();
+    let shoulders = columns
+        .iter()
+        .position(|&c| c == "shoulders_sigma_mm")
+        .unwrap();
     assert!(rows.iter().all(|r| r[shoulders].is_none()));
 }
 
@@ -212,7 +274,7 @@ fn bad_histories_are_refused_with_the_sample_named() {
     let err = detect(&h).unwrap_err().to_string();
     assert!(err.contains("sample 7"), "{err}");
     let mut h = history.clone();
-    h.samples[3].head.orientation = h.samples[3].head.orientation * 2.0;
+    h.samples[3].head.orientation *= 2.0;
     assert!(detect(&h).unwrap_err().to_string().contains("sample 3"));
     let mut h = history.clone();
     h.samples[5].trunk = None;
@@ -222,7 +284,10 @@ fn bad_histories_are_refused_with_the_sample_named() {
     assert!(detect(&h).is_err());
     let mut h = history.clone();
     h.samples[2].expulsion_force_n.x = f64::NAN;
-    assert!(detect(&h).unwrap_err().to_string().contains("expulsion_force_n"));
+    assert!(detect(&h)
+        .unwrap_err()
+        .to_string()
+        .contains("expulsion_force_n"));
     assert!(PoseHistory::from_json_str("{\"head\": 1}").is_err());
 }
 
@@ -243,13 +308,27 @@ fn arrests_are_placed_by_where_the_head_stopped() {
     let canal = reference_canal();
     let spines = canal.spines_sigma() * 1000.0;
     let cases = [
-        (spines - 20.0, ContactSite::IschialSpines, ArrestStage::MidPelvis, "ischial_spines"),
-        (spines + 15.0, ContactSite::Coccyx, ArrestStage::Outlet, "coccyx"),
+        (
+            spines - 20.0,
+            ContactSite::IschialSpines,
+            ArrestStage::MidPelvis,
+            "ischial_spines",
+        ),
+        (
+            spines + 15.0,
+            ContactSite::Coccyx,
+            ArrestStage::Outlet,
+            "coccyx",
+        ),
     ];
     for (hold, site, stage, against) in cases {
         let r = held(hold, site);
         assert!(!r.outcome.delivered);
-        let arrest = r.outcome.arrest.as_ref().unwrap_or_else(|| panic!("no arrest held at {hold}"));
+        let arrest = r
+            .outcome
+            .arrest
+            .as_ref()
+            .unwrap_or_else(|| panic!("no arrest held at {hold}"));
         assert_eq!(arrest.stage, stage);
         assert_eq!(arrest.against, against);
         observed(&r.movements.engagement);
@@ -267,7 +346,10 @@ fn large_shoulders_deliver_the_head_then_arrest() {
     assert_eq!(arrest.against, "symphysis");
     // The shoulders' station: above the outlet, below the spines.
     let outlet = reference_canal().outlet_sigma() - reference_canal().spines_sigma();
-    assert!(arrest.station_mm > 0.0 && arrest.station_mm < outlet * 1000.0, "{arrest:?}");
+    assert!(
+        arrest.station_mm > 0.0 && arrest.station_mm < outlet * 1000.0,
+        "{arrest:?}"
+    );
     observed(&r.movements.extension);
     absent(&r.movements.expulsion);
 }
