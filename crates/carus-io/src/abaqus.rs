@@ -35,12 +35,14 @@ pub fn parse_inp(path: &Path, bytes: &[u8]) -> Result<MeshFile, ReadError> {
         builder: MeshBuilder::new(path),
         set_names: HashMap::new(),
         volume_nodes: HashMap::new(),
+        facets: HashMap::new(),
         surface_faces: Vec::new(),
         line: 0,
     };
     let lines: Vec<&str> = text.lines().collect();
     reader.run(&lines)?;
     reader.resolve_surfaces()?;
+    reader.facet_surfaces();
     reader.builder.finish()
 }
 
@@ -75,7 +77,7 @@ impl Keyword {
 enum Block {
     Nodes { set: Option<String> },
     Volume { per_element: usize, set: Option<String> },
-    Ignored,
+    Ignored { set: Option<String> },
     NodeSet { name: String, generate: bool },
     ElementSet { name: String, generate: bool },
     ElementSurface { name: String },
@@ -89,6 +91,9 @@ struct Reader<'a> {
     /// Upper-case set name -> spelling of its first use.
     set_names: HashMap<String, String>,
     volume_nodes: HashMap<u64, Vec<u64>>,
+    /// Skipped 3- and 4-node elements (CPS3, S4R, R3D3, ...): an element set
+    /// holding them also becomes a surface, as Gmsh's export writes faces.
+    facets: HashMap<u64, Vec<u64>>,
     /// (surface, element id or element set, face label, line).
     surface_faces: Vec<(String, String, String, usize)>,
     line: usize,
@@ -162,9 +167,16 @@ impl Reader<'_> {
                     let set = set.clone();
                     self.node(&fields, set.as_deref())?
                 }
-                Block::Ignored => {
-                    if let Some(id) = fields.first().and_then(|f| f.parse::<u64>().ok()) {
+                Block::Ignored { set } => {
+                    let values: Vec<u64> = fields.iter().filter_map(|f| f.parse().ok()).collect();
+                    if let Some((&id, nodes)) = values.split_first() {
                         self.builder.ignore_element(id);
+                        if let Some(set) = set {
+                            self.builder.add_to_element_set(set, id);
+                        }
+                        if matches!(nodes.len(), 3 | 4) && !self.facets.contains_key(&id) {
+                            self.facets.insert(id, nodes.to_vec());
+                        }
                     }
                 }
                 Block::NodeSet { name, generate } => {
@@ -263,7 +275,7 @@ impl Reader<'_> {
                     None => {
                         self.builder
                             .note(format!("skipped *ELEMENT, TYPE={kind} (not a solid element)"));
-                        Block::Ignored
+                        Block::Ignored { set }
                     }
                 }
             }
@@ -461,6 +473,26 @@ impl Reader<'_> {
     }
 }
 
+impl Reader<'_> {
+    /// Element sets holding triangles or quadrilaterals become surfaces.
+    fn facet_surfaces(&mut self) {
+        if self.facets.is_empty() {
+            return;
+        }
+        let mut found: Vec<(String, Vec<u64>)> = Vec::new();
+        for (name, members) in self.builder.element_sets() {
+            for id in members {
+                if let Some(nodes) = self.facets.get(id) {
+                    found.push((name.clone(), nodes.clone()));
+                }
+            }
+        }
+        for (name, nodes) in found {
+            self.builder.add_surface_polygon(&name, &nodes);
+        }
+    }
+}
+
 /// Nodes per element for the solid types Carus reads.
 fn volume_nodes(kind: &str) -> Option<usize> {
     let suffix_ok = |rest: &str| rest.chars().all(|c| c.is_ascii_alphabetic());
@@ -508,6 +540,8 @@ mod tests {
         assert!(file.notes.iter().any(|n| n.contains("S4R")), "{:?}", file.notes);
         // The shell element 3 was in a set: dropped, not an error.
         assert_eq!(mesh.element_sets["with_shell"], vec![1]);
+        // ... and, being a quadrilateral in an element set, a surface.
+        assert_eq!(mesh.surfaces["with_shell"].len(), 2);
     }
 
     #[test]

@@ -130,6 +130,10 @@ impl MeshBuilder {
         self.node_sets.entry(name.to_string()).or_default().push(id);
     }
 
+    pub(crate) fn element_sets(&self) -> impl Iterator<Item = (&String, &Vec<u64>)> {
+        self.element_sets.iter()
+    }
+
     pub(crate) fn element_set(&self, name: &str) -> Option<&[u64]> {
         self.element_sets.get(name).map(Vec::as_slice)
     }
@@ -257,6 +261,10 @@ impl MeshBuilder {
                         ))
                     }
                 }
+            }
+            // A set of only skipped elements (faces exported as shells) is no element set.
+            if members.is_empty() && !ids.is_empty() {
+                continue;
             }
             members.sort_unstable();
             members.dedup();

@@ -16,7 +16,7 @@ pub mod pvd;
 mod text;
 pub mod units;
 pub mod vtk;
-mod vtu_raw;
+mod vtk_compat;
 
 use std::path::Path;
 

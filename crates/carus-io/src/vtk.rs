@@ -22,7 +22,7 @@ use vtkio::xml::Compressor;
 
 use crate::builder::{MeshBuilder, MeshFile};
 use crate::error::{ReadError, WriteError};
-use crate::vtu_raw::raw_appended_to_base64;
+use crate::vtk_compat::{legacy_type_names, raw_appended_to_base64};
 
 /// Reads a legacy `.vtk` or XML `.vtu` unstructured grid.
 pub fn read_vtk(path: &Path) -> Result<MeshFile, ReadError> {
@@ -77,7 +77,7 @@ fn load_unstructured(path: &Path) -> Result<UnstructuredGridPiece, ReadError> {
         .map(str::to_ascii_lowercase)
         .unwrap_or_default();
     let bytes = match extension.as_str() {
-        "vtk" => bytes,
+        "vtk" => legacy_type_names(&bytes).into_owned(),
         "vtu" => raw_appended_to_base64(&bytes)
             .map_err(|problem| content_error(path, problem, RESAVE_FIX))?
             .into_owned(),

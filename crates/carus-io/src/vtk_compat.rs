@@ -1,8 +1,14 @@
-//! Re-encodes a `.vtu` whose appended data is raw binary (ParaView's default
-//! when saving) as base64 appended data, the only appended encoding vtkio
-//! 0.7.0-rc2 reads. Each array's block is checked against the file's length
-//! on the way, so a truncated file gives an error naming the array instead
-//! of an out-of-range slice inside vtkio.
+//! Rewrites of VTK files that vtkio 0.7.0-rc2 cannot read as written:
+//!
+//! - a `.vtu` whose appended data is raw binary (ParaView's default when
+//!   saving) becomes base64 appended data, the only appended encoding vtkio
+//!   reads. Each array's block is checked against the file's length on the
+//!   way, so a truncated file gives an error naming the array instead of an
+//!   out-of-range slice inside vtkio;
+//! - a legacy `.vtk` of VTK 9 (version 5.1) names data types `vtktypeint64`
+//!   and so on in its data arrays, where vtkio knows only the classic names
+//!   (`long`); those are renamed (the OFFSETS and CONNECTIVITY lines, which
+//!   vtkio reads with the new names, stay).
 
 use std::borrow::Cow;
 
@@ -111,6 +117,55 @@ pub(crate) fn raw_appended_to_base64(bytes: &[u8]) -> Result<Cow<'_, [u8]>, Stri
     Ok(Cow::Owned(text.into_bytes()))
 }
 
+/// VTK 9 type names and their classic legacy names (as vtkio reads them).
+const VTK9_TYPES: [(&[u8], &[u8]); 9] = [
+    (b"vtktypeint8", b"char"),
+    (b"vtktypeuint8", b"unsigned_char"),
+    (b"vtktypeint16", b"short"),
+    (b"vtktypeint32", b"int"),
+    (b"vtktypeuint32", b"unsigned_int"),
+    (b"vtktypeint64", b"long"),
+    (b"vtktypeuint64", b"unsigned_long"),
+    (b"vtktypefloat32", b"float"),
+    (b"vtktypefloat64", b"double"),
+];
+
+/// The legacy file with VTK 9 data type names in data-array header lines
+/// replaced by their classic names; unchanged when there are none.
+pub(crate) fn legacy_type_names(bytes: &[u8]) -> Cow<'_, [u8]> {
+    let mut out: Option<Vec<u8>> = None;
+    let mut copied = 0;
+    let mut search = 0;
+    while let Some(at) = find(bytes, b" vtktype", search) {
+        let token_start = at + 1;
+        let token_end = bytes[token_start..]
+            .iter()
+            .position(|b| b.is_ascii_whitespace())
+            .map_or(bytes.len(), |p| token_start + p);
+        search = token_end;
+        let line_start = bytes[..at].iter().rposition(|&b| b == b'\n').map_or(0, |p| p + 1);
+        let line = &bytes[line_start..at];
+        if line.starts_with(b"OFFSETS") || line.starts_with(b"CONNECTIVITY") {
+            continue;
+        }
+        let token = &bytes[token_start..token_end];
+        let classic = VTK9_TYPES.iter().find(|(new, _)| *new == token).map(|(_, old)| *old);
+        if let Some(classic) = classic {
+            let buffer = out.get_or_insert_with(Vec::new);
+            buffer.extend_from_slice(&bytes[copied..token_start]);
+            buffer.extend_from_slice(classic);
+            copied = token_end;
+        }
+    }
+    match out {
+        Some(mut buffer) => {
+            buffer.extend_from_slice(&bytes[copied..]);
+            Cow::Owned(buffer)
+        }
+        None => Cow::Borrowed(bytes),
+    }
+}
+
 fn find(haystack: &[u8], needle: &[u8], from: usize) -> Option<usize> {
     haystack
         .get(from..)?
@@ -150,6 +205,14 @@ mod tests {
     fn files_without_raw_data_pass_unchanged() {
         let text = b"<VTKFile><AppendedData encoding=\"base64\">_AAAA</AppendedData></VTKFile>";
         assert!(matches!(raw_appended_to_base64(text).unwrap(), Cow::Borrowed(_)));
+    }
+
+    #[test]
+    fn vtk9_type_names_are_renamed_outside_cell_lines() {
+        let text = b"OFFSETS vtktypeint64\nx\ngmsh:physical 1 3 vtktypeint64\nA 1 2 vtktypefloat64\n";
+        let renamed = legacy_type_names(text);
+        assert_eq!(&renamed[..], &b"OFFSETS vtktypeint64\nx\ngmsh:physical 1 3 long\nA 1 2 double\n"[..]);
+        assert!(matches!(legacy_type_names(b"POINTS 3 float\n"), Cow::Borrowed(_)));
     }
 
     #[test]
