@@ -7,6 +7,7 @@
 //! `biparietal_mm`, which keeps its canonical name.
 
 use crate::canal::BirthCanal;
+use carus_anatomy::fetus::{FetalHead, Trunk};
 use glam::{DQuat, DVec3};
 use serde::{Deserialize, Serialize};
 
@@ -193,6 +194,19 @@ impl HeadGeometry {
         Ok(())
     }
 
+    /// The geometry of a carus-anatomy head, whose frame is already the
+    /// detector's: origin at the head centre, x = o, y = b, z = v; every
+    /// surface vertex is a candidate leading point.
+    pub fn from_fetal_head(head: &FetalHead) -> Self {
+        HeadGeometry {
+            centre_m: DVec3::ZERO,
+            occipitofrontal: DVec3::X,
+            vertex: DVec3::Z,
+            biparietal_mm: head.diameters.biparietal_mm,
+            skull_points_m: head.surface.vertices.clone(),
+        }
+    }
+
     /// `b = v x o`, towards the fetal left, in the body frame.
     pub fn biparietal_axis(&self) -> DVec3 {
         self.vertex.cross(self.occipitofrontal)
@@ -200,6 +214,17 @@ impl HeadGeometry {
 }
 
 impl TrunkGeometry {
+    /// The geometry of a carus-anatomy trunk, in its own frame (origin at
+    /// the atlanto-occipital pivot, x ventral, y fetal left, z cranial).
+    pub fn from_trunk(trunk: &Trunk) -> Self {
+        TrunkGeometry {
+            centre_m: trunk.landmarks.centre,
+            right_acromion_m: trunk.landmarks.acromion_right,
+            left_acromion_m: trunk.landmarks.acromion_left,
+            spine: trunk.spine_axis,
+        }
+    }
+
     /// Checks the spine direction and the shoulder points.
     pub fn validate(&self) -> Result<(), HistoryError> {
         let bad = |problem: String| HistoryError::BadTrunk { problem };

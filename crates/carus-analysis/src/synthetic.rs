@@ -158,29 +158,35 @@ impl Plan {
         self.force_mean_n - self.force_swing_n * (w * t).cos()
     }
 
-    /// Samples the plan until the head centre first reaches `end_sigma_mm`
-    /// or the time reaches `duration_s`.
+    /// Samples the plan with the synthetic ellipsoidal head and simple trunk.
     pub fn history(&self, canal: &BirthCanal) -> PoseHistory {
-        let head = ellipsoid_head();
-        let trunk = self.shoulders.as_ref().map(|_| simple_trunk());
+        self.history_with(canal, &ellipsoid_head(), &simple_trunk())
+    }
+
+    /// Samples the plan for the given head and trunk (body frames as in
+    /// carus-anatomy: head x = o, y = b, z = v; trunk x ventral, y left,
+    /// z towards the head) until the head centre first reaches
+    /// `end_sigma_mm` or the time reaches `duration_s`. The trunk is
+    /// recorded only when the plan has `shoulders`.
+    pub fn history_with(&self, canal: &BirthCanal, head: &HeadGeometry, trunk: &TrunkGeometry) -> PoseHistory {
         let mut samples = Vec::new();
         for step in 0.. {
             let t = step as f64 * self.sample_interval_s;
             let sigma_mm = self.sigma_mm(t);
-            samples.push(self.sample(canal, t, sigma_mm));
+            samples.push(self.sample(canal, trunk, t, sigma_mm));
             if sigma_mm >= self.end_sigma_mm || t >= self.duration_s {
                 break;
             }
         }
         PoseHistory {
-            head,
-            trunk,
+            head: head.clone(),
+            trunk: self.shoulders.as_ref().map(|_| trunk.clone()),
             canal: canal.clone(),
             samples,
         }
     }
 
-    fn sample(&self, canal: &BirthCanal, t: f64, sigma_mm: f64) -> PoseSample {
+    fn sample(&self, canal: &BirthCanal, body: &TrunkGeometry, t: f64, sigma_mm: f64) -> PoseSample {
         let axis = canal.axis();
         let sigma = sigma_mm * M_PER_MM;
         let frame = axis.frame(sigma);
@@ -203,7 +209,6 @@ impl Plan {
             let chest = -back;
             let left = frame.tangent.cross(chest);
             let orientation = DQuat::from_mat3(&DMat3::from_cols(chest, left, frame.tangent));
-            let body = simple_trunk();
             let shoulders_body = 0.5 * (body.left_acromion_m + body.right_acromion_m);
             RigidPose {
                 position_m: axis.point(sigma - SHOULDERS_BEHIND_HEAD_M)

@@ -363,3 +363,27 @@ fn an_undelivered_head_without_a_contact_record_is_against_unknown() {
     let r = detect(&history).unwrap();
     assert_eq!(r.outcome.arrest.unwrap().against, "unknown");
 }
+
+/// The textbook plan run through the generated gynecoid pelvis with the
+/// average term fetus of carus-anatomy (its real head surface and trunk):
+/// the detector sees all seven there too.
+#[test]
+fn the_textbook_plan_in_the_generated_pelvis_with_the_term_fetus() {
+    use carus_analysis::{BirthCanal, HeadGeometry, TrunkGeometry};
+    use carus_anatomy::fetus::Fetus;
+    use carus_anatomy::pelvis::PelvisDiameters;
+    use carus_anatomy::Pelvis;
+    let pelvis = Pelvis::generate(&PelvisDiameters::default()).unwrap();
+    let canal = BirthCanal::from_pelvis(&pelvis).unwrap();
+    let fetus = Fetus::term().unwrap();
+    let head = HeadGeometry::from_fetal_head(&fetus.head);
+    let trunk = TrunkGeometry::from_trunk(&fetus.trunk);
+    let history = synthetic::textbook_plan(&canal).history_with(&canal, &head, &trunk);
+    let r = detect(&history).unwrap();
+    for (key, movement) in r.movements.iter() {
+        assert!(movement.observed, "{key} not observed: {movement:?}");
+    }
+    assert!(r.outcome.delivered);
+    // The head's own biparietal diameter is what engagement uses.
+    assert_eq!(history.head.biparietal_mm, fetus.head.diameters.biparietal_mm);
+}
