@@ -100,7 +100,18 @@ fn gmsh_abaqus_and_vtk_exports_give_the_same_mesh() {
 #[test]
 fn meshio_conversions_give_the_same_mesh_and_sets() {
     let reference = read("box_tet_v41.msh").mesh;
-    for name in ["box_tet_meshio.vtu", "box_tet_meshio_ascii.vtu", "box_tet_meshio.vtk", "box_tet_meshio.inp"] {
+    for name in [
+        "box_tet_meshio.vtu",
+        "box_tet_meshio_ascii.vtu",
+        "box_tet_meshio.vtk",
+        "box_tet_meshio.inp",
+        "box_tet_vtk_raw.vtu",
+        "box_tet_vtk_raw_zlib.vtu",
+        "box_tet_vtk_raw_lz4.vtu",
+        "box_tet_vtk_base64_zlib.vtu",
+        "box_tet_vtk9_ascii.vtk",
+        "box_tet_vtk9_binary.vtk",
+    ] {
         let mesh = read(name).mesh;
         // meshio's ascii VTU keeps 11 significant digits.
         assert_eq!(mesh.nodes.len(), reference.nodes.len(), "{name}");
@@ -109,11 +120,14 @@ fn meshio_conversions_give_the_same_mesh_and_sets() {
         }
         assert_eq!(mesh.connectivity, reference.connectivity, "{name}");
     }
-    // meshio keeps Gmsh's physical tags as the cell array `gmsh:physical`.
-    let vtu = read("box_tet_meshio.vtu").mesh;
-    let physical: Vec<&String> = vtu.element_sets.keys().filter(|k| k.starts_with("gmsh:physical_")).collect();
-    assert_eq!(physical.len(), 1);
-    assert_eq!(vtu.element_sets[physical[0]].len(), reference.element_count());
-    let surfaces = vtu.surfaces.keys().filter(|k| k.starts_with("gmsh:physical_")).count();
-    assert_eq!(surfaces, 2, "bottom and top");
+    // meshio keeps Gmsh's physical tags as the cell array `gmsh:physical`,
+    // and VTK's writers keep it, as ParaView would when saving.
+    for name in ["box_tet_meshio.vtu", "box_tet_vtk_raw_zlib.vtu", "box_tet_vtk9_binary.vtk"] {
+        let vtu = read(name).mesh;
+        let physical: Vec<&String> = vtu.element_sets.keys().filter(|k| k.starts_with("gmsh:physical_")).collect();
+        assert_eq!(physical.len(), 1, "{name}");
+        assert_eq!(vtu.element_sets[physical[0]].len(), reference.element_count(), "{name}");
+        let surfaces = vtu.surfaces.keys().filter(|k| k.starts_with("gmsh:physical_")).count();
+        assert_eq!(surfaces, 2, "{name}: bottom and top");
+    }
 }
