@@ -1,2 +1,150 @@
-//! Import of real anatomy: surface meshes (STL, OBJ, PLY, glTF/GLB) and the
-//! landmarks files that place them in the pelvis frame.
+//! Import of real anatomy: surface meshes (STL binary and ASCII, OBJ, PLY,
+//! glTF/GLB) and the landmarks files (TOML) that declare a mesh's units and
+//! axes and its pelvis landmarks, and place it in the pelvis frame.
+//!
+//! This is one of the crate's explicit I/O modules: it reads files, nothing
+//! else in the crate does. See docs/IMPORT.md for the formats, the landmarks
+//! file and the shipped Visible Human Female pelvis.
+
+mod formats;
+mod landmarks;
+pub mod pick;
+mod weld;
+
+#[cfg(test)]
+mod tests;
+
+use std::path::{Path, PathBuf};
+
+pub use formats::{parse_gltf_parts, parse_obj, parse_ply, parse_stl, MeshFormat, NamedPart, RawMesh};
+pub use landmarks::{import_pelvis, AxesDeclaration, ImportedPelvis, LandmarksFile};
+pub use weld::{weld, MeshReport};
+
+use serde::{Deserialize, Serialize};
+
+use crate::pelvis::PelvisError;
+use crate::surface::{SurfaceDefect, TriSurface};
+
+/// Length unit of a mesh file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Units {
+    #[serde(rename = "mm")]
+    Millimetres,
+    #[serde(rename = "m")]
+    Metres,
+}
+
+impl Units {
+    /// Metres per file unit.
+    pub fn to_metres(self) -> f64 {
+        match self {
+            Units::Millimetres => 1e-3,
+            Units::Metres => 1.0,
+        }
+    }
+}
+
+/// What went wrong importing a mesh or a landmarks file, with the file and
+/// the element concerned.
+#[derive(Debug, thiserror::Error)]
+pub enum ImportError {
+    #[error("cannot read {path}: {source}")]
+    Io { path: PathBuf, source: std::io::Error },
+    #[error("{path}: unknown mesh format; use a .stl, .obj, .ply, .gltf or .glb file")]
+    UnknownFormat { path: PathBuf },
+    #[error("{path}: truncated binary STL: the header announces {expected} triangles but the file holds {found}; export the mesh again")]
+    TruncatedStl { path: PathBuf, expected: usize, found: usize },
+    #[error("{path}: not a readable {format} file: {message}")]
+    Format { path: PathBuf, format: &'static str, message: String },
+    #[error("{path}: triangle {triangle} (corner {corner}, vertex {vertex} as read) has a NaN or infinite coordinate")]
+    NonFinite { path: PathBuf, triangle: usize, corner: usize, vertex: usize },
+    #[error("{path}: the mesh has no (non-degenerate) triangles")]
+    Empty { path: PathBuf },
+    #[error("{path}: a closed surface is needed here, but {defect}; close the mesh (e.g. fill holes in MeshLab) and export it again")]
+    NotClosed { path: PathBuf, defect: SurfaceDefect },
+    #[error("{path}: {message}")]
+    LandmarksFile { path: PathBuf, message: String },
+    #[error("{path}: missing landmark(s) {}; add each under [landmarks] as `name = [x, y, z]` in the mesh's own coordinates and units", missing.join(", "))]
+    MissingLandmarks { path: PathBuf, missing: Vec<String> },
+    #[error("{path}: unknown landmark(s) {}; the landmarks are: {}", unknown.join(", "), known.join(", "))]
+    UnknownLandmarks { path: PathBuf, unknown: Vec<String>, known: Vec<String> },
+    #[error("{path}: [axes]: {message}")]
+    Axes { path: PathBuf, message: String },
+    #[error("{path}: the landmarks disagree with the declared axes: {message}")]
+    Orientation { path: PathBuf, message: String },
+    #[error("{path}: {source}")]
+    Pelvis { path: PathBuf, source: PelvisError },
+}
+
+/// A surface read from a file, in metres (the file's axes), with what the
+/// importer found.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImportedSurface {
+    pub surface: TriSurface,
+    pub report: MeshReport,
+}
+
+/// Reads any supported mesh file into a welded surface in metres, keeping
+/// the file's axes. The surface may be open or in several parts.
+pub fn read_surface(path: &Path, units: Units) -> Result<ImportedSurface, ImportError> {
+    let raw = formats::read_raw(path)?;
+    let (surface, report) = weld(path, &raw, units.to_metres())?;
+    Ok(ImportedSurface { surface, report })
+}
+
+/// Reads a mesh that must be one closed, consistently oriented,
+/// outward-facing surface (a fetal head, for instance).
+pub fn read_closed_surface(path: &Path, units: Units) -> Result<ImportedSurface, ImportError> {
+    let imported = read_surface(path, units)?;
+    imported
+        .surface
+        .check_closed()
+        .map_err(|defect| ImportError::NotClosed { path: path.to_path_buf(), defect })?;
+    Ok(imported)
+}
+
+/// Reads a glTF/GLB file's meshes as separate named parts (file units and
+/// axes, node transforms applied), e.g. to tell the bones of a pelvis apart.
+pub fn read_gltf_parts(path: &Path) -> Result<Vec<NamedPart>, ImportError> {
+    let bytes = std::fs::read(path).map_err(|source| ImportError::Io { path: path.to_path_buf(), source })?;
+    parse_gltf_parts(path, &bytes)
+}
+
+/// The shipped assets folder (assets/anatomy in the repository).
+pub fn anatomy_assets_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/anatomy")
+}
+
+/// The landmarks file of the shipped Visible Human Female pelvis.
+pub fn visible_human_female_pelvis_path() -> PathBuf {
+    anatomy_assets_dir().join("visible-human-female-pelvis.landmarks.toml")
+}
+
+/// The Visible Human Female pelvis (CC BY 4.0, see
+/// assets/anatomy/ATTRIBUTION.md) in the pelvis frame, from its shipped mesh
+/// and landmarks file.
+pub fn visible_human_female_pelvis() -> Result<ImportedPelvis, ImportError> {
+    import_pelvis(&visible_human_female_pelvis_path())
+}
+
+/// Axes of the shipped Visible Human Female GLB (/work/shared/meshes/README.md:
+/// metres, x to the body's left, y up, z forward).
+pub fn visible_human_glb_axes() -> AxesDeclaration {
+    AxesDeclaration {
+        right: Some("-x".into()),
+        anterior: Some("+z".into()),
+        cranial: Some("+y".into()),
+        ..Default::default()
+    }
+}
+
+/// Axes of the shipped Visible Human Female STL (millimetres, x to the
+/// body's left, y posterior, z superior).
+pub fn visible_human_stl_axes() -> AxesDeclaration {
+    AxesDeclaration {
+        right: Some("-x".into()),
+        anterior: Some("-y".into()),
+        cranial: Some("+z".into()),
+        ..Default::default()
+    }
+}

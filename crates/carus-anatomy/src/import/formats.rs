@@ -1,0 +1,272 @@
+//! Readers for the surface mesh formats researchers have: STL (binary and
+//! ASCII), OBJ, PLY and glTF/GLB. Each returns the triangles as stored, in
+//! the file's own units and axes, for [`super::weld`] to clean up.
+
+use std::io::{BufReader, Cursor};
+use std::path::Path;
+
+use base64::Engine;
+use glam::{DMat4, DVec3};
+
+use super::ImportError;
+
+/// Triangles as a file stores them: positions (file units) and indices.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct RawMesh {
+    pub positions: Vec<DVec3>,
+    pub triangles: Vec<[u32; 3]>,
+}
+
+impl RawMesh {
+    fn push_triangle(&mut self, corners: [DVec3; 3]) {
+        let base = self.positions.len() as u32;
+        self.positions.extend(corners);
+        self.triangles.push([base, base + 1, base + 2]);
+    }
+}
+
+/// The mesh formats, told apart by file extension.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MeshFormat {
+    Stl,
+    Obj,
+    Ply,
+    Gltf,
+}
+
+impl MeshFormat {
+    pub fn from_path(path: &Path) -> Result<Self, ImportError> {
+        let extension = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+        match extension.as_deref() {
+            Some("stl") => Ok(MeshFormat::Stl),
+            Some("obj") => Ok(MeshFormat::Obj),
+            Some("ply") => Ok(MeshFormat::Ply),
+            Some("gltf" | "glb") => Ok(MeshFormat::Gltf),
+            _ => Err(ImportError::UnknownFormat { path: path.to_path_buf() }),
+        }
+    }
+}
+
+/// Reads a mesh file of any supported format.
+pub fn read_raw(path: &Path) -> Result<RawMesh, ImportError> {
+    let format = MeshFormat::from_path(path)?;
+    let bytes = std::fs::read(path).map_err(|source| ImportError::Io { path: path.to_path_buf(), source })?;
+    match format {
+        MeshFormat::Stl => parse_stl(path, &bytes),
+        MeshFormat::Obj => parse_obj(path, &bytes),
+        MeshFormat::Ply => parse_ply(path, &bytes),
+        MeshFormat::Gltf => Ok(merge_parts(parse_gltf_parts(path, &bytes)?)),
+    }
+}
+
+fn format_error(path: &Path, format: &'static str, message: impl ToString) -> ImportError {
+    ImportError::Format { path: path.to_path_buf(), format, message: message.to_string() }
+}
+
+/// Binary STL: an 80-byte header, a triangle count, 50 bytes per triangle.
+/// Anything that does not start with `solid` or whose size fits the binary
+/// layout exactly is read as binary, so a truncated binary file is caught
+/// with its counts rather than misread.
+pub fn parse_stl(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
+    let announced = (bytes.len() >= 84).then(|| u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as usize);
+    let fits_binary = announced.is_some_and(|n| bytes.len() == 84 + 50 * n);
+    let looks_ascii = bytes.iter().skip_while(|b| b.is_ascii_whitespace()).take(5).eq(b"solid".iter());
+    if !fits_binary && !looks_ascii {
+        match announced {
+            Some(expected) if bytes.len() < 84 + 50 * expected => {
+                return Err(ImportError::TruncatedStl {
+                    path: path.to_path_buf(),
+                    expected,
+                    found: (bytes.len() - 84) / 50,
+                })
+            }
+            None => return Err(format_error(path, "STL", "the file is shorter than a binary STL header (84 bytes)")),
+            _ => {}
+        }
+    }
+    let mut cursor = Cursor::new(bytes);
+    let reader = stl_io::create_stl_reader(&mut cursor).map_err(|e| format_error(path, "STL", e))?;
+    let mut mesh = RawMesh::default();
+    for (index, triangle) in reader.enumerate() {
+        let triangle = triangle.map_err(|e| format_error(path, "STL", format!("triangle {index}: {e}")))?;
+        mesh.push_triangle(triangle.vertices.map(|v| DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64)));
+    }
+    Ok(mesh)
+}
+
+/// Wavefront OBJ, polygons fan-triangulated by tobj; materials ignored.
+pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
+    let options = tobj::LoadOptions { triangulate: true, single_index: false, ..Default::default() };
+    let (models, _materials) = tobj::load_obj_buf(&mut BufReader::new(bytes), &options, |_| Ok((Vec::new(), Default::default())))
+        .map_err(|e| format_error(path, "OBJ", e))?;
+    let mut mesh = RawMesh::default();
+    for model in models {
+        let base = mesh.positions.len() as u32;
+        mesh.positions
+            .extend(model.mesh.positions.chunks_exact(3).map(|p| DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)));
+        mesh.triangles.extend(model.mesh.indices.chunks_exact(3).map(|t| [base + t[0], base + t[1], base + t[2]]));
+    }
+    Ok(mesh)
+}
+
+/// PLY (ASCII or binary): the `vertex` element's x, y, z and the `face`
+/// element's `vertex_indices` (or `vertex_index`) lists, fan-triangulated.
+pub fn parse_ply(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
+    use ply_rs::ply::Property;
+    let parser = ply_rs::parser::Parser::<ply_rs::ply::DefaultElement>::new();
+    let ply = parser.read_ply(&mut BufReader::new(bytes)).map_err(|e| format_error(path, "PLY", e))?;
+    let scalar = |p: &Property| -> Option<f64> {
+        Some(match *p {
+            Property::Char(v) => v as f64,
+            Property::UChar(v) => v as f64,
+            Property::Short(v) => v as f64,
+            Property::UShort(v) => v as f64,
+            Property::Int(v) => v as f64,
+            Property::UInt(v) => v as f64,
+            Property::Float(v) => v as f64,
+            Property::Double(v) => v,
+            _ => return None,
+        })
+    };
+    let list = |p: &Property| -> Option<Vec<i64>> {
+        Some(match p {
+            Property::ListChar(v) => v.iter().map(|&i| i as i64).collect(),
+            Property::ListUChar(v) => v.iter().map(|&i| i as i64).collect(),
+            Property::ListShort(v) => v.iter().map(|&i| i as i64).collect(),
+            Property::ListUShort(v) => v.iter().map(|&i| i as i64).collect(),
+            Property::ListInt(v) => v.iter().map(|&i| i as i64).collect(),
+            Property::ListUInt(v) => v.iter().map(|&i| i as i64).collect(),
+            _ => return None,
+        })
+    };
+    let vertices = ply.payload.get("vertex").ok_or_else(|| format_error(path, "PLY", "no `vertex` element"))?;
+    let mut mesh = RawMesh::default();
+    for (index, vertex) in vertices.iter().enumerate() {
+        let mut xyz = [0.0; 3];
+        for (axis, name) in ["x", "y", "z"].iter().enumerate() {
+            xyz[axis] = vertex
+                .get(*name)
+                .and_then(scalar)
+                .ok_or_else(|| format_error(path, "PLY", format!("vertex {index} has no numeric `{name}` property")))?;
+        }
+        mesh.positions.push(DVec3::from_array(xyz));
+    }
+    let faces = ply.payload.get("face").ok_or_else(|| format_error(path, "PLY", "no `face` element"))?;
+    let count = mesh.positions.len() as i64;
+    for (index, face) in faces.iter().enumerate() {
+        let corners = face
+            .get("vertex_indices")
+            .or_else(|| face.get("vertex_index"))
+            .and_then(list)
+            .ok_or_else(|| format_error(path, "PLY", format!("face {index} has no `vertex_indices` list")))?;
+        if let Some(&bad) = corners.iter().find(|&&i| i < 0 || i >= count) {
+            return Err(format_error(path, "PLY", format!("face {index} refers to vertex {bad}, but there are {count} vertices")));
+        }
+        for k in 1..corners.len().saturating_sub(1) {
+            mesh.triangles.push([corners[0] as u32, corners[k] as u32, corners[k + 1] as u32]);
+        }
+    }
+    Ok(mesh)
+}
+
+/// One named mesh of a glTF scene, with its node transform applied.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NamedPart {
+    /// The glTF mesh name (or the node name, or `mesh N`).
+    pub name: String,
+    pub mesh: RawMesh,
+}
+
+/// glTF 2.0 (`.gltf` JSON with embedded or neighbouring buffers, or `.glb`):
+/// every triangle primitive of every mesh reached from the default scene,
+/// each transformed by its node's world transform. Parts keep their names.
+pub fn parse_gltf_parts(path: &Path, bytes: &[u8]) -> Result<Vec<NamedPart>, ImportError> {
+    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| format_error(path, "glTF", e))?;
+    let mut buffers: Vec<Vec<u8>> = Vec::new();
+    for buffer in gltf.document.buffers() {
+        let data = match buffer.source() {
+            gltf::buffer::Source::Bin => gltf
+                .blob
+                .clone()
+                .ok_or_else(|| format_error(path, "glTF", "buffer refers to a GLB binary chunk that is missing"))?,
+            gltf::buffer::Source::Uri(uri) => read_uri(path, uri)?,
+        };
+        if data.len() < buffer.length() {
+            return Err(format_error(
+                path,
+                "glTF",
+                format!("buffer {} holds {} bytes, fewer than the {} declared", buffer.index(), data.len(), buffer.length()),
+            ));
+        }
+        buffers.push(data);
+    }
+
+    let mut parts = Vec::new();
+    let scene = gltf.document.default_scene().or_else(|| gltf.document.scenes().next());
+    let roots: Vec<gltf::Node> = match scene {
+        Some(scene) => scene.nodes().collect(),
+        None => gltf.document.nodes().collect(),
+    };
+    let mut stack: Vec<(gltf::Node, DMat4)> = roots.into_iter().map(|n| (n, DMat4::IDENTITY)).collect();
+    while let Some((node, parent)) = stack.pop() {
+        let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(|v| v as f64)));
+        let world = parent * local;
+        if let Some(mesh) = node.mesh() {
+            let name = mesh.name().or(node.name()).map(str::to_owned).unwrap_or_else(|| format!("mesh {}", mesh.index()));
+            let mut raw = RawMesh::default();
+            let mirrored = world.determinant() < 0.0;
+            for primitive in mesh.primitives().filter(|p| p.mode() == gltf::mesh::Mode::Triangles) {
+                let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+                let Some(positions) = reader.read_positions() else { continue };
+                let base = raw.positions.len() as u32;
+                raw.positions.extend(positions.map(|p| world.transform_point3(DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64))));
+                let count = raw.positions.len() as u32 - base;
+                let indices: Vec<u32> = match reader.read_indices() {
+                    Some(indices) => indices.into_u32().collect(),
+                    None => (0..count).collect(),
+                };
+                if let Some(&bad) = indices.iter().find(|&&i| i >= count) {
+                    return Err(format_error(path, "glTF", format!("mesh `{name}` refers to vertex {bad} of {count}")));
+                }
+                raw.triangles.extend(indices.chunks_exact(3).map(|t| {
+                    let t = [base + t[0], base + t[1], base + t[2]];
+                    if mirrored {
+                        [t[0], t[2], t[1]]
+                    } else {
+                        t
+                    }
+                }));
+            }
+            parts.push(NamedPart { name, mesh: raw });
+        }
+        stack.extend(node.children().map(|child| (child, world)));
+    }
+    // Scene order, not stack order.
+    parts.reverse();
+    Ok(parts)
+}
+
+/// All parts as one mesh.
+fn merge_parts(parts: Vec<NamedPart>) -> RawMesh {
+    let mut mesh = RawMesh::default();
+    for part in parts {
+        let base = mesh.positions.len() as u32;
+        mesh.positions.extend(part.mesh.positions);
+        mesh.triangles.extend(part.mesh.triangles.iter().map(|t| t.map(|i| i + base)));
+    }
+    mesh
+}
+
+/// A buffer URI: embedded base64 data, or a file beside the glTF.
+fn read_uri(path: &Path, uri: &str) -> Result<Vec<u8>, ImportError> {
+    if let Some(data) = uri.strip_prefix("data:") {
+        let (_, encoded) = data
+            .split_once(";base64,")
+            .ok_or_else(|| format_error(path, "glTF", "only base64 data URIs are supported"))?;
+        return base64::engine::general_purpose::STANDARD
+            .decode(encoded)
+            .map_err(|e| format_error(path, "glTF", format!("embedded buffer: {e}")));
+    }
+    let file = path.parent().unwrap_or(Path::new(".")).join(uri);
+    std::fs::read(&file).map_err(|source| ImportError::Io { path: file, source })
+}

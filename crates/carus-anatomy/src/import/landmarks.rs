@@ -1,0 +1,220 @@
+//! The landmarks file: which mesh, its units and axes, and the pelvis
+//! landmarks in the mesh's own coordinates; and the import of a pelvis
+//! through it into the pelvis frame.
+//!
+//! ```toml
+//! mesh = "visible-human-female-pelvis.stl"   # relative to this file
+//! units = "mm"                               # or "m"
+//! [axes]                                     # which mesh axis points where
+//! right = "-x"                               # or left = "+x"
+//! anterior = "-y"                            # or posterior = "+y"
+//! cranial = "+z"                             # or caudal = "-z"
+//! [landmarks]                                # every PelvisLandmarks name
+//! sacral_promontory = [-6.1, 83.1, 107.7]
+//! ```
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use glam::{DAffine3, DMat3, DVec3};
+use serde::{Deserialize, Serialize};
+
+use super::{read_surface, ImportError, MeshReport, Units};
+use crate::pelvis::{Pelvis, PelvisLandmarks, LANDMARK_NAMES};
+
+/// Where the mother's directions point in the mesh: each key takes a
+/// signed mesh axis (`"+x"`, `"-y"`, `"z"`). Give one of each pair.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AxesDeclaration {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub right: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub left: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub anterior: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub posterior: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cranial: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub caudal: Option<String>,
+}
+
+/// A landmarks file as written on disk.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LandmarksFile {
+    /// Free text: where the mesh and landmarks come from.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub description: Option<String>,
+    /// The mesh file, relative to the landmarks file.
+    pub mesh: PathBuf,
+    pub units: Units,
+    pub axes: AxesDeclaration,
+    /// Landmark name -> [x, y, z] in the mesh's coordinates and units.
+    pub landmarks: BTreeMap<String, [f64; 3]>,
+}
+
+/// A pelvis imported through a landmarks file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImportedPelvis {
+    /// Surface and landmarks in the pelvis frame, with planes and axis.
+    pub pelvis: Pelvis,
+    /// What the importer found in the mesh.
+    pub report: MeshReport,
+    /// The mesh file read.
+    pub mesh_path: PathBuf,
+    /// Maps the mesh file's coordinates (file units) into the pelvis frame (metres).
+    pub mesh_to_pelvis: DAffine3,
+}
+
+fn file_error(path: &Path, message: impl ToString) -> ImportError {
+    ImportError::LandmarksFile { path: path.to_path_buf(), message: message.to_string() }
+}
+
+impl AxesDeclaration {
+    /// The matrix whose rows are the mother's right, anterior and cranial
+    /// directions in mesh coordinates: it maps mesh vectors to the
+    /// anatomical frame (x right, y anterior, z cranial). A reflection when
+    /// the mesh's axes are left-handed.
+    pub fn to_anatomical(&self, path: &Path) -> Result<DMat3, ImportError> {
+        let axes_error = |message: String| ImportError::Axes { path: path.to_path_buf(), message };
+        let pick = |positive: &Option<String>, negative: &Option<String>, names: (&str, &str)| -> Result<DVec3, ImportError> {
+            match (positive, negative) {
+                (Some(p), None) => parse_axis(p).ok_or_else(|| axes_error(bad_axis(names.0, p))),
+                (None, Some(n)) => parse_axis(n).map(|v| -v).ok_or_else(|| axes_error(bad_axis(names.1, n))),
+                (Some(_), Some(_)) => Err(axes_error(format!("give `{}` or `{}`, not both", names.0, names.1))),
+                (None, None) => Err(axes_error(format!("missing `{}` (or `{}`), e.g. {} = \"+x\"", names.0, names.1, names.0))),
+            }
+        };
+        let right = pick(&self.right, &self.left, ("right", "left"))?;
+        let anterior = pick(&self.anterior, &self.posterior, ("anterior", "posterior"))?;
+        let cranial = pick(&self.cranial, &self.caudal, ("cranial", "caudal"))?;
+        if right.dot(anterior) != 0.0 || right.dot(cranial) != 0.0 || anterior.dot(cranial) != 0.0 {
+            return Err(axes_error("the three directions must use three different mesh axes".into()));
+        }
+        Ok(DMat3::from_cols(right, anterior, cranial).transpose())
+    }
+}
+
+fn bad_axis(key: &str, value: &str) -> String {
+    format!("{key} = \"{value}\" is not a mesh axis; use one of \"+x\", \"-x\", \"+y\", \"-y\", \"+z\", \"-z\"")
+}
+
+fn parse_axis(text: &str) -> Option<DVec3> {
+    let text = text.trim();
+    let (sign, axis) = match text.as_bytes().first()? {
+        b'+' => (1.0, &text[1..]),
+        b'-' => (-1.0, &text[1..]),
+        _ => (1.0, text),
+    };
+    let unit = match axis.to_ascii_lowercase().as_str() {
+        "x" => DVec3::X,
+        "y" => DVec3::Y,
+        "z" => DVec3::Z,
+        _ => return None,
+    };
+    Some(sign * unit)
+}
+
+impl LandmarksFile {
+    /// Reads and checks a landmarks file (names, not yet geometry).
+    pub fn read(path: &Path) -> Result<Self, ImportError> {
+        let text = std::fs::read_to_string(path).map_err(|source| ImportError::Io { path: path.to_path_buf(), source })?;
+        let file: LandmarksFile = toml::from_str(&text).map_err(|e| file_error(path, e))?;
+        let unknown: Vec<String> =
+            file.landmarks.keys().filter(|k| !LANDMARK_NAMES.contains(&k.as_str())).cloned().collect();
+        if !unknown.is_empty() {
+            return Err(ImportError::UnknownLandmarks {
+                path: path.to_path_buf(),
+                unknown,
+                known: LANDMARK_NAMES.iter().map(|s| s.to_string()).collect(),
+            });
+        }
+        let missing: Vec<String> =
+            LANDMARK_NAMES.iter().filter(|k| !file.landmarks.contains_key(**k)).map(|s| s.to_string()).collect();
+        if !missing.is_empty() {
+            return Err(ImportError::MissingLandmarks { path: path.to_path_buf(), missing });
+        }
+        if let Some((name, _)) = file.landmarks.iter().find(|(_, p)| p.iter().any(|c| !c.is_finite())) {
+            return Err(file_error(path, format!("landmark `{name}` has a non-finite coordinate")));
+        }
+        Ok(file)
+    }
+
+    /// The landmarks mapped by `map` (applied to mesh coordinates).
+    fn landmarks_through(&self, path: &Path, map: impl Fn(DVec3) -> DVec3) -> Result<PelvisLandmarks, ImportError> {
+        let table: toml::Table = self
+            .landmarks
+            .iter()
+            .map(|(name, p)| {
+                let q = map(DVec3::from_array(*p));
+                (name.clone(), toml::Value::Array(q.to_array().iter().map(|&c| toml::Value::Float(c)).collect()))
+            })
+            .collect();
+        toml::Value::Table(table).try_into().map_err(|e| file_error(path, e))
+    }
+}
+
+/// Checks that left/right, front/back and up/down landmarks fall where the
+/// declared axes say (anatomical frame), naming the first contradiction.
+fn check_orientation(path: &Path, l: &PelvisLandmarks) -> Result<(), ImportError> {
+    let contradiction = |message: String| Err(ImportError::Orientation { path: path.to_path_buf(), message });
+    for (left, right, name) in [
+        (l.iliopectineal_left, l.iliopectineal_right, "iliopectineal"),
+        (l.ischial_spine_left, l.ischial_spine_right, "ischial_spine"),
+        (l.ischial_tuberosity_left, l.ischial_tuberosity_right, "ischial_tuberosity"),
+    ] {
+        if right.x <= left.x {
+            return contradiction(format!(
+                "{name}_right does not lie to the mother's right of {name}_left; swap the left and right landmarks or fix `right`/`left` in [axes]"
+            ));
+        }
+    }
+    if l.symphysis_upper.y <= l.sacral_promontory.y {
+        return contradiction(
+            "symphysis_upper does not lie anterior to sacral_promontory; check those landmarks or fix `anterior`/`posterior` in [axes]".into(),
+        );
+    }
+    if l.sacral_promontory.z <= l.coccyx_tip.z {
+        return contradiction(
+            "sacral_promontory does not lie cranial to coccyx_tip; check those landmarks or fix `cranial`/`caudal` in [axes]".into(),
+        );
+    }
+    Ok(())
+}
+
+/// Imports a pelvis: reads the landmarks file and its mesh, converts units,
+/// turns the declared axes into the anatomical frame, checks the landmarks
+/// against them, then moves mesh and landmarks into the pelvis frame that
+/// the landmarks define (CONVENTIONS.md) and assembles the [`Pelvis`].
+///
+/// The bone surface may be several parts and may be open (real segmented
+/// bone often is): it is checked for finite coordinates and valid,
+/// non-degenerate triangles only, and its parts, closed parts and open
+/// edges are reported in [`ImportedPelvis::report`].
+pub fn import_pelvis(path: &Path) -> Result<ImportedPelvis, ImportError> {
+    let file = LandmarksFile::read(path)?;
+    let to_anatomical = file.axes.to_anatomical(path)?;
+    let scale = file.units.to_metres();
+    let mesh_path = path.parent().unwrap_or(Path::new(".")).join(&file.mesh);
+
+    let anatomical = file.landmarks_through(path, |p| to_anatomical * (p * scale))?;
+    check_orientation(path, &anatomical)?;
+    let to_pelvis = anatomical.to_pelvis_frame().map_err(|source| ImportError::Pelvis { path: path.to_path_buf(), source })?;
+    let landmarks = anatomical.map(|p| to_pelvis.transform_point3(p));
+
+    let imported = read_surface(&mesh_path, file.units)?;
+    let mut surface = imported.surface;
+    let mesh_to_pelvis_metres = to_pelvis * DAffine3::from_mat3(to_anatomical);
+    surface.transform(&mesh_to_pelvis_metres);
+    let pelvis =
+        Pelvis::from_landmarks(landmarks, surface).map_err(|source| ImportError::Pelvis { path: path.to_path_buf(), source })?;
+    Ok(ImportedPelvis {
+        pelvis,
+        report: imported.report,
+        mesh_path,
+        mesh_to_pelvis: mesh_to_pelvis_metres * DAffine3::from_scale(DVec3::splat(scale)),
+    })
+}

@@ -1,0 +1,331 @@
+//! Import tests: tiny meshes in every format, broken input, landmarks files
+//! and the shipped meshes.
+
+use std::path::{Path, PathBuf};
+
+use base64::Engine;
+use glam::DVec3;
+
+use super::*;
+use crate::pelvis::measure;
+
+/// A unit right tetrahedron, outward counter-clockwise triangles.
+const TETRA_POINTS: [[f32; 3]; 4] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+const TETRA_FACES: [[u16; 3]; 4] = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
+
+/// A fresh scratch folder for this test.
+fn scratch(test: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("carus-import-{}-{test}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn write(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {
+    let path = dir.join(name);
+    std::fs::write(&path, bytes).unwrap();
+    path
+}
+
+fn binary_stl() -> Vec<u8> {
+    let triangles: Vec<stl_io::Triangle> = TETRA_FACES
+        .iter()
+        .map(|f| stl_io::Triangle {
+            normal: stl_io::Normal::new([0.0; 3]),
+            vertices: f.map(|i| stl_io::Vertex::new(TETRA_POINTS[i as usize])),
+        })
+        .collect();
+    let mut bytes = Vec::new();
+    stl_io::write_stl(&mut bytes, triangles.iter()).unwrap();
+    bytes
+}
+
+fn ascii_stl() -> String {
+    let mut text = String::from("solid tetra\n");
+    for f in TETRA_FACES {
+        text.push_str(" facet normal 0 0 0\n  outer loop\n");
+        for i in f {
+            let p = TETRA_POINTS[i as usize];
+            text.push_str(&format!("   vertex {} {} {}\n", p[0], p[1], p[2]));
+        }
+        text.push_str("  endloop\n endfacet\n");
+    }
+    text + "endsolid tetra\n"
+}
+
+fn obj() -> String {
+    let mut text = String::from("# tetrahedron\no tetra\n");
+    for p in TETRA_POINTS {
+        text.push_str(&format!("v {} {} {}\n", p[0], p[1], p[2]));
+    }
+    for f in TETRA_FACES {
+        text.push_str(&format!("f {} {} {}\n", f[0] + 1, f[1] + 1, f[2] + 1));
+    }
+    text
+}
+
+fn ply_ascii() -> String {
+    let mut text =
+        String::from("ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n");
+    text.push_str("element face 4\nproperty list uchar int vertex_indices\nend_header\n");
+    for p in TETRA_POINTS {
+        text.push_str(&format!("{} {} {}\n", p[0], p[1], p[2]));
+    }
+    for f in TETRA_FACES {
+        text.push_str(&format!("3 {} {} {}\n", f[0], f[1], f[2]));
+    }
+    text
+}
+
+fn ply_binary() -> Vec<u8> {
+    let mut bytes = b"ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face 4\nproperty list uchar int vertex_indices\nend_header\n".to_vec();
+    for p in TETRA_POINTS {
+        for c in p {
+            bytes.extend(c.to_le_bytes());
+        }
+    }
+    for f in TETRA_FACES {
+        bytes.push(3);
+        for i in f {
+            bytes.extend((i as i32).to_le_bytes());
+        }
+    }
+    bytes
+}
+
+/// Positions then indices, as one glTF buffer.
+fn gltf_buffer() -> Vec<u8> {
+    let mut bytes = Vec::new();
+    for p in TETRA_POINTS {
+        for c in p {
+            bytes.extend(c.to_le_bytes());
+        }
+    }
+    for f in TETRA_FACES {
+        for i in f {
+            bytes.extend(i.to_le_bytes());
+        }
+    }
+    bytes
+}
+
+/// glTF JSON for the tetrahedron under a node with `node_json` (e.g. a
+/// translation), its buffer given by `buffer_uri` (None: GLB binary chunk).
+fn gltf_json(node_json: &str, buffer_uri: Option<String>) -> String {
+    let uri = buffer_uri.map(|u| format!(r#""uri": "{u}", "#)).unwrap_or_default();
+    format!(
+        r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0]}}],
+        "nodes": [{{"mesh": 0 {node_json}}}],
+        "meshes": [{{"name": "tetra", "primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 1}}]}}],
+        "buffers": [{{{uri}"byteLength": 72}}],
+        "bufferViews": [{{"buffer": 0, "byteOffset": 0, "byteLength": 48}}, {{"buffer": 0, "byteOffset": 48, "byteLength": 24}}],
+        "accessors": [
+          {{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 1]}},
+          {{"bufferView": 1, "componentType": 5123, "count": 12, "type": "SCALAR"}}]}}"#
+    )
+}
+
+fn glb(node_json: &str) -> Vec<u8> {
+    let mut json = gltf_json(node_json, None).into_bytes();
+    while json.len() % 4 != 0 {
+        json.push(b' ');
+    }
+    let bin = gltf_buffer();
+    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let mut bytes = Vec::new();
+    bytes.extend(b"glTF");
+    bytes.extend(2u32.to_le_bytes());
+    bytes.extend((total as u32).to_le_bytes());
+    bytes.extend((json.len() as u32).to_le_bytes());
+    bytes.extend(b"JSON");
+    bytes.extend(&json);
+    bytes.extend((bin.len() as u32).to_le_bytes());
+    bytes.extend(b"BIN\0");
+    bytes.extend(&bin);
+    bytes
+}
+
+fn embedded_gltf(node_json: &str) -> String {
+    let data = base64::engine::general_purpose::STANDARD.encode(gltf_buffer());
+    gltf_json(node_json, Some(format!("data:application/octet-stream;base64,{data}")))
+}
+
+#[test]
+fn a_tetrahedron_round_trips_in_every_format() {
+    let dir = scratch("round-trip");
+    let files = [
+        write(&dir, "binary.stl", &binary_stl()),
+        write(&dir, "ascii.stl", ascii_stl().as_bytes()),
+        write(&dir, "tetra.obj", obj().as_bytes()),
+        write(&dir, "ascii.ply", ply_ascii().as_bytes()),
+        write(&dir, "binary.ply", &ply_binary()),
+        write(&dir, "embedded.gltf", embedded_gltf("").as_bytes()),
+        write(&dir, "binary.glb", &glb("")),
+    ];
+    for path in &files {
+        let imported = read_closed_surface(path, Units::Millimetres).unwrap_or_else(|e| panic!("{e}"));
+        let s = &imported.surface;
+        assert_eq!((s.vertices.len(), s.triangles.len()), (4, 4), "{}", path.display());
+        assert!((s.signed_volume() - 1e-9 / 6.0).abs() < 1e-18, "{}", path.display());
+        let r = imported.report;
+        assert_eq!((r.parts, r.closed_parts, r.open_edges, r.non_manifold_edges), (1, 1, 0, 0), "{}", path.display());
+    }
+    // STL stores every corner: twelve read, four kept.
+    let stl = read_surface(&files[0], Units::Metres).unwrap();
+    assert_eq!(stl.report.triangles_read, 4);
+    assert_eq!(stl.surface.vertices.len(), 4);
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn gltf_node_transforms_are_applied_and_mirrors_stay_outward() {
+    let dir = scratch("gltf-transform");
+    let moved = write(&dir, "moved.gltf", embedded_gltf(r#", "translation": [1, 2, 3]"#).as_bytes());
+    let s = read_closed_surface(&moved, Units::Metres).unwrap().surface;
+    assert_eq!(s.bounds().unwrap().0, DVec3::new(1.0, 2.0, 3.0));
+    let mirrored = write(&dir, "mirrored.glb", &glb(r#", "scale": [-1, 1, 1]"#));
+    let s = read_closed_surface(&mirrored, Units::Metres).unwrap().surface;
+    assert!(s.signed_volume() > 0.0);
+    assert_eq!(s.bounds().unwrap().0.x, -1.0);
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn broken_meshes_say_what_and_where() {
+    let dir = scratch("broken");
+    let stl = binary_stl();
+    let truncated = write(&dir, "truncated.stl", &stl[..84 + 50 * 2 + 10]);
+    let err = read_surface(&truncated, Units::Millimetres).unwrap_err();
+    assert!(matches!(err, ImportError::TruncatedStl { expected: 4, found: 2, .. }), "{err}");
+    assert!(err.to_string().contains("truncated.stl") && err.to_string().contains("4 triangles"));
+
+    let nan = write(&dir, "nan.obj", obj().replacen("v 0 1 0", "v nan 1 0", 1).as_bytes());
+    let err = read_surface(&nan, Units::Millimetres).unwrap_err();
+    // The third vertex is the second corner of the first face.
+    assert!(matches!(err, ImportError::NonFinite { triangle: 0, corner: 1, .. }), "{err}");
+
+    let open = write(&dir, "open.obj", obj().trim_end().rsplit_once('\n').unwrap().0.as_bytes());
+    let err = read_closed_surface(&open, Units::Millimetres).unwrap_err();
+    assert!(err.to_string().contains("open there") && err.to_string().contains("open.obj"), "{err}");
+    // The same surface is fine where an open one is allowed, with its openings counted.
+    assert_eq!(read_surface(&open, Units::Millimetres).unwrap().report.open_edges, 3);
+
+    let unknown = write(&dir, "mesh.xyz", b"1 2 3");
+    assert!(matches!(read_surface(&unknown, Units::Metres), Err(ImportError::UnknownFormat { .. })));
+    std::fs::remove_dir_all(dir).ok();
+}
+
+/// The shipped Visible Human landmarks file, edited by `edit`.
+fn edited_landmarks(dir: &Path, edit: impl Fn(String) -> String) -> PathBuf {
+    let text = std::fs::read_to_string(visible_human_female_pelvis_path()).unwrap();
+    let mesh = anatomy_assets_dir().join("visible-human-female-pelvis.stl");
+    let text = text.replace(
+        "mesh = \"visible-human-female-pelvis.stl\"",
+        &format!("mesh = {:?}", mesh.to_str().unwrap()),
+    );
+    write(dir, "edited.landmarks.toml", edit(text).as_bytes())
+}
+
+#[test]
+fn landmark_file_mistakes_are_named_with_their_fix() {
+    let dir = scratch("landmarks");
+    let missing = edited_landmarks(&dir, |t| {
+        t.lines().filter(|l| !l.starts_with("coccyx_tip") && !l.starts_with("sacral_apex")).collect::<Vec<_>>().join("\n")
+    });
+    let err = import_pelvis(&missing).unwrap_err().to_string();
+    assert!(err.contains("sacral_apex, coccyx_tip") || err.contains("coccyx_tip") && err.contains("sacral_apex"), "{err}");
+    assert!(err.contains("edited.landmarks.toml") && err.contains("[landmarks]"), "{err}");
+
+    let unknown = edited_landmarks(&dir, |t| t.replace("coccyx_tip", "coccyx_top"));
+    let err = import_pelvis(&unknown).unwrap_err().to_string();
+    assert!(err.contains("coccyx_top"), "{err}");
+
+    let swapped = edited_landmarks(&dir, |t| t.replace("right = \"-x\"", "right = \"+x\""));
+    let err = import_pelvis(&swapped).unwrap_err().to_string();
+    assert!(err.contains("iliopectineal_right") && err.contains("[axes]"), "{err}");
+
+    let bad_axis = edited_landmarks(&dir, |t| t.replace("cranial = \"+z\"", "cranial = \"+w\""));
+    assert!(import_pelvis(&bad_axis).unwrap_err().to_string().contains("cranial = \"+w\""));
+    let same_axis = edited_landmarks(&dir, |t| t.replace("cranial = \"+z\"", "cranial = \"+y\""));
+    assert!(import_pelvis(&same_axis).unwrap_err().to_string().contains("three different mesh axes"));
+
+    let units = edited_landmarks(&dir, |t| t.replace("units = \"mm\"", "units = \"cm\""));
+    assert!(import_pelvis(&units).unwrap_err().to_string().contains("units"));
+    std::fs::remove_dir_all(dir).ok();
+}
+
+/// The Visible Human Female pelvis's diameters as docs/IMPORT.md lists
+/// them (mm, degrees, to 0.1).
+const DOCUMENTED: [(&str, f64); 12] = [
+    ("inlet_ap_mm", 113.0),
+    ("inlet_transverse_mm", 149.1),
+    ("inlet_oblique_mm", 162.6),
+    ("mid_ap_mm", 139.8),
+    ("interspinous_mm", 116.4),
+    ("outlet_ap_mm", 96.9),
+    ("outlet_transverse_mm", 135.6),
+    ("outlet_oblique_mm", 126.4),
+    ("symphysis_length_mm", 26.1),
+    ("sacral_length_mm", 105.1),
+    ("subpubic_angle_deg", 94.7),
+    ("sacral_depth_mm", 15.2),
+];
+
+#[test]
+fn the_visible_human_pelvis_imports_into_the_pelvis_frame() {
+    let imported = visible_human_female_pelvis().unwrap();
+    let r = imported.report;
+    // Sacrum and coccyx are closed shells; each hip bone is three closed
+    // shells (ilium, ischium, pubis) sharing edges where they meet.
+    assert_eq!((r.parts, r.closed_parts, r.open_edges), (4, 2, 0), "{r:?}");
+    assert!(r.non_manifold_edges > 0);
+    let l = imported.pelvis.landmarks;
+    // Pelvis frame: origin mid-conjugate, y towards the symphysis, x to the right.
+    assert!((l.sacral_promontory + l.symphysis_upper).length() < 1e-9);
+    assert!(l.symphysis_upper.y > 0.0 && l.symphysis_upper.x.abs() < 1e-9 && l.symphysis_upper.z.abs() < 1e-9);
+    assert!(l.iliopectineal_right.x > 0.0 && l.iliopectineal_left.x < 0.0);
+    assert!(l.coccyx_tip.z < 0.0 && l.ischial_spine_left.z < 0.0);
+    let m = measure(&imported.pelvis);
+    let json = serde_json::to_value(&m.diameters).unwrap();
+    for (name, documented) in DOCUMENTED {
+        let value = json[name].as_f64().unwrap();
+        assert!((value - documented).abs() < 0.051, "{name}: measured {value:.2}, docs/IMPORT.md says {documented}");
+    }
+    assert!(m.landmark_surface_gap_mm < 0.01, "{}", m.landmark_surface_gap_mm);
+    // The rough figures of /work/shared/meshes/README.md where our picks
+    // agree with them (docs/IMPORT.md discusses the others).
+    assert!((m.diameters.inlet_ap_mm - 118.0).abs() < 6.0);
+    assert!((m.diameters.inlet_transverse_mm - 150.0).abs() < 2.0);
+    assert!((m.diameters.subpubic_angle_deg - 95.0).abs() < 2.0);
+}
+
+#[test]
+fn the_shipped_landmarks_are_what_the_picking_procedure_gives() {
+    let glb = anatomy_assets_dir().join("visible-human-female-pelvis.glb");
+    let parts = read_gltf_parts(&glb).unwrap();
+    let bones = pick::PelvisBones::from_named_parts(&parts, visible_human_glb_axes().to_anatomical(&glb).unwrap(), 1.0).unwrap();
+    let picked = pick::pick_landmarks(&bones).unwrap();
+    let file = pick::to_landmarks_file(
+        &picked,
+        Path::new("visible-human-female-pelvis.stl"),
+        Units::Millimetres,
+        visible_human_stl_axes(),
+        None,
+    )
+    .unwrap();
+    let shipped = LandmarksFile::read(&visible_human_female_pelvis_path()).unwrap();
+    assert_eq!(shipped.axes, file.axes);
+    for (name, p) in &file.landmarks {
+        let q = shipped.landmarks[name];
+        assert!((DVec3::from_array(*p) - DVec3::from_array(q)).length() < 1e-9, "{name}: picked {p:?}, shipped {q:?}");
+    }
+}
+
+#[test]
+fn the_makehuman_baby_head_is_a_closed_95_mm_wide_surface() {
+    let path = anatomy_assets_dir().join("makehuman-baby-head.stl");
+    let head = read_closed_surface(&path, Units::Millimetres).unwrap();
+    let (lo, hi) = head.surface.bounds().unwrap();
+    let extent_mm = (hi - lo) * 1e3;
+    assert!((extent_mm.x - 95.0).abs() < 0.5, "extent {extent_mm:?} mm");
+    assert_eq!(head.report.parts, 1);
+}

@@ -1,0 +1,154 @@
+//! From triangles as stored to a clean surface: non-finite coordinates
+//! refused with their triangle and vertex, duplicate vertices merged,
+//! degenerate triangles dropped, and the surface's parts and openings counted.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use super::formats::RawMesh;
+use super::ImportError;
+use crate::surface::TriSurface;
+
+/// What the importer found in a mesh and did to it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct MeshReport {
+    /// Triangles in the file.
+    pub triangles_read: usize,
+    /// Distinct vertices after merging exact duplicates.
+    pub vertices: usize,
+    /// Triangles dropped because two of their corners coincide.
+    pub degenerate_dropped: usize,
+    /// Connected parts (triangles sharing vertices).
+    pub parts: usize,
+    /// Parts whose every edge borders exactly two triangles traversing it in
+    /// opposite directions (closed, consistently oriented).
+    pub closed_parts: usize,
+    /// Edges bordering one triangle only (openings).
+    pub open_edges: usize,
+    /// Edges bordering more than two triangles.
+    pub non_manifold_edges: usize,
+}
+
+/// Checks coordinates, merges duplicate vertices (exactly equal after
+/// scaling) and drops degenerate triangles; `scale` converts file units to
+/// metres.
+pub fn weld(path: &Path, raw: &RawMesh, scale: f64) -> Result<(TriSurface, MeshReport), ImportError> {
+    let count = raw.positions.len();
+    for (triangle, corners) in raw.triangles.iter().enumerate() {
+        for (corner, &vertex) in corners.iter().enumerate() {
+            let Some(p) = raw.positions.get(vertex as usize) else {
+                return Err(ImportError::Format {
+                    path: path.to_path_buf(),
+                    format: "mesh",
+                    message: format!("triangle {triangle} refers to vertex {vertex}, but there are {count} vertices"),
+                });
+            };
+            if !p.is_finite() {
+                return Err(ImportError::NonFinite { path: path.to_path_buf(), triangle, corner, vertex: vertex as usize });
+            }
+        }
+    }
+    if raw.triangles.is_empty() {
+        return Err(ImportError::Empty { path: path.to_path_buf() });
+    }
+
+    // Merge by exact coordinate bits (+0.0 and -0.0 alike).
+    let key = |p: DVec3| p.to_array().map(|c| if c == 0.0 { 0u64 } else { c.to_bits() });
+    let mut index: HashMap<[u64; 3], u32> = HashMap::with_capacity(count);
+    let mut vertices = Vec::new();
+    let mut remap = vec![0u32; count];
+    for (i, &p) in raw.positions.iter().enumerate() {
+        let scaled = p * scale;
+        remap[i] = *index.entry(key(scaled)).or_insert_with(|| {
+            vertices.push(scaled);
+            (vertices.len() - 1) as u32
+        });
+    }
+    let mut triangles = Vec::with_capacity(raw.triangles.len());
+    let mut degenerate_dropped = 0;
+    for t in &raw.triangles {
+        let t = t.map(|v| remap[v as usize]);
+        if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
+            degenerate_dropped += 1;
+        } else {
+            triangles.push(t);
+        }
+    }
+    if triangles.is_empty() {
+        return Err(ImportError::Empty { path: path.to_path_buf() });
+    }
+    // Keep only vertices some triangle uses.
+    let mut used = vec![u32::MAX; vertices.len()];
+    let mut kept = Vec::with_capacity(vertices.len());
+    for t in &mut triangles {
+        for v in t.iter_mut() {
+            if used[*v as usize] == u32::MAX {
+                used[*v as usize] = kept.len() as u32;
+                kept.push(vertices[*v as usize]);
+            }
+            *v = used[*v as usize];
+        }
+    }
+    let surface = TriSurface::new(kept, triangles);
+    let report = survey(&surface, raw.triangles.len(), degenerate_dropped);
+    Ok((surface, report))
+}
+
+/// Counts parts, closed parts, open and non-manifold edges.
+fn survey(surface: &TriSurface, triangles_read: usize, degenerate_dropped: usize) -> MeshReport {
+    // Union-find over vertices joined by triangles.
+    let mut parent: Vec<u32> = (0..surface.vertices.len() as u32).collect();
+    fn root(parent: &mut [u32], mut v: u32) -> u32 {
+        while parent[v as usize] != v {
+            parent[v as usize] = parent[parent[v as usize] as usize];
+            v = parent[v as usize];
+        }
+        v
+    }
+    for t in &surface.triangles {
+        let a = root(&mut parent, t[0]);
+        for &v in &t[1..] {
+            let b = root(&mut parent, v);
+            parent[b as usize] = a;
+        }
+    }
+    // Directed edge uses.
+    let mut directed: HashMap<(u32, u32), u32> = HashMap::with_capacity(surface.triangles.len() * 3);
+    for t in &surface.triangles {
+        for k in 0..3 {
+            *directed.entry((t[k], t[(k + 1) % 3])).or_default() += 1;
+        }
+    }
+    let mut part_of: HashMap<u32, bool> = HashMap::new();
+    for t in &surface.triangles {
+        let r = root(&mut parent, t[0]);
+        part_of.entry(r).or_insert(true);
+    }
+    let (mut open_edges, mut non_manifold_edges) = (0, 0);
+    for (&(a, b), &uses) in &directed {
+        let back = directed.get(&(b, a)).copied().unwrap_or(0);
+        let closed_here = uses == 1 && back == 1;
+        if !closed_here {
+            let r = root(&mut parent, a);
+            part_of.insert(r, false);
+        }
+        // Count each undirected edge once.
+        if back == 0 {
+            open_edges += 1;
+        } else if (a < b) && uses + back > 2 {
+            non_manifold_edges += 1;
+        }
+    }
+    MeshReport {
+        triangles_read,
+        vertices: surface.vertices.len(),
+        degenerate_dropped,
+        parts: part_of.len(),
+        closed_parts: part_of.values().filter(|&&closed| closed).count(),
+        open_edges,
+        non_manifold_edges,
+    }
+}
