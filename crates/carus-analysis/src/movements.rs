@@ -107,7 +107,7 @@ pub struct Movements {
 
 impl Movements {
     /// Keys and movements in the textbook order.
-    pub fn iter(&self) -> [(&'static str, &Movement); 7] {
+    pub fn by_key(&self) -> [(&'static str, &Movement); 7] {
         [
             ("engagement", &self.engagement),
             ("descent", &self.descent),

@@ -168,7 +168,12 @@ impl Plan {
     /// z towards the head) until the head centre first reaches
     /// `end_sigma_mm` or the time reaches `duration_s`. The trunk is
     /// recorded only when the plan has `shoulders`.
-    pub fn history_with(&self, canal: &BirthCanal, head: &HeadGeometry, trunk: &TrunkGeometry) -> PoseHistory {
+    pub fn history_with(
+        &self,
+        canal: &BirthCanal,
+        head: &HeadGeometry,
+        trunk: &TrunkGeometry,
+    ) -> PoseHistory {
         let mut samples = Vec::new();
         for step in 0.. {
             let t = step as f64 * self.sample_interval_s;
@@ -186,7 +191,13 @@ impl Plan {
         }
     }
 
-    fn sample(&self, canal: &BirthCanal, body: &TrunkGeometry, t: f64, sigma_mm: f64) -> PoseSample {
+    fn sample(
+        &self,
+        canal: &BirthCanal,
+        body: &TrunkGeometry,
+        t: f64,
+        sigma_mm: f64,
+    ) -> PoseSample {
         let axis = canal.axis();
         let sigma = sigma_mm * M_PER_MM;
         let frame = axis.frame(sigma);

@@ -33,7 +33,7 @@ fn absent(m: &Movement) {
 fn the_textbook_labour_shows_all_seven_in_order() {
     let (_, r) = textbook();
     let m = &r.movements;
-    for (key, movement) in m.iter() {
+    for (key, movement) in m.by_key() {
         assert!(movement.observed, "{key} not observed");
     }
     let engagement = observed(&m.engagement);
@@ -231,7 +231,7 @@ fn moving_the_time_origin_moves_every_movement_with_it() {
         .movements
         .iter()
         .into_iter()
-        .zip(moved.movements.iter())
+        .zip(moved.movements.by_key())
         .map(|((_, a), (_, b))| (*a, *b));
     for (a, b) in pairs.chain([(base.posterior_rotation, moved.posterior_rotation)]) {
         assert_eq!(a.observed, b.observed);
@@ -380,10 +380,13 @@ fn the_textbook_plan_in_the_generated_pelvis_with_the_term_fetus() {
     let trunk = TrunkGeometry::from_trunk(&fetus.trunk);
     let history = synthetic::textbook_plan(&canal).history_with(&canal, &head, &trunk);
     let r = detect(&history).unwrap();
-    for (key, movement) in r.movements.iter() {
+    for (key, movement) in r.movements.by_key() {
         assert!(movement.observed, "{key} not observed: {movement:?}");
     }
     assert!(r.outcome.delivered);
     // The head's own biparietal diameter is what engagement uses.
-    assert_eq!(history.head.biparietal_mm, fetus.head.diameters.biparietal_mm);
+    assert_eq!(
+        history.head.biparietal_mm,
+        fetus.head.diameters.biparietal_mm
+    );
 }
