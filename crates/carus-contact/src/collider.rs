@@ -329,6 +329,89 @@ pub(crate) mod tests {
         }
     }
 
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(512))]
+
+        /// Random (often sliver) tetrahedra: sharp edges and corners, where
+        /// only the right edge or vertex pseudo-normal gives the right sign.
+        #[test]
+        fn sign_is_exact_near_sharp_edges_and_corners(c in prop::array::uniform12(-1.0f64..1.0),
+                                                       q in prop::array::uniform3(-1.5f64..1.5)) {
+            let mut v: Vec<DVec3> = [0, 3, 6, 9].map(|k| DVec3::new(c[k], c[k + 1], c[k + 2])).to_vec();
+            let volume = (v[1] - v[0]).dot((v[2] - v[0]).cross(v[3] - v[0]));
+            prop_assume!(volume.abs() > 1e-3);
+            if volume < 0.0 {
+                v.swap(2, 3);
+            }
+            let t = vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
+            let collider = TriangleCollider::new("tetrahedron", &v, &t).unwrap();
+            let p = DVec3::from_array(q);
+            let hit = collider.closest_point(p, f64::MAX).unwrap();
+            prop_assume!(hit.signed_distance.abs() > 1e-9);
+            let inside = t.iter().all(|tri| {
+                let [a, b, c] = tri.map(|i| v[i as usize]);
+                (p - a).dot((b - a).cross(c - a)) < 0.0
+            });
+            prop_assert_eq!(hit.signed_distance < 0.0, inside);
+        }
+    }
+
+    /// Closed torus (major radius `big`, minor `small`) about z, outward normals.
+    fn torus(big: f64, small: f64, around: u32, across: u32) -> (Vec<DVec3>, Vec<[u32; 3]>) {
+        use std::f64::consts::TAU;
+        let mut v = Vec::new();
+        for i in 0..around {
+            let u = TAU * i as f64 / around as f64;
+            for j in 0..across {
+                let w = TAU * j as f64 / across as f64;
+                let r = big + small * w.cos();
+                v.push(DVec3::new(r * u.cos(), r * u.sin(), small * w.sin()));
+            }
+        }
+        let id = |i: u32, j: u32| (i % around) * across + j % across;
+        let mut t = Vec::new();
+        for i in 0..around {
+            for j in 0..across {
+                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        (v, t)
+    }
+
+    /// Generalised winding number (solid angles, van Oosterom and Strackee
+    /// 1983): 1 inside a closed outward surface, 0 outside.
+    fn winding_number(p: DVec3, v: &[DVec3], t: &[[u32; 3]]) -> f64 {
+        t.iter()
+            .map(|tri| {
+                let [a, b, c] = tri.map(|i| v[i as usize] - p);
+                let (la, lb, lc) = (a.length(), b.length(), c.length());
+                let num = a.dot(b.cross(c));
+                let den = la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb;
+                2.0 * num.atan2(den)
+            })
+            .sum::<f64>()
+            / (4.0 * std::f64::consts::PI)
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(256))]
+
+        /// The pseudo-normal sign on a non-convex closed surface (a torus,
+        /// like the bony ring round the birth canal) agrees with the winding
+        /// number, near and far, inside the hole and in the tube.
+        #[test]
+        fn sign_matches_winding_number_on_a_torus(q in prop::array::uniform3(-0.1f64..0.1)) {
+            let (v, t) = torus(0.06, 0.02, 32, 12);
+            let collider = TriangleCollider::new("torus", &v, &t).unwrap();
+            let p = DVec3::new(q[0], q[1], q[2] * 0.3);
+            let hit = collider.closest_point(p, f64::MAX).unwrap();
+            prop_assume!(hit.signed_distance.abs() > 1e-9);
+            let inside = winding_number(p, &v, &t) > 0.5;
+            prop_assert_eq!(hit.signed_distance < 0.0, inside);
+        }
+    }
+
     #[test]
     fn bad_surfaces_are_refused_with_the_item_named() {
         let v = vec![DVec3::ZERO, DVec3::X, DVec3::Y];
