@@ -229,7 +229,7 @@ fn moving_the_time_origin_moves_every_movement_with_it() {
     let moved = detect(&shifted).unwrap();
     let pairs = base
         .movements
-        .iter()
+        .by_key()
         .into_iter()
         .zip(moved.movements.by_key())
         .map(|((_, a), (_, b))| (*a, *b));
