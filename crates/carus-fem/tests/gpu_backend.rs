@@ -225,3 +225,16 @@ fn auto_uses_a_real_gpu_or_falls_back_to_the_cpu_with_a_notice() {
     assert_eq!(opened.solver.backend(), Backend::Gpu);
     assert!(opened.solver.adapter_name().is_some());
 }
+
+#[test]
+fn the_bench_reports_the_cpu_bench_figures_and_bandwidth() {
+    let r = carus_fem::gpu::bench_tled(&device(), carus_fem::ElementKind::H8, 4, 20, Some(100.0)).unwrap();
+    assert_eq!((r.elements, r.nodes, r.steps, r.threads, r.backend.as_str()), (64, 125, 20, 64, "gpu"));
+    assert!(r.wall_s > 0.0 && (r.us_per_element_step * r.element_steps_per_s - 1e6).abs() < 1e-6 * 1e6);
+    assert!((r.achieved_bandwidth_gbs - r.bytes_per_element_step * r.element_steps_per_s / 1e9).abs() < 1e-9 * r.achieved_bandwidth_gbs);
+    assert_eq!((r.peak_bandwidth_gbs, r.peak_source.as_deref()), (Some(100.0), Some("--peak-gbs")));
+    let json = serde_json::to_value(&r).unwrap();
+    for key in ["elements", "nodes", "steps", "wall_s", "us_per_element_step", "element_steps_per_s", "threads", "backend", "achieved_bandwidth_gbs", "adapter"] {
+        assert!(json.get(key).is_some(), "{key}");
+    }
+}

@@ -22,6 +22,7 @@
 //! [`GpuDevice::from_device`] and [`GpuSolver::new`].
 
 mod backend;
+mod bench;
 mod buffers;
 mod device;
 mod error;
@@ -31,6 +32,7 @@ mod solver;
 mod traffic;
 
 pub use backend::{open_solver, Backend, BackendSolver, OpenedSolver};
+pub use bench::{bench_tled, GpuBenchReport};
 pub use device::{AdapterChoice, GpuDevice};
 pub use error::{GpuError, LAVAPIPE_HINT};
 pub use loads::MAX_LOAD_SHAPES;
