@@ -285,14 +285,14 @@ impl TledModel {
             }
         }
         let region_of = assign_regions(mesh, materials)?;
-        let (kernel, element_time_step_s, critical_element) = match options.precision {
+        let (kernel, (element_time_step_s, critical_element, min_length)) = match options.precision {
             Precision::F64 => {
-                let (k, dt, e) = build_kernel::<f64>(mesh, materials, &region_of, options)?;
-                (KernelModel::F64(k), dt, e)
+                let (k, limits) = build_kernel::<f64>(mesh, materials, &region_of, options)?;
+                (KernelModel::F64(k), limits)
             }
             Precision::F32 => {
-                let (k, dt, e) = build_kernel::<f32>(mesh, materials, &region_of, options)?;
-                (KernelModel::F32(k), dt, e)
+                let (k, limits) = build_kernel::<f32>(mesh, materials, &region_of, options)?;
+                (KernelModel::F32(k), limits)
             }
         };
         let mut lo = [f64::INFINITY; 3];
@@ -303,9 +303,11 @@ impl TledModel {
                 hi[i] = hi[i].max(p[i]);
             }
         }
+        // Probe displacements of 1e-3 of the smallest element size.
+        let probe_m = 1e-3 * min_length;
         let omega_max = match &kernel {
-            KernelModel::F32(k) => max_angular_frequency(k),
-            KernelModel::F64(k) => max_angular_frequency(k),
+            KernelModel::F32(k) => max_angular_frequency(k, probe_m),
+            KernelModel::F64(k) => max_angular_frequency(k, probe_m),
         };
         let spectral = if omega_max > 0.0 { STABILITY_MARGIN * 2.0 / omega_max } else { f64::INFINITY };
         Ok(TledModel {
@@ -425,7 +427,7 @@ fn build_kernel<T: Real>(
     materials: &[MaterialRegion],
     region_of: &[u16],
     options: &ModelOptions,
-) -> Result<(KernelData<T>, f64, usize), FemError> {
+) -> Result<(KernelData<T>, (f64, usize, f64)), FemError> {
     let npe = mesh.kind.nodes_per_element();
     let ne = mesh.element_count();
     let nn = mesh.node_count();
@@ -436,6 +438,7 @@ fn build_kernel<T: Real>(
     let mut nodal_volume = if anp { vec![0.0f64; nn] } else { Vec::new() };
     let mut dt_crit = f64::INFINITY;
     let mut dt_element = 0;
+    let mut min_length = f64::INFINITY;
     for (e, el) in mesh.elements().enumerate() {
         let region = &materials[region_of[e] as usize];
         let (lambda, mu) = region.material.lame_parameters();
@@ -456,6 +459,7 @@ fn build_kernel<T: Real>(
         };
         let c = region.material.dilatational_wave_speed(region.density_kg_m3);
         let dt = geom.characteristic_length / c;
+        min_length = min_length.min(geom.characteristic_length);
         if dt < dt_crit {
             dt_crit = dt;
             dt_element = e;
@@ -503,7 +507,7 @@ fn build_kernel<T: Real>(
         slots,
         inv_nodal_volume: nodal_volume.iter().map(|&v| T::from_f64(if v > 0.0 { 1.0 / v } else { 0.0 })).collect(),
     };
-    Ok((KernelData { elements: blocks, nodes }, dt_crit, dt_element))
+    Ok((KernelData { elements: blocks, nodes }, (dt_crit, dt_element, min_length)))
 }
 
 #[cfg(test)]

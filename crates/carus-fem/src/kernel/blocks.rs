@@ -163,9 +163,10 @@ impl<T: Real> NodeTable<T> {
         let mut f = [T::default(); 3];
         for &s in self.slots_of(n) {
             let s = s as usize;
-            f[0] += forces[s];
-            f[1] += forces[s + LANES];
-            f[2] += forces[s + 2 * LANES];
+            let copy = &forces[s..s + 2 * LANES + 1];
+            f[0] += copy[0];
+            f[1] += copy[LANES];
+            f[2] += copy[2 * LANES];
         }
         f
     }

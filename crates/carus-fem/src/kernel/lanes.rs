@@ -149,6 +149,25 @@ impl<T: Real> Lanes<T> {
     }
 }
 
+/// Views a lane-major block slice `[T; N * M * LANES]` as `[[Lanes<T>; M]; N]`
+/// without copying. Panics if the slice is shorter.
+#[inline(always)]
+pub fn block_view<T: Real, const N: usize, const M: usize>(s: &[T]) -> &[[Lanes<T>; M]; N] {
+    let s = &s[..N * M * LANES];
+    // SAFETY: `Lanes<T>` is `repr(transparent)` over `[T; LANES]`, so
+    // `[[Lanes<T>; M]; N]` has the size and alignment of `[T; N * M * LANES]`,
+    // which the slice above provides.
+    unsafe { &*(s.as_ptr() as *const [[Lanes<T>; M]; N]) }
+}
+
+/// Mutable form of [`block_view`].
+#[inline(always)]
+pub fn block_view_mut<T: Real, const N: usize, const M: usize>(s: &mut [T]) -> &mut [[Lanes<T>; M]; N] {
+    let s = &mut s[..N * M * LANES];
+    // SAFETY: as in `block_view`; the exclusive borrow is carried over.
+    unsafe { &mut *(s.as_mut_ptr() as *mut [[Lanes<T>; M]; N]) }
+}
+
 macro_rules! lanes_binop {
     ($tr:ident, $f:ident, $op:tt) => {
         impl<T: Real> $tr for Lanes<T> {

@@ -11,7 +11,7 @@ use rayon::prelude::*;
 
 use super::blocks::{ElementBlocks, NodeTable};
 use super::element::{internal_forces, Coefficients};
-use super::lanes::{Lanes, Real, LANES};
+use super::lanes::{block_view, block_view_mut, Lanes, Real, LANES};
 
 /// Blocks per parallel task (512 elements).
 const BLOCKS_PER_TASK: usize = 64;
@@ -52,16 +52,24 @@ fn first_bad(a: BadElement, b: BadElement) -> BadElement {
     }
 }
 
+/// Displacements of the block's nodes, lane-major. Each lane value is
+/// assembled in registers (one bounds check per node), not stored lane by
+/// lane and re-read as a vector, which would stall store forwarding.
 #[inline(always)]
 fn gather_displacements<T: Real, const N: usize>(conn: &[u32], u: &[T]) -> [[Lanes<T>; 3]; N] {
     let mut ue = [[Lanes([T::default(); LANES]); 3]; N];
     for a in 0..N {
+        let mut x = [T::default(); LANES];
+        let mut y = [T::default(); LANES];
+        let mut z = [T::default(); LANES];
         for l in 0..LANES {
             let n = conn[a * LANES + l] as usize * 3;
-            ue[a][0].0[l] = u[n];
-            ue[a][1].0[l] = u[n + 1];
-            ue[a][2].0[l] = u[n + 2];
+            let p = &u[n..n + 3];
+            x[l] = p[0];
+            y[l] = p[1];
+            z[l] = p[2];
         }
+        ue[a] = [Lanes(x), Lanes(y), Lanes(z)];
     }
     ue
 }
@@ -80,15 +88,9 @@ fn element_task_body<T: Real, const N: usize>(
         let b = first_block + bi;
         let conn = &eb.connectivity[b * N * LANES..(b + 1) * N * LANES];
         let ue = gather_displacements::<T, N>(conn, u);
-        // Plain loops, not array::from_fn: closures called through a library
-        // function would leave the AVX2 context un-inlined.
-        let sd = &eb.shape_derivatives[b * N * 3 * LANES..(b + 1) * N * 3 * LANES];
-        let mut dh = [[Lanes([T::default(); LANES]); 3]; N];
-        for a in 0..N {
-            for i in 0..3 {
-                dh[a][i] = Lanes::load(&sd[(a * 3 + i) * LANES..]);
-            }
-        }
+        // Model data is read in place through lane-major views (no copies,
+        // no closures that could escape the AVX2 context).
+        let dh: &[[Lanes<T>; 3]; N] = block_view(&eb.shape_derivatives[b * N * 3 * LANES..]);
         let w = Lanes::load(&eb.weight[b * LANES..]);
         let co = &eb.coefficients[b * 3 * LANES..];
         let k = Coefficients { c10: Lanes::load(co), c01: Lanes::load(&co[LANES..]), kappa: Lanes::load(&co[2 * LANES..]) };
@@ -107,22 +109,12 @@ fn element_task_body<T: Real, const N: usize>(
             None => None,
         };
         let (f, j) = if eb.hourglass.is_empty() || N != 8 {
-            internal_forces::<Lanes<T>, N>(&ue, &dh, w, &k, j_vol, None)
+            internal_forces::<Lanes<T>, N>(&ue, dh, w, &k, j_vol, None)
         } else {
-            let hgs = &eb.hourglass[b * 4 * N * LANES..(b + 1) * 4 * N * LANES];
-            let mut hg = [[Lanes([T::default(); LANES]); N]; 4];
-            for g in 0..4 {
-                for a in 0..N {
-                    hg[g][a] = Lanes::load(&hgs[(g * N + a) * LANES..]);
-                }
-            }
-            internal_forces::<Lanes<T>, N>(&ue, &dh, w, &k, j_vol, Some(&hg))
+            let hg: &[[Lanes<T>; N]; 4] = block_view(&eb.hourglass[b * 4 * N * LANES..]);
+            internal_forces::<Lanes<T>, N>(&ue, dh, w, &k, j_vol, Some(hg))
         };
-        for a in 0..N {
-            for c in 0..3 {
-                f[a][c].store(&mut ob[(a * 3 + c) * LANES..]);
-            }
-        }
+        *block_view_mut::<T, N, 3>(ob) = f;
         if bad.is_none() {
             for l in 0..LANES {
                 let jl = j.0[l];
@@ -207,14 +199,8 @@ pub fn element_volume_shares<T: Real>(eb: &ElementBlocks<T>, u: &[T], shares: &m
                 let b = t * BLOCKS_PER_TASK + bi;
                 let conn = &eb.connectivity[b * 4 * LANES..(b + 1) * 4 * LANES];
                 let ue = gather_displacements::<T, 4>(conn, u);
-                let sd = &eb.shape_derivatives[b * 4 * 3 * LANES..];
-                let mut dh = [[Lanes([T::default(); LANES]); 3]; 4];
-                for a in 0..4 {
-                    for i in 0..3 {
-                        dh[a][i] = Lanes::load(&sd[(a * 3 + i) * LANES..]);
-                    }
-                }
-                let f = super::element::deformation_gradient(&ue, &dh);
+                let dh: &[[Lanes<T>; 3]; 4] = block_view(&eb.shape_derivatives[b * 4 * 3 * LANES..]);
+                let f = super::element::deformation_gradient(&ue, dh);
                 let j = super::element::det3(&f);
                 (j * Lanes::load(&eb.quarter_volume[b * LANES..])).store(ob);
                 if bad.is_none() {
@@ -267,21 +253,23 @@ fn node_task_body<T: Real>(
 ) -> Option<usize> {
     let mut bad = None;
     let two = T::from_f64(2.0);
-    for (i, un) in u_next.chunks_exact_mut(3).enumerate() {
-        let n = first + i;
-        let f = nodes.gather(forces, n);
-        let m = nodes.mass[n];
-        let hm = it.h2 * nodes.inv_mass[n];
+    let count = u_next.len() / 3;
+    let range = 3 * first..3 * (first + count);
+    let (external, u_prev, u_curr) = (&external[range.clone()], &u_prev[range.clone()], &u_curr[range]);
+    let (mass, inv_mass) = (&nodes.mass[first..first + count], &nodes.inv_mass[first..first + count]);
+    for i in 0..count {
+        let f = nodes.gather(forces, first + i);
+        let hm = it.h2 * inv_mass[i];
         let mut ok = true;
         for c in 0..3 {
-            let r = external[3 * n + c] + m * it.gravity[c];
-            let v = (hm * (r - f[c]) + two * u_curr[3 * n + c] - it.previous_factor * u_prev[3 * n + c]) * it.inv_denominator;
-            un[c] = v;
+            let r = external[3 * i + c] + mass[i] * it.gravity[c];
+            let v = (hm * (r - f[c]) + two * u_curr[3 * i + c] - it.previous_factor * u_prev[3 * i + c]) * it.inv_denominator;
+            u_next[3 * i + c] = v;
             let bounded = v < it.runaway_m && -v < it.runaway_m;
             ok &= bounded;
         }
         if !ok && bad.is_none() {
-            bad = Some(n);
+            bad = Some(first + i);
         }
     }
     bad
