@@ -19,7 +19,8 @@ use std::path::{Path, PathBuf};
 use glam::{DAffine3, DMat3, DVec3};
 use serde::{Deserialize, Serialize};
 
-use super::{read_surface, ImportError, MeshReport, Units};
+use super::formats::{read_raw, RawMesh};
+use super::{weld, ImportError, MeshReport, Units};
 use crate::pelvis::{Pelvis, PelvisLandmarks, LANDMARK_NAMES};
 
 /// Where the mother's directions point in the mesh: each key takes a
@@ -122,7 +123,12 @@ impl LandmarksFile {
     /// Reads and checks a landmarks file (names, not yet geometry).
     pub fn read(path: &Path) -> Result<Self, ImportError> {
         let text = std::fs::read_to_string(path).map_err(|source| ImportError::Io { path: path.to_path_buf(), source })?;
-        let file: LandmarksFile = toml::from_str(&text).map_err(|e| file_error(path, e))?;
+        Self::parse(path, &text)
+    }
+
+    /// Parses and checks landmarks text; `path` names it in errors.
+    pub fn parse(path: &Path, text: &str) -> Result<Self, ImportError> {
+        let file: LandmarksFile = toml::from_str(text).map_err(|e| file_error(path, e))?;
         let unknown: Vec<String> =
             file.landmarks.keys().filter(|k| !LANDMARK_NAMES.contains(&k.as_str())).cloned().collect();
         if !unknown.is_empty() {
@@ -196,24 +202,31 @@ fn check_orientation(path: &Path, l: &PelvisLandmarks) -> Result<(), ImportError
 /// edges are reported in [`ImportedPelvis::report`].
 pub fn import_pelvis(path: &Path) -> Result<ImportedPelvis, ImportError> {
     let file = LandmarksFile::read(path)?;
+    let mesh_path = path.parent().unwrap_or(Path::new(".")).join(&file.mesh);
+    let raw = read_raw(&mesh_path)?;
+    assemble_pelvis(path, &file, mesh_path, &raw)
+}
+
+/// [`import_pelvis`] for a landmarks file already read and its mesh's
+/// triangles (e.g. embedded in the program); `path` names the landmarks
+/// file in errors, `mesh_path` the mesh.
+pub fn assemble_pelvis(path: &Path, file: &LandmarksFile, mesh_path: PathBuf, raw: &RawMesh) -> Result<ImportedPelvis, ImportError> {
     let to_anatomical = file.axes.to_anatomical(path)?;
     let scale = file.units.to_metres();
-    let mesh_path = path.parent().unwrap_or(Path::new(".")).join(&file.mesh);
 
     let anatomical = file.landmarks_through(path, |p| to_anatomical * (p * scale))?;
     check_orientation(path, &anatomical)?;
     let to_pelvis = anatomical.to_pelvis_frame().map_err(|source| ImportError::Pelvis { path: path.to_path_buf(), source })?;
     let landmarks = anatomical.map(|p| to_pelvis.transform_point3(p));
 
-    let imported = read_surface(&mesh_path, file.units)?;
-    let mut surface = imported.surface;
+    let (mut surface, report) = weld(&mesh_path, raw, scale)?;
     let mesh_to_pelvis_metres = to_pelvis * DAffine3::from_mat3(to_anatomical);
     surface.transform(&mesh_to_pelvis_metres);
     let pelvis =
         Pelvis::from_landmarks(landmarks, surface).map_err(|source| ImportError::Pelvis { path: path.to_path_buf(), source })?;
     Ok(ImportedPelvis {
         pelvis,
-        report: imported.report,
+        report,
         mesh_path,
         mesh_to_pelvis: mesh_to_pelvis_metres * DAffine3::from_scale(DVec3::splat(scale)),
     })

@@ -17,7 +17,7 @@ mod tests;
 use std::path::{Path, PathBuf};
 
 pub use formats::{parse_gltf_parts, parse_obj, parse_ply, parse_stl, MeshFormat, NamedPart, RawMesh};
-pub use landmarks::{import_pelvis, AxesDeclaration, ImportedPelvis, LandmarksFile};
+pub use landmarks::{assemble_pelvis, import_pelvis, AxesDeclaration, ImportedPelvis, LandmarksFile};
 pub use weld::{weld, MeshReport};
 
 use serde::{Deserialize, Serialize};
@@ -121,11 +121,19 @@ pub fn visible_human_female_pelvis_path() -> PathBuf {
 }
 
 /// The Visible Human Female pelvis (CC BY 4.0, see
-/// assets/anatomy/ATTRIBUTION.md) in the pelvis frame, from its shipped mesh
-/// and landmarks file.
+/// assets/anatomy/ATTRIBUTION.md) in the pelvis frame. Its mesh and
+/// landmarks file are compiled into the program, so it needs no files at
+/// run time; [`visible_human_female_pelvis_path`] names the same file on disk.
 pub fn visible_human_female_pelvis() -> Result<ImportedPelvis, ImportError> {
-    import_pelvis(&visible_human_female_pelvis_path())
+    let path = Path::new("assets/anatomy/visible-human-female-pelvis.landmarks.toml");
+    let mesh_path = PathBuf::from("assets/anatomy/visible-human-female-pelvis.stl");
+    let file = LandmarksFile::parse(path, VISIBLE_HUMAN_LANDMARKS)?;
+    let raw = parse_stl(&mesh_path, VISIBLE_HUMAN_STL)?;
+    assemble_pelvis(path, &file, mesh_path, &raw)
 }
+
+const VISIBLE_HUMAN_LANDMARKS: &str = include_str!("../../../../assets/anatomy/visible-human-female-pelvis.landmarks.toml");
+const VISIBLE_HUMAN_STL: &[u8] = include_bytes!("../../../../assets/anatomy/visible-human-female-pelvis.stl");
 
 /// Axes of the shipped Visible Human Female GLB (/work/shared/meshes/README.md:
 /// metres, x to the body's left, y up, z forward).

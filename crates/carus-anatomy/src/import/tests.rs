@@ -273,6 +273,8 @@ const DOCUMENTED: [(&str, f64); 12] = [
 #[test]
 fn the_visible_human_pelvis_imports_into_the_pelvis_frame() {
     let imported = visible_human_female_pelvis().unwrap();
+    // The embedded copy is the file on disk.
+    assert_eq!(import_pelvis(&visible_human_female_pelvis_path()).unwrap().pelvis, imported.pelvis);
     let r = imported.report;
     // Sacrum and coccyx are closed shells; each hip bone is three closed
     // shells (ilium, ischium, pubis) sharing edges where they meet.
