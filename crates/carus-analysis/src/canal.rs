@@ -5,6 +5,7 @@
 //! the planes it is built from, so a pose history can carry its canal as
 //! plain data (JSON) and rebuild the identical axis when read back.
 
+use crate::history::RigidPose;
 use carus_anatomy::axis::{AxisError, PelvicAxis, Plane};
 use carus_anatomy::Pelvis;
 use glam::DVec3;
@@ -94,9 +95,10 @@ impl BirthCanal {
         self.axis.plane_sigmas()[3]
     }
 
-    /// The leading point of a body whose centre lies at arc length
-    /// `centre_sigma`: of `points`, the one furthest along the canal
-    /// tangent there, and its arc length.
+    /// The leading point of a body at `pose` whose centre lies at arc
+    /// length `centre_sigma`: of its `body_points` (body frame), the one
+    /// furthest along the canal tangent there, in the pelvis frame, and its
+    /// arc length.
     ///
     /// CARDINAL_MOVEMENTS.md asks for the "deepest point along the axis".
     /// Taken literally (the largest projected sigma of any point) it is
@@ -108,12 +110,19 @@ impl BirthCanal {
     /// judged along the tangent at the head, where the canal is locally
     /// straight, and the chosen point's own sigma is reported
     /// (docs/DETECTOR.md).
-    pub fn leading_point(&self, points: &[DVec3], centre_sigma: f64) -> Option<(DVec3, f64)> {
-        let tangent = self.axis.tangent(centre_sigma);
-        let leading = points
+    pub fn leading_point(
+        &self,
+        body_points: &[DVec3],
+        pose: &RigidPose,
+        centre_sigma: f64,
+    ) -> Option<(DVec3, f64)> {
+        // Compare in the body frame: one rotation instead of one per point.
+        let tangent = pose.orientation.inverse() * self.axis.tangent(centre_sigma);
+        let leading = body_points
             .iter()
             .copied()
             .max_by(|a, b| a.dot(tangent).total_cmp(&b.dot(tangent)))?;
+        let leading = pose.point(leading);
         Some((leading, self.axis.project(leading)))
     }
 }

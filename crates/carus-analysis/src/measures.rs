@@ -8,6 +8,7 @@
 use crate::canal::BirthCanal;
 use crate::history::{PoseHistory, PoseSample};
 use glam::DVec3;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 const MM_PER_M: f64 = 1000.0;
@@ -122,7 +123,16 @@ impl Series {
                 b: s.head.direction(head.biparietal_axis()),
             })
             .collect();
-        let head_sigma: Vec<f64> = heads.iter().map(|h| axis.project(h.centre)).collect();
+        let head_sigma: Vec<f64> = heads.par_iter().map(|h| axis.project(h.centre)).collect();
+        let leading_sigma: Vec<f64> = (0..n)
+            .into_par_iter()
+            .map(|i| {
+                let pose = &history.samples[i].head;
+                canal
+                    .leading_point(&head.skull_points_m, pose, head_sigma[i])
+                    .map_or(head_sigma[i], |(_, sigma)| sigma)
+            })
+            .collect();
         let spine_axes = trunk_axes(history, &head_sigma);
 
         let mut series = Series {
@@ -141,18 +151,11 @@ impl Series {
             expulsion_force_n: Vec::with_capacity(n),
             contact_force_n: Vec::with_capacity(n),
         };
-        let mut skull = vec![DVec3::ZERO; head.skull_points_m.len()];
         for (i, sample) in history.samples.iter().enumerate() {
             let (h, sigma, k) = (&heads[i], head_sigma[i], spine_axes[i]);
-            for (world, &body) in skull.iter_mut().zip(&head.skull_points_m) {
-                *world = sample.head.point(body);
-            }
-            let (_, leading_sigma) = canal
-                .leading_point(&skull, sigma)
-                .unwrap_or((h.centre, sigma));
             series
                 .station_mm
-                .push((leading_sigma - canal.spines_sigma()) * MM_PER_M);
+                .push((leading_sigma[i] - canal.spines_sigma()) * MM_PER_M);
             let frame = axis.frame(sigma);
             series.theta_deg.push(cross_section_angle_deg(
                 -h.o,
@@ -181,7 +184,7 @@ impl Series {
         if let Some(trunk) = &history.trunk {
             let shoulders: Vec<ShoulderState> = history
                 .samples
-                .iter()
+                .par_iter()
                 .filter_map(|s| s.trunk)
                 .map(|pose| shoulder_state(canal, &pose, trunk))
                 .collect();
