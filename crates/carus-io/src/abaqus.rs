@@ -67,7 +67,10 @@ struct Keyword {
 
 impl Keyword {
     fn parameter(&self, key: &str) -> Option<&str> {
-        self.parameters.iter().find(|(k, _)| k == key).map(|(_, v)| v.as_str())
+        self.parameters
+            .iter()
+            .find(|(k, _)| k == key)
+            .map(|(_, v)| v.as_str())
     }
     fn flag(&self, key: &str) -> bool {
         self.parameters.iter().any(|(k, _)| k == key)
@@ -75,13 +78,30 @@ impl Keyword {
 }
 
 enum Block {
-    Nodes { set: Option<String> },
-    Volume { per_element: usize, set: Option<String> },
-    Ignored { set: Option<String> },
-    NodeSet { name: String, generate: bool },
-    ElementSet { name: String, generate: bool },
-    ElementSurface { name: String },
-    NodeSurface { name: String },
+    Nodes {
+        set: Option<String>,
+    },
+    Volume {
+        per_element: usize,
+        set: Option<String>,
+    },
+    Ignored {
+        set: Option<String>,
+    },
+    NodeSet {
+        name: String,
+        generate: bool,
+    },
+    ElementSet {
+        name: String,
+        generate: bool,
+    },
+    ElementSurface {
+        name: String,
+    },
+    NodeSurface {
+        name: String,
+    },
     Skip,
 }
 
@@ -130,7 +150,10 @@ impl Reader<'_> {
             if current.starts_with('*') {
                 if !pending.is_empty() {
                     return Err(self.error(
-                        format!("an element ends early: only {} values before the next keyword", pending.len()),
+                        format!(
+                            "an element ends early: only {} values before the next keyword",
+                            pending.len()
+                        ),
                         "give every element all its nodes",
                     ));
                 }
@@ -200,7 +223,8 @@ impl Reader<'_> {
                     }
                     let face = fields.pop().unwrap_or_default().to_ascii_uppercase();
                     let target = fields.pop().unwrap_or_default();
-                    self.surface_faces.push((name.clone(), target, face, self.line));
+                    self.surface_faces
+                        .push((name.clone(), target, face, self.line));
                 }
                 Block::NodeSurface { name } => {
                     let name = name.clone();
@@ -214,7 +238,10 @@ impl Reader<'_> {
         }
         if !pending.is_empty() {
             return Err(self.error(
-                format!("the file ends inside an element ({} values read)", pending.len()),
+                format!(
+                    "the file ends inside an element ({} values read)",
+                    pending.len()
+                ),
                 "the file looks truncated: export it again",
             ));
         }
@@ -233,7 +260,10 @@ impl Reader<'_> {
         let parameters = parts
             .filter(|p| !p.trim().is_empty())
             .map(|p| match p.split_once('=') {
-                Some((k, v)) => (k.trim().to_ascii_uppercase(), v.trim().trim_matches('"').to_string()),
+                Some((k, v)) => (
+                    k.trim().to_ascii_uppercase(),
+                    v.trim().trim_matches('"').to_string(),
+                ),
                 None => (p.trim().to_ascii_uppercase(), String::new()),
             })
             .collect();
@@ -289,14 +319,20 @@ impl Reader<'_> {
             },
             "SURFACE" => {
                 let name = self.required(keyword, "NAME")?;
-                match keyword.parameter("TYPE").map(str::to_ascii_uppercase).as_deref() {
+                match keyword
+                    .parameter("TYPE")
+                    .map(str::to_ascii_uppercase)
+                    .as_deref()
+                {
                     None | Some("ELEMENT") => Block::ElementSurface { name },
                     Some("NODE") => Block::NodeSurface {
                         name: self.set_name(&name),
                     },
                     Some(other) => {
                         return Err(self.error(
-                            format!("*SURFACE, TYPE={other} is not supported (ELEMENT and NODE are)"),
+                            format!(
+                                "*SURFACE, TYPE={other} is not supported (ELEMENT and NODE are)"
+                            ),
                             "define the surface by element faces (TYPE=ELEMENT)",
                         ))
                     }
@@ -316,8 +352,12 @@ impl Reader<'_> {
         fields
             .iter()
             .map(|f| {
-                f.parse::<u64>()
-                    .map_err(|_| self.error(format!("expected {what}, found {f:?}"), "write ids as whole numbers"))
+                f.parse::<u64>().map_err(|_| {
+                    self.error(
+                        format!("expected {what}, found {f:?}"),
+                        "write ids as whole numbers",
+                    )
+                })
             })
             .collect()
     }
@@ -325,7 +365,10 @@ impl Reader<'_> {
     fn node(&mut self, fields: &[String], set: Option<&str>) -> Result<(), ReadError> {
         if fields.len() != 4 {
             return Err(self.error(
-                format!("a node line needs `id, x, y, z`, found {} values", fields.len()),
+                format!(
+                    "a node line needs `id, x, y, z`, found {} values",
+                    fields.len()
+                ),
                 "give every node its id and three coordinates (Carus meshes are 3-D)",
             ));
         }
@@ -339,9 +382,12 @@ impl Reader<'_> {
                 )
             })?;
         }
-        self.builder
-            .add_node(id, xyz)
-            .map_err(|problem| self.error(problem, "give every node its own number and finite coordinates"))?;
+        self.builder.add_node(id, xyz).map_err(|problem| {
+            self.error(
+                problem,
+                "give every node its own number and finite coordinates",
+            )
+        })?;
         if let Some(set) = set {
             self.builder.add_to_node_set(set, id);
         }
@@ -364,7 +410,10 @@ impl Reader<'_> {
             }
         }
         if self.volume_nodes.insert(id, nodes).is_some() {
-            return Err(self.error(format!("element {id} is defined twice"), "give every element its own number"));
+            return Err(self.error(
+                format!("element {id} is defined twice"),
+                "give every element its own number",
+            ));
         }
         if let Some(set) = set {
             self.builder.add_to_element_set(&set, id);
@@ -374,7 +423,12 @@ impl Reader<'_> {
 
     /// Ids listed on a set's data line: numbers, other sets' names, or
     /// `first, last[, step]` under `GENERATE`.
-    fn members(&mut self, fields: &[String], generate: bool, elements: bool) -> Result<Vec<u64>, ReadError> {
+    fn members(
+        &mut self,
+        fields: &[String],
+        generate: bool,
+        elements: bool,
+    ) -> Result<Vec<u64>, ReadError> {
         if generate {
             let values = self.integers(fields, "a GENERATE bound")?;
             let (first, last, step) = match values[..] {
@@ -382,7 +436,10 @@ impl Reader<'_> {
                 [a, b, s] => (a, b, s),
                 _ => {
                     return Err(self.error(
-                        format!("GENERATE needs `first, last[, increment]`, found {} values", values.len()),
+                        format!(
+                            "GENERATE needs `first, last[, increment]`, found {} values",
+                            values.len()
+                        ),
                         "write one range per line",
                     ))
                 }
@@ -431,19 +488,29 @@ impl Reader<'_> {
                 Ok(id) => vec![id],
                 Err(_) => {
                     let name = self.set_name(&target);
-                    self.builder.element_set(&name).map(<[u64]>::to_vec).ok_or_else(|| {
-                        self.error(
-                            format!("surface {surface:?} names {target:?}, which is no element set"),
-                            "define the element set, or check its spelling",
-                        )
-                    })?
+                    self.builder
+                        .element_set(&name)
+                        .map(<[u64]>::to_vec)
+                        .ok_or_else(|| {
+                            self.error(
+                                format!(
+                                    "surface {surface:?} names {target:?}, which is no element set"
+                                ),
+                                "define the element set, or check its spelling",
+                            )
+                        })?
                 }
             };
             let face: usize = label
                 .strip_prefix('S')
                 .and_then(|n| n.parse().ok())
                 .filter(|n| (1..=6).contains(n))
-                .ok_or_else(|| self.error(format!("face label {label:?} is not S1..S6"), "use S1..S6 (S1..S4 on C3D4)"))?;
+                .ok_or_else(|| {
+                    self.error(
+                        format!("face label {label:?} is not S1..S6"),
+                        "use S1..S6 (S1..S4 on C3D4)",
+                    )
+                })?;
             for id in elements {
                 let Some(nodes) = self.volume_nodes.get(&id) else {
                     if self.builder.is_ignored(id) {
@@ -537,7 +604,11 @@ mod tests {
             let normal_x = (b[1] - a[1]) * (c[2] - a[2]) - (b[2] - a[2]) * (c[1] - a[1]);
             assert!(normal_x > 0.0, "x = 2 face must point towards +x");
         }
-        assert!(file.notes.iter().any(|n| n.contains("S4R")), "{:?}", file.notes);
+        assert!(
+            file.notes.iter().any(|n| n.contains("S4R")),
+            "{:?}",
+            file.notes
+        );
         // The shell element 3 was in a set: dropped, not an error.
         assert_eq!(mesh.element_sets["with_shell"], vec![1]);
         // ... and, being a quadrilateral in an element set, a surface.
@@ -556,13 +627,31 @@ mod tests {
     #[test]
     fn errors_name_the_line_and_the_fix() {
         let cases = [
-            ("*NODE\n1, 0, 0\n", "m.inp:2: a node line needs `id, x, y, z`"),
-            ("*NODE\n1, 0, 0, x\n", "m.inp:2: node 1 has the coordinate \"x\""),
-            ("*ELEMENT, TYPE=C3D10\n", "m.inp:1: element type C3D10 is not supported"),
+            (
+                "*NODE\n1, 0, 0\n",
+                "m.inp:2: a node line needs `id, x, y, z`",
+            ),
+            (
+                "*NODE\n1, 0, 0, x\n",
+                "m.inp:2: node 1 has the coordinate \"x\"",
+            ),
+            (
+                "*ELEMENT, TYPE=C3D10\n",
+                "m.inp:1: element type C3D10 is not supported",
+            ),
             ("*ELEMENT\n", "m.inp:1: *ELEMENT has no TYPE= parameter"),
-            ("*NSET, NSET=a\nmissing\n", "m.inp:2: \"missing\" is neither a number nor a node set"),
-            ("*NSET, NSET=a, GENERATE\n5, 1\n", "m.inp:2: GENERATE range 5..1"),
-            ("*NODE\n1,0,0,0\n*ELEMENT, TYPE=C3D4\n1, 1, 1\n", "m.inp:4: the file ends inside an element"),
+            (
+                "*NSET, NSET=a\nmissing\n",
+                "m.inp:2: \"missing\" is neither a number nor a node set",
+            ),
+            (
+                "*NSET, NSET=a, GENERATE\n5, 1\n",
+                "m.inp:2: GENERATE range 5..1",
+            ),
+            (
+                "*NODE\n1,0,0,0\n*ELEMENT, TYPE=C3D4\n1, 1, 1\n",
+                "m.inp:4: the file ends inside an element",
+            ),
         ];
         for (text, expected) in cases {
             let err = read(text).unwrap_err().to_string();

@@ -123,7 +123,10 @@ impl MeshBuilder {
     }
 
     pub(crate) fn add_to_element_set(&mut self, name: &str, id: u64) {
-        self.element_sets.entry(name.to_string()).or_default().push(id);
+        self.element_sets
+            .entry(name.to_string())
+            .or_default()
+            .push(id);
     }
 
     pub(crate) fn add_to_node_set(&mut self, name: &str, id: u64) {
@@ -228,8 +231,7 @@ impl MeshBuilder {
                     return Err(self.content_error(
                         format!(
                             "element {} uses node {} twice",
-                            volume_ids[e],
-                            node_ids[*a as usize]
+                            volume_ids[e], node_ids[*a as usize]
                         ),
                         "the element is degenerate: remesh or remove it",
                     ));
@@ -277,7 +279,9 @@ impl MeshBuilder {
             for &id in ids {
                 if !self.node_position.contains_key(&id) {
                     return Err(self.content_error(
-                        format!("node set {name:?} names node {id}, which the file does not define"),
+                        format!(
+                            "node set {name:?} names node {id}, which the file does not define"
+                        ),
                         "define the node or remove it from the set",
                     ));
                 }
@@ -308,7 +312,11 @@ impl MeshBuilder {
                         "put only faces of the meshed volume into surface groups",
                     ));
                 };
-                compacted.push(outward(&nodes, &connectivity[element * per_element..][..per_element], mapped));
+                compacted.push(outward(
+                    &nodes,
+                    &connectivity[element * per_element..][..per_element],
+                    mapped,
+                ));
             }
             surfaces.insert(name.clone(), compacted);
         }
@@ -364,7 +372,12 @@ impl NodeElements {
     }
 
     /// An element holding all three nodes.
-    fn element_with(&self, connectivity: &[u32], per_element: usize, triangle: &[u32; 3]) -> Option<usize> {
+    fn element_with(
+        &self,
+        connectivity: &[u32],
+        per_element: usize,
+        triangle: &[u32; 3],
+    ) -> Option<usize> {
         let a = triangle[0] as usize;
         self.elements[self.offsets[a]..self.offsets[a + 1]]
             .iter()
@@ -411,7 +424,12 @@ mod tests {
     use super::*;
 
     fn unit_tet(builder: &mut MeshBuilder) {
-        for (id, xyz) in [(10, [0.0, 0.0, 0.0]), (11, [1.0, 0.0, 0.0]), (12, [0.0, 1.0, 0.0]), (13, [0.0, 0.0, 1.0])] {
+        for (id, xyz) in [
+            (10, [0.0, 0.0, 0.0]),
+            (11, [1.0, 0.0, 0.0]),
+            (12, [0.0, 1.0, 0.0]),
+            (13, [0.0, 0.0, 1.0]),
+        ] {
             builder.add_node(id, xyz).unwrap();
         }
     }

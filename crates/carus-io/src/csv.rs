@@ -20,10 +20,15 @@ impl CsvWriter {
     /// Creates `path` and writes the header (column names without commas,
     /// quotes or line breaks, such as `time_s`).
     pub fn create(path: &Path, header: &[&str]) -> Result<Self, WriteError> {
-        if let Some(bad) = header.iter().find(|h| h.is_empty() || h.contains([',', '"', '\n', '\r'])) {
+        if let Some(bad) = header
+            .iter()
+            .find(|h| h.is_empty() || h.contains([',', '"', '\n', '\r']))
+        {
             return Err(WriteError::Shape {
                 path: path.to_path_buf(),
-                problem: format!("column name {bad:?} is empty or holds a comma, quote or line break"),
+                problem: format!(
+                    "column name {bad:?} is empty or holds a comma, quote or line break"
+                ),
             });
         }
         let file = File::create(path).map_err(|source| WriteError::Io {
@@ -52,11 +57,19 @@ impl CsvWriter {
         if values.len() != self.columns {
             return Err(WriteError::Shape {
                 path: self.path.clone(),
-                problem: format!("a row of {} values under a header of {} columns", values.len(), self.columns),
+                problem: format!(
+                    "a row of {} values under a header of {} columns",
+                    values.len(),
+                    self.columns
+                ),
             });
         }
         // Debug is the shortest exact form, with an exponent for tiny or huge values.
-        let line = values.iter().map(|v| format!("{v:?}")).collect::<Vec<_>>().join(",");
+        let line = values
+            .iter()
+            .map(|v| format!("{v:?}"))
+            .collect::<Vec<_>>()
+            .join(",");
         self.write_line(&line)
     }
 
@@ -109,7 +122,10 @@ mod tests {
         let path = temp("ragged.csv");
         let mut csv = CsvWriter::create(&path, &["a", "b"]).unwrap();
         let err = csv.row(&[1.0]).unwrap_err().to_string();
-        assert!(err.contains("a row of 1 values under a header of 2 columns"), "{err}");
+        assert!(
+            err.contains("a row of 1 values under a header of 2 columns"),
+            "{err}"
+        );
         assert!(CsvWriter::create(&path, &["a,b"]).is_err());
     }
 }

@@ -30,7 +30,10 @@ pub fn read_msh(path: &Path) -> Result<MeshFile, ReadError> {
 /// Parses the bytes of a `.msh` file; `path` only names it in errors.
 pub fn parse_msh(path: &Path, bytes: &[u8]) -> Result<MeshFile, ReadError> {
     let text = std::str::from_utf8(bytes).map_err(|e| {
-        let line = 1 + bytes[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count();
+        let line = 1 + bytes[..e.valid_up_to()]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count();
         ReadError::Syntax {
             path: path.to_path_buf(),
             line,
@@ -132,7 +135,9 @@ impl<'a> Parser<'a> {
             }
         }
         if self.version.is_none() {
-            return Err(self.tokens.error("the file is empty", "export the mesh again"));
+            return Err(self
+                .tokens
+                .error("the file is empty", "export the mesh again"));
         }
         let Parser {
             mut builder,
@@ -141,11 +146,16 @@ impl<'a> Parser<'a> {
             ..
         } = self;
         for (dim, tag, id, nodes) in grouped {
-            let name = physical_names.get(&(dim, tag)).cloned().unwrap_or_else(|| tag.to_string());
+            let name = physical_names
+                .get(&(dim, tag))
+                .cloned()
+                .unwrap_or_else(|| tag.to_string());
             match dim {
                 3 => builder.add_to_element_set(&name, id),
                 2 => builder.add_surface_polygon(&name, &nodes),
-                _ => nodes.iter().for_each(|&n| builder.add_to_node_set(&name, n)),
+                _ => nodes
+                    .iter()
+                    .for_each(|&n| builder.add_to_node_set(&name, n)),
             }
         }
         builder.finish()
@@ -179,7 +189,10 @@ impl<'a> Parser<'a> {
             let tag: i64 = self.tokens.parse("a physical group tag")?;
             let name = self.tokens.rest_of_line().trim_matches('"').to_string();
             if name.is_empty() {
-                return Err(self.tokens.error("a physical group has no name", "name it in Gmsh, or remove the entry"));
+                return Err(self.tokens.error(
+                    "a physical group has no name",
+                    "name it in Gmsh, or remove the entry",
+                ));
             }
             self.physical_names.insert((dim, tag), name);
         }
@@ -232,9 +245,12 @@ impl<'a> Parser<'a> {
                 )
             })?;
         }
-        self.builder
-            .add_node(id, xyz)
-            .map_err(|problem| self.tokens.error(problem, "give every node its own tag and finite coordinates"))
+        self.builder.add_node(id, xyz).map_err(|problem| {
+            self.tokens.error(
+                problem,
+                "give every node its own tag and finite coordinates",
+            )
+        })
     }
 
     fn nodes(&mut self) -> Result<(), ReadError> {
@@ -297,7 +313,13 @@ impl<'a> Parser<'a> {
     }
 
     /// Records one element of Gmsh type `code` in the given physical groups.
-    fn element(&mut self, id: u64, code: u32, nodes: Vec<u64>, physicals: &[i64]) -> Result<(), ReadError> {
+    fn element(
+        &mut self,
+        id: u64,
+        code: u32,
+        nodes: Vec<u64>,
+        physicals: &[i64],
+    ) -> Result<(), ReadError> {
         let (_, dim, name) = element_type(code).unwrap_or((0, 0, ""));
         match code {
             5 => {
@@ -312,7 +334,9 @@ impl<'a> Parser<'a> {
             }
             2 | 3 | 15 => {}
             1 | 8 | 26 | 27 | 28 => {
-                self.builder.note(format!("skipped {name} elements (only volumes, surfaces and points are read)"));
+                self.builder.note(format!(
+                    "skipped {name} elements (only volumes, surfaces and points are read)"
+                ));
                 return Ok(());
             }
             _ => {
@@ -330,9 +354,13 @@ impl<'a> Parser<'a> {
 
     fn element_nodes(&mut self, code: u32) -> Result<Vec<u64>, ReadError> {
         let Some((count, _, _)) = element_type(code) else {
-            return Err(self.tokens.error(format!("unknown Gmsh element type {code}"), ORDER_FIX));
+            return Err(self
+                .tokens
+                .error(format!("unknown Gmsh element type {code}"), ORDER_FIX));
         };
-        (0..count).map(|_| self.tokens.parse::<u64>("an element node tag")).collect()
+        (0..count)
+            .map(|_| self.tokens.parse::<u64>("an element node tag"))
+            .collect()
     }
 
     fn elements(&mut self) -> Result<(), ReadError> {
@@ -348,7 +376,12 @@ impl<'a> Parser<'a> {
                         tags.push(self.tokens.parse::<i64>("an element tag value")?);
                     }
                     // The first tag is the physical group (0: none).
-                    let physical: Vec<i64> = tags.first().copied().filter(|&t| t != 0).into_iter().collect();
+                    let physical: Vec<i64> = tags
+                        .first()
+                        .copied()
+                        .filter(|&t| t != 0)
+                        .into_iter()
+                        .collect();
                     let nodes = self.element_nodes(code)?;
                     self.element(id, code, nodes, &physical)?;
                 }
@@ -369,7 +402,11 @@ impl<'a> Parser<'a> {
                     };
                     let code: u32 = self.tokens.parse("an element type")?;
                     let count: usize = self.tokens.parse("the number of elements in the block")?;
-                    let physicals = self.entity_physicals.get(&(dim, tag)).cloned().unwrap_or_default();
+                    let physicals = self
+                        .entity_physicals
+                        .get(&(dim, tag))
+                        .cloned()
+                        .unwrap_or_default();
                     for _ in 0..count {
                         let id: u64 = self.tokens.parse("an element tag")?;
                         let nodes = self.element_nodes(code)?;
@@ -440,7 +477,10 @@ mod tests {
         assert!(err.starts_with("b.msh:2: the file is binary"), "{err}");
         assert!(err.contains("-bin 0"), "{err}");
         let v3 = CUBE_V22.replacen("2.2 0 8", "3.0 0 8", 1);
-        assert!(read("c.msh", &v3).unwrap_err().to_string().contains("version 3.0"));
+        assert!(read("c.msh", &v3)
+            .unwrap_err()
+            .to_string()
+            .contains("version 3.0"));
     }
 
     #[test]

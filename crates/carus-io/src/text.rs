@@ -28,7 +28,6 @@ impl<'a> Tokens<'a> {
         self.line
     }
 
-
     /// The next token, or `None` at the end of the file.
     pub(crate) fn next_token(&mut self) -> Option<&'a str> {
         let bytes = self.text.as_bytes();
@@ -133,6 +132,9 @@ mod tests {
         let path = Path::new("t.txt");
         let mut tokens = Tokens::new(path, "\n12x");
         let err = tokens.parse::<u64>("a node id").unwrap_err().to_string();
-        assert!(err.starts_with("t.txt:2: expected a node id, found \"12x\""), "{err}");
+        assert!(
+            err.starts_with("t.txt:2: expected a node id, found \"12x\""),
+            "{err}"
+        );
     }
 }

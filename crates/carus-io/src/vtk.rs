@@ -15,8 +15,8 @@ use std::path::Path;
 
 use carus_fem::{ElementKind, Mesh};
 use vtkio::model::{
-    Attribute, Attributes, ByteOrder, CellType, Cells, DataArray, DataSet, ElementType, IOBuffer, Piece, ScalarType,
-    UnstructuredGridPiece, Version, VertexNumbers, Vtk,
+    Attribute, Attributes, ByteOrder, CellType, Cells, DataArray, DataSet, ElementType, IOBuffer,
+    Piece, ScalarType, UnstructuredGridPiece, Version, VertexNumbers, Vtk,
 };
 use vtkio::xml::Compressor;
 
@@ -99,13 +99,28 @@ fn load_unstructured(path: &Path) -> Result<UnstructuredGridPiece, ReadError> {
     });
     let vtk = match parsed {
         Ok(Ok(vtk)) => vtk,
-        Ok(Err(e)) => return Err(content_error(path, format!("not a readable VTK file ({e})"), RESAVE_FIX)),
-        Err(_) => return Err(content_error(path, "not a readable VTK file (malformed data arrays)", RESAVE_FIX)),
+        Ok(Err(e)) => {
+            return Err(content_error(
+                path,
+                format!("not a readable VTK file ({e})"),
+                RESAVE_FIX,
+            ))
+        }
+        Err(_) => {
+            return Err(content_error(
+                path,
+                "not a readable VTK file (malformed data arrays)",
+                RESAVE_FIX,
+            ))
+        }
     };
     let DataSet::UnstructuredGrid { pieces, .. } = vtk.data else {
         return Err(content_error(
             path,
-            format!("the data set is a {}, not an unstructured grid", data_set_name(&vtk.data)),
+            format!(
+                "the data set is a {}, not an unstructured grid",
+                data_set_name(&vtk.data)
+            ),
             "convert it to an unstructured grid (ParaView: Append Datasets, then save as .vtu)",
         ));
     };
@@ -207,7 +222,10 @@ fn cell_points(path: &Path, cells: &Cells) -> Result<Vec<Vec<u64>>, ReadError> {
                 let Some(points) = vertices.get(i + 1..i + 1 + n) else {
                     return Err(content_error(
                         path,
-                        format!("cell {} lists more points than the CELLS section holds", out.len()),
+                        format!(
+                            "cell {} lists more points than the CELLS section holds",
+                            out.len()
+                        ),
                         RESAVE_FIX,
                     ));
                 };
@@ -215,7 +233,10 @@ fn cell_points(path: &Path, cells: &Cells) -> Result<Vec<Vec<u64>>, ReadError> {
                 i += 1 + n;
             }
         }
-        VertexNumbers::XML { connectivity, offsets } => {
+        VertexNumbers::XML {
+            connectivity,
+            offsets,
+        } => {
             // Offsets end each cell; some writers add a leading zero.
             let offsets = if offsets.len() == count + 1 && offsets.first() == Some(&0) {
                 &offsets[1..]
@@ -228,7 +249,10 @@ fn cell_points(path: &Path, cells: &Cells) -> Result<Vec<Vec<u64>>, ReadError> {
                 let Some(points) = connectivity.get(start..end) else {
                     return Err(content_error(
                         path,
-                        format!("cell {} has offset {end}, outside the connectivity array", out.len()),
+                        format!(
+                            "cell {} has offset {end}, outside the connectivity array",
+                            out.len()
+                        ),
                         RESAVE_FIX,
                     ));
                 };
@@ -240,7 +264,10 @@ fn cell_points(path: &Path, cells: &Cells) -> Result<Vec<Vec<u64>>, ReadError> {
     if out.len() != count {
         return Err(content_error(
             path,
-            format!("{} cells have point lists but {count} have types", out.len()),
+            format!(
+                "{} cells have point lists but {count} have types",
+                out.len()
+            ),
             RESAVE_FIX,
         ));
     }
@@ -249,7 +276,11 @@ fn cell_points(path: &Path, cells: &Cells) -> Result<Vec<Vec<u64>>, ReadError> {
 
 fn mesh_from_piece(path: &Path, piece: &UnstructuredGridPiece) -> Result<MeshFile, ReadError> {
     let Some(points) = piece.points.cast_into::<f64>().filter(|p| p.len() % 3 == 0) else {
-        return Err(content_error(path, "the points are not x, y, z numbers", RESAVE_FIX));
+        return Err(content_error(
+            path,
+            "the points are not x, y, z numbers",
+            RESAVE_FIX,
+        ));
     };
     let mut builder = MeshBuilder::new(path);
     for (i, p) in points.chunks_exact(3).enumerate() {
@@ -274,7 +305,9 @@ fn mesh_from_piece(path: &Path, piece: &UnstructuredGridPiece) -> Result<MeshFil
             CellType::Tetra | CellType::Quad | CellType::Pixel => 4,
             CellType::Triangle => 3,
             CellType::Vertex | CellType::PolyVertex | CellType::Line | CellType::PolyLine => {
-                builder.note(format!("skipped {cell_type:?} cells (only volumes and surfaces are read)"));
+                builder.note(format!(
+                    "skipped {cell_type:?} cells (only volumes and surfaces are read)"
+                ));
                 continue;
             }
             other => {
@@ -288,7 +321,10 @@ fn mesh_from_piece(path: &Path, piece: &UnstructuredGridPiece) -> Result<MeshFil
         if nodes.len() != expected {
             return Err(content_error(
                 path,
-                format!("cell {c} ({cell_type:?}) has {} points instead of {expected}", nodes.len()),
+                format!(
+                    "cell {c} ({cell_type:?}) has {} points instead of {expected}",
+                    nodes.len()
+                ),
                 RESAVE_FIX,
             ));
         }
@@ -386,7 +422,10 @@ pub fn write_vtu(path: &Path, mesh: &Mesh, frame: &FrameFields) -> Result<(), Wr
         ("jacobian", frame.jacobian),
     ] {
         if values.len() != elements {
-            return Err(shape_error(format!("{} values of {name} for {elements} elements", values.len())));
+            return Err(shape_error(format!(
+                "{} values of {name} for {elements} elements",
+                values.len()
+            )));
         }
     }
     let per_element = mesh.kind.nodes_per_element();
@@ -408,7 +447,10 @@ pub fn write_vtu(path: &Path, mesh: &Mesh, frame: &FrameFields) -> Result<(), Wr
     };
     let mut cell_data = vec![
         scalar("von_mises_pa", frame.von_mises_pa.to_vec()),
-        scalar("max_principal_stretch", frame.max_principal_stretch.to_vec()),
+        scalar(
+            "max_principal_stretch",
+            frame.max_principal_stretch.to_vec(),
+        ),
         scalar("jacobian", frame.jacobian.to_vec()),
     ];
     if !mesh.element_sets.is_empty() {
@@ -503,15 +545,32 @@ mod tests {
         assert_eq!(file.mesh.kind, ElementKind::T4);
         assert_eq!(file.mesh.connectivity, vec![0, 1, 2, 3]);
         assert_eq!(file.mesh.surfaces["tag_1"], vec![[0, 2, 1]]);
-        assert!(file.notes.iter().any(|n| n.contains("Line")), "{:?}", file.notes);
+        assert!(
+            file.notes.iter().any(|n| n.contains("Line")),
+            "{:?}",
+            file.notes
+        );
     }
 
     /// Four points and one tetrahedron as (name, VTK type, bytes) arrays.
     fn tet_arrays() -> Vec<(&'static str, &'static str, u32, Vec<u8>)> {
         let points: [f64; 12] = [0., 0., 0., 1., 0., 0., 0., 1., 0., 0., 0., 1.];
         vec![
-            ("", "Float64", 3, points.iter().flat_map(|v| v.to_le_bytes()).collect()),
-            ("connectivity", "Int64", 1, [0i64, 1, 2, 3].iter().flat_map(|v| v.to_le_bytes()).collect()),
+            (
+                "",
+                "Float64",
+                3,
+                points.iter().flat_map(|v| v.to_le_bytes()).collect(),
+            ),
+            (
+                "connectivity",
+                "Int64",
+                1,
+                [0i64, 1, 2, 3]
+                    .iter()
+                    .flat_map(|v| v.to_le_bytes())
+                    .collect(),
+            ),
             ("offsets", "Int64", 1, 4i64.to_le_bytes().to_vec()),
             ("types", "UInt8", 1, vec![10u8]),
         ]
@@ -527,10 +586,16 @@ mod tests {
             offsets.push(appended.len());
             if compress {
                 use std::io::Write as _;
-                let mut encoder = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::default());
+                let mut encoder =
+                    flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::default());
                 encoder.write_all(block).unwrap();
                 let packed = encoder.finish().unwrap();
-                for header in [1u64, block.len() as u64, block.len() as u64, packed.len() as u64] {
+                for header in [
+                    1u64,
+                    block.len() as u64,
+                    block.len() as u64,
+                    packed.len() as u64,
+                ] {
                     appended.extend_from_slice(&header.to_le_bytes());
                 }
                 appended.extend_from_slice(&packed);
@@ -546,7 +611,11 @@ mod tests {
                 offsets[i]
             )
         };
-        let compressor = if compress { r#" compressor="vtkZLibDataCompressor""# } else { "" };
+        let compressor = if compress {
+            r#" compressor="vtkZLibDataCompressor""#
+        } else {
+            ""
+        };
         let mut bytes = format!(
             r#"<?xml version="1.0"?>
 <VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian" header_type="UInt64"{compressor}>
@@ -601,7 +670,10 @@ mod tests {
                 cells: Cells {
                     cell_verts: VertexNumbers::Legacy {
                         num_cells: mesh.element_count() as u32,
-                        vertices: mesh.elements().flat_map(|e| std::iter::once(4).chain(e.iter().copied())).collect(),
+                        vertices: mesh
+                            .elements()
+                            .flat_map(|e| std::iter::once(4).chain(e.iter().copied()))
+                            .collect(),
                     },
                     types: vec![CellType::Tetra; mesh.element_count()],
                 },
@@ -621,7 +693,11 @@ mod tests {
     fn frames_round_trip_through_the_reader() {
         let mut mesh = carus_fem::generate::box_h8([0.1, 0.1, 0.1], [2, 2, 2]);
         mesh.element_sets.insert("tissue".into(), (0..8).collect());
-        let displacement: Vec<[f64; 3]> = mesh.nodes.iter().map(|p| [0.3 * p[0], -1e-7, p[2] * p[1]]).collect();
+        let displacement: Vec<[f64; 3]> = mesh
+            .nodes
+            .iter()
+            .map(|p| [0.3 * p[0], -1e-7, p[2] * p[1]])
+            .collect();
         let von_mises: Vec<f64> = (0..8).map(|e| 1000.0 + e as f64 / 3.0).collect();
         let stretch: Vec<f64> = (0..8).map(|e| 1.0 + e as f64 * 1e-3).collect();
         let jacobian = vec![0.999; 8];
@@ -636,11 +712,17 @@ mod tests {
         let back = read_vtk(&path).unwrap().mesh;
         assert_eq!(back.nodes, mesh.nodes);
         assert_eq!(back.connectivity, mesh.connectivity);
-        assert_eq!(back.element_sets["element_set_0"], mesh.element_sets["tissue"]);
+        assert_eq!(
+            back.element_sets["element_set_0"],
+            mesh.element_sets["tissue"]
+        );
         let arrays = read_vtk_arrays(&path).unwrap();
         let d = &arrays.point["displacement"];
         assert_eq!(d.components, 3);
-        assert_eq!(d.values, displacement.iter().flatten().copied().collect::<Vec<_>>());
+        assert_eq!(
+            d.values,
+            displacement.iter().flatten().copied().collect::<Vec<_>>()
+        );
         assert_eq!(arrays.cell["von_mises_pa"].values, von_mises);
         assert_eq!(arrays.cell["max_principal_stretch"].values, stretch);
         assert_eq!(arrays.cell["jacobian"].values, jacobian);
@@ -655,7 +737,9 @@ mod tests {
             max_principal_stretch: &[],
             jacobian: &[],
         };
-        let err = write_vtu(&temp("bad.vtu"), &mesh, &frame).unwrap_err().to_string();
+        let err = write_vtu(&temp("bad.vtu"), &mesh, &frame)
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("2 displacements for 8 nodes"), "{err}");
     }
 
@@ -672,7 +756,11 @@ mod tests {
         };
         write_vtu(&frame_path, &mesh, &frame).unwrap();
         let binary = std::fs::read_to_string(&frame_path).unwrap();
-        for (name, text) in [("t.vtu", ASCII_VTU), ("t.vtk", LEGACY_VTK), ("b.vtu", binary.as_str())] {
+        for (name, text) in [
+            ("t.vtu", ASCII_VTU),
+            ("t.vtk", LEGACY_VTK),
+            ("b.vtu", binary.as_str()),
+        ] {
             let path = temp(name);
             let stride = (text.len() / 60).max(1);
             for cut in (0..text.len()).step_by(stride) {
@@ -697,6 +785,9 @@ mod tests {
         let path = temp("poly.vtk");
         std::fs::write(&path, "# vtk DataFile Version 2.0\nt\nASCII\nDATASET POLYDATA\nPOINTS 3 float\n0 0 0 1 0 0 0 1 0\nPOLYGONS 1 4\n3 0 1 2\n").unwrap();
         let err = read_vtk(&path).unwrap_err().to_string();
-        assert!(err.contains("poly data (a surface), not an unstructured grid"), "{err}");
+        assert!(
+            err.contains("poly data (a surface), not an unstructured grid"),
+            "{err}"
+        );
     }
 }

@@ -26,7 +26,9 @@ pub(crate) fn raw_appended_to_base64(bytes: &[u8]) -> Result<Cow<'_, [u8]>, Stri
         return Ok(Cow::Borrowed(bytes));
     }
     let underscore = find(bytes, b"_", tag_end).ok_or("the appended data has no leading `_`")?;
-    let data_end = rfind(bytes, b"</AppendedData>").unwrap_or(bytes.len()).max(underscore + 1);
+    let data_end = rfind(bytes, b"</AppendedData>")
+        .unwrap_or(bytes.len())
+        .max(underscore + 1);
     let data = &bytes[underscore + 1..data_end];
 
     let head = &bytes[..appended_tag];
@@ -44,7 +46,11 @@ pub(crate) fn raw_appended_to_base64(bytes: &[u8]) -> Result<Cow<'_, [u8]>, Stri
             .ok_or_else(|| format!("the appended data ends inside an array header at byte {at}"))?;
         let mut value: u64 = 0;
         for k in 0..header_bytes {
-            let byte = if big_endian { field[k] } else { field[header_bytes - 1 - k] };
+            let byte = if big_endian {
+                field[k]
+            } else {
+                field[header_bytes - 1 - k]
+            };
             value = (value << 8) | byte as u64;
         }
         usize::try_from(value).map_err(|_| format!("array header at byte {at} is too large"))
@@ -56,7 +62,10 @@ pub(crate) fn raw_appended_to_base64(bytes: &[u8]) -> Result<Cow<'_, [u8]>, Stri
     let mut search = 0;
     while let Some(at) = text[search..].find("offset=\"") {
         let start = search + at + "offset=\"".len();
-        let end = text[start..].find('"').map(|e| start + e).ok_or("an offset attribute is not closed")?;
+        let end = text[start..]
+            .find('"')
+            .map(|e| start + e)
+            .ok_or("an offset attribute is not closed")?;
         let offset: usize = text[start..end]
             .trim()
             .parse()
@@ -92,7 +101,9 @@ pub(crate) fn raw_appended_to_base64(bytes: &[u8]) -> Result<Cow<'_, [u8]>, Stri
             encoded.push_str(&STANDARD.encode(body));
         } else {
             let size = read_header(offset)?;
-            let end = (offset + header_bytes).checked_add(size).ok_or_else(overflow)?;
+            let end = (offset + header_bytes)
+                .checked_add(size)
+                .ok_or_else(overflow)?;
             let block = data.get(offset..end).ok_or_else(overflow)?;
             encoded.push_str(&STANDARD.encode(block));
         }
@@ -143,13 +154,19 @@ pub(crate) fn legacy_type_names(bytes: &[u8]) -> Cow<'_, [u8]> {
             .position(|b| b.is_ascii_whitespace())
             .map_or(bytes.len(), |p| token_start + p);
         search = token_end;
-        let line_start = bytes[..at].iter().rposition(|&b| b == b'\n').map_or(0, |p| p + 1);
+        let line_start = bytes[..at]
+            .iter()
+            .rposition(|&b| b == b'\n')
+            .map_or(0, |p| p + 1);
         let line = &bytes[line_start..at];
         if line.starts_with(b"OFFSETS") || line.starts_with(b"CONNECTIVITY") {
             continue;
         }
         let token = &bytes[token_start..token_end];
-        let classic = VTK9_TYPES.iter().find(|(new, _)| *new == token).map(|(_, old)| *old);
+        let classic = VTK9_TYPES
+            .iter()
+            .find(|(new, _)| *new == token)
+            .map(|(_, old)| *old);
         if let Some(classic) = classic {
             let buffer = out.get_or_insert_with(Vec::new);
             buffer.extend_from_slice(&bytes[copied..token_start]);
@@ -204,15 +221,25 @@ mod tests {
     #[test]
     fn files_without_raw_data_pass_unchanged() {
         let text = b"<VTKFile><AppendedData encoding=\"base64\">_AAAA</AppendedData></VTKFile>";
-        assert!(matches!(raw_appended_to_base64(text).unwrap(), Cow::Borrowed(_)));
+        assert!(matches!(
+            raw_appended_to_base64(text).unwrap(),
+            Cow::Borrowed(_)
+        ));
     }
 
     #[test]
     fn vtk9_type_names_are_renamed_outside_cell_lines() {
-        let text = b"OFFSETS vtktypeint64\nx\ngmsh:physical 1 3 vtktypeint64\nA 1 2 vtktypefloat64\n";
+        let text =
+            b"OFFSETS vtktypeint64\nx\ngmsh:physical 1 3 vtktypeint64\nA 1 2 vtktypefloat64\n";
         let renamed = legacy_type_names(text);
-        assert_eq!(&renamed[..], &b"OFFSETS vtktypeint64\nx\ngmsh:physical 1 3 long\nA 1 2 double\n"[..]);
-        assert!(matches!(legacy_type_names(b"POINTS 3 float\n"), Cow::Borrowed(_)));
+        assert_eq!(
+            &renamed[..],
+            &b"OFFSETS vtktypeint64\nx\ngmsh:physical 1 3 long\nA 1 2 double\n"[..]
+        );
+        assert!(matches!(
+            legacy_type_names(b"POINTS 3 float\n"),
+            Cow::Borrowed(_)
+        ));
     }
 
     #[test]

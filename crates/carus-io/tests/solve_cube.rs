@@ -23,9 +23,15 @@ fn fresh_dir(name: &str) -> PathBuf {
 fn the_example_job_matches_the_direct_api_and_writes_readable_results() {
     let out = fresh_dir("cube");
     let mut progress_calls = 0;
-    let report = run_job(&example(), &out, &RunOptions::default(), &mut |_| progress_calls += 1).unwrap();
+    let report = run_job(&example(), &out, &RunOptions::default(), &mut |_| {
+        progress_calls += 1
+    })
+    .unwrap();
     assert!(report.failure.is_none(), "{:?}", report.failure);
-    assert_eq!((report.elements, report.nodes, report.element_kind), (125, 216, "h8"));
+    assert_eq!(
+        (report.elements, report.nodes, report.element_kind),
+        (125, 216, "h8")
+    );
     assert_eq!(report.steps, 5000);
     assert!((report.simulated_s - 10.0).abs() < 1e-9);
     assert_eq!(report.frames, 21, "t = 0, every 0.5 s to 10 s");
@@ -34,7 +40,8 @@ fn the_example_job_matches_the_direct_api_and_writes_readable_results() {
 
     // The same model through carus-fem directly (the V3 set-up, n = 5).
     let direct = simulate(&CubeSetup::miller(5, CubeElement::H8, CubeVariant::Clamped)).unwrap();
-    let frames = PvdCollection::parse(&std::fs::read_to_string(out.join("solution.pvd")).unwrap()).unwrap();
+    let frames =
+        PvdCollection::parse(&std::fs::read_to_string(out.join("solution.pvd")).unwrap()).unwrap();
     assert_eq!(frames.frames().len(), 21);
     let (last_time, last_file) = frames.frames().last().unwrap().clone();
     assert!((last_time - 10.0).abs() < 1e-9);
@@ -57,12 +64,27 @@ fn the_example_job_matches_the_direct_api_and_writes_readable_results() {
     assert!(worst < 1e-9, "job and direct API differ by {worst} m");
     let reaction = report.reactions_n["x0"];
     let direct_reaction = direct.reaction_fixed_face_n;
-    assert!((reaction[0] - direct_reaction[0]).abs() < 1e-6 * direct_reaction[0].abs(), "{reaction:?} vs {direct_reaction:?}");
-    assert!(reaction[0] < 0.0, "the fixed face holds the cube back along -x");
-    assert!((report.reactions_n["x1"][0] + reaction[0]).abs() < 0.01 * reaction[0].abs(), "at rest the two supports balance");
+    assert!(
+        (reaction[0] - direct_reaction[0]).abs() < 1e-6 * direct_reaction[0].abs(),
+        "{reaction:?} vs {direct_reaction:?}"
+    );
+    assert!(
+        reaction[0] < 0.0,
+        "the fixed face holds the cube back along -x"
+    );
+    assert!(
+        (report.reactions_n["x1"][0] + reaction[0]).abs() < 0.01 * reaction[0].abs(),
+        "at rest the two supports balance"
+    );
     assert!((report.max_displacement_m - 0.03).abs() < 1e-9);
-    assert!(arrays.cell["von_mises_pa"].values.iter().all(|v| v.is_finite() && *v > 0.0));
-    assert!(arrays.cell["jacobian"].values.iter().all(|j| *j > 0.5 && *j < 1.5));
+    assert!(arrays.cell["von_mises_pa"]
+        .values
+        .iter()
+        .all(|v| v.is_finite() && *v > 0.0));
+    assert!(arrays.cell["jacobian"]
+        .values
+        .iter()
+        .all(|j| *j > 0.5 && *j < 1.5));
 
     let history = std::fs::read_to_string(out.join("history.csv")).unwrap();
     let mut lines = history.lines();
@@ -70,7 +92,8 @@ fn the_example_job_matches_the_direct_api_and_writes_readable_results() {
     assert_eq!(&header[..3], ["time_s", "step", "max_displacement_m"]);
     assert!(header.contains(&"reaction_x0_x_n"));
     assert_eq!(lines.count(), 201, "t = 0 and every 0.05 s");
-    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["steps"], 5000);
 
     // A second run into the same folder is refused unless forced.
@@ -81,7 +104,11 @@ fn the_example_job_matches_the_direct_api_and_writes_readable_results() {
 
 fn write_job(dir: &Path, body: &str) -> PathBuf {
     std::fs::create_dir_all(dir).unwrap();
-    std::fs::copy(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cube_n5.msh"), dir.join("cube_n5.msh")).unwrap();
+    std::fs::copy(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cube_n5.msh"),
+        dir.join("cube_n5.msh"),
+    )
+    .unwrap();
     let path = dir.join("job.toml");
     std::fs::write(&path, body).unwrap();
     path
@@ -113,12 +140,22 @@ fn a_run_that_inverts_an_element_stops_with_its_last_good_frame() {
     let out = dir.join("out");
     let report = run_job(&job, &out, &RunOptions::default(), &mut |_| {}).unwrap();
     let failure = report.failure.clone().expect("the crushed cube must fail");
-    assert!(failure.contains("element") && failure.contains("step"), "{failure}");
-    assert!(failure.contains("cube_n5.msh"), "names the element's id in the mesh file: {failure}");
-    let frames = PvdCollection::parse(&std::fs::read_to_string(out.join("solution.pvd")).unwrap()).unwrap();
+    assert!(
+        failure.contains("element") && failure.contains("step"),
+        "{failure}"
+    );
+    assert!(
+        failure.contains("cube_n5.msh"),
+        "names the element's id in the mesh file: {failure}"
+    );
+    let frames =
+        PvdCollection::parse(&std::fs::read_to_string(out.join("solution.pvd")).unwrap()).unwrap();
     assert_eq!(frames.frames().len(), report.frames);
     let (time, file) = frames.frames().last().unwrap();
-    assert!((time - report.simulated_s).abs() < 1e-15, "the last frame is the last good state");
+    assert!(
+        (time - report.simulated_s).abs() < 1e-15,
+        "the last frame is the last good state"
+    );
     assert!(out.join(file).exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -148,15 +185,27 @@ fn job_errors_name_the_key_the_line_and_the_fix() {
     ];
     for (extra, expected) in cases {
         let job = write_job(&dir, &format!("{BASE}{extra}"));
-        let err = run_job(&job, &dir.join("out"), &RunOptions::default(), &mut |_| {}).unwrap_err().to_string();
+        let err = run_job(&job, &dir.join("out"), &RunOptions::default(), &mut |_| {})
+            .unwrap_err()
+            .to_string();
         assert!(err.contains(expected), "{err}\n  expected: {expected}");
         assert!(err.contains("fix:") || err.contains("hint:"), "{err}");
     }
     let unit = write_job(&dir, &BASE.replace("\"mm\"", "\"cm\""));
-    let err = run_job(&unit, &dir.join("out"), &RunOptions::default(), &mut |_| {}).unwrap_err().to_string();
-    assert!(err.contains("`mesh.length_unit`") && err.contains("expected `m` or `mm`"), "{err}");
-    let typo = write_job(&dir, &format!("{BASE}\n[solver]\nend_time_s = 1.0\ndamping_pers = 1.0\n"));
-    let err = run_job(&typo, &dir.join("out"), &RunOptions::default(), &mut |_| {}).unwrap_err().to_string();
+    let err = run_job(&unit, &dir.join("out"), &RunOptions::default(), &mut |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("`mesh.length_unit`") && err.contains("expected `m` or `mm`"),
+        "{err}"
+    );
+    let typo = write_job(
+        &dir,
+        &format!("{BASE}\n[solver]\nend_time_s = 1.0\ndamping_pers = 1.0\n"),
+    );
+    let err = run_job(&typo, &dir.join("out"), &RunOptions::default(), &mut |_| {})
+        .unwrap_err()
+        .to_string();
     assert!(err.contains("did you mean `damping_per_s`?"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

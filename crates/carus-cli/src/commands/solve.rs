@@ -36,10 +36,18 @@ pub fn run(args: &SolveArgs) -> anyhow::Result<Status> {
     }
     let mut progress = |p: &Progress| {
         if show_progress {
-            eprint!("\r  t = {:.4} / {:.4} s, {} steps, {} frames   ", p.time_s, p.end_time_s, p.steps, p.frames);
+            eprint!(
+                "\r  t = {:.4} / {:.4} s, {} steps, {} frames   ",
+                p.time_s, p.end_time_s, p.steps, p.frames
+            );
         }
     };
-    let report = run_job(&args.job, &args.out, &RunOptions { force: args.force }, &mut progress);
+    let report = run_job(
+        &args.job,
+        &args.out,
+        &RunOptions { force: args.force },
+        &mut progress,
+    );
     if show_progress {
         eprintln!();
     }
@@ -80,8 +88,14 @@ fn print_summary(report: &JobReport) {
         "{} steps of {:.4e} s (critical step {:.4e} s{substeps}): {:.6} s simulated in {:.2} s",
         report.steps, report.dt_s, report.critical_dt_s, report.simulated_s, report.wall_s
     );
-    println!("largest displacement at the end: {:.4} mm", report.max_displacement_m * 1e3);
+    println!(
+        "largest displacement at the end: {:.4} mm",
+        report.max_displacement_m * 1e3
+    );
     for (set, f) in &report.reactions_n {
-        println!("reaction on {set}: [{:.6e}, {:.6e}, {:.6e}] N", f[0], f[1], f[2]);
+        println!(
+            "reaction on {set}: [{:.6e}, {:.6e}, {:.6e}] N",
+            f[0], f[1], f[2]
+        );
     }
 }

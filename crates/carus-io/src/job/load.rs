@@ -17,7 +17,8 @@ pub fn load_job(path: &Path) -> Result<JobSpec, JobError> {
 
 /// Parses and checks job-file text; `path` names it in errors.
 pub fn parse_job(path: &Path, text: &str) -> Result<JobSpec, JobError> {
-    let deserializer = toml::Deserializer::parse(text).map_err(|e| toml_error(path, text, String::new(), &e))?;
+    let deserializer =
+        toml::Deserializer::parse(text).map_err(|e| toml_error(path, text, String::new(), &e))?;
     let spec: JobSpec = serde_path_to_error::deserialize(deserializer).map_err(|e| {
         let key = e.path().to_string();
         toml_error(path, text, key, e.inner())
@@ -111,7 +112,11 @@ impl Checker<'_> {
         if value.is_finite() && value > 0.0 {
             Ok(())
         } else {
-            Err(self.fail(key, format!("{value} must be positive and finite"), "give a positive value"))
+            Err(self.fail(
+                key,
+                format!("{value} must be positive and finite"),
+                "give a positive value",
+            ))
         }
     }
 
@@ -119,13 +124,21 @@ impl Checker<'_> {
         if value.is_finite() && value >= 0.0 {
             Ok(())
         } else {
-            Err(self.fail(key, format!("{value} must be zero or positive"), "give a value >= 0"))
+            Err(self.fail(
+                key,
+                format!("{value} must be zero or positive"),
+                "give a value >= 0",
+            ))
         }
     }
 
     fn finite(&self, key: String, values: &[f64]) -> Result<(), JobError> {
         match values.iter().find(|v| !v.is_finite()) {
-            Some(v) => Err(self.fail(key, format!("{v} is not a finite number"), "give finite numbers")),
+            Some(v) => Err(self.fail(
+                key,
+                format!("{v} is not a finite number"),
+                "give finite numbers",
+            )),
             None => Ok(()),
         }
     }
@@ -178,17 +191,20 @@ impl Checker<'_> {
                 }
             }
             Law::MooneyRivlin => {
-                let (Some(c10), Some(c01), Some(kappa)) = (m.c10_pa, m.c01_pa, m.bulk_modulus_pa) else {
+                let (Some(c10), Some(c01), Some(kappa)) = (m.c10_pa, m.c01_pa, m.bulk_modulus_pa)
+                else {
                     return Err(self.fail(
                         key.to_string(),
                         "a mooney_rivlin material needs c10_pa, c01_pa and bulk_modulus_pa".into(),
                         "give all three",
                     ));
                 };
-                if given(m.shear_modulus_pa) || given(m.young_modulus_pa) || given(m.poisson_ratio) {
+                if given(m.shear_modulus_pa) || given(m.young_modulus_pa) || given(m.poisson_ratio)
+                {
                     return Err(self.fail(
                         key.to_string(),
-                        "a mooney_rivlin material takes c10_pa, c01_pa and bulk_modulus_pa only".into(),
+                        "a mooney_rivlin material takes c10_pa, c01_pa and bulk_modulus_pa only"
+                            .into(),
                         "remove the other moduli",
                     ));
                 }
@@ -232,7 +248,11 @@ impl Checker<'_> {
 fn check_values(path: &Path, spec: &JobSpec) -> Result<(), JobError> {
     let c = Checker { path };
     if spec.mesh.file.trim().is_empty() {
-        return Err(c.fail("mesh.file".into(), "is empty".into(), "give the mesh file's path, relative to the job file"));
+        return Err(c.fail(
+            "mesh.file".into(),
+            "is empty".into(),
+            "give the mesh file's path, relative to the job file",
+        ));
     }
     if spec.materials.is_empty() {
         return Err(c.fail(
@@ -279,7 +299,10 @@ fn check_values(path: &Path, spec: &JobSpec) -> Result<(), JobError> {
         }
     }
     c.non_negative("solver.damping_per_s".into(), s.damping_per_s)?;
-    c.non_negative("solver.hourglass_coefficient".into(), s.hourglass_coefficient)?;
+    c.non_negative(
+        "solver.hourglass_coefficient".into(),
+        s.hourglass_coefficient,
+    )?;
     if let Some(v) = spec.output.frame_interval_s {
         c.positive("output.frame_interval_s".into(), v)?;
     }

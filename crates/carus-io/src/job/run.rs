@@ -7,14 +7,16 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use carus_fem::{
-    BoundaryConditions, FemError, FixedDofs, ImposedDisplacement, LoadShape, Material, MaterialRegion, Mesh,
-    ModelOptions, MooneyRivlin, NeoHookean, NodalForce, Precision, StepControl, SurfacePressure, TetFormulation,
-    TledModel, TledSolver,
+    BoundaryConditions, FemError, FixedDofs, ImposedDisplacement, LoadShape, Material,
+    MaterialRegion, Mesh, ModelOptions, MooneyRivlin, NeoHookean, NodalForce, Precision,
+    StepControl, SurfacePressure, TetFormulation, TledModel, TledSolver,
 };
 use serde::Serialize;
 
 use super::load::{load_job, mesh_path};
-use super::spec::{JobSpec, Law, LoadSpec, PrecisionSpec, TetSpec, TimeStep, AUTO_TIME_STEP_FRACTION};
+use super::spec::{
+    JobSpec, Law, LoadSpec, PrecisionSpec, TetSpec, TimeStep, AUTO_TIME_STEP_FRACTION,
+};
 use super::JobError;
 use crate::builder::MeshFile;
 use crate::csv::CsvWriter;
@@ -87,7 +89,10 @@ fn describe(error: &FemError, file: &MeshFile) -> String {
         _ => None,
     };
     match element.and_then(|e| file.element_id(e).map(|id| (e, id))) {
-        Some((e, id)) => format!("{error} [element {e} is element {id} of {}]", file.source.display()),
+        Some((e, id)) => format!(
+            "{error} [element {e} is element {id} of {}]",
+            file.source.display()
+        ),
         None => error.to_string(),
     }
 }
@@ -118,13 +123,17 @@ impl Sets<'_> {
     }
 
     fn surface(&self, key: String, name: &str) -> Result<Vec<[u32; 3]>, JobError> {
-        self.mesh.surfaces.get(name).cloned().ok_or_else(|| JobError::UnknownSet {
-            path: self.job.to_path_buf(),
-            key,
-            kind: "surface",
-            name: name.to_string(),
-            available: self.mesh.surfaces.keys().cloned().collect(),
-        })
+        self.mesh
+            .surfaces
+            .get(name)
+            .cloned()
+            .ok_or_else(|| JobError::UnknownSet {
+                path: self.job.to_path_buf(),
+                key,
+                kind: "surface",
+                name: name.to_string(),
+                available: self.mesh.surfaces.keys().cloned().collect(),
+            })
     }
 
     fn check_element_set(&self, key: String, name: &str) -> Result<(), JobError> {
@@ -148,16 +157,24 @@ fn materials(spec: &JobSpec, sets: &Sets) -> Result<Vec<MaterialRegion>, JobErro
             sets.check_element_set(format!("material[{i}].element_set"), set)?;
         }
         // The loader checked that exactly one parameter set is present.
-        let material = match (m.law, m.shear_modulus_pa, m.bulk_modulus_pa, m.young_modulus_pa, m.poisson_ratio) {
+        let material = match (
+            m.law,
+            m.shear_modulus_pa,
+            m.bulk_modulus_pa,
+            m.young_modulus_pa,
+            m.poisson_ratio,
+        ) {
             (Law::NeoHookean, Some(mu), Some(kappa), _, _) => Material::neo_hookean(mu, kappa),
-            (Law::NeoHookean, _, _, Some(e), Some(nu)) => Material::NeoHookean(
-                NeoHookean::from_young_poisson(e, nu).map_err(|err| JobError::Invalid {
-                    path: sets.job.to_path_buf(),
-                    key: format!("material[{i}]"),
-                    problem: err.to_string(),
-                    fix: "give valid moduli".into(),
-                })?,
-            ),
+            (Law::NeoHookean, _, _, Some(e), Some(nu)) => {
+                Material::NeoHookean(NeoHookean::from_young_poisson(e, nu).map_err(|err| {
+                    JobError::Invalid {
+                        path: sets.job.to_path_buf(),
+                        key: format!("material[{i}]"),
+                        problem: err.to_string(),
+                        fix: "give valid moduli".into(),
+                    }
+                })?)
+            }
             _ => Material::MooneyRivlin(MooneyRivlin {
                 c10_pa: m.c10_pa.unwrap_or_default(),
                 c01_pa: m.c01_pa.unwrap_or_default(),
@@ -173,10 +190,17 @@ fn materials(spec: &JobSpec, sets: &Sets) -> Result<Vec<MaterialRegion>, JobErro
     Ok(regions)
 }
 
-/// Boundary conditions, and the node sets whose reaction is reported.
-fn boundary_conditions(spec: &JobSpec, sets: &Sets) -> Result<(BoundaryConditions, Vec<(String, Vec<u32>)>), JobError> {
+/// Node sets held by supports (fixed or displaced), by name: their
+/// reactions are reported.
+type Supports = Vec<(String, Vec<u32>)>;
+
+/// Boundary conditions, and the supports whose reaction is reported.
+fn boundary_conditions(
+    spec: &JobSpec,
+    sets: &Sets,
+) -> Result<(BoundaryConditions, Supports), JobError> {
     let mut bcs = BoundaryConditions::default();
-    let mut supports: Vec<(String, Vec<u32>)> = Vec::new();
+    let mut supports: Supports = Vec::new();
     let mut support = |name: &str, nodes: &[u32]| {
         if !supports.iter().any(|(n, _)| n == name) {
             supports.push((name.to_string(), nodes.to_vec()));
@@ -238,13 +262,18 @@ fn prepare_out_dir(dir: &Path, force: bool) -> Result<(), JobError> {
     };
     if dir.exists() {
         if occupied(dir) && !force {
-            return Err(JobError::OutDirExists { dir: dir.to_path_buf() });
+            return Err(JobError::OutDirExists {
+                dir: dir.to_path_buf(),
+            });
         }
         let frames = dir.join("frames");
         if frames.is_dir() {
             for entry in std::fs::read_dir(&frames).map_err(io)? {
                 let path = entry.map_err(io)?.path();
-                let is_frame = path.file_name().and_then(|n| n.to_str()).is_some_and(|n| n.starts_with("frame_") && n.ends_with(".vtu"));
+                let is_frame = path
+                    .file_name()
+                    .and_then(|n| n.to_str())
+                    .is_some_and(|n| n.starts_with("frame_") && n.ends_with(".vtu"));
                 if is_frame {
                     std::fs::remove_file(&path).map_err(io)?;
                 }
@@ -256,11 +285,21 @@ fn prepare_out_dir(dir: &Path, force: bool) -> Result<(), JobError> {
 
 /// A column name from a set name (letters, digits and `_` only).
 fn column(name: &str) -> String {
-    name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '_' { c } else { '_' }).collect()
+    name.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
 }
 
 fn max_norm(u: &[[f64; 3]]) -> f64 {
-    u.iter().map(|d| (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()).fold(0.0, f64::max)
+    u.iter()
+        .map(|d| (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt())
+        .fold(0.0, f64::max)
 }
 
 /// Frames, PVD and history of a running job.
@@ -268,7 +307,7 @@ struct Recorder {
     out_dir: PathBuf,
     pvd: PvdCollection,
     history: CsvWriter,
-    supports: Vec<(String, Vec<u32>)>,
+    supports: Supports,
     last_frame_time_s: Option<f64>,
     reactions: BTreeMap<String, [f64; 3]>,
 }
@@ -332,11 +371,16 @@ pub fn run_job(
     let spec = load_job(job_path)?;
     // Refuse an occupied folder before the (possibly long) model build.
     if !options.force && occupied(out_dir) {
-        return Err(JobError::OutDirExists { dir: out_dir.to_path_buf() });
+        return Err(JobError::OutDirExists {
+            dir: out_dir.to_path_buf(),
+        });
     }
     let file = crate::read_mesh(&mesh_path(job_path, &spec))?.to_metres(spec.mesh.length_unit);
     let mesh = &file.mesh;
-    let sets = Sets { job: job_path, mesh };
+    let sets = Sets {
+        job: job_path,
+        mesh,
+    };
     let regions = materials(&spec, &sets)?;
     let (bcs, supports) = boundary_conditions(&spec, &sets)?;
     let solver_spec = &spec.solver;
@@ -363,23 +407,34 @@ pub fn run_job(
         TimeStep::Seconds(dt) if solver_spec.sub_stepping => (dt, StepControl::SubStep),
         TimeStep::Seconds(dt) => (dt, StepControl::Refuse),
     };
-    let mut solver = TledSolver::new(Arc::new(model), &bcs, dt_s, control).map_err(|e| match e {
-        FemError::TimeStepAboveCritical { .. } => JobError::Invalid {
-            path: job_path.to_path_buf(),
-            key: "solver.time_step_s".into(),
-            problem: e.to_string(),
-            fix: "lower time_step_s, set it to \"auto\", or set sub_stepping = true".into(),
-        },
-        other => model_error(other),
-    })?;
+    let mut solver =
+        TledSolver::new(Arc::new(model), &bcs, dt_s, control).map_err(|e| match e {
+            FemError::TimeStepAboveCritical { .. } => JobError::Invalid {
+                path: job_path.to_path_buf(),
+                key: "solver.time_step_s".into(),
+                problem: e.to_string(),
+                fix: "lower time_step_s, set it to \"auto\", or set sub_stepping = true".into(),
+            },
+            other => model_error(other),
+        })?;
 
     prepare_out_dir(out_dir, options.force)?;
     let end_s = solver_spec.end_time_s;
     let frame_interval_s = spec.output.frame_interval_s.unwrap_or(end_s / 20.0);
-    let history_interval_s = spec.output.history_interval_s.unwrap_or(frame_interval_s / 10.0);
-    let mut header: Vec<String> = ["time_s", "step", "max_displacement_m", "kinetic_j", "strain_j", "hourglass_j"]
-        .map(String::from)
-        .to_vec();
+    let history_interval_s = spec
+        .output
+        .history_interval_s
+        .unwrap_or(frame_interval_s / 10.0);
+    let mut header: Vec<String> = [
+        "time_s",
+        "step",
+        "max_displacement_m",
+        "kinetic_j",
+        "strain_j",
+        "hourglass_j",
+    ]
+    .map(String::from)
+    .to_vec();
     for (name, _) in &supports {
         for axis in ["x", "y", "z"] {
             header.push(format!("reaction_{}_{axis}_n", column(name)));
@@ -449,7 +504,10 @@ pub fn run_job(
     };
     let summary = out_dir.join("summary.json");
     let json = serde_json::to_string_pretty(&report).unwrap_or_default();
-    std::fs::write(&summary, json + "\n").map_err(|source| crate::WriteError::Io { path: summary, source })?;
+    std::fs::write(&summary, json + "\n").map_err(|source| crate::WriteError::Io {
+        path: summary,
+        source,
+    })?;
     Ok(report)
 }
 
@@ -466,6 +524,9 @@ mod tests {
 
     #[test]
     fn the_axis_order_matches_the_component_order() {
-        assert_eq!([Axis::X as usize, Axis::Y as usize, Axis::Z as usize], [0, 1, 2]);
+        assert_eq!(
+            [Axis::X as usize, Axis::Y as usize, Axis::Z as usize],
+            [0, 1, 2]
+        );
     }
 }
