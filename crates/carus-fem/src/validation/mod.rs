@@ -4,7 +4,8 @@
 //! and returns a serialisable report with its figures and a pass flag; the
 //! size is a parameter so the tests run small versions of the very same
 //! cases that `carus validate` runs at full size. V5 (CPU against GPU
-//! backend) is built with the `gpu` feature.
+//! backend) is built with the `gpu` feature and runs where an adapter
+//! opens; [`backend_comparison`] says why it did not run otherwise.
 
 pub mod closed_form;
 pub mod critical_step;
@@ -103,4 +104,48 @@ pub(crate) fn boundary_nodes(mesh: &Mesh) -> Vec<u32> {
     nodes.sort_unstable();
     nodes.dedup();
     nodes
+}
+
+/// V5's outcome in this build.
+#[derive(Debug, Clone, Serialize)]
+#[serde(tag = "status", rename_all = "snake_case")]
+pub enum BackendComparison {
+    /// Both backends ran; the report says whether they agree.
+    #[cfg(feature = "gpu")]
+    Ran(v5::V5Report),
+    /// The comparison failed part way (a device or solver error).
+    #[cfg(feature = "gpu")]
+    Failed { error: String },
+    /// No GPU backend to compare with: not a pass, not a failure.
+    NotRun { reason: String },
+}
+
+impl BackendComparison {
+    /// Some(pass) when the comparison ran or failed, None when it did not run.
+    pub fn verdict(&self) -> Option<bool> {
+        match self {
+            #[cfg(feature = "gpu")]
+            BackendComparison::Ran(report) => Some(report.passed),
+            #[cfg(feature = "gpu")]
+            BackendComparison::Failed { .. } => Some(false),
+            BackendComparison::NotRun { .. } => None,
+        }
+    }
+}
+
+/// Runs V5 where this build has a GPU backend and an adapter opens.
+pub fn backend_comparison(size: CaseSize) -> BackendComparison {
+    #[cfg(feature = "gpu")]
+    {
+        match v5::run(size) {
+            Ok(report) => BackendComparison::Ran(report),
+            Err(error @ crate::gpu::GpuError::NoAdapter { .. }) => BackendComparison::NotRun { reason: error.to_string() },
+            Err(error) => BackendComparison::Failed { error: error.to_string() },
+        }
+    }
+    #[cfg(not(feature = "gpu"))]
+    {
+        let _ = size;
+        BackendComparison::NotRun { reason: "no GPU backend in this build (build with the `gpu` feature)".to_string() }
+    }
 }
