@@ -1,6 +1,7 @@
-//! End to end: the shipped example job (VALIDATION.md V3 at n = 5, from a
-//! Gmsh file) run through `carus_io::job`, checked against the same cube
-//! built directly with carus-fem's API, and its outputs read back.
+//! End to end: the shipped example jobs run through `carus_io::job`. The
+//! cube (VALIDATION.md V3 at n = 5, from a Gmsh file) is checked against
+//! the same cube built directly with carus-fem's API; the pad (tetrahedra
+//! from an Abaqus file in mm, pressure, gravity) against statics.
 
 use std::path::{Path, PathBuf};
 
@@ -99,6 +100,37 @@ fn the_example_job_matches_the_direct_api_and_writes_readable_results() {
     // A second run into the same folder is refused unless forced.
     let again = run_job(&example(), &out, &RunOptions::default(), &mut |_| {});
     assert!(matches!(again, Err(JobError::OutDirExists { .. })));
+    std::fs::remove_dir_all(&out).unwrap();
+}
+
+#[test]
+fn the_pad_example_sags_under_pressure_and_gravity() {
+    let out = fresh_dir("pad");
+    let job = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/pad_pressure.toml");
+    let report = run_job(&job, &out, &RunOptions::default(), &mut |_| {}).unwrap();
+    assert!(report.failure.is_none(), "{:?}", report.failure);
+    assert_eq!((report.element_kind, report.elements, report.nodes), ("t4", 432, 147));
+    assert!(report.dt_s < report.critical_dt_s);
+    // Read in millimetres, scaled to metres: the pad is 20 mm wide.
+    let last = out.join(format!("frames/frame_{:05}.vtu", report.frames - 1));
+    let mesh = carus_io::read_mesh(&last).unwrap().mesh;
+    let width = mesh.nodes.iter().map(|p| p[0]).fold(0.0, f64::max);
+    assert!((width - 0.02).abs() < 1e-12);
+    // The centre of the top face moves down, nearly the most of all nodes.
+    let u = &read_vtk_arrays(&last).unwrap().point["displacement"].values;
+    let centre = mesh
+        .nodes
+        .iter()
+        .position(|p| (p[0] - 0.01).abs() < 1e-9 && (p[1] - 0.01).abs() < 1e-9 && (p[2] - 0.004).abs() < 1e-9)
+        .unwrap();
+    let sag = -u[3 * centre + 2];
+    assert!(sag > 0.9 * report.max_displacement_m, "sag {sag} m, largest {} m", report.max_displacement_m);
+    assert!(sag > 1e-4 && sag < 5e-3, "a plausible plate deflection: {sag} m");
+    // The rim holds the pad up: at most the whole load (pressure on 4 cm^2
+    // plus the weight), less what acts on the rim nodes themselves.
+    let load = 50.0 * 4e-4 + 1000.0 * 1.6e-6 * 9.81;
+    let rim = report.reactions_n["rim"];
+    assert!(rim[2] > 0.5 * load && rim[2] < load, "rim reaction {rim:?}, load {load} N");
     std::fs::remove_dir_all(&out).unwrap();
 }
 
