@@ -10,7 +10,7 @@ use carus_fem::gpu::{open_solver, AdapterChoice, Backend, BackendSolver, GpuDevi
 use carus_fem::validation::v5;
 use carus_fem::validation::CaseSize;
 use carus_fem::{
-    BoundaryConditions, FemError, FixedDofs, ImposedDisplacement, LoadShape, Material, MaterialRegion, Mesh, ModelOptions, NodalForce,
+    BoundaryConditions, FemError, FixedDofs, ImposedDisplacement, LoadShape, Material, MaterialRegion, Mesh, ModelOptions, MooneyRivlin, NodalForce,
     Precision, StepControl, SurfacePressure, TetFormulation, TledModel, TledSolver,
 };
 
@@ -21,7 +21,11 @@ fn device() -> GpuDevice {
 }
 
 fn model(mesh: &Mesh, tet_formulation: TetFormulation, precision: Precision) -> Arc<TledModel> {
-    let region = MaterialRegion { element_set: None, material: Material::neo_hookean(1006.711409, 50_000.0), density_kg_m3: 1000.0 };
+    model_of(mesh, Material::neo_hookean(1006.711409, 50_000.0), tet_formulation, precision)
+}
+
+fn model_of(mesh: &Mesh, material: Material, tet_formulation: TetFormulation, precision: Precision) -> Arc<TledModel> {
+    let region = MaterialRegion { element_set: None, material, density_kg_m3: 1000.0 };
     let options = ModelOptions { tet_formulation, hourglass_coefficient: 0.075, damping_per_s: 5.0, precision };
     Arc::new(TledModel::new(mesh, &[region], &options).unwrap())
 }
@@ -53,7 +57,8 @@ fn v5_small_cubes_agree_with_the_cpu_backend() {
 }
 
 /// Every kind of load at once: fixed face, a smooth imposed displacement,
-/// ramped nodal forces, follower pressure and gravity.
+/// ramped nodal forces, follower pressure and gravity (neo-Hookean H8,
+/// Mooney-Rivlin T4ANP).
 fn all_loads(mesh: &Mesh) -> BoundaryConditions {
     BoundaryConditions {
         fixed: vec![FixedDofs { nodes: mesh.node_sets["x0"].clone(), components: [true; 3] }],
@@ -71,8 +76,12 @@ fn all_loads(mesh: &Mesh) -> BoundaryConditions {
 #[test]
 fn every_load_kind_agrees_with_the_cpu_backend() {
     let gpu = device();
-    for (mesh, tet) in [(box_h8([EDGE_M; 3], [3, 3, 3]), TetFormulation::T4), (box_t4([EDGE_M; 3], [2, 2, 2]), TetFormulation::T4Anp)] {
-        let m = model(&mesh, tet, Precision::F64);
+    let mooney_rivlin = Material::MooneyRivlin(MooneyRivlin { c10_pa: 300.0, c01_pa: 200.0, bulk_modulus_pa: 50_000.0 });
+    for (mesh, material, tet) in [
+        (box_h8([EDGE_M; 3], [3, 3, 3]), Material::neo_hookean(1006.711409, 50_000.0), TetFormulation::T4),
+        (box_t4([EDGE_M; 3], [2, 2, 2]), mooney_rivlin, TetFormulation::T4Anp),
+    ] {
+        let m = model_of(&mesh, material, tet, Precision::F64);
         let bcs = all_loads(&mesh);
         let dt = 0.5 * m.critical_time_step();
         let steps = (0.4 / dt) as u64;
@@ -104,7 +113,7 @@ fn coupling_hooks_agree_with_the_cpu_backend() {
     let mut bcs = BoundaryConditions::default();
     bcs.fix_nodes(&mesh.node_sets["x0"]);
     let dt = 0.5 * m.critical_time_step();
-    let mut cpu = BackendSolver::Cpu(TledSolver::new(Arc::clone(&m), &bcs, dt, StepControl::Refuse).unwrap());
+    let mut cpu = BackendSolver::Cpu(Box::new(TledSolver::new(Arc::clone(&m), &bcs, dt, StepControl::Refuse).unwrap()));
     let mut g = BackendSolver::Gpu(Box::new(GpuSolver::new(&gpu, m, &bcs, dt, StepControl::Refuse, GpuOptions::default()).unwrap()));
     // A "fetal head" pressing on part of the far face, deeper each coupling step.
     let pushed: Vec<u32> = mesh.node_sets["x1"].iter().copied().filter(|&n| mesh.nodes[n as usize][1] < 0.05).collect();

@@ -60,7 +60,7 @@ impl FromStr for Backend {
 
 /// A TLED run on either backend, with the API both share.
 pub enum BackendSolver {
-    Cpu(TledSolver),
+    Cpu(Box<TledSolver>),
     Gpu(Box<GpuSolver>),
 }
 
@@ -82,7 +82,7 @@ pub fn open_solver(
     options: GpuOptions,
 ) -> Result<OpenedSolver, GpuError> {
     let cpu = |model, notice| -> Result<OpenedSolver, GpuError> {
-        Ok(OpenedSolver { solver: BackendSolver::Cpu(TledSolver::new(model, bcs, dt_s, control)?), notice })
+        Ok(OpenedSolver { solver: BackendSolver::Cpu(Box::new(TledSolver::new(model, bcs, dt_s, control)?)), notice })
     };
     match backend {
         Backend::Cpu => cpu(model, None),

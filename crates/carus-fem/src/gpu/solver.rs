@@ -117,6 +117,8 @@ pub struct GpuSolver {
     slots_at: u32,
     triangle_forces_at: u32,
     step_stride: u64,
+    /// The device's max_compute_workgroups_per_dimension.
+    max_workgroups: u32,
     dt_s: f64,
     substeps_per_step: u32,
     h_s: f64,
@@ -198,7 +200,9 @@ impl GpuSolver {
         let model_buffers = ModelBuffers::upload(gpu, &arrays)?;
         let state = gpu.scoped("allocating the solver state", || {
             let none = wgpu::BufferUsages::empty();
-            let zeros = |label: &str, words: usize| storage(gpu, label, &vec![0f32; words], wgpu::BufferUsages::VERTEX);
+            let zeros = |label: &str, words: usize| storage(gpu, label, &vec![0f32; words], none);
+            // Displacements double as vertex data for a viewer on the same device.
+            let field = |label: &str| storage(gpu, label, &vec![0f32; 3 * nn], wgpu::BufferUsages::VERTEX);
             let uniform = |label: &str, bytes: u64| {
                 gpu.device().create_buffer(&wgpu::BufferDescriptor {
                     label: Some(label),
@@ -208,8 +212,8 @@ impl GpuSolver {
                 })
             };
             StateBuffers {
-                u: std::array::from_fn(|_| zeros("displacement", 3 * nn)),
-                backup: std::array::from_fn(|_| zeros("displacement backup", 3 * nn)),
+                u: std::array::from_fn(|_| field("displacement")),
+                backup: std::array::from_fn(|_| field("displacement backup")),
                 forces: zeros("force copies", force_words),
                 status: storage(gpu, "status", &CLEAR_STATUS, none),
                 shares: zeros("volume shares", if arrays.anp { ne } else { 1 }),
@@ -240,6 +244,7 @@ impl GpuSolver {
             slots_at: arrays.node_count + 1,
             triangle_forces_at,
             step_stride,
+            max_workgroups: limits.max_compute_workgroups_per_dimension,
             dt_s,
             substeps_per_step,
             h_s,
@@ -368,7 +373,7 @@ impl GpuSolver {
     }
 
     fn dispatch(&self, pass: &mut wgpu::ComputePass<'_>, kernel: &super::kernels::Kernel, group: &wgpu::BindGroup, offset: u32, count: u32) {
-        let (x, y) = workgroups(count, self.gpu.device().limits().max_compute_workgroups_per_dimension);
+        let (x, y) = workgroups(count, self.max_workgroups);
         pass.set_pipeline(&kernel.pipeline);
         pass.set_bind_group(0, group, &[offset]);
         pass.dispatch_workgroups(x, y, 1);

@@ -59,7 +59,14 @@ fn size_of(size: CaseSize) -> (usize, u64) {
     }
 }
 
-fn run_cpu(model: Arc<TledModel>, setup: &CubeSetup, steps: u64) -> Result<(Vec<[f64; 3]>, [f64; 3], f64), GpuError> {
+/// The end state of a CPU run.
+struct CpuRun {
+    displacements_m: Vec<[f64; 3]>,
+    reaction_n: [f64; 3],
+    wall_s: f64,
+}
+
+fn run_cpu(model: Arc<TledModel>, setup: &CubeSetup, steps: u64) -> Result<CpuRun, GpuError> {
     let start = Instant::now();
     let mesh = setup.mesh();
     let mut solver = TledSolver::new(model, &setup.boundary_conditions(&mesh), setup.dt_s(), StepControl::SubStep)?;
@@ -68,7 +75,7 @@ fn run_cpu(model: Arc<TledModel>, setup: &CubeSetup, steps: u64) -> Result<(Vec<
     }
     solver.update_internal_forces()?;
     let reaction = solver.reaction_force(&mesh.node_sets["x0"])?;
-    Ok((solver.displacements(), reaction, start.elapsed().as_secs_f64()))
+    Ok(CpuRun { displacements_m: solver.displacements(), reaction_n: reaction, wall_s: start.elapsed().as_secs_f64() })
 }
 
 /// Runs one element kind on both backends.
@@ -77,8 +84,8 @@ pub fn run_case(gpu: &GpuDevice, element: CubeElement, n: usize, steps: u64) -> 
     let mesh = setup.mesh();
     let model64 = tissue_model(&mesh, &setup.options())?;
     let model32 = tissue_model(&mesh, &CubeSetup { precision: Precision::F32, ..setup }.options())?;
-    let (u64_, reaction_cpu_n, cpu_wall_s) = run_cpu(Arc::clone(&model64), &setup, steps)?;
-    let (u32_, _, _) = run_cpu(model32, &setup, steps)?;
+    let cpu64 = run_cpu(Arc::clone(&model64), &setup, steps)?;
+    let cpu32 = run_cpu(model32, &setup, steps)?;
     let start = Instant::now();
     let mut solver = GpuSolver::new(gpu, model64, &setup.boundary_conditions(&mesh), setup.dt_s(), StepControl::SubStep, GpuOptions::default())?;
     solver.advance_steps(steps)?;
@@ -86,20 +93,20 @@ pub fn run_case(gpu: &GpuDevice, element: CubeElement, n: usize, steps: u64) -> 
     let reaction_gpu_n = solver.reaction_force(&mesh.node_sets["x0"])?;
     let u_gpu = solver.displacements()?;
     let gpu_wall_s = start.elapsed().as_secs_f64();
-    let max_difference_cpu_f64_m = max_distance(&u_gpu, &u64_);
-    let max_difference_cpu_f32_m = max_distance(&u_gpu, &u32_);
+    let max_difference_cpu_f64_m = max_distance(&u_gpu, &cpu64.displacements_m);
+    let max_difference_cpu_f32_m = max_distance(&u_gpu, &cpu32.displacements_m);
     let tolerance = DIFFERENCE_TOLERANCE_OF_EDGE * CUBE_EDGE_M;
     Ok(V5Case {
         element,
         n,
         steps,
         dt_s: setup.dt_s(),
-        max_displacement_m: u64_.iter().map(|p| (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt()).fold(0.0, f64::max),
+        max_displacement_m: cpu64.displacements_m.iter().map(|p| (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt()).fold(0.0, f64::max),
         max_difference_cpu_f64_m,
         max_difference_cpu_f32_m,
-        reaction_cpu_n,
+        reaction_cpu_n: cpu64.reaction_n,
         reaction_gpu_n,
-        cpu_wall_s,
+        cpu_wall_s: cpu64.wall_s,
         gpu_wall_s,
         passed: max_difference_cpu_f64_m < tolerance && max_difference_cpu_f32_m < tolerance,
     })
