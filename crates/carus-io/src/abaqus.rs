@@ -46,6 +46,10 @@ pub fn parse_inp(path: &Path, bytes: &[u8]) -> Result<MeshFile, ReadError> {
     reader.builder.finish()
 }
 
+/// More ids than any mesh Carus can hold in memory: a GENERATE range this
+/// long is a typo, not a set.
+const MAX_GENERATED: u64 = 1 << 32;
+
 /// H8 faces S1..S6 (0-based local nodes), from the Abaqus manual's C3D8 table.
 const HEXAHEDRON_FACES: [&[usize]; 6] = [
     &[0, 1, 2, 3],
@@ -450,6 +454,12 @@ impl Reader<'_> {
                     "use first <= last and a positive increment",
                 ));
             }
+            if (last - first) / step >= MAX_GENERATED {
+                return Err(self.error(
+                    format!("GENERATE range {first}..{last} step {step} lists more than {MAX_GENERATED} ids"),
+                    "check the bounds (a typo can add digits)",
+                ));
+            }
             return Ok((first..=last).step_by(step as usize).collect());
         }
         let mut ids = Vec::new();
@@ -658,6 +668,28 @@ mod tests {
             assert!(err.starts_with(expected), "{err}\n  expected: {expected}");
             assert!(err.contains("; fix: "), "{err}");
         }
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn arbitrary_text_never_panics(text in "[*,0-9a-zA-Z=\n .-]{0,300}") {
+            let _ = read(&text);
+        }
+
+        #[test]
+        fn spliced_fixtures_never_panic(at in 0usize..2000, junk in "[*,0-9A-Z=\n .-]{0,40}") {
+            let at = at.min(TWO_HEX.len());
+            let text = format!("{}{junk}{}", &TWO_HEX[..at], &TWO_HEX[at..]);
+            let _ = read(&text);
+        }
+    }
+
+    #[test]
+    fn huge_generate_ranges_are_refused_not_allocated() {
+        let err = read("*NSET, NSET=a, GENERATE\n1, 99999999999999, 1\n")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("lists more than"), "{err}");
     }
 
     #[test]

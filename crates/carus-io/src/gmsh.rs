@@ -516,6 +516,37 @@ mod tests {
         }
     }
 
+    proptest::proptest! {
+        #[test]
+        fn arbitrary_bytes_never_panic(bytes in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..300)) {
+            let _ = parse_msh(Path::new("a.msh"), &bytes);
+        }
+
+        #[test]
+        fn spliced_fixtures_never_panic(at in 0usize..1500, junk in "[$0-9a-zA-Z\n .\"-]{0,40}") {
+            for text in [CUBE_V22, CUBE_V41, CUBE_V40] {
+                let at = at.min(text.len());
+                let spliced = format!("{}{junk}{}", &text[..at], &text[at..]);
+                let _ = read("s.msh", &spliced);
+            }
+        }
+    }
+
+    #[test]
+    fn huge_counts_end_at_the_end_of_the_file() {
+        let text = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 18446744073709551615 1 2\n3 1 0 18446744073709551615\n1\n";
+        let err = read("h.msh", text).unwrap_err().to_string();
+        assert!(err.contains("ends while reading"), "{err}");
+    }
+
+    #[test]
+    fn mixed_hexahedra_and_tetrahedra_are_refused_with_the_counts() {
+        let mixed = CUBE_V22.replacen("$Elements\n5\n", "$Elements\n6\n6 4 2 1 1 1 2 4 7\n", 1);
+        let err = read("m.msh", &mixed).unwrap_err().to_string();
+        assert!(err.contains("mixes 2 hexahedra and 1 tetrahedra"), "{err}");
+        assert!(err.contains("fix:"), "{err}");
+    }
+
     #[test]
     fn a_bad_coordinate_names_the_node_and_line() {
         let bad = CUBE_V22.replacen("\n3 2 0 0\n", "\n3 2 nan 0\n", 1);

@@ -109,7 +109,10 @@ fn the_pad_example_sags_under_pressure_and_gravity() {
     let job = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/pad_pressure.toml");
     let report = run_job(&job, &out, &RunOptions::default(), &mut |_| {}).unwrap();
     assert!(report.failure.is_none(), "{:?}", report.failure);
-    assert_eq!((report.element_kind, report.elements, report.nodes), ("t4", 432, 147));
+    assert_eq!(
+        (report.element_kind, report.elements, report.nodes),
+        ("t4", 432, 147)
+    );
     assert!(report.dt_s < report.critical_dt_s);
     // Read in millimetres, scaled to metres: the pad is 20 mm wide.
     let last = out.join(format!("frames/frame_{:05}.vtu", report.frames - 1));
@@ -121,16 +124,28 @@ fn the_pad_example_sags_under_pressure_and_gravity() {
     let centre = mesh
         .nodes
         .iter()
-        .position(|p| (p[0] - 0.01).abs() < 1e-9 && (p[1] - 0.01).abs() < 1e-9 && (p[2] - 0.004).abs() < 1e-9)
+        .position(|p| {
+            (p[0] - 0.01).abs() < 1e-9 && (p[1] - 0.01).abs() < 1e-9 && (p[2] - 0.004).abs() < 1e-9
+        })
         .unwrap();
     let sag = -u[3 * centre + 2];
-    assert!(sag > 0.9 * report.max_displacement_m, "sag {sag} m, largest {} m", report.max_displacement_m);
-    assert!(sag > 1e-4 && sag < 5e-3, "a plausible plate deflection: {sag} m");
+    assert!(
+        sag > 0.9 * report.max_displacement_m,
+        "sag {sag} m, largest {} m",
+        report.max_displacement_m
+    );
+    assert!(
+        sag > 1e-4 && sag < 5e-3,
+        "a plausible plate deflection: {sag} m"
+    );
     // The rim holds the pad up: at most the whole load (pressure on 4 cm^2
     // plus the weight), less what acts on the rim nodes themselves.
     let load = 50.0 * 4e-4 + 1000.0 * 1.6e-6 * 9.81;
     let rim = report.reactions_n["rim"];
-    assert!(rim[2] > 0.5 * load && rim[2] < load, "rim reaction {rim:?}, load {load} N");
+    assert!(
+        rim[2] > 0.5 * load && rim[2] < load,
+        "rim reaction {rim:?}, load {load} N"
+    );
     std::fs::remove_dir_all(&out).unwrap();
 }
 
