@@ -11,7 +11,9 @@ use std::path::Path;
 use carus_anatomy::import::{pick, read_gltf_parts, visible_human_glb_axes, visible_human_stl_axes, Units};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let glb = std::env::args().nth(1).ok_or("usage: pick_pelvis_landmarks PELVIS.glb")?;
+    let glb = std::env::args()
+        .nth(1)
+        .ok_or("usage: pick_pelvis_landmarks PELVIS.glb")?;
     let glb = Path::new(&glb);
     let parts = read_gltf_parts(glb)?;
     let bones = pick::PelvisBones::from_named_parts(&parts, visible_human_glb_axes().to_anatomical(glb)?, 1.0)?;

@@ -115,7 +115,13 @@ impl HeadDiameters {
         ];
         for ((smaller, smaller_mm), (larger, larger_mm), why) in ordered {
             if smaller_mm >= larger_mm {
-                return Err(HeadError::Conflict { smaller, smaller_mm, larger, larger_mm, why });
+                return Err(HeadError::Conflict {
+                    smaller,
+                    smaller_mm,
+                    larger,
+                    larger_mm,
+                    why,
+                });
             }
         }
         Ok(())
@@ -142,17 +148,47 @@ mod tests {
 
     #[test]
     fn impossible_orderings_name_the_conflict() {
-        let d = HeadDiameters { bitemporal_mm: 96.0, ..Default::default() };
+        let d = HeadDiameters {
+            bitemporal_mm: 96.0,
+            ..Default::default()
+        };
         let message = d.validate().unwrap_err().to_string();
-        assert!(message.contains("bitemporal_mm") && message.contains("biparietal_mm"), "{message}");
+        assert!(
+            message.contains("bitemporal_mm") && message.contains("biparietal_mm"),
+            "{message}"
+        );
 
-        let d = HeadDiameters { suboccipitobregmatic_mm: 120.0, ..Default::default() };
+        let d = HeadDiameters {
+            suboccipitobregmatic_mm: 120.0,
+            ..Default::default()
+        };
         let message = d.validate().unwrap_err().to_string();
-        assert!(message.contains("suboccipitobregmatic_mm") && message.contains("occipitofrontal_mm"), "{message}");
+        assert!(
+            message.contains("suboccipitobregmatic_mm") && message.contains("occipitofrontal_mm"),
+            "{message}"
+        );
 
-        let d = HeadDiameters { biparietal_mm: -1.0, ..Default::default() };
-        assert_eq!(d.validate(), Err(HeadError::NotPositive { name: "biparietal_mm", value: -1.0 }));
-        let d = HeadDiameters { mentovertical_mm: f64::NAN, ..Default::default() };
-        assert!(matches!(d.validate(), Err(HeadError::NotPositive { name: "mentovertical_mm", .. })));
+        let d = HeadDiameters {
+            biparietal_mm: -1.0,
+            ..Default::default()
+        };
+        assert_eq!(
+            d.validate(),
+            Err(HeadError::NotPositive {
+                name: "biparietal_mm",
+                value: -1.0
+            })
+        );
+        let d = HeadDiameters {
+            mentovertical_mm: f64::NAN,
+            ..Default::default()
+        };
+        assert!(matches!(
+            d.validate(),
+            Err(HeadError::NotPositive {
+                name: "mentovertical_mm",
+                ..
+            })
+        ));
     }
 }

@@ -184,7 +184,10 @@ impl FetalHead {
             suboccipital: midline(profile.suboccipital),
             atlanto_occipital: midline((1.0 - PIVOT_DEPTH) * base),
         };
-        let body = HeadBody { profile, half_biparietal };
+        let body = HeadBody {
+            profile,
+            half_biparietal,
+        };
 
         let (mut directions, triangles) = geodesic_sphere(subdivisions);
         let on_surface: Vec<DVec3> = landmarks.named()[..13].iter().map(|(_, p)| p.normalize()).collect();
@@ -194,7 +197,11 @@ impl FetalHead {
         for (&vertex, (_, p)) in pinned.iter().zip(landmarks.named()) {
             vertices[vertex as usize] = p;
         }
-        Ok(FetalHead { diameters: *diameters, surface: TriSurface::new(vertices, triangles), landmarks })
+        Ok(FetalHead {
+            diameters: *diameters,
+            surface: TriSurface::new(vertices, triangles),
+            landmarks,
+        })
     }
 
     /// Measures the head back from its surface and landmarks.
@@ -357,7 +364,14 @@ mod tests {
     fn the_measurement_serialises_with_canonical_names() {
         let m = FetalHead::new(&HeadDiameters::default()).unwrap().measure();
         let json = serde_json::to_value(&m).unwrap();
-        for key in ["biparietal_mm", "bitemporal_mm", "occipitofrontal_mm", "suboccipitobregmatic_mm", "mentovertical_mm", "submentobregmatic_mm"] {
+        for key in [
+            "biparietal_mm",
+            "bitemporal_mm",
+            "occipitofrontal_mm",
+            "suboccipitobregmatic_mm",
+            "mentovertical_mm",
+            "submentobregmatic_mm",
+        ] {
             assert!(json[key].is_f64(), "{key}");
         }
         assert!(json["landmarks_mm"]["atlanto_occipital"].is_array());
@@ -365,7 +379,10 @@ mod tests {
 
     #[test]
     fn bad_resolutions_are_refused() {
-        assert_eq!(FetalHead::with_subdivisions(&HeadDiameters::default(), 9), Err(HeadError::Resolution(9)));
+        assert_eq!(
+            FetalHead::with_subdivisions(&HeadDiameters::default(), 9),
+            Err(HeadError::Resolution(9))
+        );
     }
 
     #[test]

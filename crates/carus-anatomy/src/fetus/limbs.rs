@@ -54,7 +54,10 @@ impl Limbs {
             // Upper arm down and forwards along the chest, forearm across it.
             let elbow = shoulder + UPPER_ARM.0 * DVec3::new(0.45, -side * 0.15, -0.88).normalize();
             let wrist = elbow + FOREARM.0 * DVec3::new(0.35, -side * 0.55, 0.76).normalize();
-            CapsuleChain { joints: vec![shoulder, elbow, wrist], radii: vec![UPPER_ARM.1, FOREARM.1] }
+            CapsuleChain {
+                joints: vec![shoulder, elbow, wrist],
+                radii: vec![UPPER_ARM.1, FOREARM.1],
+            }
         };
         let leg = |trochanter: DVec3| {
             let side = trochanter.y.signum();
@@ -62,7 +65,10 @@ impl Limbs {
             // Thigh forwards and up along the abdomen, leg folded back down.
             let knee = hip + THIGH.0 * DVec3::new(0.8, 0.05 * side, 0.6).normalize();
             let ankle = knee + LEG.0 * DVec3::new(-0.15, -0.1 * side, -0.98).normalize();
-            CapsuleChain { joints: vec![hip, knee, ankle], radii: vec![THIGH.1, LEG.1] }
+            CapsuleChain {
+                joints: vec![hip, knee, ankle],
+                radii: vec![THIGH.1, LEG.1],
+            }
         };
         Limbs {
             arm_left: arm(l.acromion_left),
@@ -95,7 +101,11 @@ mod tests {
             let side = if name.ends_with("left") { 1.0 } else { -1.0 };
             assert!(chain.joints[0].y * side > 0.0, "{name}");
             let lengths: Vec<f64> = chain.segments().map(|(a, b, _)| a.distance(b)).collect();
-            let expected = if name.starts_with("arm") { [UPPER_ARM.0, FOREARM.0] } else { [THIGH.0, LEG.0] };
+            let expected = if name.starts_with("arm") {
+                [UPPER_ARM.0, FOREARM.0]
+            } else {
+                [THIGH.0, LEG.0]
+            };
             for (got, want) in lengths.iter().zip(expected) {
                 assert!((got - want).abs() < 1e-12, "{name}");
             }

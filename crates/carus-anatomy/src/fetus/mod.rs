@@ -16,7 +16,9 @@ mod sphere;
 pub mod trunk;
 
 pub use diameters::{HeadDiameters, HeadError};
-pub use head::{FetalHead, HeadExtents, HeadLandmarks, HeadMeasurement, DEFAULT_HEAD_SUBDIVISIONS, HEAD_LANDMARK_NAMES};
+pub use head::{
+    FetalHead, HeadExtents, HeadLandmarks, HeadMeasurement, DEFAULT_HEAD_SUBDIVISIONS, HEAD_LANDMARK_NAMES,
+};
 pub use limbs::{CapsuleChain, Limbs};
 pub use trunk::{Trunk, TrunkDiameters, TrunkError, TrunkLandmarks, TrunkMeasurement};
 
@@ -49,7 +51,12 @@ impl Fetus {
         let trunk = Trunk::new(trunk)?;
         let limbs = Limbs::flexed(&trunk);
         let neck_pivot = head.landmarks.atlanto_occipital;
-        Ok(Fetus { head, trunk, limbs, neck_pivot })
+        Ok(Fetus {
+            head,
+            trunk,
+            limbs,
+            neck_pivot,
+        })
     }
 
     /// The average term fetus of REFERENCE_DATA.md.
@@ -76,7 +83,10 @@ mod tests {
     fn the_term_fetus_hangs_together_at_the_pivot() {
         let f = Fetus::term().unwrap();
         let to_head = f.trunk_to_head();
-        assert_eq!(to_head.transform_point3(f.trunk.landmarks.neck), f.head.landmarks.atlanto_occipital);
+        assert_eq!(
+            to_head.transform_point3(f.trunk.landmarks.neck),
+            f.head.landmarks.atlanto_occipital
+        );
         // The shoulders lie below the head's skull base, the breech further down.
         let shoulders = to_head.transform_point3(f.trunk.landmarks.bisacromial_midpoint);
         assert!(shoulders.z < f.head.landmarks.submental.z);
@@ -85,7 +95,10 @@ mod tests {
 
     #[test]
     fn errors_name_the_part() {
-        let bad = HeadDiameters { biparietal_mm: 0.0, ..Default::default() };
+        let bad = HeadDiameters {
+            biparietal_mm: 0.0,
+            ..Default::default()
+        };
         let err = Fetus::new(&bad, &TrunkDiameters::default()).unwrap_err().to_string();
         assert!(err.starts_with("fetal head") && err.contains("biparietal_mm"), "{err}");
     }

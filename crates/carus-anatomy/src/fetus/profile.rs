@@ -87,14 +87,38 @@ impl Design {
         let vertex = self.menton + m.mentovertical * direction(self.mv_angle);
         let occiput = self.glabella - DVec2::new(m.occipitofrontal, 0.0);
         [
-            Support { point: self.glabella, angle: 0.0 },
-            Support { point: bregma, angle: self.sob_angle },
-            Support { point: bregma, angle: smb_angle },
-            Support { point: vertex, angle: self.mv_angle },
-            Support { point: occiput, angle: PI },
-            Support { point: bregma - m.suboccipitobregmatic * direction(self.sob_angle), angle: self.sob_angle + PI },
-            Support { point: bregma - m.submentobregmatic * direction(smb_angle), angle: smb_angle + PI },
-            Support { point: self.menton, angle: self.mv_angle + PI },
+            Support {
+                point: self.glabella,
+                angle: 0.0,
+            },
+            Support {
+                point: bregma,
+                angle: self.sob_angle,
+            },
+            Support {
+                point: bregma,
+                angle: smb_angle,
+            },
+            Support {
+                point: vertex,
+                angle: self.mv_angle,
+            },
+            Support {
+                point: occiput,
+                angle: PI,
+            },
+            Support {
+                point: bregma - m.suboccipitobregmatic * direction(self.sob_angle),
+                angle: self.sob_angle + PI,
+            },
+            Support {
+                point: bregma - m.submentobregmatic * direction(smb_angle),
+                angle: smb_angle + PI,
+            },
+            Support {
+                point: self.menton,
+                angle: self.mv_angle + PI,
+            },
         ]
     }
 
@@ -211,7 +235,10 @@ impl SagittalProfile {
         };
         let (design, clearance, arc) = search(&m);
         if clearance < MIN_CLEARANCE {
-            return Err(HeadError::Unshapeable { region: ARC_NAMES[arc], overlap_mm: (MIN_CLEARANCE - clearance) * 1e3 });
+            return Err(HeadError::Unshapeable {
+                region: ARC_NAMES[arc],
+                overlap_mm: (MIN_CLEARANCE - clearance) * 1e3,
+            });
         }
         let mut s = design.supports(&m);
         let centre = s[0].point - DVec2::new(0.5 * m.occipitofrontal, 0.0);
@@ -336,7 +363,10 @@ mod tests {
         let p = SagittalProfile::new(&HeadDiameters::default()).unwrap();
         let extreme = |a: DVec2, b: DVec2| {
             let u = (b - a).normalize();
-            let (lo, hi) = p.polygon().iter().fold((f64::MAX, f64::MIN), |(lo, hi), q| (lo.min(q.dot(u)), hi.max(q.dot(u))));
+            let (lo, hi) = p
+                .polygon()
+                .iter()
+                .fold((f64::MAX, f64::MIN), |(lo, hi), q| (lo.min(q.dot(u)), hi.max(q.dot(u))));
             assert!((hi - b.dot(u)).abs() < 1e-12 && (lo - a.dot(u)).abs() < 1e-12);
         };
         extreme(p.occiput, p.glabella);

@@ -29,7 +29,10 @@ pub struct TrunkDiameters {
 
 impl Default for TrunkDiameters {
     fn default() -> Self {
-        TrunkDiameters { bisacromial_mm: 120.0, bitrochanteric_mm: 95.0 }
+        TrunkDiameters {
+            bisacromial_mm: 120.0,
+            bitrochanteric_mm: 95.0,
+        }
     }
 }
 
@@ -42,7 +45,10 @@ pub enum TrunkError {
 
 impl TrunkDiameters {
     pub fn validate(&self) -> Result<(), TrunkError> {
-        for (name, value) in [("bisacromial_mm", self.bisacromial_mm), ("bitrochanteric_mm", self.bitrochanteric_mm)] {
+        for (name, value) in [
+            ("bisacromial_mm", self.bisacromial_mm),
+            ("bitrochanteric_mm", self.bitrochanteric_mm),
+        ] {
             if !(value.is_finite() && value > 0.0) {
                 return Err(TrunkError::NotPositive { name, value });
             }
@@ -130,7 +136,13 @@ fn ring_point(s: &Section, theta: f64) -> DVec3 {
     let p = 2.0 / SECTION_EXPONENT;
     let (sin, cos) = theta.sin_cos();
     // Exact zeros at the quarter points keep the extremes exact.
-    let shaped = |c: f64| if c.abs() < 1e-12 { 0.0 } else { c.signum() * c.abs().powf(p) };
+    let shaped = |c: f64| {
+        if c.abs() < 1e-12 {
+            0.0
+        } else {
+            c.signum() * c.abs().powf(p)
+        }
+    };
     DVec3::new(s.centre_x + s.half_depth * shaped(sin), s.half_width * shaped(cos), s.z)
 }
 
@@ -183,7 +195,12 @@ impl Trunk {
             centre: 0.5 * (bisacromial_midpoint + 0.5 * (trochanter_left + trochanter_right)),
             breech,
         };
-        Ok(Trunk { diameters: *d, surface: TriSurface::new(vertices, triangles), landmarks, spine_axis: -DVec3::Z })
+        Ok(Trunk {
+            diameters: *d,
+            surface: TriSurface::new(vertices, triangles),
+            landmarks,
+            spine_axis: -DVec3::Z,
+        })
     }
 
     /// The trunk measured back, millimetres.
@@ -236,7 +253,10 @@ mod tests {
         assert!(l.acromion_left.y > 0.0 && l.acromion_right.y < 0.0);
         assert!(l.breech.z < l.trochanter_left.z && l.trochanter_left.z < l.acromion_left.z);
         assert!((trunk.spine_axis - (l.breech - l.neck).normalize()).length() < 0.2);
-        let bad = TrunkDiameters { bitrochanteric_mm: 0.0, ..Default::default() };
+        let bad = TrunkDiameters {
+            bitrochanteric_mm: 0.0,
+            ..Default::default()
+        };
         assert!(Trunk::new(&bad).unwrap_err().to_string().contains("bitrochanteric_mm"));
     }
 }

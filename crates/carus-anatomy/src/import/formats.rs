@@ -42,7 +42,9 @@ impl MeshFormat {
             Some("obj") => Ok(MeshFormat::Obj),
             Some("ply") => Ok(MeshFormat::Ply),
             Some("gltf" | "glb") => Ok(MeshFormat::Gltf),
-            _ => Err(ImportError::UnknownFormat { path: path.to_path_buf() }),
+            _ => Err(ImportError::UnknownFormat {
+                path: path.to_path_buf(),
+            }),
         }
     }
 }
@@ -50,7 +52,10 @@ impl MeshFormat {
 /// Reads a mesh file of any supported format.
 pub fn read_raw(path: &Path) -> Result<RawMesh, ImportError> {
     let format = MeshFormat::from_path(path)?;
-    let bytes = std::fs::read(path).map_err(|source| ImportError::Io { path: path.to_path_buf(), source })?;
+    let bytes = std::fs::read(path).map_err(|source| ImportError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
     match format {
         MeshFormat::Stl => parse_stl(path, &bytes),
         MeshFormat::Obj => parse_obj(path, &bytes),
@@ -60,7 +65,11 @@ pub fn read_raw(path: &Path) -> Result<RawMesh, ImportError> {
 }
 
 fn format_error(path: &Path, format: &'static str, message: impl ToString) -> ImportError {
-    ImportError::Format { path: path.to_path_buf(), format, message: message.to_string() }
+    ImportError::Format {
+        path: path.to_path_buf(),
+        format,
+        message: message.to_string(),
+    }
 }
 
 /// Binary STL: an 80-byte header, a triangle count, 50 bytes per triangle.
@@ -68,9 +77,14 @@ fn format_error(path: &Path, format: &'static str, message: impl ToString) -> Im
 /// layout exactly is read as binary, so a truncated binary file is caught
 /// with its counts rather than misread.
 pub fn parse_stl(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
-    let announced = (bytes.len() >= 84).then(|| u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as usize);
+    let announced =
+        (bytes.len() >= 84).then(|| u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as usize);
     let fits_binary = announced.is_some_and(|n| bytes.len() == 84 + 50 * n);
-    let looks_ascii = bytes.iter().skip_while(|b| b.is_ascii_whitespace()).take(5).eq(b"solid".iter());
+    let looks_ascii = bytes
+        .iter()
+        .skip_while(|b| b.is_ascii_whitespace())
+        .take(5)
+        .eq(b"solid".iter());
     if !fits_binary && !looks_ascii {
         match announced {
             Some(expected) if bytes.len() < 84 + 50 * expected => {
@@ -80,7 +94,13 @@ pub fn parse_stl(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
                     found: (bytes.len() - 84) / 50,
                 })
             }
-            None => return Err(format_error(path, "STL", "the file is shorter than a binary STL header (84 bytes)")),
+            None => {
+                return Err(format_error(
+                    path,
+                    "STL",
+                    "the file is shorter than a binary STL header (84 bytes)",
+                ))
+            }
             _ => {}
         }
     }
@@ -89,22 +109,43 @@ pub fn parse_stl(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
     let mut mesh = RawMesh::default();
     for (index, triangle) in reader.enumerate() {
         let triangle = triangle.map_err(|e| format_error(path, "STL", format!("triangle {index}: {e}")))?;
-        mesh.push_triangle(triangle.vertices.map(|v| DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64)));
+        mesh.push_triangle(
+            triangle
+                .vertices
+                .map(|v| DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64)),
+        );
     }
     Ok(mesh)
 }
 
 /// Wavefront OBJ, polygons fan-triangulated by tobj; materials ignored.
 pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
-    let options = tobj::LoadOptions { triangulate: true, single_index: false, ..Default::default() };
-    let (models, _materials) = tobj::load_obj_buf(&mut BufReader::new(bytes), &options, |_| Ok((Vec::new(), Default::default())))
-        .map_err(|e| format_error(path, "OBJ", e))?;
+    let options = tobj::LoadOptions {
+        triangulate: true,
+        single_index: false,
+        ..Default::default()
+    };
+    let (models, _materials) = tobj::load_obj_buf(&mut BufReader::new(bytes), &options, |_| {
+        Ok((Vec::new(), Default::default()))
+    })
+    .map_err(|e| format_error(path, "OBJ", e))?;
     let mut mesh = RawMesh::default();
     for model in models {
         let base = mesh.positions.len() as u32;
-        mesh.positions
-            .extend(model.mesh.positions.chunks_exact(3).map(|p| DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)));
-        mesh.triangles.extend(model.mesh.indices.chunks_exact(3).map(|t| [base + t[0], base + t[1], base + t[2]]));
+        mesh.positions.extend(
+            model
+                .mesh
+                .positions
+                .chunks_exact(3)
+                .map(|p| DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)),
+        );
+        mesh.triangles.extend(
+            model
+                .mesh
+                .indices
+                .chunks_exact(3)
+                .map(|t| [base + t[0], base + t[1], base + t[2]]),
+        );
     }
     Ok(mesh)
 }
@@ -114,7 +155,9 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
 pub fn parse_ply(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
     use ply_rs::ply::Property;
     let parser = ply_rs::parser::Parser::<ply_rs::ply::DefaultElement>::new();
-    let ply = parser.read_ply(&mut BufReader::new(bytes)).map_err(|e| format_error(path, "PLY", e))?;
+    let ply = parser
+        .read_ply(&mut BufReader::new(bytes))
+        .map_err(|e| format_error(path, "PLY", e))?;
     let scalar = |p: &Property| -> Option<f64> {
         Some(match *p {
             Property::Char(v) => v as f64,
@@ -139,7 +182,10 @@ pub fn parse_ply(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
             _ => return None,
         })
     };
-    let vertices = ply.payload.get("vertex").ok_or_else(|| format_error(path, "PLY", "no `vertex` element"))?;
+    let vertices = ply
+        .payload
+        .get("vertex")
+        .ok_or_else(|| format_error(path, "PLY", "no `vertex` element"))?;
     let mut mesh = RawMesh::default();
     for (index, vertex) in vertices.iter().enumerate() {
         let mut xyz = [0.0; 3];
@@ -151,7 +197,10 @@ pub fn parse_ply(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
         }
         mesh.positions.push(DVec3::from_array(xyz));
     }
-    let faces = ply.payload.get("face").ok_or_else(|| format_error(path, "PLY", "no `face` element"))?;
+    let faces = ply
+        .payload
+        .get("face")
+        .ok_or_else(|| format_error(path, "PLY", "no `face` element"))?;
     let count = mesh.positions.len() as i64;
     for (index, face) in faces.iter().enumerate() {
         let corners = face
@@ -160,10 +209,15 @@ pub fn parse_ply(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
             .and_then(list)
             .ok_or_else(|| format_error(path, "PLY", format!("face {index} has no `vertex_indices` list")))?;
         if let Some(&bad) = corners.iter().find(|&&i| i < 0 || i >= count) {
-            return Err(format_error(path, "PLY", format!("face {index} refers to vertex {bad}, but there are {count} vertices")));
+            return Err(format_error(
+                path,
+                "PLY",
+                format!("face {index} refers to vertex {bad}, but there are {count} vertices"),
+            ));
         }
         for k in 1..corners.len().saturating_sub(1) {
-            mesh.triangles.push([corners[0] as u32, corners[k] as u32, corners[k + 1] as u32]);
+            mesh.triangles
+                .push([corners[0] as u32, corners[k] as u32, corners[k + 1] as u32]);
         }
     }
     Ok(mesh)
@@ -195,7 +249,12 @@ pub fn parse_gltf_parts(path: &Path, bytes: &[u8]) -> Result<Vec<NamedPart>, Imp
             return Err(format_error(
                 path,
                 "glTF",
-                format!("buffer {} holds {} bytes, fewer than the {} declared", buffer.index(), data.len(), buffer.length()),
+                format!(
+                    "buffer {} holds {} bytes, fewer than the {} declared",
+                    buffer.index(),
+                    data.len(),
+                    buffer.length()
+                ),
             ));
         }
         buffers.push(data);
@@ -212,21 +271,33 @@ pub fn parse_gltf_parts(path: &Path, bytes: &[u8]) -> Result<Vec<NamedPart>, Imp
         let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(|v| v as f64)));
         let world = parent * local;
         if let Some(mesh) = node.mesh() {
-            let name = mesh.name().or(node.name()).map(str::to_owned).unwrap_or_else(|| format!("mesh {}", mesh.index()));
+            let name = mesh
+                .name()
+                .or(node.name())
+                .map(str::to_owned)
+                .unwrap_or_else(|| format!("mesh {}", mesh.index()));
             let mut raw = RawMesh::default();
             let mirrored = world.determinant() < 0.0;
             for primitive in mesh.primitives().filter(|p| p.mode() == gltf::mesh::Mode::Triangles) {
                 let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
-                let Some(positions) = reader.read_positions() else { continue };
+                let Some(positions) = reader.read_positions() else {
+                    continue;
+                };
                 let base = raw.positions.len() as u32;
-                raw.positions.extend(positions.map(|p| world.transform_point3(DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64))));
+                raw.positions.extend(
+                    positions.map(|p| world.transform_point3(DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64))),
+                );
                 let count = raw.positions.len() as u32 - base;
                 let indices: Vec<u32> = match reader.read_indices() {
                     Some(indices) => indices.into_u32().collect(),
                     None => (0..count).collect(),
                 };
                 if let Some(&bad) = indices.iter().find(|&&i| i >= count) {
-                    return Err(format_error(path, "glTF", format!("mesh `{name}` refers to vertex {bad} of {count}")));
+                    return Err(format_error(
+                        path,
+                        "glTF",
+                        format!("mesh `{name}` refers to vertex {bad} of {count}"),
+                    ));
                 }
                 raw.triangles.extend(indices.chunks_exact(3).map(|t| {
                     let t = [base + t[0], base + t[1], base + t[2]];
@@ -252,7 +323,8 @@ fn merge_parts(parts: Vec<NamedPart>) -> RawMesh {
     for part in parts {
         let base = mesh.positions.len() as u32;
         mesh.positions.extend(part.mesh.positions);
-        mesh.triangles.extend(part.mesh.triangles.iter().map(|t| t.map(|i| i + base)));
+        mesh.triangles
+            .extend(part.mesh.triangles.iter().map(|t| t.map(|i| i + base)));
     }
     mesh
 }

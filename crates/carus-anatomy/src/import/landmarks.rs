@@ -71,7 +71,10 @@ pub struct ImportedPelvis {
 }
 
 fn file_error(path: &Path, message: impl ToString) -> ImportError {
-    ImportError::LandmarksFile { path: path.to_path_buf(), message: message.to_string() }
+    ImportError::LandmarksFile {
+        path: path.to_path_buf(),
+        message: message.to_string(),
+    }
 }
 
 impl AxesDeclaration {
@@ -80,20 +83,31 @@ impl AxesDeclaration {
     /// anatomical frame (x right, y anterior, z cranial). A reflection when
     /// the mesh's axes are left-handed.
     pub fn to_anatomical(&self, path: &Path) -> Result<DMat3, ImportError> {
-        let axes_error = |message: String| ImportError::Axes { path: path.to_path_buf(), message };
-        let pick = |positive: &Option<String>, negative: &Option<String>, names: (&str, &str)| -> Result<DVec3, ImportError> {
-            match (positive, negative) {
-                (Some(p), None) => parse_axis(p).ok_or_else(|| axes_error(bad_axis(names.0, p))),
-                (None, Some(n)) => parse_axis(n).map(|v| -v).ok_or_else(|| axes_error(bad_axis(names.1, n))),
-                (Some(_), Some(_)) => Err(axes_error(format!("give `{}` or `{}`, not both", names.0, names.1))),
-                (None, None) => Err(axes_error(format!("missing `{}` (or `{}`), e.g. {} = \"+x\"", names.0, names.1, names.0))),
-            }
+        let axes_error = |message: String| ImportError::Axes {
+            path: path.to_path_buf(),
+            message,
         };
+        let pick =
+            |positive: &Option<String>, negative: &Option<String>, names: (&str, &str)| -> Result<DVec3, ImportError> {
+                match (positive, negative) {
+                    (Some(p), None) => parse_axis(p).ok_or_else(|| axes_error(bad_axis(names.0, p))),
+                    (None, Some(n)) => parse_axis(n)
+                        .map(|v| -v)
+                        .ok_or_else(|| axes_error(bad_axis(names.1, n))),
+                    (Some(_), Some(_)) => Err(axes_error(format!("give `{}` or `{}`, not both", names.0, names.1))),
+                    (None, None) => Err(axes_error(format!(
+                        "missing `{}` (or `{}`), e.g. {} = \"+x\"",
+                        names.0, names.1, names.0
+                    ))),
+                }
+            };
         let right = pick(&self.right, &self.left, ("right", "left"))?;
         let anterior = pick(&self.anterior, &self.posterior, ("anterior", "posterior"))?;
         let cranial = pick(&self.cranial, &self.caudal, ("cranial", "caudal"))?;
         if right.dot(anterior) != 0.0 || right.dot(cranial) != 0.0 || anterior.dot(cranial) != 0.0 {
-            return Err(axes_error("the three directions must use three different mesh axes".into()));
+            return Err(axes_error(
+                "the three directions must use three different mesh axes".into(),
+            ));
         }
         Ok(DMat3::from_cols(right, anterior, cranial).transpose())
     }
@@ -122,15 +136,22 @@ fn parse_axis(text: &str) -> Option<DVec3> {
 impl LandmarksFile {
     /// Reads and checks a landmarks file (names, not yet geometry).
     pub fn read(path: &Path) -> Result<Self, ImportError> {
-        let text = std::fs::read_to_string(path).map_err(|source| ImportError::Io { path: path.to_path_buf(), source })?;
+        let text = std::fs::read_to_string(path).map_err(|source| ImportError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
         Self::parse(path, &text)
     }
 
     /// Parses and checks landmarks text; `path` names it in errors.
     pub fn parse(path: &Path, text: &str) -> Result<Self, ImportError> {
         let file: LandmarksFile = toml::from_str(text).map_err(|e| file_error(path, e))?;
-        let unknown: Vec<String> =
-            file.landmarks.keys().filter(|k| !LANDMARK_NAMES.contains(&k.as_str())).cloned().collect();
+        let unknown: Vec<String> = file
+            .landmarks
+            .keys()
+            .filter(|k| !LANDMARK_NAMES.contains(&k.as_str()))
+            .cloned()
+            .collect();
         if !unknown.is_empty() {
             return Err(ImportError::UnknownLandmarks {
                 path: path.to_path_buf(),
@@ -138,13 +159,22 @@ impl LandmarksFile {
                 known: LANDMARK_NAMES.iter().map(|s| s.to_string()).collect(),
             });
         }
-        let missing: Vec<String> =
-            LANDMARK_NAMES.iter().filter(|k| !file.landmarks.contains_key(**k)).map(|s| s.to_string()).collect();
+        let missing: Vec<String> = LANDMARK_NAMES
+            .iter()
+            .filter(|k| !file.landmarks.contains_key(**k))
+            .map(|s| s.to_string())
+            .collect();
         if !missing.is_empty() {
-            return Err(ImportError::MissingLandmarks { path: path.to_path_buf(), missing });
+            return Err(ImportError::MissingLandmarks {
+                path: path.to_path_buf(),
+                missing,
+            });
         }
         if let Some((name, _)) = file.landmarks.iter().find(|(_, p)| p.iter().any(|c| !c.is_finite())) {
-            return Err(file_error(path, format!("landmark `{name}` has a non-finite coordinate")));
+            return Err(file_error(
+                path,
+                format!("landmark `{name}` has a non-finite coordinate"),
+            ));
         }
         Ok(file)
     }
@@ -156,7 +186,10 @@ impl LandmarksFile {
             .iter()
             .map(|(name, p)| {
                 let q = map(DVec3::from_array(*p));
-                (name.clone(), toml::Value::Array(q.to_array().iter().map(|&c| toml::Value::Float(c)).collect()))
+                (
+                    name.clone(),
+                    toml::Value::Array(q.to_array().iter().map(|&c| toml::Value::Float(c)).collect()),
+                )
             })
             .collect();
         toml::Value::Table(table).try_into().map_err(|e| file_error(path, e))
@@ -166,11 +199,20 @@ impl LandmarksFile {
 /// Checks that left/right, front/back and up/down landmarks fall where the
 /// declared axes say (anatomical frame), naming the first contradiction.
 fn check_orientation(path: &Path, l: &PelvisLandmarks) -> Result<(), ImportError> {
-    let contradiction = |message: String| Err(ImportError::Orientation { path: path.to_path_buf(), message });
+    let contradiction = |message: String| {
+        Err(ImportError::Orientation {
+            path: path.to_path_buf(),
+            message,
+        })
+    };
     for (left, right, name) in [
         (l.iliopectineal_left, l.iliopectineal_right, "iliopectineal"),
         (l.ischial_spine_left, l.ischial_spine_right, "ischial_spine"),
-        (l.ischial_tuberosity_left, l.ischial_tuberosity_right, "ischial_tuberosity"),
+        (
+            l.ischial_tuberosity_left,
+            l.ischial_tuberosity_right,
+            "ischial_tuberosity",
+        ),
     ] {
         if right.x <= left.x {
             return contradiction(format!(
@@ -210,20 +252,30 @@ pub fn import_pelvis(path: &Path) -> Result<ImportedPelvis, ImportError> {
 /// [`import_pelvis`] for a landmarks file already read and its mesh's
 /// triangles (e.g. embedded in the program); `path` names the landmarks
 /// file in errors, `mesh_path` the mesh.
-pub fn assemble_pelvis(path: &Path, file: &LandmarksFile, mesh_path: PathBuf, raw: &RawMesh) -> Result<ImportedPelvis, ImportError> {
+pub fn assemble_pelvis(
+    path: &Path,
+    file: &LandmarksFile,
+    mesh_path: PathBuf,
+    raw: &RawMesh,
+) -> Result<ImportedPelvis, ImportError> {
     let to_anatomical = file.axes.to_anatomical(path)?;
     let scale = file.units.to_metres();
 
     let anatomical = file.landmarks_through(path, |p| to_anatomical * (p * scale))?;
     check_orientation(path, &anatomical)?;
-    let to_pelvis = anatomical.to_pelvis_frame().map_err(|source| ImportError::Pelvis { path: path.to_path_buf(), source })?;
+    let to_pelvis = anatomical.to_pelvis_frame().map_err(|source| ImportError::Pelvis {
+        path: path.to_path_buf(),
+        source,
+    })?;
     let landmarks = anatomical.map(|p| to_pelvis.transform_point3(p));
 
     let (mut surface, report) = weld(&mesh_path, raw, scale)?;
     let mesh_to_pelvis_metres = to_pelvis * DAffine3::from_mat3(to_anatomical);
     surface.transform(&mesh_to_pelvis_metres);
-    let pelvis =
-        Pelvis::from_landmarks(landmarks, surface).map_err(|source| ImportError::Pelvis { path: path.to_path_buf(), source })?;
+    let pelvis = Pelvis::from_landmarks(landmarks, surface).map_err(|source| ImportError::Pelvis {
+        path: path.to_path_buf(),
+        source,
+    })?;
     Ok(ImportedPelvis {
         pelvis,
         report,

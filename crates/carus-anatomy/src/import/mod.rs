@@ -53,11 +53,24 @@ pub enum ImportError {
     #[error("{path}: unknown mesh format; use a .stl, .obj, .ply, .gltf or .glb file")]
     UnknownFormat { path: PathBuf },
     #[error("{path}: truncated binary STL: the header announces {expected} triangles but the file holds {found}; export the mesh again")]
-    TruncatedStl { path: PathBuf, expected: usize, found: usize },
+    TruncatedStl {
+        path: PathBuf,
+        expected: usize,
+        found: usize,
+    },
     #[error("{path}: not a readable {format} file: {message}")]
-    Format { path: PathBuf, format: &'static str, message: String },
+    Format {
+        path: PathBuf,
+        format: &'static str,
+        message: String,
+    },
     #[error("{path}: triangle {triangle} (corner {corner}, vertex {vertex} as read) has a NaN or infinite coordinate")]
-    NonFinite { path: PathBuf, triangle: usize, corner: usize, vertex: usize },
+    NonFinite {
+        path: PathBuf,
+        triangle: usize,
+        corner: usize,
+        vertex: usize,
+    },
     #[error("{path}: the mesh has no (non-degenerate) triangles")]
     Empty { path: PathBuf },
     #[error("{path}: a closed surface is needed here, but {defect}; close the mesh (e.g. fill holes in MeshLab) and export it again")]
@@ -67,7 +80,11 @@ pub enum ImportError {
     #[error("{path}: missing landmark(s) {}; add each under [landmarks] as `name = [x, y, z]` in the mesh's own coordinates and units", missing.join(", "))]
     MissingLandmarks { path: PathBuf, missing: Vec<String> },
     #[error("{path}: unknown landmark(s) {}; the landmarks are: {}", unknown.join(", "), known.join(", "))]
-    UnknownLandmarks { path: PathBuf, unknown: Vec<String>, known: Vec<String> },
+    UnknownLandmarks {
+        path: PathBuf,
+        unknown: Vec<String>,
+        known: Vec<String>,
+    },
     #[error("{path}: [axes]: {message}")]
     Axes { path: PathBuf, message: String },
     #[error("{path}: the landmarks disagree with the declared axes: {message}")]
@@ -99,14 +116,20 @@ pub fn read_closed_surface(path: &Path, units: Units) -> Result<ImportedSurface,
     imported
         .surface
         .check_closed()
-        .map_err(|defect| ImportError::NotClosed { path: path.to_path_buf(), defect })?;
+        .map_err(|defect| ImportError::NotClosed {
+            path: path.to_path_buf(),
+            defect,
+        })?;
     Ok(imported)
 }
 
 /// Reads a glTF/GLB file's meshes as separate named parts (file units and
 /// axes, node transforms applied), e.g. to tell the bones of a pelvis apart.
 pub fn read_gltf_parts(path: &Path) -> Result<Vec<NamedPart>, ImportError> {
-    let bytes = std::fs::read(path).map_err(|source| ImportError::Io { path: path.to_path_buf(), source })?;
+    let bytes = std::fs::read(path).map_err(|source| ImportError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
     parse_gltf_parts(path, &bytes)
 }
 
@@ -132,7 +155,8 @@ pub fn visible_human_female_pelvis() -> Result<ImportedPelvis, ImportError> {
     assemble_pelvis(path, &file, mesh_path, &raw)
 }
 
-const VISIBLE_HUMAN_LANDMARKS: &str = include_str!("../../../../assets/anatomy/visible-human-female-pelvis.landmarks.toml");
+const VISIBLE_HUMAN_LANDMARKS: &str =
+    include_str!("../../../../assets/anatomy/visible-human-female-pelvis.landmarks.toml");
 const VISIBLE_HUMAN_STL: &[u8] = include_bytes!("../../../../assets/anatomy/visible-human-female-pelvis.stl");
 
 /// Axes of the shipped Visible Human Female GLB (/work/shared/meshes/README.md:

@@ -74,7 +74,11 @@ impl PelvisBones {
             if name.contains("spongy") {
                 continue;
             }
-            let side = if name.ends_with("_l") || name.ends_with("left") { 0 } else { 1 };
+            let side = if name.ends_with("_l") || name.ends_with("left") {
+                0
+            } else {
+                1
+            };
             let target = if name.contains("sacrum") {
                 &mut bones.sacrum
             } else if name.contains("coccyx") {
@@ -109,7 +113,11 @@ impl PelvisBones {
 }
 
 /// The best point of `points` by `score` (largest), or the named error.
-fn best(points: impl IntoIterator<Item = DVec3>, what: &'static str, score: impl Fn(DVec3) -> f64) -> Result<DVec3, PickError> {
+fn best(
+    points: impl IntoIterator<Item = DVec3>,
+    what: &'static str,
+    score: impl Fn(DVec3) -> f64,
+) -> Result<DVec3, PickError> {
     points
         .into_iter()
         .max_by(|&a, &b| score(a).total_cmp(&score(b)))
@@ -165,13 +173,21 @@ pub fn pick_landmarks(b: &PelvisBones) -> Result<PelvisLandmarks, PickError> {
     let min_x = |v: &[DVec3]| v.iter().map(|p| p.x).fold(f64::MAX, f64::min);
     let max_x = |v: &[DVec3]| v.iter().map(|p| p.x).fold(f64::MIN, f64::max);
     let midline = 0.5 * (min_x(&b.pubis[1]) + max_x(&b.pubis[0]));
-    let pubic: Vec<DVec3> =
-        b.pubis.iter().flatten().copied().filter(|p| (p.x - midline).abs() < PUBIC_SLAB).collect();
+    let pubic: Vec<DVec3> = b
+        .pubis
+        .iter()
+        .flatten()
+        .copied()
+        .filter(|p| (p.x - midline).abs() < PUBIC_SLAB)
+        .collect();
 
     // 2. Lower inner border of the symphysis: the back of its lowest band.
     let lowest = pubic.iter().map(|p| p.z).fold(f64::MAX, f64::min);
-    let symphysis_lower =
-        best(pubic.iter().copied().filter(|p| p.z < lowest + EDGE_BAND), "lower symphysis border", |p| -p.y)?;
+    let symphysis_lower = best(
+        pubic.iter().copied().filter(|p| p.z < lowest + EDGE_BAND),
+        "lower symphysis border",
+        |p| -p.y,
+    )?;
 
     // 3. Obstetric conjugate: the shortest distance from the upper sacrum
     //    (midline) to the symphysis gives the promontory and the upper inner border.
@@ -201,7 +217,15 @@ pub fn pick_landmarks(b: &PelvisBones) -> Result<PelvisLandmarks, PickError> {
 
     // 4. Widest inlet transverse: at each millimetre of the conjugate, the
     //    innermost bone on each side within the brim slab; the widest level.
-    let hip: Vec<DVec3> = b.ilium.iter().chain(&b.pubis).chain(&b.ischium).flatten().copied().chain(b.sacrum.iter().copied()).collect();
+    let hip: Vec<DVec3> = b
+        .ilium
+        .iter()
+        .chain(&b.pubis)
+        .chain(&b.ischium)
+        .flatten()
+        .copied()
+        .chain(b.sacrum.iter().copied())
+        .collect();
     let mut levels: HashMap<i64, (Option<DVec3>, Option<DVec3>)> = HashMap::new();
     for &p in &hip {
         let l = frame.local(p);
@@ -235,42 +259,67 @@ pub fn pick_landmarks(b: &PelvisBones) -> Result<PelvisLandmarks, PickError> {
     }
     let (_, iliopectineal_left, iliopectineal_right) = widest.ok_or(PickError::NotFound("inlet transverse"))?;
 
-    let mut sided = [[DVec3::ZERO; 2]; 5];
-    for side in 0..2 {
+    // Steps 5-9 on each side: [sacroiliac, iliopubic, ischiopubic, spine, tuberosity].
+    let one_side = |side: usize| -> Result<[DVec3; 5], PickError> {
         let sign = if side == 1 { 1.0 } else { -1.0 };
         let medial = |p: DVec3| -sign * frame.local(p).x;
         // 5. Sacroiliac joint at the brim: the front-top end of the sacrum's
         //    junction with the ilium.
         let joint = near(&b.sacrum, &b.ilium[side], JUNCTION);
-        sided[0][side] = best(joint, "sacroiliac joint", |p| frame.local(p).y + frame.local(p).z)?;
+        let sacroiliac = best(joint, "sacroiliac joint", |p| frame.local(p).y + frame.local(p).z)?;
         // 6. Iliopubic eminence: the top of the pubis's junction with the ilium.
         let iliopubic = near(&b.pubis[side], &b.ilium[side], JUNCTION);
-        sided[1][side] = best(iliopubic, "iliopubic eminence", |p| frame.local(p).z)?;
+        let iliopubic = best(iliopubic, "iliopubic eminence", |p| frame.local(p).z)?;
         // 7. Ischiopubic junction: the lowest part of the pubis's junction
         //    with the ischium, its most medial (inner) point.
-        let ischiopubic = near(&b.pubis[side], &b.ischium[side], JUNCTION);
-        let bottom = ischiopubic.iter().map(|&p| frame.local(p).z).fold(f64::MAX, f64::min);
-        sided[2][side] =
-            best(ischiopubic.into_iter().filter(|&p| frame.local(p).z < bottom + 6.0 * MM), "ischiopubic junction", medial)?;
+        let junction = near(&b.pubis[side], &b.ischium[side], JUNCTION);
+        let bottom = junction.iter().map(|&p| frame.local(p).z).fold(f64::MAX, f64::min);
+        let ischiopubic = best(
+            junction.into_iter().filter(|&p| frame.local(p).z < bottom + 6.0 * MM),
+            "ischiopubic junction",
+            medial,
+        )?;
         // 8. Ischial spine: the most medial point of the ischium's back part.
-        sided[3][side] = best(
-            b.ischium[side].iter().copied().filter(|&p| frame.local(p).y < SPINE_MAX_ANTERIOR),
+        let spine = best(
+            b.ischium[side]
+                .iter()
+                .copied()
+                .filter(|&p| frame.local(p).y < SPINE_MAX_ANTERIOR),
             "ischial spine",
             medial,
         )?;
         // 9. Ischial tuberosity: the inner surface around the ischium's lowest point.
-        let lowest = best(b.ischium[side].iter().copied(), "ischial tuberosity", |p| -frame.local(p).z)?;
-        sided[4][side] = best(
-            b.ischium[side].iter().copied().filter(|p| p.distance(lowest) < TUBEROSITY_RADIUS),
+        let lowest = best(b.ischium[side].iter().copied(), "ischial tuberosity", |p| {
+            -frame.local(p).z
+        })?;
+        let tuberosity = best(
+            b.ischium[side]
+                .iter()
+                .copied()
+                .filter(|p| p.distance(lowest) < TUBEROSITY_RADIUS),
             "ischial tuberosity",
             medial,
         )?;
-    }
+        Ok([sacroiliac, iliopubic, ischiopubic, spine, tuberosity])
+    };
+    let [left, right] = [one_side(0)?, one_side(1)?];
 
     // 10. Sacral apex: the front of the sacrum's lowest midline band.
-    let sacral_midline: Vec<DVec3> = b.sacrum.iter().copied().filter(|p| (p.x - midline).abs() < PUBIC_SLAB).collect();
+    let sacral_midline: Vec<DVec3> = b
+        .sacrum
+        .iter()
+        .copied()
+        .filter(|p| (p.x - midline).abs() < PUBIC_SLAB)
+        .collect();
     let sacral_bottom = sacral_midline.iter().map(|p| p.z).fold(f64::MAX, f64::min);
-    let sacral_apex = best(sacral_midline.iter().copied().filter(|p| p.z < sacral_bottom + EDGE_BAND), "sacral apex", |p| p.y)?;
+    let sacral_apex = best(
+        sacral_midline
+            .iter()
+            .copied()
+            .filter(|p| p.z < sacral_bottom + EDGE_BAND),
+        "sacral apex",
+        |p| p.y,
+    )?;
     // 11. Coccyx tip: the point of the coccyx farthest from the sacral apex.
     let coccyx_tip = best(b.coccyx.iter().copied(), "coccyx tip", |p| p.distance(sacral_apex))?;
 
@@ -292,15 +341,21 @@ pub fn pick_landmarks(b: &PelvisBones) -> Result<PelvisLandmarks, PickError> {
     }
     let mut keys: Vec<i64> = steps.keys().copied().collect();
     keys.sort_unstable();
-    let curve: Vec<DVec3> =
-        std::iter::once(sacral_promontory).chain(keys.iter().map(|k| steps[k])).chain(std::iter::once(sacral_apex)).collect();
+    let curve: Vec<DVec3> = std::iter::once(sacral_promontory)
+        .chain(keys.iter().map(|k| steps[k]))
+        .chain(std::iter::once(sacral_apex))
+        .collect();
     let mut lengths = vec![0.0];
     for w in curve.windows(2) {
         lengths.push(lengths[lengths.len() - 1] + w[0].distance(w[1]));
     }
     let total = lengths[lengths.len() - 1];
     let at_fraction = |f: f64| {
-        let k = (0..curve.len()).min_by(|&a, &b| (lengths[a] - f * total).abs().total_cmp(&(lengths[b] - f * total).abs()));
+        let k = (0..curve.len()).min_by(|&a, &b| {
+            (lengths[a] - f * total)
+                .abs()
+                .total_cmp(&(lengths[b] - f * total).abs())
+        });
         curve[k.unwrap_or(0)]
     };
     let sacrum_s2_s3 = at_fraction(S2_S3_FRACTION);
@@ -309,8 +364,12 @@ pub fn pick_landmarks(b: &PelvisBones) -> Result<PelvisLandmarks, PickError> {
     // 13. Lower lateral borders of the sacrum: its most lateral points at
     //     the level of the S4-S5 junction.
     let level = (sacrum_s4_s5 - sacral_promontory).dot(along);
-    let band: Vec<DVec3> =
-        b.sacrum.iter().copied().filter(|p| ((*p - sacral_promontory).dot(along) - level).abs() < BORDER_BAND).collect();
+    let band: Vec<DVec3> = b
+        .sacrum
+        .iter()
+        .copied()
+        .filter(|p| ((*p - sacral_promontory).dot(along) - level).abs() < BORDER_BAND)
+        .collect();
     let sacral_border_left = best(band.iter().copied(), "sacral border", |p| midline - p.x)?;
     let sacral_border_right = best(band.iter().copied(), "sacral border", |p| p.x - midline)?;
 
@@ -320,22 +379,22 @@ pub fn pick_landmarks(b: &PelvisBones) -> Result<PelvisLandmarks, PickError> {
         symphysis_lower,
         iliopectineal_left,
         iliopectineal_right,
-        sacroiliac_left: sided[0][0],
-        sacroiliac_right: sided[0][1],
-        iliopubic_eminence_left: sided[1][0],
-        iliopubic_eminence_right: sided[1][1],
+        sacroiliac_left: left[0],
+        sacroiliac_right: right[0],
+        iliopubic_eminence_left: left[1],
+        iliopubic_eminence_right: right[1],
         sacrum_s2_s3,
         sacrum_s4_s5,
         sacral_apex,
         coccyx_tip,
-        ischial_spine_left: sided[3][0],
-        ischial_spine_right: sided[3][1],
-        ischial_tuberosity_left: sided[4][0],
-        ischial_tuberosity_right: sided[4][1],
+        ischial_spine_left: left[3],
+        ischial_spine_right: right[3],
+        ischial_tuberosity_left: left[4],
+        ischial_tuberosity_right: right[4],
         sacral_border_left,
         sacral_border_right,
-        ischiopubic_left: sided[2][0],
-        ischiopubic_right: sided[2][1],
+        ischiopubic_left: left[2],
+        ischiopubic_right: right[2],
     })
 }
 

@@ -126,7 +126,7 @@ fn gltf_json(node_json: &str, buffer_uri: Option<String>) -> String {
 
 fn glb(node_json: &str) -> Vec<u8> {
     let mut json = gltf_json(node_json, None).into_bytes();
-    while json.len() % 4 != 0 {
+    while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
     let bin = gltf_buffer();
@@ -167,7 +167,12 @@ fn a_tetrahedron_round_trips_in_every_format() {
         assert_eq!((s.vertices.len(), s.triangles.len()), (4, 4), "{}", path.display());
         assert!((s.signed_volume() - 1e-9 / 6.0).abs() < 1e-18, "{}", path.display());
         let r = imported.report;
-        assert_eq!((r.parts, r.closed_parts, r.open_edges, r.non_manifold_edges), (1, 1, 0, 0), "{}", path.display());
+        assert_eq!(
+            (r.parts, r.closed_parts, r.open_edges, r.non_manifold_edges),
+            (1, 1, 0, 0),
+            "{}",
+            path.display()
+        );
     }
     // STL stores every corner: twelve read, four kept.
     let stl = read_surface(&files[0], Units::Metres).unwrap();
@@ -179,7 +184,11 @@ fn a_tetrahedron_round_trips_in_every_format() {
 #[test]
 fn gltf_node_transforms_are_applied_and_mirrors_stay_outward() {
     let dir = scratch("gltf-transform");
-    let moved = write(&dir, "moved.gltf", embedded_gltf(r#", "translation": [1, 2, 3]"#).as_bytes());
+    let moved = write(
+        &dir,
+        "moved.gltf",
+        embedded_gltf(r#", "translation": [1, 2, 3]"#).as_bytes(),
+    );
     let s = read_closed_surface(&moved, Units::Metres).unwrap().surface;
     assert_eq!(s.bounds().unwrap().0, DVec3::new(1.0, 2.0, 3.0));
     let mirrored = write(&dir, "mirrored.glb", &glb(r#", "scale": [-1, 1, 1]"#));
@@ -195,22 +204,52 @@ fn broken_meshes_say_what_and_where() {
     let stl = binary_stl();
     let truncated = write(&dir, "truncated.stl", &stl[..84 + 50 * 2 + 10]);
     let err = read_surface(&truncated, Units::Millimetres).unwrap_err();
-    assert!(matches!(err, ImportError::TruncatedStl { expected: 4, found: 2, .. }), "{err}");
+    assert!(
+        matches!(
+            err,
+            ImportError::TruncatedStl {
+                expected: 4,
+                found: 2,
+                ..
+            }
+        ),
+        "{err}"
+    );
     assert!(err.to_string().contains("truncated.stl") && err.to_string().contains("4 triangles"));
 
     let nan = write(&dir, "nan.obj", obj().replacen("v 0 1 0", "v nan 1 0", 1).as_bytes());
     let err = read_surface(&nan, Units::Millimetres).unwrap_err();
     // The third vertex is the second corner of the first face.
-    assert!(matches!(err, ImportError::NonFinite { triangle: 0, corner: 1, .. }), "{err}");
+    assert!(
+        matches!(
+            err,
+            ImportError::NonFinite {
+                triangle: 0,
+                corner: 1,
+                ..
+            }
+        ),
+        "{err}"
+    );
 
-    let open = write(&dir, "open.obj", obj().trim_end().rsplit_once('\n').unwrap().0.as_bytes());
+    let open = write(
+        &dir,
+        "open.obj",
+        obj().trim_end().rsplit_once('\n').unwrap().0.as_bytes(),
+    );
     let err = read_closed_surface(&open, Units::Millimetres).unwrap_err();
-    assert!(err.to_string().contains("open there") && err.to_string().contains("open.obj"), "{err}");
+    assert!(
+        err.to_string().contains("open there") && err.to_string().contains("open.obj"),
+        "{err}"
+    );
     // The same surface is fine where an open one is allowed, with its openings counted.
     assert_eq!(read_surface(&open, Units::Millimetres).unwrap().report.open_edges, 3);
 
     let unknown = write(&dir, "mesh.xyz", b"1 2 3");
-    assert!(matches!(read_surface(&unknown, Units::Metres), Err(ImportError::UnknownFormat { .. })));
+    assert!(matches!(
+        read_surface(&unknown, Units::Metres),
+        Err(ImportError::UnknownFormat { .. })
+    ));
     std::fs::remove_dir_all(dir).ok();
 }
 
@@ -229,11 +268,20 @@ fn edited_landmarks(dir: &Path, edit: impl Fn(String) -> String) -> PathBuf {
 fn landmark_file_mistakes_are_named_with_their_fix() {
     let dir = scratch("landmarks");
     let missing = edited_landmarks(&dir, |t| {
-        t.lines().filter(|l| !l.starts_with("coccyx_tip") && !l.starts_with("sacral_apex")).collect::<Vec<_>>().join("\n")
+        t.lines()
+            .filter(|l| !l.starts_with("coccyx_tip") && !l.starts_with("sacral_apex"))
+            .collect::<Vec<_>>()
+            .join("\n")
     });
     let err = import_pelvis(&missing).unwrap_err().to_string();
-    assert!(err.contains("sacral_apex, coccyx_tip") || err.contains("coccyx_tip") && err.contains("sacral_apex"), "{err}");
-    assert!(err.contains("edited.landmarks.toml") && err.contains("[landmarks]"), "{err}");
+    assert!(
+        err.contains("sacral_apex, coccyx_tip") || err.contains("coccyx_tip") && err.contains("sacral_apex"),
+        "{err}"
+    );
+    assert!(
+        err.contains("edited.landmarks.toml") && err.contains("[landmarks]"),
+        "{err}"
+    );
 
     let unknown = edited_landmarks(&dir, |t| t.replace("coccyx_tip", "coccyx_top"));
     let err = import_pelvis(&unknown).unwrap_err().to_string();
@@ -244,9 +292,15 @@ fn landmark_file_mistakes_are_named_with_their_fix() {
     assert!(err.contains("iliopectineal_right") && err.contains("[axes]"), "{err}");
 
     let bad_axis = edited_landmarks(&dir, |t| t.replace("cranial = \"+z\"", "cranial = \"+w\""));
-    assert!(import_pelvis(&bad_axis).unwrap_err().to_string().contains("cranial = \"+w\""));
+    assert!(import_pelvis(&bad_axis)
+        .unwrap_err()
+        .to_string()
+        .contains("cranial = \"+w\""));
     let same_axis = edited_landmarks(&dir, |t| t.replace("cranial = \"+z\"", "cranial = \"+y\""));
-    assert!(import_pelvis(&same_axis).unwrap_err().to_string().contains("three different mesh axes"));
+    assert!(import_pelvis(&same_axis)
+        .unwrap_err()
+        .to_string()
+        .contains("three different mesh axes"));
 
     let units = edited_landmarks(&dir, |t| t.replace("units = \"mm\"", "units = \"cm\""));
     assert!(import_pelvis(&units).unwrap_err().to_string().contains("units"));
@@ -274,7 +328,10 @@ const DOCUMENTED: [(&str, f64); 12] = [
 fn the_visible_human_pelvis_imports_into_the_pelvis_frame() {
     let imported = visible_human_female_pelvis().unwrap();
     // The embedded copy is the file on disk.
-    assert_eq!(import_pelvis(&visible_human_female_pelvis_path()).unwrap().pelvis, imported.pelvis);
+    assert_eq!(
+        import_pelvis(&visible_human_female_pelvis_path()).unwrap().pelvis,
+        imported.pelvis
+    );
     let r = imported.report;
     // Sacrum and coccyx are closed shells; each hip bone is three closed
     // shells (ilium, ischium, pubis) sharing edges where they meet.
@@ -287,10 +344,13 @@ fn the_visible_human_pelvis_imports_into_the_pelvis_frame() {
     assert!(l.iliopectineal_right.x > 0.0 && l.iliopectineal_left.x < 0.0);
     assert!(l.coccyx_tip.z < 0.0 && l.ischial_spine_left.z < 0.0);
     let m = measure(&imported.pelvis);
-    let json = serde_json::to_value(&m.diameters).unwrap();
+    let json = serde_json::to_value(m.diameters).unwrap();
     for (name, documented) in DOCUMENTED {
         let value = json[name].as_f64().unwrap();
-        assert!((value - documented).abs() < 0.051, "{name}: measured {value:.2}, docs/IMPORT.md says {documented}");
+        assert!(
+            (value - documented).abs() < 0.051,
+            "{name}: measured {value:.2}, docs/IMPORT.md says {documented}"
+        );
     }
     assert!(m.landmark_surface_gap_mm < 0.01, "{}", m.landmark_surface_gap_mm);
     // The rough figures of /work/shared/meshes/README.md where our picks
@@ -304,7 +364,8 @@ fn the_visible_human_pelvis_imports_into_the_pelvis_frame() {
 fn the_shipped_landmarks_are_what_the_picking_procedure_gives() {
     let glb = anatomy_assets_dir().join("visible-human-female-pelvis.glb");
     let parts = read_gltf_parts(&glb).unwrap();
-    let bones = pick::PelvisBones::from_named_parts(&parts, visible_human_glb_axes().to_anatomical(&glb).unwrap(), 1.0).unwrap();
+    let bones = pick::PelvisBones::from_named_parts(&parts, visible_human_glb_axes().to_anatomical(&glb).unwrap(), 1.0)
+        .unwrap();
     let picked = pick::pick_landmarks(&bones).unwrap();
     let file = pick::to_landmarks_file(
         &picked,
@@ -318,7 +379,10 @@ fn the_shipped_landmarks_are_what_the_picking_procedure_gives() {
     assert_eq!(shipped.axes, file.axes);
     for (name, p) in &file.landmarks {
         let q = shipped.landmarks[name];
-        assert!((DVec3::from_array(*p) - DVec3::from_array(q)).length() < 1e-9, "{name}: picked {p:?}, shipped {q:?}");
+        assert!(
+            (DVec3::from_array(*p) - DVec3::from_array(q)).length() < 1e-9,
+            "{name}: picked {p:?}, shipped {q:?}"
+        );
     }
 }
 
@@ -330,4 +394,20 @@ fn the_makehuman_baby_head_is_a_closed_95_mm_wide_surface() {
     let extent_mm = (hi - lo) * 1e3;
     assert!((extent_mm.x - 95.0).abs() < 0.5, "extent {extent_mm:?} mm");
     assert_eq!(head.report.parts, 1);
+}
+
+#[test]
+fn equivalent_axis_declarations_import_the_same_pelvis() {
+    let dir = scratch("axes");
+    let original = import_pelvis(&edited_landmarks(&dir, |t| t)).unwrap();
+    let restated = edited_landmarks(&dir, |t| {
+        t.replace("right = \"-x\"", "left = \"+x\"")
+            .replace("anterior = \"-y\"", "posterior = \"y\"")
+            .replace("cranial = \"+z\"", "caudal = \"-z\"")
+    });
+    let restated = import_pelvis(&restated).unwrap();
+    assert_eq!(original.pelvis.landmarks, restated.pelvis.landmarks);
+    restated.pelvis.surface.check_finite_and_indexed().unwrap();
+    assert!(restated.pelvis.surface.signed_volume() > 0.0);
+    std::fs::remove_dir_all(dir).ok();
 }

@@ -47,12 +47,19 @@ pub fn weld(path: &Path, raw: &RawMesh, scale: f64) -> Result<(TriSurface, MeshR
                 });
             };
             if !p.is_finite() {
-                return Err(ImportError::NonFinite { path: path.to_path_buf(), triangle, corner, vertex: vertex as usize });
+                return Err(ImportError::NonFinite {
+                    path: path.to_path_buf(),
+                    triangle,
+                    corner,
+                    vertex: vertex as usize,
+                });
             }
         }
     }
     if raw.triangles.is_empty() {
-        return Err(ImportError::Empty { path: path.to_path_buf() });
+        return Err(ImportError::Empty {
+            path: path.to_path_buf(),
+        });
     }
 
     // Merge by exact coordinate bits (+0.0 and -0.0 alike).
@@ -78,7 +85,9 @@ pub fn weld(path: &Path, raw: &RawMesh, scale: f64) -> Result<(TriSurface, MeshR
         }
     }
     if triangles.is_empty() {
-        return Err(ImportError::Empty { path: path.to_path_buf() });
+        return Err(ImportError::Empty {
+            path: path.to_path_buf(),
+        });
     }
     // Keep only vertices some triangle uses.
     let mut used = vec![u32::MAX; vertices.len()];
