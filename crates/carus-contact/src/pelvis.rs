@@ -113,12 +113,18 @@ pub struct BodyMotion {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct BodyContactState {
     anchors: Vec<Option<DVec3>>,
+    /// Samples last found inside the bone deeper than the search depth.
+    too_deep: Vec<bool>,
     clearance: Clearance,
 }
 
 impl BodyContactState {
     pub fn new(samples: &SurfaceSamples) -> Self {
-        BodyContactState { anchors: vec![None; samples.len()], clearance: Clearance::new(samples.len()) }
+        BodyContactState {
+            anchors: vec![None; samples.len()],
+            too_deep: vec![false; samples.len()],
+            clearance: Clearance::new(samples.len()),
+        }
     }
 
     /// Number of samples currently in contact.
@@ -175,6 +181,11 @@ pub struct ContactReport {
     /// Summed normal spring stiffness of the active contacts, N/m: the K of
     /// [`ContactLaw::critical_time_step`].
     pub normal_stiffness_n_per_m: f64,
+    /// Samples inside the bone deeper than the search depth: they carry no
+    /// force. Nonzero means the body tunnelled into the bone (a rigid step
+    /// too long, or a load far beyond the one the stiffness was sized for):
+    /// the loop should stop or shorten its step.
+    pub too_deep: usize,
 }
 
 impl ContactReport {
@@ -283,13 +294,18 @@ pub fn pelvis_contacts(
         pivot,
         moment_about_pivot: DVec3::ZERO,
         normal_stiffness_n_per_m: 0.0,
+        too_deep: 0,
     };
     for (i, (contact, anchor, query)) in results.into_iter().enumerate() {
         memory.anchors[i] = anchor;
         if let Some(found) = query {
             let p = motion.pose.transform_point(samples.points[i]);
             memory.clearance.record(i, p, found.as_ref(), band, searched);
+            // A skipped sample keeps its flag: having moved less than its
+            // depth beyond the band, it is still that deep.
+            memory.too_deep[i] = found.is_some_and(|h| -h.signed_distance > band);
         }
+        report.too_deep += usize::from(memory.too_deep[i]);
         if let Some(c) = contact {
             report.force += c.force();
             report.torque_about_com += (c.body_point - com).cross(c.force());
@@ -535,6 +551,22 @@ mod tests {
         assert_eq!(report.contacts[1].region, Some(0));
         assert_eq!(report.contacts[3].region, Some(1));
         assert_eq!(pelvis.region_name(1), Some("symphysis"));
+    }
+
+    #[test]
+    fn samples_deeper_than_the_search_depth_are_reported() {
+        let pelvis = plane(DQuat::IDENTITY).with_search_depth(2e-3).unwrap();
+        let law = ContactLaw::default();
+        let samples = SurfaceSamples { points: vec![DVec3::new(0.1, 0.0, -1e-3), DVec3::new(-0.1, 0.0, -3e-3)], areas: vec![1e-4; 2] };
+        let still = |z: f64| BodyMotion { pose: RigidPose::new(DVec3::new(0.0, 0.0, z), DQuat::IDENTITY), linear_velocity: DVec3::ZERO, angular_velocity: DVec3::ZERO };
+        let mut memory = BodyContactState::new(&samples);
+        let report = pelvis_contacts(&pelvis, &law, &samples, &still(0.0), DVec3::ZERO, &mut memory).unwrap();
+        assert_eq!((report.contacts.len(), report.too_deep), (1, 1));
+        // Still flagged while skipped; cleared once it is back within the band.
+        let report = pelvis_contacts(&pelvis, &law, &samples, &still(1e-4), DVec3::ZERO, &mut memory).unwrap();
+        assert_eq!(report.too_deep, 1);
+        let report = pelvis_contacts(&pelvis, &law, &samples, &still(1.5e-3), DVec3::ZERO, &mut memory).unwrap();
+        assert_eq!((report.contacts.len(), report.too_deep), (1, 0));
     }
 
     #[test]
