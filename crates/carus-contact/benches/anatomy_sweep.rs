@@ -34,6 +34,7 @@ fn sweep(c: &mut Criterion) {
     let mut sigma = -0.03;
     let mut first_contact = None;
     let mut passes = 0u32;
+    let mut next_print = 100u32;
     let start = std::time::Instant::now();
     while sigma <= outlet {
         let motion = BodyMotion { pose: pose_at(sigma), linear_velocity: DVec3::ZERO, angular_velocity: DVec3::ZERO };
@@ -43,15 +44,18 @@ fn sweep(c: &mut Criterion) {
             first_contact = Some(sigma);
             eprintln!("first bone contact at sigma {:.1} mm", sigma * 1e3);
         }
-        if passes % 100 == 0 && !report.contacts.is_empty() {
-            let deepest = report.contacts.iter().map(|c| c.depth).fold(0.0, f64::max);
+        if passes == next_print && !report.contacts.is_empty() {
             eprintln!(
-                "sigma {:6.1} mm: {:4} contacts, deepest {:.2} mm, force {:8.1} N",
+                "sigma {:6.1} mm: {:4} contacts, deepest {:.2} mm, force {:8.1} N, {} samples tunnelled",
                 sigma * 1e3,
                 report.contacts.len(),
-                deepest * 1e3,
-                report.force.length()
+                report.deepest_m * 1e3,
+                report.force.length(),
+                report.too_deep
             );
+        }
+        if passes == next_print {
+            next_print += 100;
         }
         sigma += 1e-4;
     }

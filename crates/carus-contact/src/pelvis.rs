@@ -186,6 +186,9 @@ pub struct ContactReport {
     /// too long, or a load far beyond the one the stiffness was sized for):
     /// the loop should stop or shorten its step.
     pub too_deep: usize,
+    /// Deepest penetration among the contacts, m: keep it well below half
+    /// the bone's thickness, or the closest point flips to the far side.
+    pub deepest_m: f64,
 }
 
 impl ContactReport {
@@ -295,6 +298,7 @@ pub fn pelvis_contacts(
         moment_about_pivot: DVec3::ZERO,
         normal_stiffness_n_per_m: 0.0,
         too_deep: 0,
+        deepest_m: 0.0,
     };
     for (i, (contact, anchor, query)) in results.into_iter().enumerate() {
         memory.anchors[i] = anchor;
@@ -311,6 +315,7 @@ pub fn pelvis_contacts(
             report.torque_about_com += (c.body_point - com).cross(c.force());
             report.moment_about_pivot += c.moment_about(pivot);
             report.normal_stiffness_n_per_m += law.penalty_stiffness_pa_per_m * samples.areas[i];
+            report.deepest_m = report.deepest_m.max(c.depth);
             report.contacts.push(c);
         }
     }
@@ -537,6 +542,7 @@ mod tests {
         let mut anchors = BodyContactState::new(&samples);
         let report = pelvis_contacts(&pelvis, &law, &samples, &motion, pivot, &mut anchors).unwrap();
         assert_eq!(report.contacts.len(), 4);
+        assert!((report.deepest_m - 5e-4).abs() < 1e-15);
         let f = 4.0 * law.penalty_stiffness_pa_per_m * 1e-4 * 5e-4;
         assert!((report.force - DVec3::new(0.0, 0.0, f)).length() < 1e-9 * f);
         // Centre of pressure under the centre of mass, pivot e to the side:
