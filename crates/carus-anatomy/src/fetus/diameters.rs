@@ -56,11 +56,12 @@ pub enum HeadError {
         why: &'static str,
     },
     #[error(
-        "these six diameters cannot shape one convex head: along the {region} the landmarks \
-         would overlap by {overlap_mm:.1} mm; bring suboccipitobregmatic_mm, submentobregmatic_mm, \
-         mentovertical_mm and occipitofrontal_mm closer to their usual proportions (95, 95, 137.5, 117.5)"
+        "these six diameters cannot shape one convex head: along the {region} the landmarks miss the \
+         1 mm clearance a convex outline needs by {shortfall_mm:.1} mm; bring suboccipitobregmatic_mm, \
+         submentobregmatic_mm, mentovertical_mm and occipitofrontal_mm closer to their usual proportions \
+         (95, 95, 137.5, 117.5)"
     )]
-    Unshapeable { region: &'static str, overlap_mm: f64 },
+    Unshapeable { region: &'static str, shortfall_mm: f64 },
     #[error("surface resolution {0} is out of range: use 2 to 6 sphere subdivisions")]
     Resolution(u32),
 }

@@ -237,7 +237,7 @@ impl SagittalProfile {
         if clearance < MIN_CLEARANCE {
             return Err(HeadError::Unshapeable {
                 region: ARC_NAMES[arc],
-                overlap_mm: (MIN_CLEARANCE - clearance) * 1e3,
+                shortfall_mm: (MIN_CLEARANCE - clearance) * 1e3,
             });
         }
         let mut s = design.supports(&m);
