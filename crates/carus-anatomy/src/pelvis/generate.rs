@@ -14,16 +14,13 @@
 
 use glam::{DVec2, DVec3};
 
-use super::interpolate::catmull_rom;
+use super::interpolate::{catmull_rom, SuperRing, HALF_TURN};
 use super::layout::{point, Layout};
 use super::PelvisLandmarks;
 use crate::surface::TriSurface;
 
 /// Grid columns per 1/64 of a turn round the canal.
 const RESOLUTION: usize = 2;
-/// Positions round the canal are in 1/64 turns, `da` = distance from the
-/// front midline (0 front, 16 side, 32 back).
-const HALF_TURN: f64 = 32.0;
 /// Key rings, top to bottom; rows are measured in these units (`kappa`).
 const INLET: usize = 2;
 const GREATEST: usize = 3;
@@ -32,28 +29,6 @@ const APEX: usize = 5;
 const OUTLET: usize = 6;
 /// Grid rows between consecutive key rings (times RESOLUTION).
 const ROWS_BETWEEN: [usize; 6] = [3, 3, 5, 5, 5, 5];
-
-/// A ring that is a superellipse in x and a bent line in (y, z): through
-/// `front` and `back` on the midline and `(+-half_width, lateral)` at the sides.
-struct SuperRing {
-    front: DVec2,
-    back: DVec2,
-    lateral: DVec2,
-    half_width: f64,
-    exponent: f64,
-}
-
-impl SuperRing {
-    /// Point at signed turn position `s` (1/64 turns, positive towards the mother's left).
-    fn at(&self, s: f64) -> DVec3 {
-        let theta = std::f64::consts::FRAC_PI_2 + std::f64::consts::PI * s / HALF_TURN;
-        let power = |c: f64| c.signum() * c.abs().powf(2.0 / self.exponent);
-        let (sin, cos) = theta.sin_cos();
-        let share = power(sin).abs();
-        let end = if sin > 0.0 { self.front } else { self.back };
-        point(self.half_width * power(cos), self.lateral + share * (end - self.lateral))
-    }
-}
 
 /// A ring through control points given on the mother's left side at
 /// distances `da` from the front midline, mirrored to the right.
@@ -98,6 +73,22 @@ impl Ring {
     }
 }
 
+/// Superellipse exponent of the rings below the inlet (slightly fuller than
+/// an ellipse; engineering choice).
+const MID_RING_EXPONENT: f64 = 2.2;
+
+/// The mid-pelvis ring through the lower symphysis, the spines and S4-S5;
+/// the pelvic floor's attachment follows it from the pubis to the spines.
+pub(crate) fn mid_ring(l: &PelvisLandmarks) -> SuperRing {
+    SuperRing {
+        front: l.symphysis_lower,
+        back: l.sacrum_s4_s5,
+        left: l.ischial_spine_left,
+        right: l.ischial_spine_right,
+        exponent: MID_RING_EXPONENT,
+    }
+}
+
 fn yz(p: DVec3) -> DVec2 {
     DVec2::new(p.y, p.z)
 }
@@ -115,41 +106,36 @@ fn key_rings(layout: &Layout) -> [Ring; 7] {
     // False pelvis: the iliac fossae flare out to the crests (intercristal
     // width about twice the inlet transverse; engineering proportions).
     let crest_height = 0.55 * a;
-    let crest = SuperRing {
-        front: DVec2::new(0.75 * a, 0.6 * crest_height),
-        back: DVec2::new(-0.8 * a, 0.85 * crest_height),
-        lateral: DVec2::new(y_t + 0.1 * a, crest_height),
-        half_width: 0.95 * t,
-        exponent: 2.5,
+    let symmetric = |front: DVec2, back: DVec2, lateral: DVec2, half_width: f64, exponent: f64| SuperRing {
+        front: point(0.0, front),
+        back: point(0.0, back),
+        left: point(-half_width, lateral),
+        right: point(half_width, lateral),
+        exponent,
     };
-    let fossa = SuperRing {
-        front: DVec2::new(0.65 * a, 0.25 * a),
-        back: DVec2::new(-0.62 * a, 0.2 * a),
-        lateral: DVec2::new(y_t + 0.05 * a, 0.22 * a),
-        half_width: 0.72 * t,
-        exponent: 2.3,
-    };
-    let inlet = SuperRing {
-        front: yz(l.symphysis_upper),
-        back: yz(l.sacral_promontory),
-        lateral: DVec2::new(y_t, 0.0),
-        half_width: 0.5 * t,
-        exponent: layout.inlet_exponent,
-    };
-    let greatest = SuperRing {
-        front: yz(l.symphysis_middle()),
-        back: yz(l.sacrum_s2_s3),
-        lateral: layout.greatest_lateral,
-        half_width: layout.greatest_half_width,
-        exponent: 2.2,
-    };
-    let mid = SuperRing {
-        front: yz(l.symphysis_lower),
-        back: yz(l.sacrum_s4_s5),
-        lateral: layout.spine,
-        half_width: 0.5 * i,
-        exponent: 2.2,
-    };
+    let crest = symmetric(
+        DVec2::new(0.75 * a, 0.6 * crest_height),
+        DVec2::new(-0.8 * a, 0.85 * crest_height),
+        DVec2::new(y_t + 0.1 * a, crest_height),
+        0.95 * t,
+        2.5,
+    );
+    let fossa = symmetric(
+        DVec2::new(0.65 * a, 0.25 * a),
+        DVec2::new(-0.62 * a, 0.2 * a),
+        DVec2::new(y_t + 0.05 * a, 0.22 * a),
+        0.72 * t,
+        2.3,
+    );
+    let inlet = symmetric(yz(l.symphysis_upper), yz(l.sacral_promontory), DVec2::new(y_t, 0.0), 0.5 * t, layout.inlet_exponent);
+    let greatest = symmetric(
+        yz(l.symphysis_middle()),
+        yz(l.sacrum_s2_s3),
+        layout.greatest_lateral,
+        layout.greatest_half_width,
+        MID_RING_EXPONENT,
+    );
+    let mid = mid_ring(l);
     let junction = yz(l.ischiopubic_left);
     let border = l.sacral_border_left;
     let ischium = 0.5 * (layout.spine + tuberosity);

@@ -1,7 +1,39 @@
-//! Cubic Hermite (Catmull-Rom) interpolation through control points at
-//! non-uniform knots, periodic (around the canal) or open (down the canal).
+//! Curves the canal is built from: cubic Hermite (Catmull-Rom)
+//! interpolation through control points at non-uniform knots, periodic
+//! (around the canal) or open (down the canal), and superellipse rings.
 
 use glam::DVec3;
+
+/// Positions round the canal are in 1/64 turns: signed `s` positive towards
+/// the mother's left, `da = |s|` the distance from the front midline (0 front,
+/// 16 side, 32 back).
+pub(crate) const HALF_TURN: f64 = 32.0;
+
+/// A closed ring through four points: `front` and `back` on the antero-
+/// posterior line, `left` and `right` at the sides, a superellipse of
+/// `exponent` in between (2 is an ellipse; larger is boxier). With the sides
+/// at (+-w, y_l, z_l) it is x = w cos^(2/n), (y, z) moving from the sides'
+/// midpoint towards front or back by sin^(2/n).
+pub(crate) struct SuperRing {
+    pub front: DVec3,
+    pub back: DVec3,
+    pub left: DVec3,
+    pub right: DVec3,
+    pub exponent: f64,
+}
+
+impl SuperRing {
+    /// Point at signed turn position `s` (see [`HALF_TURN`]).
+    pub fn at(&self, s: f64) -> DVec3 {
+        let theta = std::f64::consts::FRAC_PI_2 + std::f64::consts::PI * s / HALF_TURN;
+        let (sin, cos) = theta.sin_cos();
+        let power = |c: f64| c.abs().powf(2.0 / self.exponent);
+        let middle = 0.5 * (self.left + self.right);
+        let side = if cos < 0.0 { self.left } else { self.right };
+        let end = if sin > 0.0 { self.front } else { self.back };
+        middle + power(cos) * (side - middle) + power(sin) * (end - middle)
+    }
+}
 
 /// Hermite basis between two control points `h` apart.
 fn hermite(p0: DVec3, m0: DVec3, p1: DVec3, m1: DVec3, h: f64, s: f64) -> DVec3 {

@@ -14,10 +14,14 @@ mod interpolate;
 mod landmarks;
 mod layout;
 pub mod measure;
+mod spec;
 
 pub use diameters::{DiameterError, PelvisDiameters};
 pub use landmarks::{PelvisLandmarks, LANDMARK_NAMES};
 pub use measure::{measure, PelvisMeasurement, PlaneMeasurement};
+pub use spec::{PelvisBuildError, PelvisSpec};
+pub(crate) use generate::mid_ring;
+pub(crate) use interpolate::SuperRing as MidRing;
 
 use glam::DVec3;
 use serde::{Deserialize, Serialize};

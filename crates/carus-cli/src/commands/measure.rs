@@ -1,10 +1,181 @@
-//! `carus measure` (being built; replaced by its owner).
+//! `carus measure pelvis|head [FILE.toml] [--json]`: builds (or imports) the
+//! anatomy a file describes and prints every diameter, plane and landmark.
 
-use super::Status;
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use carus_anatomy::fetus::{FetalHead, HeadDiameters, HeadMeasurement};
+use carus_anatomy::floor::FloorParameters;
+use carus_anatomy::pelvis::{measure, Pelvis, PelvisMeasurement, PelvisSpec};
+use serde::Deserialize;
+
+use super::{print_json, Status};
+
+/// Which part to measure.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum MeasurePart {
+    /// The maternal bony pelvis (`[pelvis]` table).
+    Pelvis,
+    /// The fetal head (`[head]` table).
+    Head,
+}
 
 #[derive(clap::Args)]
-pub struct MeasureArgs {}
+pub struct MeasureArgs {
+    /// The part to measure.
+    #[arg(value_enum)]
+    pub part: MeasurePart,
+    /// Anatomy or scenario file (TOML) with a `[pelvis]` or `[head]` table of
+    /// canonical keys (docs/ANATOMY.md); without it, the defaults.
+    pub file: Option<PathBuf>,
+    /// Print one JSON object on standard output.
+    #[arg(long)]
+    pub json: bool,
+}
 
-pub fn run(_args: &MeasureArgs) -> anyhow::Result<Status> {
-    anyhow::bail!("`carus measure` is not built yet")
+pub fn run(args: &MeasureArgs) -> anyhow::Result<Status> {
+    let file = AnatomyFile::load(args.file.as_deref())?;
+    match args.part {
+        MeasurePart::Pelvis => {
+            let pelvis = file.pelvis()?;
+            let m = measure(&pelvis);
+            if args.json {
+                print_json(&m)?;
+            } else {
+                print_pelvis(&m, file.describe());
+            }
+        }
+        MeasurePart::Head => {
+            let head = FetalHead::new(&file.head).context("the [head] diameters cannot be built")?;
+            let m = head.measure();
+            if args.json {
+                print_json(&m)?;
+            } else {
+                print_head(&m, file.describe());
+            }
+        }
+    }
+    Ok(Status::Success)
+}
+
+fn print_pelvis(m: &PelvisMeasurement, source: String) {
+    println!("Pelvis ({source}), pelvis frame: x mother's right, y anterior, z cranial; mm and degrees");
+    println!();
+    println!("Diameters");
+    let d = &m.diameters;
+    let rows: [(&str, &str, f64); 12] = [
+        ("inlet_ap_mm", "obstetric conjugate (promontory - upper inner symphysis)", d.inlet_ap_mm),
+        ("inlet_transverse_mm", "widest inlet transverse (iliopectineal points)", d.inlet_transverse_mm),
+        ("inlet_oblique_mm", "inlet oblique, mean of right and left", d.inlet_oblique_mm),
+        ("mid_ap_mm", "lower symphysis - S4-S5", d.mid_ap_mm),
+        ("interspinous_mm", "between the ischial spines", d.interspinous_mm),
+        ("outlet_ap_mm", "lower symphysis - coccyx tip", d.outlet_ap_mm),
+        ("outlet_transverse_mm", "intertuberous", d.outlet_transverse_mm),
+        ("outlet_oblique_mm", "outlet oblique, mean of right and left", d.outlet_oblique_mm),
+        ("symphysis_length_mm", "inner symphysis, upper - lower border", d.symphysis_length_mm),
+        ("sacral_length_mm", "promontory - sacral apex", d.sacral_length_mm),
+        ("sacral_depth_mm", "S2-S3 behind the promontory-apex chord", d.sacral_depth_mm),
+        ("subpubic_angle_deg", "pubic arch at the lower symphysis", d.subpubic_angle_deg),
+    ];
+    for (key, meaning, value) in rows {
+        println!("  {key:<22} {value:8.1}   {meaning}");
+    }
+    println!("  {:<22} {:8.1} / {:.1}", "inlet obliques R / L", m.inlet_oblique_right_mm, m.inlet_oblique_left_mm);
+    println!("  {:<22} {:8.1} / {:.1}", "outlet obliques R / L", m.outlet_oblique_right_mm, m.outlet_oblique_left_mm);
+    println!("  {:<22} {:8.1}", "outlet post. sagittal", m.outlet_posterior_sagittal_mm);
+    println!();
+    println!("Planes (centre, caudal normal, tilt from the inlet, AP, transverse, sigma along the pelvic axis)");
+    for name in ["inlet", "greatest_dimensions", "mid", "outlet"] {
+        let p = &m.planes[name];
+        let transverse = p.transverse_mm.map_or("-".to_string(), |t| format!("{t:.1}"));
+        println!(
+            "  {name:<20} centre ({:6.1} {:6.1} {:6.1})  normal ({:5.2} {:5.2} {:5.2})  tilt {:5.1}  AP {:6.1}  transverse {:>6}  sigma {:6.1}",
+            p.centre_mm[0], p.centre_mm[1], p.centre_mm[2], p.normal[0], p.normal[1], p.normal[2], p.tilt_from_inlet_deg, p.ap_mm, transverse, p.sigma_mm
+        );
+    }
+    println!("  pelvic axis length (inlet to outlet centre) {:.1}", m.axis_length_mm);
+    println!();
+    println!("Landmarks (x, y, z)");
+    for (name, p) in &m.landmarks_mm {
+        println!("  {name:<26} {:7.1} {:7.1} {:7.1}", p[0], p[1], p[2]);
+    }
+    println!("  largest landmark distance from the surface: {:.2}", m.landmark_surface_gap_mm);
+}
+
+fn print_head(m: &HeadMeasurement, source: String) {
+    println!("Fetal head ({source}), head frame: x occipitofrontal, y towards the fetal left, z vertex; mm");
+    println!();
+    println!("Diameters");
+    for (key, value) in [
+        ("biparietal_mm", m.biparietal_mm),
+        ("bitemporal_mm", m.bitemporal_mm),
+        ("occipitofrontal_mm", m.occipitofrontal_mm),
+        ("suboccipitobregmatic_mm", m.suboccipitobregmatic_mm),
+        ("mentovertical_mm", m.mentovertical_mm),
+        ("submentobregmatic_mm", m.submentobregmatic_mm),
+    ] {
+        println!("  {key:<26} {value:8.1}");
+    }
+    println!();
+    println!("Extents: {}", serde_json::to_string(&m.extents).unwrap_or_default());
+    println!();
+    println!("Landmarks (x, y, z)");
+    for (name, p) in &m.landmarks_mm {
+        println!("  {name:<26} {:7.1} {:7.1} {:7.1}", p[0], p[1], p[2]);
+    }
+}
+
+/// The anatomy tables (`[pelvis]`, `[head]`, `[floor]`) of an anatomy or
+/// scenario file, shared with `carus mesh`. Other tables of a scenario file
+/// are left to the commands that use them.
+pub struct AnatomyFile {
+    pub path: Option<PathBuf>,
+    pub pelvis: PelvisSpec,
+    pub head: HeadDiameters,
+    pub floor: FloorParameters,
+}
+
+impl AnatomyFile {
+    /// Reads `path`, or the defaults when there is none.
+    pub fn load(path: Option<&Path>) -> anyhow::Result<Self> {
+        let Some(path) = path else {
+            return Ok(AnatomyFile {
+                path: None,
+                pelvis: PelvisSpec::default(),
+                head: HeadDiameters::default(),
+                floor: FloorParameters::default(),
+            });
+        };
+        let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+        let table: toml::Table = toml::from_str(&text).with_context(|| format!("{} is not valid TOML", path.display()))?;
+        fn part<T: for<'de> Deserialize<'de> + Default>(path: &Path, table: &toml::Table, key: &str) -> anyhow::Result<T> {
+            match table.get(key) {
+                None => Ok(T::default()),
+                Some(value) => T::deserialize(value.clone())
+                    .with_context(|| format!("{}: in the [{key}] table (keys and units: docs/ANATOMY.md)", path.display())),
+            }
+        }
+        Ok(AnatomyFile {
+            pelvis: part(path, &table, "pelvis")?,
+            head: part(path, &table, "head")?,
+            floor: part(path, &table, "floor")?,
+            path: Some(path.to_path_buf()),
+        })
+    }
+
+    /// Builds the pelvis the file describes (imports resolve next to the file).
+    pub fn pelvis(&self) -> anyhow::Result<Pelvis> {
+        let base = self.path.as_deref().and_then(Path::parent).unwrap_or(Path::new("."));
+        let where_ = self.path.as_ref().map_or("the default pelvis".to_string(), |p| format!("{}: [pelvis]", p.display()));
+        self.pelvis.build(base).with_context(|| where_)
+    }
+
+    /// Where the anatomy came from, for headings.
+    pub fn describe(&self) -> String {
+        let source = self.path.as_ref().map_or("defaults".to_string(), |p| p.display().to_string());
+        match &self.pelvis {
+            PelvisSpec::Imported { landmarks_file } => format!("{source}, pelvis imported from {}", landmarks_file.display()),
+            PelvisSpec::Generated(_) => source,
+        }
+    }
 }

@@ -1,10 +1,156 @@
-//! `carus mesh` (being built; replaced by its owner).
+//! `carus mesh pelvis|head|floor [FILE.toml] --out DIR`: writes the anatomy
+//! for inspection in ParaView: surfaces as binary STL, the pelvic floor as
+//! VTU, landmarks as CSV and JSON beside them (mm, in each part's frame).
 
-use super::Status;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use carus_anatomy::fetus::FetalHead;
+use carus_anatomy::floor::{pelvic_floor, ATTACHED};
+use carus_anatomy::TriSurface;
+use carus_io::{write_vtu, FrameFields};
+
+use super::measure::AnatomyFile;
+use super::{print_json, Status};
+
+/// Which part to write.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum MeshPart {
+    /// The bony pelvis surface, its landmarks and the pelvic axis.
+    Pelvis,
+    /// The fetal head surface and its landmarks.
+    Head,
+    /// The pelvic floor volume mesh (with the pelvis it is shaped to).
+    Floor,
+}
 
 #[derive(clap::Args)]
-pub struct MeshArgs {}
+pub struct MeshArgs {
+    /// The part to write.
+    #[arg(value_enum)]
+    pub part: MeshPart,
+    /// Anatomy or scenario file (TOML) with `[pelvis]`, `[head]` or `[floor]`
+    /// tables (docs/ANATOMY.md); without it, the defaults.
+    pub file: Option<PathBuf>,
+    /// Folder to write into (created if missing).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Print one JSON object (the files written) on standard output.
+    #[arg(long)]
+    pub json: bool,
+}
 
-pub fn run(_args: &MeshArgs) -> anyhow::Result<Status> {
-    anyhow::bail!("`carus mesh` is not built yet")
+/// Points along the pelvic axis in the written axis file.
+const AXIS_SAMPLES: usize = 60;
+
+pub fn run(args: &MeshArgs) -> anyhow::Result<Status> {
+    let file = AnatomyFile::load(args.file.as_deref())?;
+    std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create the folder {}", args.out.display()))?;
+    let mut written = Vec::new();
+    match args.part {
+        MeshPart::Pelvis | MeshPart::Floor => {
+            let pelvis = file.pelvis()?;
+            written.push(write_stl(&args.out.join("pelvis.stl"), &pelvis.surface)?);
+            let landmarks: Vec<(String, [f64; 3])> =
+                pelvis.landmarks.named().iter().map(|(n, p)| (n.to_string(), p.to_array())).collect();
+            written.extend(write_landmarks(&args.out, "pelvis_landmarks", &landmarks)?);
+            let axis: Vec<(f64, [f64; 3])> = (0..=AXIS_SAMPLES)
+                .map(|k| {
+                    let sigma = pelvis.axis.length() * k as f64 / AXIS_SAMPLES as f64;
+                    (sigma, pelvis.axis.point(sigma).to_array())
+                })
+                .collect();
+            written.push(write_axis(&args.out.join("pelvic_axis.csv"), &axis)?);
+            if args.part == MeshPart::Floor {
+                let floor = pelvic_floor(&pelvis, &file.floor).context("the [floor] cannot be built for this pelvis")?;
+                let path = args.out.join("pelvic_floor.vtu");
+                let zeros_n = vec![[0.0; 3]; floor.node_count()];
+                let zeros_e = vec![0.0; floor.element_count()];
+                let ones_e = vec![1.0; floor.element_count()];
+                let fields = FrameFields {
+                    displacement_m: &zeros_n,
+                    von_mises_pa: &zeros_e,
+                    max_principal_stretch: &ones_e,
+                    jacobian: &ones_e,
+                };
+                write_vtu(&path, &floor, &fields)?;
+                written.push(path);
+                let attached: Vec<(String, [f64; 3])> =
+                    floor.node_sets[ATTACHED].iter().map(|&n| (format!("node_{n}"), floor.nodes[n as usize])).collect();
+                written.extend(write_landmarks(&args.out, "pelvic_floor_attached_nodes", &attached)?);
+                eprintln!(
+                    "pelvic floor: {} H8 elements, {} nodes, {} attached",
+                    floor.element_count(),
+                    floor.node_count(),
+                    attached.len()
+                );
+            }
+        }
+        MeshPart::Head => {
+            let head = FetalHead::new(&file.head).context("the [head] diameters cannot be built")?;
+            written.push(write_stl(&args.out.join("head.stl"), &head.surface)?);
+            let landmarks: Vec<(String, [f64; 3])> =
+                head.landmarks.named().iter().map(|(n, p)| (n.to_string(), p.to_array())).collect();
+            written.extend(write_landmarks(&args.out, "head_landmarks", &landmarks)?);
+        }
+    }
+    if args.json {
+        let files: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
+        print_json(&serde_json::json!({ "out_dir": args.out.display().to_string(), "files": files }))?;
+    } else {
+        for p in &written {
+            println!("wrote {}", p.display());
+        }
+    }
+    Ok(Status::Success)
+}
+
+/// Binary STL, coordinates in millimetres (what ParaView and slicers expect of STL).
+fn write_stl(path: &Path, surface: &TriSurface) -> anyhow::Result<PathBuf> {
+    let mut bytes = Vec::with_capacity(84 + 50 * surface.triangles.len());
+    let mut header = [0u8; 80];
+    let title = b"carus anatomy, millimetres, pelvis frame";
+    header[..title.len()].copy_from_slice(title);
+    bytes.extend_from_slice(&header);
+    bytes.extend_from_slice(&(surface.triangles.len() as u32).to_le_bytes());
+    for t in 0..surface.triangles.len() {
+        let [a, b, c] = surface.corners(t);
+        let normal = (b - a).cross(c - a).normalize_or_zero();
+        for v in [normal, a * 1e3, b * 1e3, c * 1e3] {
+            for x in v.to_array() {
+                bytes.extend_from_slice(&(x as f32).to_le_bytes());
+            }
+        }
+        bytes.extend_from_slice(&0u16.to_le_bytes());
+    }
+    std::fs::write(path, bytes).with_context(|| format!("cannot write {}", path.display()))?;
+    Ok(path.to_path_buf())
+}
+
+/// `NAME.csv` (name,x_mm,y_mm,z_mm) and `NAME.json` ({name: [x, y, z]} in
+/// mm) from points in metres.
+fn write_landmarks(dir: &Path, name: &str, points: &[(String, [f64; 3])]) -> anyhow::Result<[PathBuf; 2]> {
+    let csv_path = dir.join(format!("{name}.csv"));
+    let mut csv = String::from("name,x_mm,y_mm,z_mm\n");
+    for (label, p) in points {
+        csv += &format!("{label},{:.4},{:.4},{:.4}\n", p[0] * 1e3, p[1] * 1e3, p[2] * 1e3);
+    }
+    std::fs::write(&csv_path, csv).with_context(|| format!("cannot write {}", csv_path.display()))?;
+    let json_path = dir.join(format!("{name}.json"));
+    let map: serde_json::Map<String, serde_json::Value> =
+        points.iter().map(|(label, p)| (label.clone(), serde_json::json!([p[0] * 1e3, p[1] * 1e3, p[2] * 1e3]))).collect();
+    let mut out = std::fs::File::create(&json_path).with_context(|| format!("cannot write {}", json_path.display()))?;
+    writeln!(out, "{}", serde_json::to_string_pretty(&map)?).with_context(|| format!("cannot write {}", json_path.display()))?;
+    Ok([csv_path, json_path])
+}
+
+/// `sigma_mm,x_mm,y_mm,z_mm` along the pelvic axis.
+fn write_axis(path: &Path, samples: &[(f64, [f64; 3])]) -> anyhow::Result<PathBuf> {
+    let mut csv = String::from("sigma_mm,x_mm,y_mm,z_mm\n");
+    for (sigma, p) in samples {
+        csv += &format!("{:.4},{:.4},{:.4},{:.4}\n", sigma * 1e3, p[0] * 1e3, p[1] * 1e3, p[2] * 1e3);
+    }
+    std::fs::write(path, csv).with_context(|| format!("cannot write {}", path.display()))?;
+    Ok(path.to_path_buf())
 }
