@@ -3,6 +3,7 @@
 
 pub mod axis;
 pub mod fetus;
+pub mod floor;
 pub mod import;
 pub mod pelvis;
 pub mod surface;
