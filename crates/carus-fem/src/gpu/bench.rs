@@ -8,12 +8,12 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-use crate::generate::{box_h8, box_t4};
-use crate::loads::{BoundaryConditions, ImposedDisplacement, LoadShape};
-use crate::material::Material;
+use crate::loads::BoundaryConditions;
 use crate::mesh::ElementKind;
-use crate::model::{MaterialRegion, ModelOptions, Precision, TledModel};
+use crate::model::TledModel;
 use crate::solver::StepControl;
+use crate::validation::cube::{CubeElement, CubeSetup, CubeVariant};
+use crate::validation::tissue_model;
 
 use super::device::GpuDevice;
 use super::error::GpuError;
@@ -51,26 +51,16 @@ pub struct GpuBenchReport {
     pub fraction_of_peak: Option<f64>,
 }
 
-/// The bench cube: edge 0.1 m, n^3 H8 (or 6 n^3 T4), the V3 tissue
-/// (VALIDATION.md: mu = 1006.711409 Pa, kappa = 50 kPa, 1000 kg/m^3,
-/// damping 5 1/s), x = 0 fixed, x = L pulled 0.03 m over 1 s; dt is the
-/// critical step, as in the CPU bench.
+/// The CPU bench's cube: VALIDATION.md V3 (free-lateral variant) at size
+/// n, dt the critical step.
 fn cube(element: ElementKind, n: usize) -> Result<(Arc<TledModel>, BoundaryConditions), GpuError> {
-    let mesh = match element {
-        ElementKind::H8 => box_h8([0.1; 3], [n; 3]),
-        ElementKind::T4 => box_t4([0.1; 3], [n; 3]),
+    let element = match element {
+        ElementKind::H8 => CubeElement::H8,
+        ElementKind::T4 => CubeElement::T4,
     };
-    let region = MaterialRegion { element_set: None, material: Material::neo_hookean(1006.711409, 50_000.0), density_kg_m3: 1000.0 };
-    let options = ModelOptions { damping_per_s: 5.0, precision: Precision::F32, ..ModelOptions::default() };
-    let model = Arc::new(TledModel::new(&mesh, &[region], &options)?);
-    let mut bcs = BoundaryConditions::default();
-    bcs.fix_nodes(&mesh.node_sets["x0"]);
-    bcs.displacements.push(ImposedDisplacement {
-        nodes: mesh.node_sets["x1"].clone(),
-        components: [Some(0.03), None, None],
-        shape: LoadShape::RampHold { ramp_s: 1.0 },
-    });
-    Ok((model, bcs))
+    let setup = CubeSetup::miller(n, element, CubeVariant::FreeLateral);
+    let mesh = setup.mesh();
+    Ok((tissue_model(&mesh, &setup.options())?, setup.boundary_conditions(&mesh)))
 }
 
 /// Times `steps` steps of the n-cube on `gpu`, after a short warm-up;
