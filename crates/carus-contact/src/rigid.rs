@@ -42,6 +42,13 @@ impl RigidPose {
     }
 }
 
+impl Default for RigidPose {
+    /// The identity: body frame on the world frame.
+    fn default() -> Self {
+        RigidPose::IDENTITY
+    }
+}
+
 /// A force through the centre of mass and a torque, world frame.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct Wrench {
