@@ -97,14 +97,6 @@ impl TriangleCollider {
         Ok(TriangleCollider { mesh, face_normals, edge_normals, vertex_normals })
     }
 
-    pub fn vertices(&self) -> &[DVec3] {
-        self.mesh.vertices()
-    }
-
-    pub fn triangles(&self) -> &[[u32; 3]] {
-        self.mesh.indices()
-    }
-
     pub fn triangle_count(&self) -> usize {
         self.face_normals.len()
     }
@@ -113,17 +105,6 @@ impl TriangleCollider {
     pub fn corners(&self, t: u32) -> [DVec3; 3] {
         let v = self.mesh.vertices();
         self.mesh.indices()[t as usize].map(|i| v[i as usize])
-    }
-
-    /// Unit outward normal of triangle `t`.
-    pub fn face_normal(&self, t: u32) -> DVec3 {
-        self.face_normals[t as usize]
-    }
-
-    /// Axis-aligned bounds `(min, max)` in the collider's frame.
-    pub fn bounds(&self) -> (DVec3, DVec3) {
-        let aabb = self.mesh.local_aabb();
-        (aabb.mins, aabb.maxs)
     }
 
     /// Triangles whose bounding boxes meet the box `(min, max)` (BVH query),

@@ -170,11 +170,6 @@ impl Neck {
         })
     }
 
-    /// The atlanto-occipital pivot as carried by the head, world.
-    pub fn pivot_on_head(&self, state: &RigidBodyState) -> DVec3 {
-        state.pose(self.head).transform_point(self.pivot_in_head)
-    }
-
     /// Spring and dashpot loads on both bodies at the current state.
     pub fn load(&self, model: &RigidBodyModel, state: &RigidBodyState) -> NeckLoad {
         let s = &self.stiffness;
