@@ -54,8 +54,7 @@ fn bench_step(c: &mut Criterion) {
             let options = ModelOptions { precision, damping_per_s: 5.0, ..ModelOptions::default() };
             let region = MaterialRegion { element_set: None, material: Material::neo_hookean(1006.711409, 50_000.0), density_kg_m3: 1000.0 };
             let model = Arc::new(TledModel::new(&mesh, &[region], &options).expect("valid cube"));
-            let mut bc = BoundaryConditions::default();
-            bc.gravity_m_s2 = Some([0.0, 0.0, -9.81]);
+            let mut bc = BoundaryConditions { gravity_m_s2: Some([0.0, 0.0, -9.81]), ..BoundaryConditions::default() };
             let x0: Vec<u32> = (0..mesh.node_count() as u32).filter(|&n| mesh.nodes[n as usize][2] == 0.0).collect();
             bc.fix_nodes(&x0);
             let dt = 0.9 * model.critical_time_step();

@@ -263,7 +263,7 @@ impl TledModel {
     /// index), on elements without a material, and on invalid options.
     pub fn new(mesh: &Mesh, materials: &[MaterialRegion], options: &ModelOptions) -> Result<TledModel, FemError> {
         let npe = mesh.kind.nodes_per_element();
-        if mesh.connectivity.len() % npe != 0 {
+        if !mesh.connectivity.len().is_multiple_of(npe) {
             return Err(FemError::RaggedConnectivity { len: mesh.connectivity.len(), per_element: npe });
         }
         let ne = mesh.element_count();
@@ -422,12 +422,16 @@ fn assign_regions(mesh: &Mesh, materials: &[MaterialRegion]) -> Result<Vec<u16>,
     Ok(region_of)
 }
 
+/// Element estimate of the critical step, its element, and the smallest
+/// characteristic length.
+type StepLimits = (f64, usize, f64);
+
 fn build_kernel<T: Real>(
     mesh: &Mesh,
     materials: &[MaterialRegion],
     region_of: &[u16],
     options: &ModelOptions,
-) -> Result<(KernelData<T>, (f64, usize, f64)), FemError> {
+) -> Result<(KernelData<T>, StepLimits), FemError> {
     let npe = mesh.kind.nodes_per_element();
     let ne = mesh.element_count();
     let nn = mesh.node_count();

@@ -86,7 +86,7 @@ pub fn scaled_jacobian(kind: ElementKind, x: &[[f64; 3]]) -> f64 {
 /// those below `min_scaled_jacobian` listed. Errors only on a malformed mesh.
 pub fn check_quality(mesh: &Mesh, min_scaled_jacobian: f64) -> Result<QualityReport, FemError> {
     let npe = mesh.kind.nodes_per_element();
-    if mesh.connectivity.len() % npe != 0 {
+    if !mesh.connectivity.len().is_multiple_of(npe) {
         return Err(FemError::RaggedConnectivity { len: mesh.connectivity.len(), per_element: npe });
     }
     if mesh.element_count() == 0 {

@@ -1,12 +1,12 @@
 //! The TLED time loop: mutable state apart from the constant [`TledModel`].
 //!
 //! One (sub-)step is a fixed sequence of stages:
-//! 1. `apply_loads`      external nodal forces R(t_n) (nodal forces, follower pressure);
-//! 2. `element_forces`   per-element internal forces into force copies
-//!                       (T4ANP first averages the dilatation per node);
-//! 3. `advance_nodes`    gather per node + central difference with damping;
-//! 4. `enforce_constraints` fixed, imposed and coupled displacements at t_{n+1};
-//! 5. commit             rotate the displacement buffers, advance time.
+//! 1. `apply_loads`: external nodal forces R(t_n) (nodal forces, follower pressure);
+//! 2. `element_forces`: per-element internal forces into force copies
+//!    (T4ANP first averages the dilatation per node);
+//! 3. `advance_nodes`: gather per node + central difference with damping;
+//! 4. `enforce_constraints`: fixed, imposed and coupled displacements at t_{n+1};
+//! 5. `commit`: rotate the displacement buffers, advance time.
 //!
 //! A failing stage returns before the commit, so the state stays the last
 //! good one. No stage allocates.
@@ -217,10 +217,10 @@ impl<T: Real> State<T> {
     }
 
     /// Stage 2: internal forces of the current displacement into the force copies.
-    fn element_forces(&mut self, k: &KernelData<T>, anp: bool) -> Result<(), Failure> {
+    fn element_forces(&mut self, k: &KernelData<T>, anp: bool) -> Result<(), (usize, f64)> {
         let nodal_j = if anp {
-            if let Some((e, j)) = passes::element_volume_shares(&k.elements, &self.u_curr, &mut self.volume_shares) {
-                return Err(Failure::Element(e, j));
+            if let Some(bad) = passes::element_volume_shares(&k.elements, &self.u_curr, &mut self.volume_shares) {
+                return Err(bad);
             }
             passes::nodal_dilatation(&k.elements, &k.nodes, &self.volume_shares, &mut self.nodal_j);
             Some(self.nodal_j.as_slice())
@@ -228,7 +228,7 @@ impl<T: Real> State<T> {
             None
         };
         match passes::element_forces(&k.elements, &self.u_curr, nodal_j, &mut self.forces) {
-            Some((e, j)) => Err(Failure::Element(e, j)),
+            Some(bad) => Err(bad),
             None => Ok(()),
         }
     }
@@ -283,7 +283,7 @@ impl<T: Real> State<T> {
         t_next: f64,
     ) -> Result<(), Failure> {
         self.apply_loads(loads, reference, t);
-        self.element_forces(k, anp)?;
+        self.element_forces(k, anp).map_err(|(e, j)| Failure::Element(e, j))?;
         self.advance_nodes(k)?;
         self.enforce_constraints(loads, coupled, t_next);
         self.commit();
@@ -523,19 +523,16 @@ impl TledSolver {
     pub fn update_internal_forces(&mut self) -> Result<(), FemError> {
         let anp = self.model.uses_anp();
         let t = self.time_s;
-        let model = Arc::clone(&self.model);
-        let _ = &model;
-        match with_state!(self, |k, s| s.element_forces(k, anp)) {
-            Ok(()) => Ok(()),
-            Err(Failure::Element(element, jacobian)) => Err(FemError::ElementInvertedDuringRun { element, jacobian, time_s: t }),
-            Err(Failure::Node(_)) => unreachable!("the element pass reports elements only"),
-        }
+        with_state!(self, |k, s| s.element_forces(k, anp))
+            .map_err(|(element, jacobian)| FemError::ElementInvertedDuringRun { element, jacobian, time_s: t })
     }
 
-    /// Internal nodal forces F(u) at the given nodes, N: the force the
-    /// tissue exerts on whatever holds those nodes is minus this... no: this
-    /// is the force needed to hold them (reaction = F). Evaluated at the
-    /// displacement of the last force evaluation (see [`Self::update_internal_forces`]).
+    /// Internal nodal forces F(u) at the given nodes, N: the force with
+    /// which the tissue resists being displaced there, so that whatever holds
+    /// those nodes (a support, an imposed displacement, a contact) carries
+    /// F. Evaluated at the displacement of the last force evaluation: the
+    /// start of the last sub-step, or the current one after
+    /// [`Self::update_internal_forces`].
     pub fn internal_forces(&self, nodes: &[u32]) -> Result<Vec<[f64; 3]>, FemError> {
         let nn = self.model.node_count();
         nodes.iter().try_for_each(|&n| check_node("internal_forces", n, nn))?;

@@ -241,6 +241,7 @@ pub struct Integrator<T> {
 }
 
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn node_task_body<T: Real>(
     nodes: &NodeTable<T>,
     first: usize,
