@@ -149,7 +149,8 @@ fn near(points: &[DVec3], others: &[DVec3], tolerance: f64) -> Vec<DVec3> {
 }
 
 /// The inlet frame of the picking: origin at the obstetric conjugate's
-/// midpoint, `ap` along it, `transverse` the mesh x made orthogonal to it,
+/// midpoint, `ap` along it, `transverse` the anatomical x (mother's right)
+/// made orthogonal to it,
 /// `normal` = transverse x ap (cranial).
 struct InletFrame {
     origin: DVec3,
