@@ -95,13 +95,21 @@ impl<T: Real> ElementBlocks<T> {
     /// Element of a force slot (inverse of [`Self::force_slot`]).
     #[inline]
     pub fn slot_element(&self, slot: usize) -> usize {
-        (slot / (self.nodes_per_element * 3 * LANES)) * LANES + slot % LANES
+        // Constant divisors (multiplications) instead of a division by a run-time value.
+        let block = match self.nodes_per_element {
+            4 => slot / (4 * 3 * LANES),
+            _ => slot / (8 * 3 * LANES),
+        };
+        block * LANES + slot % LANES
     }
 
     /// Local node of a force slot.
     #[inline]
     pub fn slot_local_node(&self, slot: usize) -> usize {
-        (slot / (3 * LANES)) % self.nodes_per_element
+        match self.nodes_per_element {
+            4 => (slot / (3 * LANES)) % 4,
+            _ => (slot / (3 * LANES)) % 8,
+        }
     }
 
     /// Length of the per-element force-copy array.

@@ -188,26 +188,45 @@ pub fn element_forces<T: Real>(eb: &ElementBlocks<T>, u: &[T], nodal_j: Option<&
         .reduce(|| None, first_bad)
 }
 
+#[inline(always)]
+fn volume_task_body<T: Real>(eb: &ElementBlocks<T>, first_block: usize, u: &[T], out: &mut [T]) -> BadElement {
+    let mut bad = None;
+    for (bi, ob) in out.chunks_exact_mut(LANES).enumerate() {
+        let b = first_block + bi;
+        let conn = &eb.connectivity[b * 4 * LANES..(b + 1) * 4 * LANES];
+        let ue = gather_displacements::<T, 4>(conn, u);
+        let dh: &[[Lanes<T>; 3]; 4] = block_view(&eb.shape_derivatives[b * 4 * 3 * LANES..]);
+        let f = super::element::deformation_gradient(&ue, dh);
+        let j = super::element::det3(&f);
+        (j * Lanes::load(&eb.quarter_volume[b * LANES..])).store(ob);
+        if bad.is_none() {
+            bad = (0..LANES).find(|&l| !(j.0[l] > T::default())).map(|l| (b * LANES + l, j.0[l].to_f64()));
+        }
+    }
+    bad
+}
+
+#[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
+#[target_feature(enable = "avx2,fma")]
+fn volume_task_avx2<T: Real>(eb: &ElementBlocks<T>, first_block: usize, u: &[T], out: &mut [T]) -> BadElement {
+    volume_task_body(eb, first_block, u, out)
+}
+
 /// T4ANP pass 1: current volume share J_e V_e / 4 of every element.
 pub fn element_volume_shares<T: Real>(eb: &ElementBlocks<T>, u: &[T], shares: &mut [T]) -> BadElement {
+    let avx2 = has_avx2();
     shares
         .par_chunks_mut(BLOCKS_PER_TASK * LANES)
         .enumerate()
         .map(|(t, out)| {
-            let mut bad = None;
-            for (bi, ob) in out.chunks_exact_mut(LANES).enumerate() {
-                let b = t * BLOCKS_PER_TASK + bi;
-                let conn = &eb.connectivity[b * 4 * LANES..(b + 1) * 4 * LANES];
-                let ue = gather_displacements::<T, 4>(conn, u);
-                let dh: &[[Lanes<T>; 3]; 4] = block_view(&eb.shape_derivatives[b * 4 * 3 * LANES..]);
-                let f = super::element::deformation_gradient(&ue, dh);
-                let j = super::element::det3(&f);
-                (j * Lanes::load(&eb.quarter_volume[b * LANES..])).store(ob);
-                if bad.is_none() {
-                    bad = (0..LANES).find(|&l| !(j.0[l] > T::default())).map(|l| (b * LANES + l, j.0[l].to_f64()));
-                }
+            let first_block = t * BLOCKS_PER_TASK;
+            #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
+            if avx2 {
+                // SAFETY: AVX2 and FMA support was detected at run time.
+                return unsafe { volume_task_avx2(eb, first_block, u, out) };
             }
-            bad
+            let _ = avx2;
+            volume_task_body(eb, first_block, u, out)
         })
         .reduce(|| None, first_bad)
 }
