@@ -8,8 +8,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::kernel::blocks::KernelData;
 use crate::kernel::element::{
-    add_hourglass_forces, deformation_gradient, det3, hourglass_amplitudes, right_cauchy_green, second_piola_kirchhoff,
-    strain_energy_density, Coefficients, Sym,
+    add_hourglass_forces, deformation_gradient, det3, hourglass_amplitudes, right_cauchy_green,
+    second_piola_kirchhoff, strain_energy_density, Coefficients, Sym,
 };
 use crate::kernel::lanes::Real;
 
@@ -45,14 +45,23 @@ pub fn largest_eigenvalue(c: &Sym<f64>) -> f64 {
     }
     let p2 = (c.xx - q).powi(2) + (c.yy - q).powi(2) + (c.zz - q).powi(2) + 2.0 * p1;
     let p = (p2 / 6.0).sqrt();
-    let b = Sym { xx: (c.xx - q) / p, yy: (c.yy - q) / p, zz: (c.zz - q) / p, xy: c.xy / p, yz: c.yz / p, xz: c.xz / p };
+    let b = Sym {
+        xx: (c.xx - q) / p,
+        yy: (c.yy - q) / p,
+        zz: (c.zz - q) / p,
+        xy: c.xy / p,
+        yz: c.yz / p,
+        xz: c.xz / p,
+    };
     let r = (b.det() / 2.0).clamp(-1.0, 1.0);
     q + 2.0 * p * (r.acos() / 3.0).cos()
 }
 
 /// Von Mises equivalent of a symmetric stress.
 pub fn von_mises(s: &Sym<f64>) -> f64 {
-    (0.5 * ((s.xx - s.yy).powi(2) + (s.yy - s.zz).powi(2) + (s.zz - s.xx).powi(2)) + 3.0 * (s.xy * s.xy + s.yz * s.yz + s.xz * s.xz)).sqrt()
+    (0.5 * ((s.xx - s.yy).powi(2) + (s.yy - s.zz).powi(2) + (s.zz - s.xx).powi(2))
+        + 3.0 * (s.xy * s.xy + s.yz * s.yz + s.xz * s.xz))
+        .sqrt()
 }
 
 /// Cauchy stress sigma = F S F^T / J.
@@ -65,7 +74,14 @@ fn cauchy(f: &[[f64; 3]; 3], s: &Sym<f64>, j: f64) -> Sym<f64> {
         }
     }
     let e = |i: usize, k: usize| (0..3).map(|m| fs[i][m] * f[k][m]).sum::<f64>() / j;
-    Sym { xx: e(0, 0), yy: e(1, 1), zz: e(2, 2), xy: e(0, 1), yz: e(1, 2), xz: e(0, 2) }
+    Sym {
+        xx: e(0, 0),
+        yy: e(1, 1),
+        zz: e(2, 2),
+        xy: e(0, 1),
+        yz: e(1, 2),
+        xz: e(0, 2),
+    }
 }
 
 struct ElementResult {
@@ -76,28 +92,48 @@ struct ElementResult {
     hourglass_j: f64,
 }
 
-fn evaluate_element<T: Real, const N: usize>(k: &KernelData<T>, e: usize, u: &[T], nodal_j: Option<&[f64]>) -> ElementResult {
+fn evaluate_element<T: Real, const N: usize>(
+    k: &KernelData<T>,
+    e: usize,
+    u: &[T],
+    nodal_j: Option<&[f64]>,
+) -> ElementResult {
     let eb = &k.elements;
-    let ue: [[f64; 3]; N] = std::array::from_fn(|a| std::array::from_fn(|c| u[3 * eb.node(e, a) + c].to_f64()));
-    let dh: [[f64; 3]; N] = std::array::from_fn(|a| std::array::from_fn(|i| eb.shape_derivative(e, a, i)));
-    let co = Coefficients { c10: eb.coefficient(e, 0), c01: eb.coefficient(e, 1), kappa: eb.coefficient(e, 2) };
+    let ue: [[f64; 3]; N] =
+        std::array::from_fn(|a| std::array::from_fn(|c| u[3 * eb.node(e, a) + c].to_f64()));
+    let dh: [[f64; 3]; N] =
+        std::array::from_fn(|a| std::array::from_fn(|i| eb.shape_derivative(e, a, i)));
+    let co = Coefficients {
+        c10: eb.coefficient(e, 0),
+        c01: eb.coefficient(e, 1),
+        kappa: eb.coefficient(e, 2),
+    };
     let w = eb.element_weight(e);
     let f = deformation_gradient(&ue, &dh);
     let j = det3(&f);
     let c = right_cauchy_green(&f);
-    let j_vol = nodal_j.map_or(j, |nj| (0..N).map(|a| nj[eb.node(e, a)]).sum::<f64>() / N as f64);
+    let j_vol = nodal_j.map_or(j, |nj| {
+        (0..N).map(|a| nj[eb.node(e, a)]).sum::<f64>() / N as f64
+    });
     let s = second_piola_kirchhoff(&c, j, j_vol, &co);
     // T4ANP stores its volumetric energy per node (see `anp_nodal_state`).
-    let energy_co = if nodal_j.is_some() { Coefficients { kappa: 0.0, ..co } } else { co };
+    let energy_co = if nodal_j.is_some() {
+        Coefficients { kappa: 0.0, ..co }
+    } else {
+        co
+    };
     let hourglass_j = if eb.hourglass.is_empty() || N != 8 {
         0.0
     } else {
-        let hg: [[f64; N]; 4] = std::array::from_fn(|g| std::array::from_fn(|a| eb.hourglass_vector(e, g, a)));
+        let hg: [[f64; N]; 4] =
+            std::array::from_fn(|g| std::array::from_fn(|a| eb.hourglass_vector(e, g, a)));
         let q = hourglass_amplitudes(&ue, &hg);
         // E_hg = 1/2 u . K_hg u = 1/2 u . f_hg.
         let mut fhg = [[0.0; 3]; N];
         add_hourglass_forces(&mut fhg, &q, &hg);
-        0.5 * (0..N).map(|a| (0..3).map(|c| ue[a][c] * fhg[a][c]).sum::<f64>()).sum::<f64>()
+        0.5 * (0..N)
+            .map(|a| (0..3).map(|c| ue[a][c] * fhg[a][c]).sum::<f64>())
+            .sum::<f64>()
     };
     ElementResult {
         von_mises: von_mises(&cauchy(&f, &s, j)),
@@ -118,8 +154,10 @@ fn anp_nodal_state<T: Real>(k: &KernelData<T>, u: &[T]) -> (Vec<f64>, f64) {
     let shares: Vec<f64> = (0..eb.element_count)
         .into_par_iter()
         .map(|e| {
-            let ue: [[f64; 3]; 4] = std::array::from_fn(|a| std::array::from_fn(|c| u[3 * eb.node(e, a) + c].to_f64()));
-            let dh: [[f64; 3]; 4] = std::array::from_fn(|a| std::array::from_fn(|i| eb.shape_derivative(e, a, i)));
+            let ue: [[f64; 3]; 4] =
+                std::array::from_fn(|a| std::array::from_fn(|c| u[3 * eb.node(e, a) + c].to_f64()));
+            let dh: [[f64; 3]; 4] =
+                std::array::from_fn(|a| std::array::from_fn(|i| eb.shape_derivative(e, a, i)));
             det3(&deformation_gradient(&ue, &dh)) * eb.quarter_volume[e].to_f64()
         })
         .collect();
@@ -130,7 +168,11 @@ fn anp_nodal_state<T: Real>(k: &KernelData<T>, u: &[T]) -> (Vec<f64>, f64) {
                 return (1.0, 0.0);
             }
             let slots = k.nodes.slots_of(n);
-            let j = slots.iter().map(|&s| shares[eb.slot_element(s as usize)]).sum::<f64>() * inv;
+            let j = slots
+                .iter()
+                .map(|&s| shares[eb.slot_element(s as usize)])
+                .sum::<f64>()
+                * inv;
             let kappa_v: f64 = slots
                 .iter()
                 .map(|&s| {
@@ -141,11 +183,18 @@ fn anp_nodal_state<T: Real>(k: &KernelData<T>, u: &[T]) -> (Vec<f64>, f64) {
             (j, 0.5 * kappa_v * (j - 1.0) * (j - 1.0))
         })
         .collect();
-    (per_node.iter().map(|p| p.0).collect(), per_node.iter().map(|p| p.1).sum())
+    (
+        per_node.iter().map(|p| p.0).collect(),
+        per_node.iter().map(|p| p.1).sum(),
+    )
 }
 
 /// Fields and element energies (strain, hourglass) of displacement `u`.
-pub(crate) fn evaluate<T: Real>(k: &KernelData<T>, anp: bool, u: &[T]) -> (ElementFields, f64, f64) {
+pub(crate) fn evaluate<T: Real>(
+    k: &KernelData<T>,
+    anp: bool,
+    u: &[T],
+) -> (ElementFields, f64, f64) {
     let (nodal_j, volumetric_j) = if anp {
         let (j, energy) = anp_nodal_state(k, u);
         (Some(j), energy)
@@ -165,7 +214,11 @@ pub(crate) fn evaluate<T: Real>(k: &KernelData<T>, anp: bool, u: &[T]) -> (Eleme
         max_principal_stretch: results.iter().map(|r| r.stretch).collect(),
         jacobian: results.iter().map(|r| r.jacobian).collect(),
     };
-    (fields, volumetric_j + results.iter().map(|r| r.strain_j).sum::<f64>(), results.iter().map(|r| r.hourglass_j).sum())
+    (
+        fields,
+        volumetric_j + results.iter().map(|r| r.strain_j).sum::<f64>(),
+        results.iter().map(|r| r.hourglass_j).sum(),
+    )
 }
 
 /// Kinetic energy with velocity (u - u_prev) / h.
@@ -175,7 +228,9 @@ pub(crate) fn kinetic_energy<T: Real>(k: &KernelData<T>, u: &[T], u_prev: &[T], 
         .iter()
         .enumerate()
         .map(|(n, m)| {
-            let v2: f64 = (0..3).map(|c| ((u[3 * n + c].to_f64() - u_prev[3 * n + c].to_f64()) / h).powi(2)).sum();
+            let v2: f64 = (0..3)
+                .map(|c| ((u[3 * n + c].to_f64() - u_prev[3 * n + c].to_f64()) / h).powi(2))
+                .sum();
             0.5 * m.to_f64() * v2
         })
         .sum()
@@ -187,18 +242,46 @@ mod tests {
 
     #[test]
     fn eigenvalue_of_diagonal_and_rotated() {
-        let d = Sym { xx: 2.0, yy: 5.0, zz: 3.0, xy: 0.0, yz: 0.0, xz: 0.0 };
+        let d = Sym {
+            xx: 2.0,
+            yy: 5.0,
+            zz: 3.0,
+            xy: 0.0,
+            yz: 0.0,
+            xz: 0.0,
+        };
         assert_eq!(largest_eigenvalue(&d), 5.0);
         // [[2,1,0],[1,2,0],[0,0,1]] has eigenvalues 3, 1, 1.
-        let s = Sym { xx: 2.0, yy: 2.0, zz: 1.0, xy: 1.0, yz: 0.0, xz: 0.0 };
+        let s = Sym {
+            xx: 2.0,
+            yy: 2.0,
+            zz: 1.0,
+            xy: 1.0,
+            yz: 0.0,
+            xz: 0.0,
+        };
         assert!((largest_eigenvalue(&s) - 3.0).abs() < 1e-12);
     }
 
     #[test]
     fn von_mises_of_uniaxial_and_hydrostatic() {
-        let uni = Sym { xx: 7.0, yy: 0.0, zz: 0.0, xy: 0.0, yz: 0.0, xz: 0.0 };
+        let uni = Sym {
+            xx: 7.0,
+            yy: 0.0,
+            zz: 0.0,
+            xy: 0.0,
+            yz: 0.0,
+            xz: 0.0,
+        };
         assert!((von_mises(&uni) - 7.0).abs() < 1e-12);
-        let hyd = Sym { xx: 4.0, yy: 4.0, zz: 4.0, xy: 0.0, yz: 0.0, xz: 0.0 };
+        let hyd = Sym {
+            xx: 4.0,
+            yy: 4.0,
+            zz: 4.0,
+            xy: 0.0,
+            yz: 0.0,
+            xz: 0.0,
+        };
         assert!(von_mises(&hyd).abs() < 1e-12);
     }
 }

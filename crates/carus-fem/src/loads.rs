@@ -25,7 +25,13 @@ pub enum LoadShape {
 impl LoadShape {
     /// Load factor at time `t_s`.
     pub fn value(&self, t_s: f64) -> f64 {
-        let ramp = |d: f64| if d > 0.0 { (t_s / d).clamp(0.0, 1.0) } else { 1.0 };
+        let ramp = |d: f64| {
+            if d > 0.0 {
+                (t_s / d).clamp(0.0, 1.0)
+            } else {
+                1.0
+            }
+        };
         match *self {
             LoadShape::Step => 1.0,
             LoadShape::Ramp { duration_s } => ramp(duration_s),
@@ -46,7 +52,9 @@ impl LoadShape {
         if d.is_finite() && d >= 0.0 {
             Ok(())
         } else {
-            Err(format!("load shape duration must be finite and >= 0, got {d} s"))
+            Err(format!(
+                "load shape duration must be finite and >= 0, got {d} s"
+            ))
         }
     }
 }
@@ -103,7 +111,10 @@ pub struct BoundaryConditions {
 impl BoundaryConditions {
     /// Fixes all components of the given nodes.
     pub fn fix_nodes(&mut self, nodes: &[u32]) -> &mut Self {
-        self.fixed.push(FixedDofs { nodes: nodes.to_vec(), components: [true; 3] });
+        self.fixed.push(FixedDofs {
+            nodes: nodes.to_vec(),
+            components: [true; 3],
+        });
         self
     }
 }

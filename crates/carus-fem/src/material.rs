@@ -42,7 +42,10 @@ impl NeoHookean {
     /// mu = E / (2 (1 + nu)), kappa = E / (3 (1 - 2 nu))).
     pub fn from_young_poisson(young_pa: f64, poisson: f64) -> Result<Self, FemError> {
         let (mu, kappa) = shear_bulk_from_young_poisson(young_pa, poisson)?;
-        Ok(NeoHookean { shear_modulus_pa: mu, bulk_modulus_pa: kappa })
+        Ok(NeoHookean {
+            shear_modulus_pa: mu,
+            bulk_modulus_pa: kappa,
+        })
     }
 }
 
@@ -67,20 +70,28 @@ pub enum Material {
 
 fn shear_bulk_from_young_poisson(young_pa: f64, poisson: f64) -> Result<(f64, f64), FemError> {
     if !(young_pa.is_finite() && young_pa > 0.0) {
-        return Err(FemError::InvalidMaterial { reason: format!("Young's modulus must be positive, got {young_pa} Pa") });
+        return Err(FemError::InvalidMaterial {
+            reason: format!("Young's modulus must be positive, got {young_pa} Pa"),
+        });
     }
     if !(poisson > -1.0 && poisson < 0.5) {
         return Err(FemError::InvalidMaterial {
             reason: format!("Poisson's ratio must lie in (-1, 0.5), got {poisson}; use bulk modulus for incompressibility"),
         });
     }
-    Ok((young_pa / (2.0 * (1.0 + poisson)), young_pa / (3.0 * (1.0 - 2.0 * poisson))))
+    Ok((
+        young_pa / (2.0 * (1.0 + poisson)),
+        young_pa / (3.0 * (1.0 - 2.0 * poisson)),
+    ))
 }
 
 impl Material {
     /// Neo-Hookean from shear and bulk moduli.
     pub fn neo_hookean(shear_modulus_pa: f64, bulk_modulus_pa: f64) -> Self {
-        Material::NeoHookean(NeoHookean { shear_modulus_pa, bulk_modulus_pa })
+        Material::NeoHookean(NeoHookean {
+            shear_modulus_pa,
+            bulk_modulus_pa,
+        })
     }
 
     /// Coefficients (c10, c01, kappa) of the shared isotropic kernel.
@@ -94,7 +105,13 @@ impl Material {
     /// Rejects non-physical parameters (the region is named by the caller).
     pub fn validate(&self) -> Result<(), FemError> {
         let [c10, c01, kappa] = self.kernel_coefficients();
-        let ok = c10.is_finite() && c01.is_finite() && kappa.is_finite() && c10 + c01 > 0.0 && c10 >= 0.0 && c01 >= 0.0 && kappa > 0.0;
+        let ok = c10.is_finite()
+            && c01.is_finite()
+            && kappa.is_finite()
+            && c10 + c01 > 0.0
+            && c10 >= 0.0
+            && c01 >= 0.0
+            && kappa > 0.0;
         if ok {
             Ok(())
         } else {
@@ -181,11 +198,13 @@ mod tests {
     fn law() -> impl Strategy<Value = Material> {
         prop_oneof![
             (100.0f64..1e4, 1e3f64..1e5).prop_map(|(mu, k)| Material::neo_hookean(mu, k)),
-            (50.0f64..5e3, 0.0f64..5e3, 1e3f64..1e5).prop_map(|(c10, c01, k)| Material::MooneyRivlin(MooneyRivlin {
-                c10_pa: c10,
-                c01_pa: c01,
-                bulk_modulus_pa: k
-            })),
+            (50.0f64..5e3, 0.0f64..5e3, 1e3f64..1e5).prop_map(|(c10, c01, k)| {
+                Material::MooneyRivlin(MooneyRivlin {
+                    c10_pa: c10,
+                    c01_pa: c01,
+                    bulk_modulus_pa: k,
+                })
+            }),
         ]
     }
 

@@ -54,7 +54,12 @@ pub struct ModelOptions {
 
 impl Default for ModelOptions {
     fn default() -> Self {
-        ModelOptions { tet_formulation: TetFormulation::T4, hourglass_coefficient: 0.075, damping_per_s: 0.0, precision: Precision::F64 }
+        ModelOptions {
+            tet_formulation: TetFormulation::T4,
+            hourglass_coefficient: 0.075,
+            damping_per_s: 0.0,
+            precision: Precision::F64,
+        }
     }
 }
 
@@ -119,14 +124,25 @@ const H8_GAMMA: [[f64; 4]; 8] = [
 ];
 
 /// Quadrilateral faces of the H8 (VTK order).
-pub(crate) const H8_FACES: [[usize; 4]; 6] = [[0, 1, 2, 3], [4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [3, 0, 4, 7]];
+pub(crate) const H8_FACES: [[usize; 4]; 6] = [
+    [0, 1, 2, 3],
+    [4, 5, 6, 7],
+    [0, 1, 5, 4],
+    [1, 2, 6, 5],
+    [2, 3, 7, 6],
+    [3, 0, 4, 7],
+];
 pub(crate) const T4_FACES: [[usize; 3]; 4] = [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]];
 
 fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
 }
 fn norm(a: [f64; 3]) -> f64 {
     (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
@@ -152,7 +168,11 @@ pub(crate) fn h8_jacobian(x: &[[f64; 3]; 8], xi: [f64; 3]) -> [[f64; 3]; 3] {
     let mut jac = [[0.0; 3]; 3];
     for (a, s) in H8_CORNERS.iter().enumerate() {
         let f = [1.0 + s[0] * xi[0], 1.0 + s[1] * xi[1], 1.0 + s[2] * xi[2]];
-        let dn = [s[0] * f[1] * f[2] / 8.0, s[1] * f[0] * f[2] / 8.0, s[2] * f[0] * f[1] / 8.0];
+        let dn = [
+            s[0] * f[1] * f[2] / 8.0,
+            s[1] * f[0] * f[2] / 8.0,
+            s[2] * f[0] * f[1] / 8.0,
+        ];
         for i in 0..3 {
             for j in 0..3 {
                 jac[i][j] += dn[i] * x[a][j];
@@ -180,13 +200,25 @@ pub(crate) fn h8_geometry(e: usize, x: &[[f64; 3]; 8]) -> Result<ElementGeometry
     for s in H8_CORNERS {
         volume += det3(&h8_jacobian(x, [s[0] * g, s[1] * g, s[2] * g]));
     }
-    let max_edge = (0..8).flat_map(|a| (0..8).map(move |b| (a, b))).map(|(a, b)| norm(sub(x[a], x[b]))).fold(0.0, f64::max);
+    let max_edge = (0..8)
+        .flat_map(|a| (0..8).map(move |b| (a, b)))
+        .map(|(a, b)| norm(sub(x[a], x[b])))
+        .fold(0.0, f64::max);
     if volume.abs() <= 1e-9 * max_edge.powi(3) {
-        return Err(FemError::DegenerateElement { element: e, volume_m3: volume });
+        return Err(FemError::DegenerateElement {
+            element: e,
+            volume_m3: volume,
+        });
     }
-    let min_corner = H8_CORNERS.iter().map(|&s| det3(&h8_jacobian(x, s))).fold(f64::INFINITY, f64::min);
+    let min_corner = H8_CORNERS
+        .iter()
+        .map(|&s| det3(&h8_jacobian(x, s)))
+        .fold(f64::INFINITY, f64::min);
     if volume < 0.0 || min_corner <= 0.0 {
-        return Err(FemError::InvertedElement { element: e, jacobian: min_corner.min(volume) });
+        return Err(FemError::InvertedElement {
+            element: e,
+            jacobian: min_corner.min(volume),
+        });
     }
     // Uniform-gradient (mean) shape derivatives dh = (1/V) integral of dN/dx dV
     // (Flanagan & Belytschko 1981; NiftySim's "B-matrix method"): equal to
@@ -201,7 +233,11 @@ pub(crate) fn h8_geometry(e: usize, x: &[[f64; 3]; 8]) -> Result<ElementGeometry
         let inv = inverse3(&jac);
         for (a, s) in H8_CORNERS.iter().enumerate() {
             let f = [1.0 + s[0] * xi[0], 1.0 + s[1] * xi[1], 1.0 + s[2] * xi[2]];
-            let dn = [s[0] * f[1] * f[2] / 8.0, s[1] * f[0] * f[2] / 8.0, s[2] * f[0] * f[1] / 8.0];
+            let dn = [
+                s[0] * f[1] * f[2] / 8.0,
+                s[1] * f[0] * f[2] / 8.0,
+                s[2] * f[0] * f[1] / 8.0,
+            ];
             for j in 0..3 {
                 dh[a][j] += det * (0..3).map(|i| dn[i] * inv[j][i]).sum::<f64>() / volume;
             }
@@ -212,22 +248,41 @@ pub(crate) fn h8_geometry(e: usize, x: &[[f64; 3]; 8]) -> Result<ElementGeometry
         .iter()
         .map(|f| 0.5 * norm(cross(sub(x[f[2]], x[f[0]]), sub(x[f[3]], x[f[1]]))))
         .fold(0.0, f64::max);
-    Ok(ElementGeometry { shape_derivatives: dh, weight: volume, volume, characteristic_length: volume / max_face })
+    Ok(ElementGeometry {
+        shape_derivatives: dh,
+        weight: volume,
+        volume,
+        characteristic_length: volume / max_face,
+    })
 }
 
 /// T4 geometry; errors on inverted or degenerate elements.
 pub(crate) fn t4_geometry(e: usize, x: &[[f64; 3]; 4]) -> Result<ElementGeometry, FemError> {
     let d = [sub(x[1], x[0]), sub(x[2], x[0]), sub(x[3], x[0])];
     let volume = det3(&d) / 6.0;
-    let max_edge = (0..4).flat_map(|a| (0..4).map(move |b| (a, b))).map(|(a, b)| norm(sub(x[a], x[b]))).fold(0.0, f64::max);
+    let max_edge = (0..4)
+        .flat_map(|a| (0..4).map(move |b| (a, b)))
+        .map(|(a, b)| norm(sub(x[a], x[b])))
+        .fold(0.0, f64::max);
     if volume.abs() <= 1e-9 * max_edge.powi(3) {
-        return Err(FemError::DegenerateElement { element: e, volume_m3: volume });
+        return Err(FemError::DegenerateElement {
+            element: e,
+            volume_m3: volume,
+        });
     }
     if volume < 0.0 {
-        return Err(FemError::InvertedElement { element: e, jacobian: 6.0 * volume });
+        return Err(FemError::InvertedElement {
+            element: e,
+            jacobian: 6.0 * volume,
+        });
     }
     let inv = inverse3(&d);
-    const DN: [[f64; 3]; 4] = [[-1.0, -1.0, -1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    const DN: [[f64; 3]; 4] = [
+        [-1.0, -1.0, -1.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0],
+    ];
     let mut dh = [[0.0; 3]; 8];
     for a in 0..4 {
         for j in 0..3 {
@@ -235,14 +290,28 @@ pub(crate) fn t4_geometry(e: usize, x: &[[f64; 3]; 4]) -> Result<ElementGeometry
         }
     }
     // Minimum altitude 3 V / A_max (LS-DYNA Theory Manual, sec. 22.1, tetrahedra).
-    let max_face = T4_FACES.iter().map(|f| 0.5 * norm(cross(sub(x[f[1]], x[f[0]]), sub(x[f[2]], x[f[0]])))).fold(0.0, f64::max);
-    Ok(ElementGeometry { shape_derivatives: dh, weight: volume, volume, characteristic_length: 3.0 * volume / max_face })
+    let max_face = T4_FACES
+        .iter()
+        .map(|f| 0.5 * norm(cross(sub(x[f[1]], x[f[0]]), sub(x[f[2]], x[f[0]]))))
+        .fold(0.0, f64::max);
+    Ok(ElementGeometry {
+        shape_derivatives: dh,
+        weight: volume,
+        volume,
+        characteristic_length: 3.0 * volume / max_face,
+    })
 }
 
 /// H8 hourglass vectors scaled by sqrt(k): s_g,a = sqrt(k) gamma_a,g with
 /// gamma = Gamma - (dh/dx)(x^T Gamma), k = HGKappa V (lambda + 2 mu) sum((dh/dx)^2) / 8
 /// (Flanagan & Belytschko 1981 as in NiftySim; DESIGN.md).
-pub(crate) fn h8_hourglass(x: &[[f64; 3]; 8], g: &ElementGeometry, kappa_hg: f64, lambda: f64, mu: f64) -> [[f64; 8]; 4] {
+pub(crate) fn h8_hourglass(
+    x: &[[f64; 3]; 8],
+    g: &ElementGeometry,
+    kappa_hg: f64,
+    lambda: f64,
+    mu: f64,
+) -> [[f64; 8]; 4] {
     let dh = &g.shape_derivatives;
     let sum_sq: f64 = dh.iter().flatten().map(|v| v * v).sum();
     let k = kappa_hg * g.volume * (lambda + 2.0 * mu) * sum_sq / 8.0;
@@ -261,31 +330,53 @@ pub(crate) fn h8_hourglass(x: &[[f64; 3]; 8], g: &ElementGeometry, kappa_hg: f64
 impl TledModel {
     /// Precomputes the model. Fails on inverted or degenerate elements (by
     /// index), on elements without a material, and on invalid options.
-    pub fn new(mesh: &Mesh, materials: &[MaterialRegion], options: &ModelOptions) -> Result<TledModel, FemError> {
+    pub fn new(
+        mesh: &Mesh,
+        materials: &[MaterialRegion],
+        options: &ModelOptions,
+    ) -> Result<TledModel, FemError> {
         let npe = mesh.kind.nodes_per_element();
         if !mesh.connectivity.len().is_multiple_of(npe) {
-            return Err(FemError::RaggedConnectivity { len: mesh.connectivity.len(), per_element: npe });
+            return Err(FemError::RaggedConnectivity {
+                len: mesh.connectivity.len(),
+                per_element: npe,
+            });
         }
         let ne = mesh.element_count();
         if ne == 0 {
             return Err(FemError::EmptyMesh);
         }
         if !(options.hourglass_coefficient.is_finite() && options.hourglass_coefficient >= 0.0) {
-            return Err(FemError::InvalidOption { option: "hourglass_coefficient", reason: format!("must be >= 0, got {}", options.hourglass_coefficient) });
+            return Err(FemError::InvalidOption {
+                option: "hourglass_coefficient",
+                reason: format!("must be >= 0, got {}", options.hourglass_coefficient),
+            });
         }
         if !(options.damping_per_s.is_finite() && options.damping_per_s >= 0.0) {
-            return Err(FemError::InvalidOption { option: "damping_per_s", reason: format!("must be >= 0, got {}", options.damping_per_s) });
+            return Err(FemError::InvalidOption {
+                option: "damping_per_s",
+                reason: format!("must be >= 0, got {}", options.damping_per_s),
+            });
         }
-        if let Some(n) = mesh.nodes.iter().position(|p| !p.iter().all(|v| v.is_finite())) {
+        if let Some(n) = mesh
+            .nodes
+            .iter()
+            .position(|p| !p.iter().all(|v| v.is_finite()))
+        {
             return Err(FemError::NonFiniteNode { node: n });
         }
         for (e, el) in mesh.elements().enumerate() {
             if let Some(&node) = el.iter().find(|&&n| n as usize >= mesh.node_count()) {
-                return Err(FemError::NodeOutOfRange { element: e, node, node_count: mesh.node_count() });
+                return Err(FemError::NodeOutOfRange {
+                    element: e,
+                    node,
+                    node_count: mesh.node_count(),
+                });
             }
         }
         let region_of = assign_regions(mesh, materials)?;
-        let (kernel, (element_time_step_s, critical_element, min_length)) = match options.precision {
+        let (kernel, (element_time_step_s, critical_element, min_length)) = match options.precision
+        {
             Precision::F64 => {
                 let (k, limits) = build_kernel::<f64>(mesh, materials, &region_of, options)?;
                 (KernelModel::F64(k), limits)
@@ -309,7 +400,11 @@ impl TledModel {
             KernelModel::F32(k) => max_angular_frequency(k, probe_m),
             KernelModel::F64(k) => max_angular_frequency(k, probe_m),
         };
-        let spectral = if omega_max > 0.0 { STABILITY_MARGIN * 2.0 / omega_max } else { f64::INFINITY };
+        let spectral = if omega_max > 0.0 {
+            STABILITY_MARGIN * 2.0 / omega_max
+        } else {
+            f64::INFINITY
+        };
         Ok(TledModel {
             mesh: mesh.clone(),
             options: *options,
@@ -400,17 +495,31 @@ fn assign_regions(mesh: &Mesh, materials: &[MaterialRegion]) -> Result<Vec<u16>,
     for (r, region) in materials.iter().enumerate() {
         region.material.validate()?;
         if !(region.density_kg_m3.is_finite() && region.density_kg_m3 > 0.0) {
-            return Err(FemError::InvalidMaterial { reason: format!("density must be positive, got {} kg/m^3", region.density_kg_m3) });
+            return Err(FemError::InvalidMaterial {
+                reason: format!(
+                    "density must be positive, got {} kg/m^3",
+                    region.density_kg_m3
+                ),
+            });
         }
-        let r = u16::try_from(r).map_err(|_| FemError::InvalidMaterial { reason: "more than 65535 material regions".into() })?;
+        let r = u16::try_from(r).map_err(|_| FemError::InvalidMaterial {
+            reason: "more than 65535 material regions".into(),
+        })?;
         match &region.element_set {
             None => region_of.fill(r),
             Some(name) => {
-                let set = mesh.element_sets.get(name).ok_or_else(|| FemError::UnknownElementSet { set: name.clone() })?;
+                let set = mesh
+                    .element_sets
+                    .get(name)
+                    .ok_or_else(|| FemError::UnknownElementSet { set: name.clone() })?;
                 for &e in set {
-                    let slot = region_of
-                        .get_mut(e as usize)
-                        .ok_or_else(|| FemError::ElementSetOutOfRange { set: name.clone(), element: e, element_count: ne })?;
+                    let slot = region_of.get_mut(e as usize).ok_or_else(|| {
+                        FemError::ElementSetOutOfRange {
+                            set: name.clone(),
+                            element: e,
+                            element_count: ne,
+                        }
+                    })?;
                     *slot = r;
                 }
             }
@@ -452,7 +561,13 @@ fn build_kernel<T: Real>(
                 let x: [[f64; 3]; 8] = std::array::from_fn(|a| mesh.nodes[el[a] as usize]);
                 let g = h8_geometry(e, &x)?;
                 if hourglass {
-                    hg = Some(h8_hourglass(&x, &g, options.hourglass_coefficient, lambda, mu));
+                    hg = Some(h8_hourglass(
+                        &x,
+                        &g,
+                        options.hourglass_coefficient,
+                        lambda,
+                        mu,
+                    ));
                 }
                 g
             }
@@ -461,7 +576,9 @@ fn build_kernel<T: Real>(
                 t4_geometry(e, &x)?
             }
         };
-        let c = region.material.dilatational_wave_speed(region.density_kg_m3);
+        let c = region
+            .material
+            .dilatational_wave_speed(region.density_kg_m3);
         let dt = geom.characteristic_length / c;
         min_length = min_length.min(geom.characteristic_length);
         if dt < dt_crit {
@@ -505,13 +622,25 @@ fn build_kernel<T: Real>(
         }
     }
     let nodes = NodeTable {
-        inv_mass: mass.iter().map(|&m| T::from_f64(if m > 0.0 { 1.0 / m } else { 0.0 })).collect(),
+        inv_mass: mass
+            .iter()
+            .map(|&m| T::from_f64(if m > 0.0 { 1.0 / m } else { 0.0 }))
+            .collect(),
         mass: mass.iter().map(|&m| T::from_f64(m)).collect(),
         slot_start,
         slots,
-        inv_nodal_volume: nodal_volume.iter().map(|&v| T::from_f64(if v > 0.0 { 1.0 / v } else { 0.0 })).collect(),
+        inv_nodal_volume: nodal_volume
+            .iter()
+            .map(|&v| T::from_f64(if v > 0.0 { 1.0 / v } else { 0.0 }))
+            .collect(),
     };
-    Ok((KernelData { elements: blocks, nodes }, (dt_crit, dt_element, min_length)))
+    Ok((
+        KernelData {
+            elements: blocks,
+            nodes,
+        },
+        (dt_crit, dt_element, min_length),
+    ))
 }
 
 #[cfg(test)]
@@ -521,7 +650,11 @@ mod tests {
     use proptest::prelude::*;
 
     fn region() -> MaterialRegion {
-        MaterialRegion { element_set: None, material: Material::neo_hookean(1000.0, 50_000.0), density_kg_m3: 1000.0 }
+        MaterialRegion {
+            element_set: None,
+            material: Material::neo_hookean(1000.0, 50_000.0),
+            density_kg_m3: 1000.0,
+        }
     }
 
     fn unit_hex() -> [[f64; 3]; 8] {
@@ -590,23 +723,44 @@ mod tests {
         for a in 0..4 {
             mesh.connectivity[8 + 4 + a] = flat[a];
         }
-        assert!(matches!(TledModel::new(&mesh, &[region()], &ModelOptions::default()), Err(FemError::DegenerateElement { element: 1, .. })));
+        assert!(matches!(
+            TledModel::new(&mesh, &[region()], &ModelOptions::default()),
+            Err(FemError::DegenerateElement { element: 1, .. })
+        ));
 
         let mut mesh = box_h8([0.1; 3], [2, 1, 1]);
         mesh.element_sets.insert("left".into(), vec![0]);
-        let only_left = MaterialRegion { element_set: Some("left".into()), ..region() };
-        assert!(matches!(TledModel::new(&mesh, &[only_left], &ModelOptions::default()), Err(FemError::MissingMaterial { element: 1 })));
-        let unknown = MaterialRegion { element_set: Some("nope".into()), ..region() };
-        assert!(matches!(TledModel::new(&mesh, &[region(), unknown], &ModelOptions::default()), Err(FemError::UnknownElementSet { .. })));
+        let only_left = MaterialRegion {
+            element_set: Some("left".into()),
+            ..region()
+        };
+        assert!(matches!(
+            TledModel::new(&mesh, &[only_left], &ModelOptions::default()),
+            Err(FemError::MissingMaterial { element: 1 })
+        ));
+        let unknown = MaterialRegion {
+            element_set: Some("nope".into()),
+            ..region()
+        };
+        assert!(matches!(
+            TledModel::new(&mesh, &[region(), unknown], &ModelOptions::default()),
+            Err(FemError::UnknownElementSet { .. })
+        ));
     }
 
     #[test]
     fn later_regions_override_earlier_ones() {
         let mut mesh = box_h8([0.1; 3], [2, 1, 1]);
         mesh.element_sets.insert("right".into(), vec![1]);
-        let stiff = MaterialRegion { element_set: Some("right".into()), material: Material::neo_hookean(4000.0, 90_000.0), density_kg_m3: 1000.0 };
+        let stiff = MaterialRegion {
+            element_set: Some("right".into()),
+            material: Material::neo_hookean(4000.0, 90_000.0),
+            density_kg_m3: 1000.0,
+        };
         let m = TledModel::new(&mesh, &[region(), stiff], &ModelOptions::default()).unwrap();
-        let KernelModel::F64(k) = m.kernel() else { panic!("f64 model") };
+        let KernelModel::F64(k) = m.kernel() else {
+            panic!("f64 model")
+        };
         assert_eq!(k.elements.coefficient(0, 0), 500.0);
         assert_eq!(k.elements.coefficient(1, 0), 2000.0);
         assert_eq!(k.elements.coefficient(1, 2), 90_000.0);

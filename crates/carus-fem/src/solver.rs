@@ -63,7 +63,11 @@ fn check_node(what: &'static str, n: u32, nn: usize) -> Result<(), FemError> {
     if (n as usize) < nn {
         Ok(())
     } else {
-        Err(FemError::BoundaryNodeOutOfRange { what, node: n, node_count: nn })
+        Err(FemError::BoundaryNodeOutOfRange {
+            what,
+            node: n,
+            node_count: nn,
+        })
     }
 }
 
@@ -89,7 +93,9 @@ impl CompiledLoads {
                 for c in 0..3 {
                     if let Some(v) = d.components[c] {
                         if !v.is_finite() {
-                            return Err(bad(format!("imposed displacement of node {n} is not finite")));
+                            return Err(bad(format!(
+                                "imposed displacement of node {n} is not finite"
+                            )));
                         }
                         dofs.push((n * 3 + c as u32, v));
                     }
@@ -111,7 +117,10 @@ impl CompiledLoads {
         for p in &bc.pressures {
             p.shape.validate().map_err(bad)?;
             if !p.pressure_pa.is_finite() {
-                return Err(bad(format!("surface pressure {} Pa is not finite", p.pressure_pa)));
+                return Err(bad(format!(
+                    "surface pressure {} Pa is not finite",
+                    p.pressure_pa
+                )));
             }
             for t in &p.triangles {
                 for &n in t {
@@ -119,7 +128,8 @@ impl CompiledLoads {
                     out.load_nodes.push(n);
                 }
             }
-            out.pressures.push((p.shape, p.pressure_pa, p.triangles.clone()));
+            out.pressures
+                .push((p.shape, p.pressure_pa, p.triangles.clone()));
         }
         out.load_nodes.sort_unstable();
         out.load_nodes.dedup();
@@ -160,7 +170,14 @@ enum Failure {
 }
 
 impl<T: Real> State<T> {
-    fn new(k: &KernelData<T>, anp: bool, h: f64, damping: f64, gravity: [f64; 3], runaway_m: f64) -> Self {
+    fn new(
+        k: &KernelData<T>,
+        anp: bool,
+        h: f64,
+        damping: f64,
+        gravity: [f64; 3],
+        runaway_m: f64,
+    ) -> Self {
         let nn = k.nodes.mass.len();
         let half = 0.5 * damping * h;
         State {
@@ -169,8 +186,16 @@ impl<T: Real> State<T> {
             u_next: vec![T::default(); 3 * nn],
             external: vec![T::default(); 3 * nn],
             forces: vec![T::default(); k.elements.force_copy_len()],
-            volume_shares: if anp { vec![T::default(); k.elements.block_count * LANES] } else { Vec::new() },
-            nodal_j: if anp { vec![T::from_f64(1.0); nn] } else { Vec::new() },
+            volume_shares: if anp {
+                vec![T::default(); k.elements.block_count * LANES]
+            } else {
+                Vec::new()
+            },
+            nodal_j: if anp {
+                vec![T::from_f64(1.0); nn]
+            } else {
+                Vec::new()
+            },
             integrator: Integrator {
                 h2: T::from_f64(h * h),
                 previous_factor: T::from_f64(1.0 - half),
@@ -206,7 +231,11 @@ impl<T: Real> State<T> {
                 let e1 = [x[1][0] - x[0][0], x[1][1] - x[0][1], x[1][2] - x[0][2]];
                 let e2 = [x[2][0] - x[0][0], x[2][1] - x[0][1], x[2][2] - x[0][2]];
                 // Area vector A n = (e1 x e2) / 2; each node takes -p A n / 3.
-                let an = [e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]];
+                let an = [
+                    e1[1] * e2[2] - e1[2] * e2[1],
+                    e1[2] * e2[0] - e1[0] * e2[2],
+                    e1[0] * e2[1] - e1[1] * e2[0],
+                ];
                 for &n in tri {
                     for c in 0..3 {
                         self.external[3 * n as usize + c] += T::from_f64(-p * an[c] / 6.0);
@@ -219,10 +248,17 @@ impl<T: Real> State<T> {
     /// Stage 2: internal forces of the current displacement into the force copies.
     fn element_forces(&mut self, k: &KernelData<T>, anp: bool) -> Result<(), (usize, f64)> {
         let nodal_j = if anp {
-            if let Some(bad) = passes::element_volume_shares(&k.elements, &self.u_curr, &mut self.volume_shares) {
+            if let Some(bad) =
+                passes::element_volume_shares(&k.elements, &self.u_curr, &mut self.volume_shares)
+            {
                 return Err(bad);
             }
-            passes::nodal_dilatation(&k.elements, &k.nodes, &self.volume_shares, &mut self.nodal_j);
+            passes::nodal_dilatation(
+                &k.elements,
+                &k.nodes,
+                &self.volume_shares,
+                &mut self.nodal_j,
+            );
             Some(self.nodal_j.as_slice())
         } else {
             None
@@ -235,14 +271,27 @@ impl<T: Real> State<T> {
 
     /// Stage 3: gather and central-difference update into u_next.
     fn advance_nodes(&mut self, k: &KernelData<T>) -> Result<(), Failure> {
-        match passes::advance_nodes(&k.nodes, &self.forces, &self.external, &self.integrator, &self.u_prev, &self.u_curr, &mut self.u_next) {
+        match passes::advance_nodes(
+            &k.nodes,
+            &self.forces,
+            &self.external,
+            &self.integrator,
+            &self.u_prev,
+            &self.u_curr,
+            &mut self.u_next,
+        ) {
             Some(n) => Err(Failure::Node(n)),
             None => Ok(()),
         }
     }
 
     /// Stage 4: displacement constraints at t_{n+1}.
-    fn enforce_constraints(&mut self, loads: &CompiledLoads, coupled: &[(u32, [f64; 3])], t_next: f64) {
+    fn enforce_constraints(
+        &mut self,
+        loads: &CompiledLoads,
+        coupled: &[(u32, [f64; 3])],
+        t_next: f64,
+    ) {
         for &d in &loads.fixed_dofs {
             self.u_next[d as usize] = T::default();
         }
@@ -283,7 +332,8 @@ impl<T: Real> State<T> {
         t_next: f64,
     ) -> Result<(), Failure> {
         self.apply_loads(loads, reference, t);
-        self.element_forces(k, anp).map_err(|(e, j)| Failure::Element(e, j))?;
+        self.element_forces(k, anp)
+            .map_err(|(e, j)| Failure::Element(e, j))?;
         self.advance_nodes(k)?;
         self.enforce_constraints(loads, coupled, t_next);
         self.commit();
@@ -291,7 +341,9 @@ impl<T: Real> State<T> {
     }
 
     fn to_vec3(v: &[T]) -> Vec<[f64; 3]> {
-        v.chunks_exact(3).map(|c| [c[0].to_f64(), c[1].to_f64(), c[2].to_f64()]).collect()
+        v.chunks_exact(3)
+            .map(|c| [c[0].to_f64(), c[1].to_f64(), c[2].to_f64()])
+            .collect()
     }
 
     fn from_vec3(dst: &mut [T], src: &[[f64; 3]]) {
@@ -346,7 +398,12 @@ impl TledSolver {
     /// A solver at rest (zero displacement and velocity) at t = 0.
     /// `dt_s` above the model's critical step is refused, or split into
     /// sub-steps with [`StepControl::SubStep`].
-    pub fn new(model: Arc<TledModel>, bcs: &BoundaryConditions, dt_s: f64, control: StepControl) -> Result<Self, FemError> {
+    pub fn new(
+        model: Arc<TledModel>,
+        bcs: &BoundaryConditions,
+        dt_s: f64,
+        control: StepControl,
+    ) -> Result<Self, FemError> {
         if !(dt_s.is_finite() && dt_s > 0.0) {
             return Err(FemError::InvalidTimeStep { dt_s });
         }
@@ -355,11 +412,19 @@ impl TledSolver {
             1
         } else {
             match control {
-                StepControl::Refuse => return Err(FemError::TimeStepAboveCritical { dt_s, critical_s: critical }),
+                StepControl::Refuse => {
+                    return Err(FemError::TimeStepAboveCritical {
+                        dt_s,
+                        critical_s: critical,
+                    })
+                }
                 StepControl::SubStep => {
                     let n = (dt_s / critical).ceil();
                     if n > u32::MAX as f64 {
-                        return Err(FemError::TimeStepAboveCritical { dt_s, critical_s: critical });
+                        return Err(FemError::TimeStepAboveCritical {
+                            dt_s,
+                            critical_s: critical,
+                        });
                     }
                     // Guard against rounding leaving dt / n a hair above critical.
                     let mut n = n as u32;
@@ -377,10 +442,26 @@ impl TledSolver {
         // A displacement a hundred times the body's size is a runaway.
         let runaway = 100.0 * model.size_m();
         let state = match model.kernel() {
-            KernelModel::F64(k) => StateData::F64(State::new(k, anp, h, damping, loads.gravity, runaway)),
-            KernelModel::F32(k) => StateData::F32(State::new(k, anp, h, damping, loads.gravity, runaway)),
+            KernelModel::F64(k) => {
+                StateData::F64(State::new(k, anp, h, damping, loads.gravity, runaway))
+            }
+            KernelModel::F32(k) => {
+                StateData::F32(State::new(k, anp, h, damping, loads.gravity, runaway))
+            }
         };
-        Ok(TledSolver { model, loads, dt_s, substeps_per_step, h_s: h, time_s: 0.0, steps: 0, substeps: 0, coupled: Vec::new(), can_roll_back: false, state })
+        Ok(TledSolver {
+            model,
+            loads,
+            dt_s,
+            substeps_per_step,
+            h_s: h,
+            time_s: 0.0,
+            steps: 0,
+            substeps: 0,
+            coupled: Vec::new(),
+            can_roll_back: false,
+            state,
+        })
     }
 
     pub fn model(&self) -> &Arc<TledModel> {
@@ -418,7 +499,8 @@ impl TledSolver {
         let model = Arc::clone(&self.model);
         let reference = &model.mesh().nodes;
         let (loads, coupled) = (&self.loads, &self.coupled);
-        let result = with_state!(self, |k, s| s.substep(k, anp, loads, coupled, reference, t, t_next));
+        let result = with_state!(self, |k, s| s
+            .substep(k, anp, loads, coupled, reference, t, t_next));
         match result {
             Ok(()) => {
                 self.time_s = t_next;
@@ -438,15 +520,25 @@ impl TledSolver {
                     self.can_roll_back = false;
                 }
                 if j.is_nan() {
-                    Err(FemError::Diverged { time_s: t, last_good_time_s: self.time_s, what: format!("element {element} has a non-finite deformation") })
+                    Err(FemError::Diverged {
+                        time_s: t,
+                        last_good_time_s: self.time_s,
+                        what: format!("element {element} has a non-finite deformation"),
+                    })
                 } else {
-                    Err(FemError::ElementInvertedDuringRun { element, jacobian: j, time_s: t })
+                    Err(FemError::ElementInvertedDuringRun {
+                        element,
+                        jacobian: j,
+                        time_s: t,
+                    })
                 }
             }
             Err(Failure::Node(node)) => Err(FemError::Diverged {
                 time_s: t_next,
                 last_good_time_s: t,
-                what: format!("node {node} displacement is non-finite or beyond 100 x the model size"),
+                what: format!(
+                    "node {node} displacement is non-finite or beyond 100 x the model size"
+                ),
             }),
         }
     }
@@ -484,21 +576,35 @@ impl TledSolver {
         if n >= self.model.node_count() {
             return None;
         }
-        Some(with_state_ref!(self, |_k, s| [s.u_curr[3 * n].to_f64(), s.u_curr[3 * n + 1].to_f64(), s.u_curr[3 * n + 2].to_f64()]))
+        Some(with_state_ref!(self, |_k, s| [
+            s.u_curr[3 * n].to_f64(),
+            s.u_curr[3 * n + 1].to_f64(),
+            s.u_curr[3 * n + 2].to_f64()
+        ]))
     }
 
     /// Holds the given displacements on those nodes from the next step on,
     /// until [`Self::release_imposed`] (replacing earlier values for the same nodes).
-    pub fn impose_displacements(&mut self, nodes: &[u32], displacements_m: &[[f64; 3]]) -> Result<(), FemError> {
+    pub fn impose_displacements(
+        &mut self,
+        nodes: &[u32],
+        displacements_m: &[[f64; 3]],
+    ) -> Result<(), FemError> {
         if nodes.len() != displacements_m.len() {
             return Err(FemError::InvalidBoundaryCondition {
-                reason: format!("{} nodes but {} displacements given to impose_displacements", nodes.len(), displacements_m.len()),
+                reason: format!(
+                    "{} nodes but {} displacements given to impose_displacements",
+                    nodes.len(),
+                    displacements_m.len()
+                ),
             });
         }
         for (&n, d) in nodes.iter().zip(displacements_m) {
             check_node("impose_displacements", n, self.model.node_count())?;
             if !d.iter().all(|v| v.is_finite()) {
-                return Err(FemError::InvalidBoundaryCondition { reason: format!("imposed displacement of node {n} is not finite") });
+                return Err(FemError::InvalidBoundaryCondition {
+                    reason: format!("imposed displacement of node {n} is not finite"),
+                });
             }
             match self.coupled.binary_search_by_key(&n, |&(m, _)| m) {
                 Ok(i) => self.coupled[i].1 = *d,
@@ -523,8 +629,13 @@ impl TledSolver {
     pub fn update_internal_forces(&mut self) -> Result<(), FemError> {
         let anp = self.model.uses_anp();
         let t = self.time_s;
-        with_state!(self, |k, s| s.element_forces(k, anp))
-            .map_err(|(element, jacobian)| FemError::ElementInvertedDuringRun { element, jacobian, time_s: t })
+        with_state!(self, |k, s| s.element_forces(k, anp)).map_err(|(element, jacobian)| {
+            FemError::ElementInvertedDuringRun {
+                element,
+                jacobian,
+                time_s: t,
+            }
+        })
     }
 
     /// Internal nodal forces F(u) at the given nodes, N: the force with
@@ -535,7 +646,9 @@ impl TledSolver {
     /// [`Self::update_internal_forces`].
     pub fn internal_forces(&self, nodes: &[u32]) -> Result<Vec<[f64; 3]>, FemError> {
         let nn = self.model.node_count();
-        nodes.iter().try_for_each(|&n| check_node("internal_forces", n, nn))?;
+        nodes
+            .iter()
+            .try_for_each(|&n| check_node("internal_forces", n, nn))?;
         Ok(with_state_ref!(self, |k, s| nodes
             .iter()
             .map(|&n| k.nodes.gather(&s.forces, n as usize).map(|v| v.to_f64()))
@@ -546,7 +659,9 @@ impl TledSolver {
     /// supports or imposed displacements on those nodes, at rest).
     pub fn reaction_force(&self, nodes: &[u32]) -> Result<[f64; 3], FemError> {
         let f = self.internal_forces(nodes)?;
-        Ok(f.iter().fold([0.0; 3], |acc, v| [acc[0] + v[0], acc[1] + v[1], acc[2] + v[2]]))
+        Ok(f.iter().fold([0.0; 3], |acc, v| {
+            [acc[0] + v[0], acc[1] + v[1], acc[2] + v[2]]
+        }))
     }
 
     /// Von Mises stress, maximum principal stretch and J per element.
@@ -561,13 +676,20 @@ impl TledSolver {
         let h = self.h_s;
         with_state_ref!(self, |k, s| {
             let (_, strain_j, hourglass_j) = fields::evaluate(k, anp, &s.u_curr);
-            Energies { kinetic_j: fields::kinetic_energy(k, &s.u_curr, &s.u_prev, h), strain_j, hourglass_j }
+            Energies {
+                kinetic_j: fields::kinetic_energy(k, &s.u_curr, &s.u_prev, h),
+                strain_j,
+                hourglass_j,
+            }
         })
     }
 
     /// A copy of the whole mutable state.
     pub fn snapshot(&self) -> SolverSnapshot {
-        let (displacements_m, previous_displacements_m) = with_state_ref!(self, |_k, s| (State::to_vec3(&s.u_curr), State::to_vec3(&s.u_prev)));
+        let (displacements_m, previous_displacements_m) = with_state_ref!(self, |_k, s| (
+            State::to_vec3(&s.u_curr),
+            State::to_vec3(&s.u_prev)
+        ));
         SolverSnapshot {
             time_s: self.time_s,
             steps: self.steps,
@@ -589,9 +711,15 @@ impl TledSolver {
     /// boundary conditions continue from there bit for bit).
     pub fn restore(&mut self, snap: &SolverSnapshot) -> Result<(), FemError> {
         let nn = self.model.node_count();
-        for len in [snap.displacements_m.len(), snap.previous_displacements_m.len()] {
+        for len in [
+            snap.displacements_m.len(),
+            snap.previous_displacements_m.len(),
+        ] {
             if len != nn {
-                return Err(FemError::SnapshotMismatch { got: len, expected: nn });
+                return Err(FemError::SnapshotMismatch {
+                    got: len,
+                    expected: nn,
+                });
             }
         }
         for &(n, _) in &snap.coupled {
@@ -619,7 +747,11 @@ mod tests {
     use crate::model::{MaterialRegion, ModelOptions, Precision, TetFormulation};
 
     fn region() -> MaterialRegion {
-        MaterialRegion { element_set: None, material: Material::neo_hookean(1006.711409, 50_000.0), density_kg_m3: 1000.0 }
+        MaterialRegion {
+            element_set: None,
+            material: Material::neo_hookean(1006.711409, 50_000.0),
+            density_kg_m3: 1000.0,
+        }
     }
 
     fn model(mesh: &Mesh, options: ModelOptions) -> Arc<TledModel> {
@@ -633,7 +765,11 @@ mod tests {
             .enumerate()
             .map(|(i, p)| {
                 let s = (i as f64 * 12.9898).sin() * 0.3;
-                [amp * (3.0 * p[1] + s).sin(), amp * (2.0 * p[2] - s).cos() * 0.5, amp * (p[0] * 4.0 + s).sin() * 0.7]
+                [
+                    amp * (3.0 * p[1] + s).sin(),
+                    amp * (2.0 * p[2] - s).cos() * 0.5,
+                    amp * (p[0] * 4.0 + s).sin() * 0.7,
+                ]
             })
             .collect()
     }
@@ -660,8 +796,17 @@ mod tests {
             (box_t4([0.1, 0.08, 0.06], [2, 2, 1]), TetFormulation::T4Anp),
         ];
         for (mesh, tet_formulation) in cases {
-            let m = model(&mesh, ModelOptions { hourglass_coefficient: 0.3, tet_formulation, ..ModelOptions::default() });
-            let mut solver = TledSolver::new(m, &BoundaryConditions::default(), 1e-4, StepControl::Refuse).unwrap();
+            let m = model(
+                &mesh,
+                ModelOptions {
+                    hourglass_coefficient: 0.3,
+                    tet_formulation,
+                    ..ModelOptions::default()
+                },
+            );
+            let mut solver =
+                TledSolver::new(m, &BoundaryConditions::default(), 1e-4, StepControl::Refuse)
+                    .unwrap();
             let u = wavy(&mesh, 0.01);
             set_displacement(&mut solver, &u);
             solver.update_internal_forces().unwrap();
@@ -680,7 +825,12 @@ mod tests {
                     set_displacement(&mut solver, &um);
                     let em = total_energy(&solver);
                     let fd = (ep - em) / (2.0 * h);
-                    assert!((fd - f[n][c]).abs() < 1e-5 * scale, "{:?} node {n} comp {c}: fd {fd} vs {}", mesh.kind, f[n][c]);
+                    assert!(
+                        (fd - f[n][c]).abs() < 1e-5 * scale,
+                        "{:?} node {n} comp {c}: fd {fd} vs {}",
+                        mesh.kind,
+                        f[n][c]
+                    );
                 }
             }
         }
@@ -692,8 +842,16 @@ mod tests {
         let u = wavy(&mesh, 0.01);
         let all: Vec<u32> = (0..mesh.node_count() as u32).collect();
         let forces = |precision| {
-            let m = model(&mesh, ModelOptions { precision, ..ModelOptions::default() });
-            let mut s = TledSolver::new(m, &BoundaryConditions::default(), 1e-4, StepControl::Refuse).unwrap();
+            let m = model(
+                &mesh,
+                ModelOptions {
+                    precision,
+                    ..ModelOptions::default()
+                },
+            );
+            let mut s =
+                TledSolver::new(m, &BoundaryConditions::default(), 1e-4, StepControl::Refuse)
+                    .unwrap();
             set_displacement(&mut s, &u);
             s.update_internal_forces().unwrap();
             s.internal_forces(&all).unwrap()
@@ -710,11 +868,23 @@ mod tests {
         // Homogeneous deformation: every element and node has the same J, so
         // averaging changes nothing.
         let mesh = box_t4([0.1, 0.1, 0.1], [2, 2, 2]);
-        let u: Vec<[f64; 3]> = mesh.nodes.iter().map(|p| [0.05 * p[0] + 0.02 * p[1], -0.03 * p[1], 0.04 * p[2]]).collect();
+        let u: Vec<[f64; 3]> = mesh
+            .nodes
+            .iter()
+            .map(|p| [0.05 * p[0] + 0.02 * p[1], -0.03 * p[1], 0.04 * p[2]])
+            .collect();
         let all: Vec<u32> = (0..mesh.node_count() as u32).collect();
         let forces = |tet_formulation| {
-            let m = model(&mesh, ModelOptions { tet_formulation, ..ModelOptions::default() });
-            let mut s = TledSolver::new(m, &BoundaryConditions::default(), 1e-4, StepControl::Refuse).unwrap();
+            let m = model(
+                &mesh,
+                ModelOptions {
+                    tet_formulation,
+                    ..ModelOptions::default()
+                },
+            );
+            let mut s =
+                TledSolver::new(m, &BoundaryConditions::default(), 1e-4, StepControl::Refuse)
+                    .unwrap();
             set_displacement(&mut s, &u);
             s.update_internal_forces().unwrap();
             s.internal_forces(&all).unwrap()
@@ -734,11 +904,22 @@ mod tests {
         let c = ((50_000.0 + 4.0 * 1006.711409 / 3.0) / 1000.0f64).sqrt();
         assert!((m.element_time_step() - 0.025 / c).abs() < 1e-12 * crit);
         assert!(crit < m.element_time_step());
-        match TledSolver::new(m.clone(), &BoundaryConditions::default(), 2.5 * crit, StepControl::Refuse) {
+        match TledSolver::new(
+            m.clone(),
+            &BoundaryConditions::default(),
+            2.5 * crit,
+            StepControl::Refuse,
+        ) {
             Err(FemError::TimeStepAboveCritical { critical_s, .. }) => assert_eq!(critical_s, crit),
             other => panic!("expected refusal, got {other:?}"),
         }
-        let mut s = TledSolver::new(m, &BoundaryConditions::default(), 2.5 * crit, StepControl::SubStep).unwrap();
+        let mut s = TledSolver::new(
+            m,
+            &BoundaryConditions::default(),
+            2.5 * crit,
+            StepControl::SubStep,
+        )
+        .unwrap();
         assert_eq!(s.substeps_per_step(), 3);
         s.step().unwrap();
         assert_eq!((s.steps(), s.substeps()), (1, 3));
@@ -766,7 +947,11 @@ mod run_tests {
 
     fn model(n: usize, options: ModelOptions) -> (crate::mesh::Mesh, Arc<TledModel>) {
         let mesh = box_h8([0.1; 3], [n; 3]);
-        let region = MaterialRegion { element_set: None, material: Material::neo_hookean(1000.0, 20_000.0), density_kg_m3: 1000.0 };
+        let region = MaterialRegion {
+            element_set: None,
+            material: Material::neo_hookean(1000.0, 20_000.0),
+            density_kg_m3: 1000.0,
+        };
         let m = Arc::new(TledModel::new(&mesh, &[region], &options).unwrap());
         (mesh, m)
     }
@@ -784,11 +969,26 @@ mod run_tests {
 
     #[test]
     fn results_do_not_depend_on_the_thread_count() {
-        let (mesh, m) = model(4, ModelOptions { damping_per_s: 5.0, ..ModelOptions::default() });
+        let (mesh, m) = model(
+            4,
+            ModelOptions {
+                damping_per_s: 5.0,
+                ..ModelOptions::default()
+            },
+        );
         let run = |threads| {
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
             pool.install(|| {
-                let mut s = TledSolver::new(m.clone(), &pull(&mesh, 0.02), 0.9 * m.critical_time_step(), StepControl::Refuse).unwrap();
+                let mut s = TledSolver::new(
+                    m.clone(),
+                    &pull(&mesh, 0.02),
+                    0.9 * m.critical_time_step(),
+                    StepControl::Refuse,
+                )
+                .unwrap();
                 for _ in 0..200 {
                     s.step().unwrap();
                 }
@@ -796,15 +996,26 @@ mod run_tests {
             })
         };
         let (a, b) = (run(1), run(2));
-        assert!(a.iter().flatten().zip(b.iter().flatten()).all(|(x, y)| x.to_bits() == y.to_bits()));
+        assert!(a
+            .iter()
+            .flatten()
+            .zip(b.iter().flatten())
+            .all(|(x, y)| x.to_bits() == y.to_bits()));
         assert!(a.iter().flatten().any(|v| v.abs() > 1e-3));
     }
 
     #[test]
     fn snapshot_restore_resumes_bit_for_bit() {
-        let (mesh, m) = model(3, ModelOptions { damping_per_s: 2.0, ..ModelOptions::default() });
+        let (mesh, m) = model(
+            3,
+            ModelOptions {
+                damping_per_s: 2.0,
+                ..ModelOptions::default()
+            },
+        );
         let dt = 0.9 * m.critical_time_step();
-        let mut a = TledSolver::new(m.clone(), &pull(&mesh, 0.02), dt, StepControl::Refuse).unwrap();
+        let mut a =
+            TledSolver::new(m.clone(), &pull(&mesh, 0.02), dt, StepControl::Refuse).unwrap();
         for _ in 0..50 {
             a.step().unwrap();
         }
@@ -826,7 +1037,11 @@ mod run_tests {
         let mut bc = BoundaryConditions::default();
         bc.fix_nodes(&mesh.node_sets["x0"]);
         // A huge sudden compression of the far face.
-        bc.displacements.push(ImposedDisplacement { nodes: mesh.node_sets["x1"].clone(), components: [Some(-0.09), None, None], shape: LoadShape::Step });
+        bc.displacements.push(ImposedDisplacement {
+            nodes: mesh.node_sets["x1"].clone(),
+            components: [Some(-0.09), None, None],
+            shape: LoadShape::Step,
+        });
         let mut s = TledSolver::new(m, &bc, 0.5 * 1e-4, StepControl::SubStep).unwrap();
         let mut failure = None;
         for _ in 0..100 {
@@ -840,7 +1055,9 @@ mod run_tests {
             }
         }
         match failure {
-            Some(FemError::ElementInvertedDuringRun { element, jacobian, .. }) => {
+            Some(FemError::ElementInvertedDuringRun {
+                element, jacobian, ..
+            }) => {
                 assert!(element < 8);
                 assert!(jacobian <= 0.0);
             }
@@ -852,7 +1069,13 @@ mod run_tests {
     /// the fixed base, and a small follower pressure on the top face.
     #[test]
     fn gravity_and_pressure_are_carried_to_the_supports() {
-        let (mesh, m) = model(2, ModelOptions { damping_per_s: 60.0, ..ModelOptions::default() });
+        let (mesh, m) = model(
+            2,
+            ModelOptions {
+                damping_per_s: 60.0,
+                ..ModelOptions::default()
+            },
+        );
         let base = mesh.node_sets["z0"].clone();
         let masses = m.node_masses_kg();
         let base_mass: f64 = base.iter().map(|&n| masses[n as usize]).sum();
@@ -860,25 +1083,54 @@ mod run_tests {
             let mut bc = BoundaryConditions::default();
             bc.fix_nodes(&base);
             bc.gravity_m_s2 = gravity;
-            bc.pressures.push(SurfacePressure { triangles: mesh.surfaces["z1"].clone(), pressure_pa, shape: LoadShape::RampHold { ramp_s: 0.05 } });
-            let mut s = TledSolver::new(m.clone(), &bc, 0.9 * m.critical_time_step(), StepControl::Refuse).unwrap();
+            bc.pressures.push(SurfacePressure {
+                triangles: mesh.surfaces["z1"].clone(),
+                pressure_pa,
+                shape: LoadShape::RampHold { ramp_s: 0.05 },
+            });
+            let mut s = TledSolver::new(
+                m.clone(),
+                &bc,
+                0.9 * m.critical_time_step(),
+                StepControl::Refuse,
+            )
+            .unwrap();
             s.advance_to(1.0).unwrap();
             s.update_internal_forces().unwrap();
             let r = s.reaction_force(&base).unwrap();
             // The internal forces of the base balance the loads on the other nodes.
-            let expected = if gravity.is_some() { (1.0 - base_mass) * 9.81 } else { pressure_pa * 0.01 };
+            let expected = if gravity.is_some() {
+                (1.0 - base_mass) * 9.81
+            } else {
+                pressure_pa * 0.01
+            };
             let tolerance = if gravity.is_some() { 1e-6 } else { 2e-3 };
-            assert!((r[2] - expected).abs() < tolerance * expected, "{r:?} vs {expected}");
+            assert!(
+                (r[2] - expected).abs() < tolerance * expected,
+                "{r:?} vs {expected}"
+            );
             assert!(r[0].abs() < 1e-9 && r[1].abs() < 1e-9);
         }
     }
 
     #[test]
     fn coupling_holds_and_releases_nodes() {
-        let (mesh, m) = model(2, ModelOptions { damping_per_s: 30.0, ..ModelOptions::default() });
+        let (mesh, m) = model(
+            2,
+            ModelOptions {
+                damping_per_s: 30.0,
+                ..ModelOptions::default()
+            },
+        );
         let mut bc = BoundaryConditions::default();
         bc.fix_nodes(&mesh.node_sets["x0"]);
-        let mut s = TledSolver::new(m.clone(), &bc, 0.9 * m.critical_time_step(), StepControl::Refuse).unwrap();
+        let mut s = TledSolver::new(
+            m.clone(),
+            &bc,
+            0.9 * m.critical_time_step(),
+            StepControl::Refuse,
+        )
+        .unwrap();
         let held = mesh.node_sets["x1"].clone();
         let push = vec![[0.01, 0.0, 0.0]; held.len()];
         assert!(s.impose_displacements(&held, &push[1..]).is_err());
@@ -890,7 +1142,10 @@ mod run_tests {
         s.update_internal_forces().unwrap();
         let pull = s.reaction_force(&held).unwrap();
         let support = s.reaction_force(&mesh.node_sets["x0"]).unwrap();
-        assert!(pull[0] > 0.0 && (pull[0] + support[0]).abs() < 1e-2 * pull[0], "{pull:?} {support:?}");
+        assert!(
+            pull[0] > 0.0 && (pull[0] + support[0]).abs() < 1e-2 * pull[0],
+            "{pull:?} {support:?}"
+        );
         s.release_imposed();
         s.advance_to(3.0).unwrap();
         let back = s.displacement(held[0]).unwrap();

@@ -53,8 +53,16 @@ impl<T: Real> ElementBlocks<T> {
             shape_derivatives: vec![T::default(); slots * nodes_per_element * 3],
             weight: vec![T::default(); slots],
             coefficients: vec![T::default(); slots * 3],
-            hourglass: if hourglass { vec![T::default(); slots * 32] } else { Vec::new() },
-            quarter_volume: if anp { vec![T::default(); slots] } else { Vec::new() },
+            hourglass: if hourglass {
+                vec![T::default(); slots * 32]
+            } else {
+                Vec::new()
+            },
+            quarter_volume: if anp {
+                vec![T::default(); slots]
+            } else {
+                Vec::new()
+            },
         }
     }
 
@@ -65,7 +73,8 @@ impl<T: Real> ElementBlocks<T> {
         for a in 0..npe {
             self.connectivity[(b * npe + a) * LANES + l] = input.nodes[a];
             for i in 0..3 {
-                self.shape_derivatives[((b * npe + a) * 3 + i) * LANES + l] = T::from_f64(input.shape_derivatives[a][i]);
+                self.shape_derivatives[((b * npe + a) * 3 + i) * LANES + l] =
+                    T::from_f64(input.shape_derivatives[a][i]);
             }
         }
         self.weight[b * LANES + l] = T::from_f64(input.weight);
@@ -125,7 +134,9 @@ impl<T: Real> ElementBlocks<T> {
 
     #[inline]
     pub fn shape_derivative(&self, e: usize, a: usize, i: usize) -> f64 {
-        self.shape_derivatives[((e / LANES * self.nodes_per_element + a) * 3 + i) * LANES + e % LANES].to_f64()
+        self.shape_derivatives
+            [((e / LANES * self.nodes_per_element + a) * 3 + i) * LANES + e % LANES]
+            .to_f64()
     }
 
     #[inline]
@@ -194,7 +205,12 @@ impl<T: Real> KernelData<T> {
         let e = &self.elements;
         let n = &self.nodes;
         e.connectivity.len() * 4
-            + (e.shape_derivatives.len() + e.weight.len() + e.coefficients.len() + e.hourglass.len() + e.quarter_volume.len()) * t
+            + (e.shape_derivatives.len()
+                + e.weight.len()
+                + e.coefficients.len()
+                + e.hourglass.len()
+                + e.quarter_volume.len())
+                * t
             + (n.mass.len() + n.inv_mass.len() + n.inv_nodal_volume.len()) * t
             + (n.slot_start.len() + n.slots.len()) * 4
     }

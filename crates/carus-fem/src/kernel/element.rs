@@ -19,7 +19,8 @@ pub struct Sym<S> {
 impl<S: Num> Sym<S> {
     #[inline(always)]
     pub fn det(&self) -> S {
-        self.xx * (self.yy * self.zz - self.yz * self.yz) - self.xy * (self.xy * self.zz - self.yz * self.xz)
+        self.xx * (self.yy * self.zz - self.yz * self.yz)
+            - self.xy * (self.xy * self.zz - self.yz * self.xz)
             + self.xz * (self.xy * self.yz - self.yy * self.xz)
     }
 
@@ -44,7 +45,11 @@ impl<S: Num> Sym<S> {
     /// Full row-major matrix.
     #[inline(always)]
     pub fn to_rows(&self) -> [[S; 3]; 3] {
-        [[self.xx, self.xy, self.xz], [self.xy, self.yy, self.yz], [self.xz, self.yz, self.zz]]
+        [
+            [self.xx, self.xy, self.xz],
+            [self.xy, self.yy, self.yz],
+            [self.xz, self.yz, self.zz],
+        ]
     }
 }
 
@@ -76,13 +81,20 @@ pub struct Coefficients<S> {
 
 impl Coefficients<f64> {
     pub fn from_f64(k: [f64; 3]) -> Self {
-        Coefficients { c10: k[0], c01: k[1], kappa: k[2] }
+        Coefficients {
+            c10: k[0],
+            c01: k[1],
+            kappa: k[2],
+        }
     }
 }
 
 /// F = I + sum_a u_a (dh_a/dX)^T: F[i][j] = delta_ij + sum_a u_a[i] dh_a[j].
 #[inline(always)]
-pub fn deformation_gradient<S: Num, const N: usize>(u: &[[S; 3]; N], dh: &[[S; 3]; N]) -> [[S; 3]; 3] {
+pub fn deformation_gradient<S: Num, const N: usize>(
+    u: &[[S; 3]; N],
+    dh: &[[S; 3]; N],
+) -> [[S; 3]; 3] {
     let mut f = [[S::splat(0.0); 3]; 3];
     for i in 0..3 {
         for j in 0..3 {
@@ -98,7 +110,8 @@ pub fn deformation_gradient<S: Num, const N: usize>(u: &[[S; 3]; N], dh: &[[S; 3
 
 #[inline(always)]
 pub fn det3<S: Num>(f: &[[S; 3]; 3]) -> S {
-    f[0][0] * (f[1][1] * f[2][2] - f[1][2] * f[2][1]) - f[0][1] * (f[1][0] * f[2][2] - f[1][2] * f[2][0])
+    f[0][0] * (f[1][1] * f[2][2] - f[1][2] * f[2][1])
+        - f[0][1] * (f[1][0] * f[2][2] - f[1][2] * f[2][0])
         + f[0][2] * (f[1][0] * f[2][1] - f[1][1] * f[2][0])
 }
 
@@ -106,7 +119,14 @@ pub fn det3<S: Num>(f: &[[S; 3]; 3]) -> S {
 #[inline(always)]
 pub fn right_cauchy_green<S: Num>(f: &[[S; 3]; 3]) -> Sym<S> {
     let col = |i: usize, j: usize| f[0][i] * f[0][j] + f[1][i] * f[1][j] + f[2][i] * f[2][j];
-    Sym { xx: col(0, 0), yy: col(1, 1), zz: col(2, 2), xy: col(0, 1), yz: col(1, 2), xz: col(0, 2) }
+    Sym {
+        xx: col(0, 0),
+        yy: col(1, 1),
+        zz: col(2, 2),
+        xy: col(0, 1),
+        yz: col(1, 2),
+        xz: col(0, 2),
+    }
 }
 
 /// Second Piola-Kirchhoff stress of the decoupled isotropic law.
@@ -129,7 +149,8 @@ pub fn second_piola_kirchhoff<S: Num>(c: &Sym<S>, j: S, j_vol: S, k: &Coefficien
         xz: adj.xz * inv_det_c,
     };
     let i1 = c.trace();
-    let tr_c2 = c.xx * c.xx + c.yy * c.yy + c.zz * c.zz + two * (c.xy * c.xy + c.yz * c.yz + c.xz * c.xz);
+    let tr_c2 =
+        c.xx * c.xx + c.yy * c.yy + c.zz * c.zz + two * (c.xy * c.xy + c.yz * c.yz + c.xz * c.xz);
     let i2 = S::splat(0.5) * (i1 * i1 - tr_c2);
     let y = j.inv_cbrt();
     let y2 = y * y;
@@ -155,7 +176,8 @@ pub fn strain_energy_density<S: Num>(c: &Sym<S>, j: S, j_vol: S, k: &Coefficient
     let two = S::splat(2.0);
     let three = S::splat(3.0);
     let i1 = c.trace();
-    let tr_c2 = c.xx * c.xx + c.yy * c.yy + c.zz * c.zz + two * (c.xy * c.xy + c.yz * c.yz + c.xz * c.xz);
+    let tr_c2 =
+        c.xx * c.xx + c.yy * c.yy + c.zz * c.zz + two * (c.xy * c.xy + c.yz * c.yz + c.xz * c.xz);
     let i2 = S::splat(0.5) * (i1 * i1 - tr_c2);
     let y = j.inv_cbrt();
     let y2 = y * y;
@@ -166,7 +188,12 @@ pub fn strain_energy_density<S: Num>(c: &Sym<S>, j: S, j_vol: S, k: &Coefficient
 /// Nodal forces f_a = w F S dh_a, w the element volume (NiftySim:
 /// Fe = 8 detJ X S dh^T, the same on parallelepipeds).
 #[inline(always)]
-pub fn stress_forces<S: Num, const N: usize>(f: &[[S; 3]; 3], s: &Sym<S>, dh: &[[S; 3]; N], w: S) -> [[S; 3]; N] {
+pub fn stress_forces<S: Num, const N: usize>(
+    f: &[[S; 3]; 3],
+    s: &Sym<S>,
+    dh: &[[S; 3]; N],
+    w: S,
+) -> [[S; 3]; N] {
     let sr = s.to_rows();
     let mut p = [[S::splat(0.0); 3]; 3];
     for i in 0..3 {
@@ -185,7 +212,10 @@ pub fn stress_forces<S: Num, const N: usize>(f: &[[S; 3]; 3], s: &Sym<S>, dh: &[
 
 /// Hourglass mode amplitudes q_g,c = sum_a s_g,a u_a,c with s = sqrt(k) gamma.
 #[inline(always)]
-pub fn hourglass_amplitudes<S: Num, const N: usize>(u: &[[S; 3]; N], hg: &[[S; N]; 4]) -> [[S; 3]; 4] {
+pub fn hourglass_amplitudes<S: Num, const N: usize>(
+    u: &[[S; 3]; N],
+    hg: &[[S; N]; 4],
+) -> [[S; 3]; 4] {
     let mut q = [[S::splat(0.0); 3]; 4];
     for g in 0..4 {
         for c in 0..3 {
@@ -202,7 +232,11 @@ pub fn hourglass_amplitudes<S: Num, const N: usize>(u: &[[S; 3]; N], hg: &[[S; N
 /// Adds the hourglass forces k gamma gamma^T u per component
 /// (Flanagan & Belytschko 1981 stiffness form as in NiftySim).
 #[inline(always)]
-pub fn add_hourglass_forces<S: Num, const N: usize>(forces: &mut [[S; 3]; N], q: &[[S; 3]; 4], hg: &[[S; N]; 4]) {
+pub fn add_hourglass_forces<S: Num, const N: usize>(
+    forces: &mut [[S; 3]; N],
+    q: &[[S; 3]; 4],
+    hg: &[[S; N]; 4],
+) {
     for a in 0..N {
         for c in 0..3 {
             let mut acc = forces[a][c];
@@ -245,7 +279,12 @@ mod tests {
 
     /// Unit-cube T4 (0,0,0),(1,0,0),(0,1,0),(0,0,1) shape derivatives.
     fn unit_tet_dh() -> [[f64; 3]; 4] {
-        [[-1.0, -1.0, -1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+        [
+            [-1.0, -1.0, -1.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ]
     }
 
     proptest! {
@@ -297,7 +336,11 @@ mod tests {
 
     #[test]
     fn rigid_translation_gives_no_force() {
-        let k = Coefficients { c10: 500.0, c01: 0.0, kappa: 5e4 };
+        let k = Coefficients {
+            c10: 500.0,
+            c01: 0.0,
+            kappa: 5e4,
+        };
         let u = [[0.3, -0.2, 0.1]; 4];
         let (f, j) = internal_forces(&u, &unit_tet_dh(), 1.0 / 6.0, &k, None, None);
         assert!((j - 1.0).abs() < 1e-15);

@@ -91,7 +91,12 @@ impl Real for f64 {
 /// What the element maths needs of a number: field operations, a square
 /// root and x^(-1/3).
 pub trait Num:
-    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self> + Neg<Output = Self>
+    Copy
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
 {
     fn splat(x: f64) -> Self;
     fn sqrt(self) -> Self;
@@ -162,7 +167,9 @@ pub fn block_view<T: Real, const N: usize, const M: usize>(s: &[T]) -> &[[Lanes<
 
 /// Mutable form of [`block_view`].
 #[inline(always)]
-pub fn block_view_mut<T: Real, const N: usize, const M: usize>(s: &mut [T]) -> &mut [[Lanes<T>; M]; N] {
+pub fn block_view_mut<T: Real, const N: usize, const M: usize>(
+    s: &mut [T],
+) -> &mut [[Lanes<T>; M]; N] {
     let s = &mut s[..N * M * LANES];
     // SAFETY: as in `block_view`; the exclusive borrow is carried over.
     unsafe { &mut *(s.as_mut_ptr() as *mut [[Lanes<T>; M]; N]) }

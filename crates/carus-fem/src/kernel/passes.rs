@@ -93,7 +93,11 @@ fn element_task_body<T: Real, const N: usize>(
         let dh: &[[Lanes<T>; 3]; N] = block_view(&eb.shape_derivatives[b * N * 3 * LANES..]);
         let w = Lanes::load(&eb.weight[b * LANES..]);
         let co = &eb.coefficients[b * 3 * LANES..];
-        let k = Coefficients { c10: Lanes::load(co), c01: Lanes::load(&co[LANES..]), kappa: Lanes::load(&co[2 * LANES..]) };
+        let k = Coefficients {
+            c10: Lanes::load(co),
+            c01: Lanes::load(&co[LANES..]),
+            kappa: Lanes::load(&co[2 * LANES..]),
+        };
         let j_vol = match nodal_j {
             Some(nj) => {
                 let mut s = [T::default(); LANES];
@@ -171,7 +175,12 @@ fn element_task<T: Real, const N: usize>(
 /// Element pass: writes every element's internal nodal forces (stress plus
 /// hourglass) into `forces` (layout of [`ElementBlocks::force_slot`]).
 /// `nodal_j`: the averaged nodal dilatation for T4ANP, None otherwise.
-pub fn element_forces<T: Real>(eb: &ElementBlocks<T>, u: &[T], nodal_j: Option<&[T]>, forces: &mut [T]) -> BadElement {
+pub fn element_forces<T: Real>(
+    eb: &ElementBlocks<T>,
+    u: &[T],
+    nodal_j: Option<&[T]>,
+    forces: &mut [T],
+) -> BadElement {
     let avx2 = has_avx2();
     let npe = eb.nodes_per_element;
     let task = BLOCKS_PER_TASK * npe * 3 * LANES;
@@ -189,7 +198,12 @@ pub fn element_forces<T: Real>(eb: &ElementBlocks<T>, u: &[T], nodal_j: Option<&
 }
 
 #[inline(always)]
-fn volume_task_body<T: Real>(eb: &ElementBlocks<T>, first_block: usize, u: &[T], out: &mut [T]) -> BadElement {
+fn volume_task_body<T: Real>(
+    eb: &ElementBlocks<T>,
+    first_block: usize,
+    u: &[T],
+    out: &mut [T],
+) -> BadElement {
     let mut bad = None;
     for (bi, ob) in out.chunks_exact_mut(LANES).enumerate() {
         let b = first_block + bi;
@@ -200,7 +214,9 @@ fn volume_task_body<T: Real>(eb: &ElementBlocks<T>, first_block: usize, u: &[T],
         let j = super::element::det3(&f);
         (j * Lanes::load(&eb.quarter_volume[b * LANES..])).store(ob);
         if bad.is_none() {
-            bad = (0..LANES).find(|&l| !(j.0[l] > T::default())).map(|l| (b * LANES + l, j.0[l].to_f64()));
+            bad = (0..LANES)
+                .find(|&l| !(j.0[l] > T::default()))
+                .map(|l| (b * LANES + l, j.0[l].to_f64()));
         }
     }
     bad
@@ -208,12 +224,21 @@ fn volume_task_body<T: Real>(eb: &ElementBlocks<T>, first_block: usize, u: &[T],
 
 #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
 #[target_feature(enable = "avx2,fma")]
-fn volume_task_avx2<T: Real>(eb: &ElementBlocks<T>, first_block: usize, u: &[T], out: &mut [T]) -> BadElement {
+fn volume_task_avx2<T: Real>(
+    eb: &ElementBlocks<T>,
+    first_block: usize,
+    u: &[T],
+    out: &mut [T],
+) -> BadElement {
     volume_task_body(eb, first_block, u, out)
 }
 
 /// T4ANP pass 1: current volume share J_e V_e / 4 of every element.
-pub fn element_volume_shares<T: Real>(eb: &ElementBlocks<T>, u: &[T], shares: &mut [T]) -> BadElement {
+pub fn element_volume_shares<T: Real>(
+    eb: &ElementBlocks<T>,
+    u: &[T],
+    shares: &mut [T],
+) -> BadElement {
     let avx2 = has_avx2();
     shares
         .par_chunks_mut(BLOCKS_PER_TASK * LANES)
@@ -232,18 +257,30 @@ pub fn element_volume_shares<T: Real>(eb: &ElementBlocks<T>, u: &[T], shares: &m
 }
 
 /// T4ANP pass 2: nodal dilatation J_n = (sum of J_e V_e / 4) / (sum of V_e / 4).
-pub fn nodal_dilatation<T: Real>(eb: &ElementBlocks<T>, nodes: &NodeTable<T>, shares: &[T], nodal_j: &mut [T]) {
-    nodal_j.par_chunks_mut(NODES_PER_TASK).enumerate().for_each(|(t, out)| {
-        for (i, nj) in out.iter_mut().enumerate() {
-            let n = t * NODES_PER_TASK + i;
-            let mut acc = T::default();
-            for &s in nodes.slots_of(n) {
-                acc += shares[eb.slot_element(s as usize)];
+pub fn nodal_dilatation<T: Real>(
+    eb: &ElementBlocks<T>,
+    nodes: &NodeTable<T>,
+    shares: &[T],
+    nodal_j: &mut [T],
+) {
+    nodal_j
+        .par_chunks_mut(NODES_PER_TASK)
+        .enumerate()
+        .for_each(|(t, out)| {
+            for (i, nj) in out.iter_mut().enumerate() {
+                let n = t * NODES_PER_TASK + i;
+                let mut acc = T::default();
+                for &s in nodes.slots_of(n) {
+                    acc += shares[eb.slot_element(s as usize)];
+                }
+                // Orphan nodes (no element) keep J = 1.
+                *nj = if nodes.inv_nodal_volume[n] > T::default() {
+                    acc * nodes.inv_nodal_volume[n]
+                } else {
+                    T::from_f64(1.0)
+                };
             }
-            // Orphan nodes (no element) keep J = 1.
-            *nj = if nodes.inv_nodal_volume[n] > T::default() { acc * nodes.inv_nodal_volume[n] } else { T::from_f64(1.0) };
-        }
-    });
+        });
 }
 
 /// Constants of the central-difference update with mass-proportional damping
@@ -275,15 +312,24 @@ fn node_task_body<T: Real>(
     let two = T::from_f64(2.0);
     let count = u_next.len() / 3;
     let range = 3 * first..3 * (first + count);
-    let (external, u_prev, u_curr) = (&external[range.clone()], &u_prev[range.clone()], &u_curr[range]);
-    let (mass, inv_mass) = (&nodes.mass[first..first + count], &nodes.inv_mass[first..first + count]);
+    let (external, u_prev, u_curr) = (
+        &external[range.clone()],
+        &u_prev[range.clone()],
+        &u_curr[range],
+    );
+    let (mass, inv_mass) = (
+        &nodes.mass[first..first + count],
+        &nodes.inv_mass[first..first + count],
+    );
     for i in 0..count {
         let f = nodes.gather(forces, first + i);
         let hm = it.h2 * inv_mass[i];
         let mut ok = true;
         for c in 0..3 {
             let r = external[3 * i + c] + mass[i] * it.gravity[c];
-            let v = (hm * (r - f[c]) + two * u_curr[3 * i + c] - it.previous_factor * u_prev[3 * i + c]) * it.inv_denominator;
+            let v = (hm * (r - f[c]) + two * u_curr[3 * i + c]
+                - it.previous_factor * u_prev[3 * i + c])
+                * it.inv_denominator;
             u_next[3 * i + c] = v;
             let bounded = v < it.runaway_m && -v < it.runaway_m;
             ok &= bounded;
@@ -333,14 +379,19 @@ pub fn advance_nodes<T: Real>(
             #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
             if avx2 {
                 // SAFETY: AVX2 and FMA support was detected at run time.
-                return unsafe { node_task_avx2(nodes, first, forces, external, it, u_prev, u_curr, out) };
+                return unsafe {
+                    node_task_avx2(nodes, first, forces, external, it, u_prev, u_curr, out)
+                };
             }
             let _ = avx2;
             node_task_body(nodes, first, forces, external, it, u_prev, u_curr, out)
         })
-        .reduce(|| None, |a, b| match (a, b) {
-            (Some(x), Some(y)) => Some(x.min(y)),
-            (x, None) => x,
-            (None, y) => y,
-        })
+        .reduce(
+            || None,
+            |a, b| match (a, b) {
+                (Some(x), Some(y)) => Some(x.min(y)),
+                (x, None) => x,
+                (None, y) => y,
+            },
+        )
 }

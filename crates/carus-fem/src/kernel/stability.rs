@@ -45,8 +45,14 @@ pub fn max_angular_frequency<T: Real>(k: &KernelData<T>, probe_m: f64) -> f64 {
     // Deterministic start rich in short waves: a hashed sign per dof.
     let mut v: Vec<f64> = (0..3 * nn)
         .map(|i| {
-            let h = (i as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15).rotate_left(17);
-            if h & 1 == 0 { 1.0 } else { -1.0 }
+            let h = (i as u64)
+                .wrapping_mul(0x9e37_79b9_7f4a_7c15)
+                .rotate_left(17);
+            if h & 1 == 0 {
+                1.0
+            } else {
+                -1.0
+            }
         })
         .collect();
     let mut u = vec![T::default(); 3 * nn];
@@ -56,7 +62,11 @@ pub fn max_angular_frequency<T: Real>(k: &KernelData<T>, probe_m: f64) -> f64 {
     let mut lambda = 0.0f64;
     for it in 0..MAX_ITERATIONS {
         // Symmetric form: y = M^-1/2 K M^-1/2 v, Rayleigh quotient v.y / v.v.
-        let w: Vec<f64> = v.iter().enumerate().map(|(i, x)| x * inv_sqrt_mass[i / 3]).collect();
+        let w: Vec<f64> = v
+            .iter()
+            .enumerate()
+            .map(|(i, x)| x * inv_sqrt_mass[i / 3])
+            .collect();
         let w_max = w.iter().fold(0.0f64, |a, x| a.max(x.abs()));
         if !(w_max > 0.0) {
             break;
@@ -70,7 +80,9 @@ pub fn max_angular_frequency<T: Real>(k: &KernelData<T>, probe_m: f64) -> f64 {
             *ui = T::from_f64(-d * wi);
         }
         forces_at(k, &u, &mut copies, &mut f_minus);
-        let y: Vec<f64> = (0..3 * nn).map(|i| (f_plus[i] - f_minus[i]) / (2.0 * d) * inv_sqrt_mass[i / 3]).collect();
+        let y: Vec<f64> = (0..3 * nn)
+            .map(|i| (f_plus[i] - f_minus[i]) / (2.0 * d) * inv_sqrt_mass[i / 3])
+            .collect();
         let vv: f64 = v.iter().map(|x| x * x).sum();
         let vy: f64 = v.iter().zip(&y).map(|(a, b)| a * b).sum();
         let next = vy / vv;
