@@ -1,0 +1,44 @@
+//! Forward simulation of labour (issue 4, docs/LABOUR.md): a scenario in,
+//! a pose history, the cardinal-movement detector's report, ParaView series
+//! and a run record out.
+//!
+//! - [`scenario`]: the TOML schema and the built-in scenarios;
+//! - [`scene`]: the constant scene built from a scenario (anatomy, bodies, floor, start);
+//! - [`expulsion`]: the expulsion force generator;
+//! - [`sim`]: the mutable state and the step pipeline;
+//! - [`record`]: the run record (everything a report needs);
+//! - [`output`]: the files of a run (the only module that writes);
+//! - [`run`]: the driver: progress, stop flag, checkpoints, resume.
+
+pub mod expulsion;
+pub mod output;
+pub mod record;
+pub mod run;
+pub mod scenario;
+pub mod scene;
+pub mod sim;
+
+pub use record::{KeyMoment, RunRecord, RunSummary};
+pub use run::{resume, run, Observer, RunOptions, SilentObserver};
+pub use scenario::{Scenario, ScenarioError, BUILTINS};
+pub use scene::Scene;
+pub use sim::{SimState, Simulation};
+
+/// Why a run cannot start or go on.
+#[derive(Debug, thiserror::Error)]
+pub enum LabourError {
+    #[error(transparent)]
+    Scenario(#[from] ScenarioError),
+    #[error("anatomy: {0}")]
+    Anatomy(String),
+    #[error("contact: {0}")]
+    Contact(#[from] carus_contact::ContactError),
+    #[error("pelvic floor solver: {0}")]
+    Floor(#[from] carus_fem::FemError),
+    #[error("pose history: {0}")]
+    History(#[from] carus_analysis::HistoryError),
+    #[error("{path}: {message}")]
+    Output { path: std::path::PathBuf, message: String },
+    #[error("checkpoint: {0}")]
+    Checkpoint(String),
+}

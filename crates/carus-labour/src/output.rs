@@ -1,0 +1,155 @@
+//! The files of a run (the crate's only file-system module): pose history
+//! (JSON, CSV), detector report, run record, checkpoints, and ParaView
+//! series (VTU/PVD) of the fetus, the pelvis and the deforming floor.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use carus_analysis::{DetectorReport, PoseHistory};
+use carus_contact::RigidPose;
+use carus_fem::{Mesh, TledSolver};
+use carus_io::{CsvWriter, FrameFields, PvdCollection};
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use crate::sim::{FloorSample, SimState};
+use crate::LabourError;
+
+pub const SCENARIO_FILE: &str = "scenario.toml";
+pub const CHECKPOINT_FILE: &str = "checkpoint.json";
+pub const HISTORY_JSON: &str = "pose_history.json";
+pub const HISTORY_CSV: &str = "pose_history.csv";
+pub const MOVEMENTS_FILE: &str = "movements.json";
+pub const RUN_FILE: &str = "run.json";
+pub const PELVIS_VTU: &str = "pelvis.vtu";
+pub const HEAD_BODY_VTU: &str = "head_body.vtu";
+pub const TRUNK_BODY_VTU: &str = "trunk_body.vtu";
+pub const FRAMES_DIR: &str = "frames";
+
+fn output_error(path: &Path, e: impl std::fmt::Display) -> LabourError {
+    LabourError::Output { path: path.to_path_buf(), message: e.to_string() }
+}
+
+pub fn write_text(path: &Path, text: &str) -> Result<(), LabourError> {
+    std::fs::write(path, text).map_err(|e| output_error(path, e))
+}
+
+pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<(), LabourError> {
+    let text = serde_json::to_string(value).map_err(|e| output_error(path, e))?;
+    write_text(path, &text)
+}
+
+/// What a checkpoint holds: the scenario as written, the full state and the
+/// VTU frames written so far.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Checkpoint {
+    pub scenario_toml: String,
+    /// Folder an imported pelvis path is relative to.
+    pub base_dir: PathBuf,
+    pub state: SimState,
+    pub frame_times: Vec<f64>,
+}
+
+pub fn write_checkpoint(dir: &Path, checkpoint: &Checkpoint) -> Result<(), LabourError> {
+    // Write then rename, so an interrupted write never leaves a broken checkpoint.
+    let path = dir.join(CHECKPOINT_FILE);
+    let partial = dir.join("checkpoint.json.partial");
+    write_json(&partial, checkpoint)?;
+    std::fs::rename(&partial, &path).map_err(|e| output_error(&path, e))
+}
+
+pub fn read_checkpoint(dir: &Path) -> Result<Checkpoint, LabourError> {
+    let path = dir.join(CHECKPOINT_FILE);
+    let text = std::fs::read_to_string(&path)
+        .map_err(|e| output_error(&path, format!("{e}; is this the out dir of a `carus run`?")))?;
+    serde_json::from_str(&text).map_err(|e| output_error(&path, format!("not a Carus checkpoint: {e}")))
+}
+
+/// A triangle surface as a VTU file (ASCII), placed by `pose`.
+pub fn write_surface_vtu(path: &Path, vertices: &[DVec3], triangles: &[[u32; 3]], pose: &RigidPose) -> Result<(), LabourError> {
+    let mut s = String::with_capacity(64 * vertices.len() + 32 * triangles.len());
+    s.push_str("<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\">\n<UnstructuredGrid>\n");
+    let _ = writeln!(s, "<Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">", vertices.len(), triangles.len());
+    s.push_str("<Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n");
+    for v in vertices {
+        let p = pose.transform_point(*v);
+        let _ = writeln!(s, "{} {} {}", p.x, p.y, p.z);
+    }
+    s.push_str("</DataArray></Points>\n<Cells><DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n");
+    for t in triangles {
+        let _ = writeln!(s, "{} {} {}", t[0], t[1], t[2]);
+    }
+    s.push_str("</DataArray><DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n");
+    for k in 0..triangles.len() {
+        let _ = writeln!(s, "{}", 3 * (k + 1));
+    }
+    s.push_str("</DataArray><DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n");
+    for _ in triangles {
+        s.push_str("5\n");
+    }
+    s.push_str("</DataArray></Cells>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n");
+    write_text(path, &s)
+}
+
+/// The floor's current state as a VTU frame (displacement, von Mises
+/// stress, maximum principal stretch, J).
+pub fn write_floor_vtu(path: &Path, mesh: &Mesh, solver: &TledSolver) -> Result<(), LabourError> {
+    let u = solver.displacements();
+    let fields = solver.element_fields();
+    let frame = FrameFields {
+        displacement_m: &u,
+        von_mises_pa: &fields.von_mises_pa,
+        max_principal_stretch: &fields.max_principal_stretch,
+        jacobian: &fields.jacobian,
+    };
+    carus_io::write_vtu(path, mesh, &frame).map_err(|e| output_error(path, e))
+}
+
+/// A PVD time series of `frames/<stem>_NNNN.vtu`.
+pub fn write_pvd(dir: &Path, stem: &str, times: &[f64]) -> Result<String, LabourError> {
+    let mut pvd = PvdCollection::new();
+    for (k, t) in times.iter().enumerate() {
+        pvd.push(*t, frame_name(stem, k));
+    }
+    let name = format!("{stem}.pvd");
+    let path = dir.join(&name);
+    pvd.write(&path).map_err(|e| output_error(&path, e))?;
+    Ok(name)
+}
+
+/// Relative path of VTU frame `k` of a series.
+pub fn frame_name(stem: &str, k: usize) -> String {
+    format!("{FRAMES_DIR}/{stem}_{k:04}.vtu")
+}
+
+/// The pose history as CSV: the detector's series (station, theta, phi,
+/// forces...) beside the head and trunk poses in the pelvis frame.
+pub fn write_history_csv(path: &Path, history: &PoseHistory, report: Option<&DetectorReport>, floor: &[FloorSample]) -> Result<(), LabourError> {
+    let (series_columns, rows) = match report {
+        Some(r) => r.series.table(),
+        None => (vec!["time_s"], history.samples.iter().map(|s| vec![Some(s.time_s)]).collect()),
+    };
+    let mut header: Vec<&str> = series_columns.clone();
+    let poses = [
+        "head_x_m", "head_y_m", "head_z_m", "head_qx", "head_qy", "head_qz", "head_qw", "trunk_x_m", "trunk_y_m", "trunk_z_m",
+        "trunk_qx", "trunk_qy", "trunk_qz", "trunk_qw", "expulsion_fx_n", "expulsion_fy_n", "expulsion_fz_n", "bone_fx_n",
+        "bone_fy_n", "bone_fz_n", "floor_fx_n", "floor_fy_n", "floor_fz_n", "floor_peak_stretch",
+    ];
+    header.extend_from_slice(&poses);
+    let mut csv = CsvWriter::create(path, &header).map_err(|e| output_error(path, e))?;
+    for (k, (row, sample)) in rows.iter().zip(&history.samples).enumerate() {
+        let mut values: Vec<f64> = row.iter().map(|v| v.unwrap_or(f64::NAN)).collect();
+        let h = sample.head;
+        values.extend([h.position_m.x, h.position_m.y, h.position_m.z, h.orientation.x, h.orientation.y, h.orientation.z, h.orientation.w]);
+        match sample.trunk {
+            Some(t) => values.extend([t.position_m.x, t.position_m.y, t.position_m.z, t.orientation.x, t.orientation.y, t.orientation.z, t.orientation.w]),
+            None => values.extend([f64::NAN; 7]),
+        }
+        for f in [sample.expulsion_force_n, sample.bone_contact_force_n, sample.floor_contact_force_n] {
+            values.extend(f.to_array());
+        }
+        values.push(floor.get(k).map_or(f64::NAN, |f| f.peak_stretch));
+        csv.row(&values).map_err(|e| output_error(path, e))?;
+    }
+    csv.flush().map_err(|e| output_error(path, e))
+}

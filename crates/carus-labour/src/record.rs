@@ -1,0 +1,93 @@
+//! The run record: everything a report needs, serialisable to run.json.
+
+use carus_analysis::{DetectorReport, Outcome, PoseHistory, RigidPose};
+use serde::{Deserialize, Serialize};
+
+use crate::scenario::Scenario;
+use crate::sim::FloorSample;
+
+/// The headline figures of a run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunSummary {
+    pub scenario: String,
+    pub outcome: Outcome,
+    /// Simulated time reached, s.
+    pub simulated_s: f64,
+    /// Wall-clock time of this invocation, s (a resumed run counts its part).
+    pub wall_s: f64,
+    /// Whether the run reached its end (false: stopped, resumable).
+    pub completed: bool,
+    pub rigid_steps: u64,
+    pub rigid_dt_s: f64,
+    pub floor_substeps_per_step: u32,
+    pub floor_elements: usize,
+    pub head_samples: usize,
+    pub trunk_samples: usize,
+    pub head_mass_kg: f64,
+    pub trunk_mass_kg: Option<f64>,
+}
+
+/// An instant worth a picture (engagement, full internal rotation,
+/// crowning, restitution), with the poses and the nearest ParaView frame.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct KeyMoment {
+    pub name: String,
+    pub time_s: f64,
+    pub head: RigidPose,
+    pub trunk: Option<RigidPose>,
+    /// Index of the nearest VTU frame (floor_NNNN.vtu, head_NNNN.vtu), if written.
+    pub frame: Option<usize>,
+}
+
+/// Everything a report needs (run.json in the out dir).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunRecord {
+    pub scenario: Scenario,
+    pub summary: RunSummary,
+    pub history: PoseHistory,
+    /// None when the run stopped before its second sample.
+    pub detector: Option<DetectorReport>,
+    /// Peak stretch and stress of the pelvic floor over time.
+    pub floor: Vec<FloorSample>,
+    pub key_moments: Vec<KeyMoment>,
+    /// Files of the run, relative to the out dir: surfaces and series.
+    pub files: Files,
+}
+
+/// Where the run's files are, relative to its out dir.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Files {
+    pub scenario: String,
+    pub pose_history_json: String,
+    pub pose_history_csv: String,
+    pub movements: String,
+    pub pelvis_vtu: String,
+    /// Head and trunk surfaces in their body frames (place with the poses).
+    pub head_body_vtu: String,
+    pub trunk_body_vtu: Option<String>,
+    pub head_pvd: Option<String>,
+    pub trunk_pvd: Option<String>,
+    pub floor_pvd: Option<String>,
+    pub checkpoint: String,
+}
+
+/// The key moments the detector's report marks.
+pub fn key_moments(history: &PoseHistory, report: &DetectorReport, frame_times: &[f64]) -> Vec<KeyMoment> {
+    let m = &report.movements;
+    let crowning = report.series.head_delivered.iter().position(|&d| d).map(|i| report.series.time_s[i]);
+    let candidates = [
+        ("engagement", m.engagement.end_s),
+        ("internal_rotation", m.internal_rotation.end_s),
+        ("crowning", crowning),
+        ("restitution", m.external_rotation.end_s),
+    ];
+    candidates
+        .iter()
+        .filter_map(|(name, t)| {
+            let t = (*t)?;
+            let sample = history.samples.iter().min_by(|a, b| (a.time_s - t).abs().total_cmp(&(b.time_s - t).abs()))?;
+            let frame = (0..frame_times.len()).min_by(|&a, &b| (frame_times[a] - t).abs().total_cmp(&(frame_times[b] - t).abs()));
+            Some(KeyMoment { name: name.to_string(), time_s: sample.time_s, head: sample.head, trunk: sample.trunk, frame })
+        })
+        .collect()
+}

@@ -1,0 +1,320 @@
+//! The driver of a run: builds the scene, steps the simulation to its end
+//! (or until stopped), writes frames and checkpoints on the way, and at the
+//! end the pose history, the detector's report and the run record. Reports
+//! progress through an [`Observer`]; never prints.
+
+use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::Instant;
+
+use carus_analysis::{detect, Outcome, PoseHistory};
+use carus_contact::RigidPose;
+
+use crate::output::{self, Checkpoint};
+use crate::record::{key_moments, Files, RunRecord, RunSummary};
+use crate::scenario::Scenario;
+use crate::scene::{Scene, HEAD, TRUNK};
+use crate::sim::Simulation;
+use crate::LabourError;
+
+/// How a run is driven.
+#[derive(Debug, Clone, Default)]
+pub struct RunOptions {
+    /// Set from outside (Ctrl-C) to stop cleanly with everything written.
+    pub stop: Option<Arc<AtomicBool>>,
+    /// Stop as if interrupted once this simulated time is reached (tests).
+    pub stop_at_s: Option<f64>,
+}
+
+/// Progress of a run, for a progress bar.
+pub trait Observer {
+    /// Called every few hundred steps with the simulated time and the end time.
+    fn progress(&mut self, simulated_s: f64, end_s: f64);
+}
+
+/// An observer that ignores progress.
+pub struct SilentObserver;
+
+impl Observer for SilentObserver {
+    fn progress(&mut self, _simulated_s: f64, _end_s: f64) {}
+}
+
+/// Steps between stop-flag checks and progress calls.
+const POLL_STEPS: u64 = 200;
+
+/// Runs `scenario` from its start, writing into `out_dir` (which must exist).
+pub fn run(scenario: &Scenario, out_dir: &Path, options: &RunOptions, observer: &mut dyn Observer) -> Result<RunRecord, LabourError> {
+    let started = Instant::now();
+    let scene = Scene::build(scenario)?;
+    output::write_text(&out_dir.join(output::SCENARIO_FILE), &scenario.to_toml()?)?;
+    write_static(&scene, out_dir)?;
+    let sim = Simulation::new(&scene)?;
+    drive(sim, out_dir, options, observer, Vec::new(), started)
+}
+
+/// Continues the run in `out_dir` from its last checkpoint.
+pub fn resume(out_dir: &Path, options: &RunOptions, observer: &mut dyn Observer) -> Result<RunRecord, LabourError> {
+    let started = Instant::now();
+    let checkpoint = output::read_checkpoint(out_dir)?;
+    let scenario = Scenario::parse(&out_dir.join(output::CHECKPOINT_FILE), &checkpoint.scenario_toml, checkpoint.base_dir.clone())?;
+    let scene = Scene::build(&scenario)?;
+    let sim = Simulation::from_state(&scene, checkpoint.state)?;
+    drive(sim, out_dir, options, observer, checkpoint.frame_times, started)
+}
+
+fn drive(
+    mut sim: Simulation<'_>,
+    out_dir: &Path,
+    options: &RunOptions,
+    observer: &mut dyn Observer,
+    mut frame_times: Vec<f64>,
+    started: Instant,
+) -> Result<RunRecord, LabourError> {
+    let scene = sim.scene;
+    let s = &scene.scenario;
+    let dt = sim.dt_s();
+    let end_steps = (s.numerics.end_time_s / dt).round() as u64;
+    let checkpoint_every = ((s.numerics.checkpoint_every_s / dt).round() as u64).max(1);
+    let frame_every = ((s.output.vtu_every_s / dt).round() as u64).max(1);
+    let stop_step = options.stop_at_s.map(|t| (t / dt).round() as u64);
+    let frames_dir = out_dir.join(output::FRAMES_DIR);
+    if s.output.vtu {
+        std::fs::create_dir_all(&frames_dir).map_err(|e| LabourError::Output { path: frames_dir.clone(), message: e.to_string() })?;
+        if sim.state.step == 0 && frame_times.is_empty() {
+            write_frame(&sim, out_dir, &mut frame_times)?;
+        }
+    }
+    let mut completed = true;
+    let mut failure = None;
+    while sim.state.step < end_steps {
+        if stop_step.is_some_and(|k| sim.state.step >= k) || options.stop.as_ref().is_some_and(|f| f.load(Ordering::Relaxed)) {
+            completed = false;
+            break;
+        }
+        if let Err(e) = sim.step() {
+            // Keep what was simulated: write it all, then report the error.
+            failure = Some(e);
+            break;
+        }
+        let k = sim.state.step;
+        if s.output.vtu && k % frame_every == 0 {
+            write_frame(&sim, out_dir, &mut frame_times)?;
+        }
+        if k % checkpoint_every == 0 {
+            save_checkpoint(&mut sim, out_dir, &frame_times)?;
+        }
+        if k % POLL_STEPS == 0 {
+            observer.progress(sim.time_s(), s.numerics.end_time_s);
+        }
+        if s.numerics.stop_when_delivered && k % 20 == 0 && delivered(&sim) {
+            break;
+        }
+    }
+    observer.progress(sim.time_s(), s.numerics.end_time_s);
+    save_checkpoint(&mut sim, out_dir, &frame_times)?;
+    let record = finish(&mut sim, out_dir, &frame_times, completed, started)?;
+    match failure {
+        Some(e) => Err(e),
+        None => Ok(record),
+    }
+}
+
+/// The trunk's centre (or, without a trunk, the head's) is well past the outlet.
+fn delivered(sim: &Simulation<'_>) -> bool {
+    let scene = sim.scene;
+    let outlet = scene.canal.outlet();
+    let bodies = &sim.state.bodies;
+    match &scene.trunk_geometry {
+        Some(g) => outlet.signed_distance(bodies.pose(TRUNK).transform_point(g.centre_m)) > 0.03,
+        None => outlet.signed_distance(bodies.pose(HEAD).transform_point(scene.head_geometry.centre_m)) > 0.08,
+    }
+}
+
+fn save_checkpoint(sim: &mut Simulation<'_>, out_dir: &Path, frame_times: &[f64]) -> Result<(), LabourError> {
+    let scenario_toml = sim.scene.scenario.to_toml()?;
+    let base_dir = sim.scene.scenario.base_dir.clone();
+    let state = sim.checkpoint_state().clone();
+    output::write_checkpoint(out_dir, &Checkpoint { scenario_toml, base_dir, state, frame_times: frame_times.to_vec() })
+}
+
+/// The surfaces that do not move: the pelvis, and the fetal parts in their body frames.
+fn write_static(scene: &Scene, out_dir: &Path) -> Result<(), LabourError> {
+    let identity = RigidPose::default();
+    let p = &scene.pelvis.surface;
+    output::write_surface_vtu(&out_dir.join(output::PELVIS_VTU), &p.vertices, &p.triangles, &identity)?;
+    let h = &scene.head.surface;
+    output::write_surface_vtu(&out_dir.join(output::HEAD_BODY_VTU), &h.vertices, &h.triangles, &identity)?;
+    if let Some(t) = &scene.trunk {
+        output::write_surface_vtu(&out_dir.join(output::TRUNK_BODY_VTU), &t.surface.vertices, &t.surface.triangles, &identity)?;
+    }
+    Ok(())
+}
+
+fn write_frame(sim: &Simulation<'_>, out_dir: &Path, frame_times: &mut Vec<f64>) -> Result<(), LabourError> {
+    let scene = sim.scene;
+    let k = frame_times.len();
+    let bodies = &sim.state.bodies;
+    let h = &scene.head.surface;
+    output::write_surface_vtu(&out_dir.join(output::frame_name("head", k)), &h.vertices, &h.triangles, &bodies.pose(HEAD))?;
+    if let Some(t) = &scene.trunk {
+        output::write_surface_vtu(&out_dir.join(output::frame_name("trunk", k)), &t.surface.vertices, &t.surface.triangles, &bodies.pose(TRUNK))?;
+    }
+    if let (Some(floor), Some(solver)) = (&scene.floor, sim.solver()) {
+        output::write_floor_vtu(&out_dir.join(output::frame_name("floor", k)), &floor.mesh, solver)?;
+    }
+    frame_times.push(sim.time_s());
+    Ok(())
+}
+
+/// The pose history of the run so far.
+pub fn history(sim: &Simulation<'_>) -> PoseHistory {
+    let scene = sim.scene;
+    PoseHistory {
+        head: scene.head_geometry.clone(),
+        trunk: scene.trunk_geometry.clone(),
+        canal: scene.canal.clone(),
+        samples: sim.state.samples.clone(),
+    }
+}
+
+fn finish(sim: &mut Simulation<'_>, out_dir: &Path, frame_times: &[f64], completed: bool, started: Instant) -> Result<RunRecord, LabourError> {
+    let scene = sim.scene;
+    let history = history(sim);
+    // A run stopped before its second sample has nothing to detect yet.
+    let report = if history.samples.len() >= 2 { Some(detect(&history)?) } else { None };
+    output::write_json(&out_dir.join(output::HISTORY_JSON), &history)?;
+    output::write_json(&out_dir.join(output::MOVEMENTS_FILE), &report)?;
+    output::write_history_csv(&out_dir.join(output::HISTORY_CSV), &history, report.as_ref(), &sim.state.floor_samples)?;
+    let vtu = scene.scenario.output.vtu && !frame_times.is_empty();
+    let pvd = |stem: &str| if vtu { output::write_pvd(out_dir, stem, frame_times).map(Some) } else { Ok(None) };
+    let head_pvd = pvd("head")?;
+    let trunk_pvd = if scene.trunk.is_some() { pvd("trunk")? } else { None };
+    let floor_pvd = if scene.floor.is_some() { pvd("floor")? } else { None };
+    let summary = RunSummary {
+        scenario: scene.scenario.name.clone(),
+        outcome: report.as_ref().map_or(Outcome { delivered: false, arrest: None }, |r| r.outcome.clone()),
+        simulated_s: sim.time_s(),
+        wall_s: started.elapsed().as_secs_f64(),
+        completed,
+        rigid_steps: sim.state.step,
+        rigid_dt_s: sim.dt_s(),
+        floor_substeps_per_step: sim.floor_substeps(),
+        floor_elements: scene.floor.as_ref().map_or(0, |f| f.mesh.element_count()),
+        head_samples: scene.head.samples.len(),
+        trunk_samples: scene.trunk.as_ref().map_or(0, |t| t.samples.len()),
+        head_mass_kg: scene.head.mass.mass_kg,
+        trunk_mass_kg: scene.trunk.as_ref().map(|t| t.mass.mass_kg),
+    };
+    let record = RunRecord {
+        scenario: scene.scenario.clone(),
+        summary,
+        key_moments: report.as_ref().map_or_else(Vec::new, |r| key_moments(&history, r, frame_times)),
+        history,
+        detector: report,
+        floor: sim.state.floor_samples.clone(),
+        files: Files {
+            scenario: output::SCENARIO_FILE.into(),
+            pose_history_json: output::HISTORY_JSON.into(),
+            pose_history_csv: output::HISTORY_CSV.into(),
+            movements: output::MOVEMENTS_FILE.into(),
+            pelvis_vtu: output::PELVIS_VTU.into(),
+            head_body_vtu: output::HEAD_BODY_VTU.into(),
+            trunk_body_vtu: scene.trunk.as_ref().map(|_| output::TRUNK_BODY_VTU.into()),
+            head_pvd,
+            trunk_pvd,
+            floor_pvd,
+            checkpoint: output::CHECKPOINT_FILE.into(),
+        },
+    };
+    output::write_json(&out_dir.join(output::RUN_FILE), &record)?;
+    Ok(record)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scenario::Scenario;
+
+    /// The normal scenario made coarse for tests: a coarser head, sparser
+    /// contact samples, a small floor mesh, a 1 ms step, 2.4 s simulated
+    /// (the head enters the inlet), no VTU frames.
+    pub(crate) fn coarse(end_s: f64) -> Scenario {
+        let mut s = Scenario::builtin("normal").unwrap();
+        s.numerics.head_subdivisions = 3;
+        s.contact.sample_spacing_mm = 8.0;
+        s.floor.mesh.elements_around = 16;
+        s.floor.mesh.elements_across = 3;
+        s.numerics.rigid_dt_s = 1e-3;
+        s.numerics.end_time_s = end_s;
+        s.numerics.checkpoint_every_s = 0.5;
+        s.output.vtu = false;
+        s
+    }
+
+    fn run_in(s: &Scenario, options: &RunOptions) -> (tempfile::TempDir, RunRecord) {
+        let dir = tempfile::tempdir().unwrap();
+        let record = run(s, dir.path(), options, &mut SilentObserver).unwrap();
+        (dir, record)
+    }
+
+    #[test]
+    fn the_coarse_normal_scenario_runs_and_is_deterministic() {
+        let s = coarse(2.4);
+        let (dir, a) = run_in(&s, &RunOptions::default());
+        let (_, b) = run_in(&s, &RunOptions::default());
+        assert!(a.summary.completed);
+        assert_eq!(a.history, b.history, "two runs of one scenario differ");
+        assert_eq!(a.floor, b.floor);
+        // It moved: the head descended under the expulsion force.
+        let series = &a.detector.series;
+        assert!(series.station_mm.last().unwrap() - series.station_mm[0] > 10.0, "{:?}", series.station_mm);
+        for file in [output::RUN_FILE, output::MOVEMENTS_FILE, output::HISTORY_CSV, output::HISTORY_JSON, output::CHECKPOINT_FILE] {
+            assert!(dir.path().join(file).exists(), "{file} missing");
+        }
+    }
+
+    #[test]
+    fn halving_the_rigid_step_gives_the_same_motion() {
+        let s = coarse(2.4);
+        let mut fine = s.clone();
+        fine.numerics.rigid_dt_s = 0.5e-3;
+        let (_, a) = run_in(&s, &RunOptions::default());
+        let (_, b) = run_in(&fine, &RunOptions::default());
+        // The TLED sub-step is chosen per rigid step: halving dt halves the sub-steps per step.
+        assert_ne!(a.summary.floor_substeps_per_step, b.summary.floor_substeps_per_step);
+        let (sa, sb) = (&a.detector.series, &b.detector.series);
+        assert_eq!(sa.time_s.len(), sb.time_s.len());
+        for k in 0..sa.time_s.len() {
+            let (ds, dtheta, dphi) = (sa.station_mm[k] - sb.station_mm[k], sa.theta_deg[k] - sb.theta_deg[k], sa.phi_deg[k] - sb.phi_deg[k]);
+            assert!(ds.abs() < 1.0 && dtheta.abs() < 2.0 && dphi.abs() < 2.0, "t = {}: station {ds} mm, theta {dtheta}, phi {dphi} deg apart", sa.time_s[k]);
+        }
+    }
+
+    #[test]
+    fn a_resumed_run_equals_an_uninterrupted_one_bit_for_bit() {
+        let s = coarse(2.0);
+        let (_, whole) = run_in(&s, &RunOptions::default());
+        let (dir, half) = run_in(&s, &RunOptions { stop_at_s: Some(1.0), ..RunOptions::default() });
+        assert!(!half.summary.completed);
+        assert_eq!(half.summary.simulated_s, 1.0);
+        let resumed = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).unwrap();
+        assert!(resumed.summary.completed);
+        assert_eq!(resumed.history, whole.history);
+        assert_eq!(resumed.floor, whole.floor);
+        assert_eq!(resumed.detector, whole.detector);
+        assert!(resumed.detector.is_some());
+    }
+
+    #[test]
+    fn the_stop_flag_stops_cleanly_with_everything_written() {
+        let s = coarse(2.0);
+        let flag = Arc::new(AtomicBool::new(true));
+        let (dir, record) = run_in(&s, &RunOptions { stop: Some(flag), ..RunOptions::default() });
+        assert!(!record.summary.completed);
+        assert_eq!(record.summary.simulated_s, 0.0);
+        for file in [output::RUN_FILE, output::MOVEMENTS_FILE, output::HISTORY_CSV, output::CHECKPOINT_FILE, output::SCENARIO_FILE] {
+            assert!(dir.path().join(file).exists(), "{file} missing");
+        }
+    }
+}

@@ -1,0 +1,597 @@
+//! The scenario file: anatomy, starting position, forces, contact, neck,
+//! tissue and numerics of one labour, in TOML with the canonical keys of
+//! CONVENTIONS.md. Unknown keys, wrong units and impossible values are
+//! refused with the key's path and a hint (serde_path_to_error gives the
+//! path, toml the line).
+
+use std::path::{Path, PathBuf};
+
+use carus_anatomy::fetus::{HeadDiameters, TrunkDiameters};
+use carus_anatomy::floor::FloorParameters;
+use carus_anatomy::pelvis::PelvisSpec;
+use serde::{Deserialize, Serialize};
+
+/// Name an imported pelvis takes to mean the shipped Visible Human Female pelvis.
+pub const VISIBLE_HUMAN: &str = "visible-human-female";
+
+/// Why a scenario cannot be used.
+#[derive(Debug, thiserror::Error)]
+pub enum ScenarioError {
+    #[error("{path}: cannot read: {source}")]
+    Io { path: PathBuf, source: std::io::Error },
+    #[error("{path}:{line}: {key}{message}\n  hint: {hint}")]
+    Syntax { path: PathBuf, line: usize, key: String, message: String, hint: String },
+    #[error("{path}: `{key}` = {value}: {problem}\n  hint: {hint}")]
+    Value { path: PathBuf, key: &'static str, value: String, problem: String, hint: String },
+    #[error("no built-in scenario named `{0}`; `carus scenarios` lists them")]
+    UnknownBuiltin(String),
+    #[error("cannot write the scenario as TOML: {0}")]
+    Serialize(#[from] toml::ser::Error),
+}
+
+/// Which part of the head presents.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Presentation {
+    /// Vertex (occiput) presentation: `position` names the occiput.
+    Vertex,
+    /// Face presentation: the head fully extended, `position` names the chin (mentum).
+    Face,
+}
+
+/// Clinical position of the denominator (occiput for a vertex, mentum for
+/// a face presentation) in the maternal pelvis.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Position {
+    OA,
+    LOA,
+    LOT,
+    LOP,
+    OP,
+    ROP,
+    ROT,
+    ROA,
+    /// Mentum anterior (face presentation).
+    MA,
+    /// Mentum posterior (face presentation).
+    MP,
+    LMT,
+    RMT,
+}
+
+impl Position {
+    /// Angle of the denominator in the inlet cross-section from anterior,
+    /// degrees, positive to the mother's right (CARDINAL_MOVEMENTS.md theta).
+    pub fn theta_deg(self) -> f64 {
+        match self {
+            Position::OA | Position::MA => 0.0,
+            Position::LOA => -45.0,
+            Position::LOT | Position::LMT => -90.0,
+            Position::LOP => -135.0,
+            Position::OP | Position::MP => 180.0,
+            Position::ROP => 135.0,
+            Position::ROT | Position::RMT => 90.0,
+            Position::ROA => 45.0,
+        }
+    }
+
+    fn is_mentum(self) -> bool {
+        matches!(self, Position::MA | Position::MP | Position::LMT | Position::RMT)
+    }
+}
+
+/// `[trunk]`: the fetal trunk, joined to the head by the neck.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TrunkSection {
+    /// Without a trunk the expulsion force acts at the pivot on the head.
+    pub enabled: bool,
+    /// REFERENCE_DATA.md: bisacromial about 120 mm.
+    pub bisacromial_mm: f64,
+    /// Engineering estimate 95 mm (carus-anatomy TrunkDiameters).
+    pub bitrochanteric_mm: f64,
+}
+
+impl Default for TrunkSection {
+    fn default() -> Self {
+        let d = TrunkDiameters::default();
+        TrunkSection { enabled: true, bisacromial_mm: d.bisacromial_mm, bitrochanteric_mm: d.bitrochanteric_mm }
+    }
+}
+
+/// `[start]`: where the fetus starts (an input, CARDINAL_MOVEMENTS.md).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct StartSection {
+    /// Station of the head's leading point, mm (negative above the spines).
+    pub station_mm: f64,
+    pub presentation: Presentation,
+    pub position: Position,
+    /// Head attitude phi relative to the trunk, degrees (positive: flexed).
+    pub attitude_deg: f64,
+}
+
+impl Default for StartSection {
+    fn default() -> Self {
+        // LOT, head above the inlet, slightly flexed: the normal labour of
+        // CARDINAL_MOVEMENTS.md ("Clinical sanity cases").
+        StartSection { station_mm: -55.0, presentation: Presentation::Vertex, position: Position::LOT, attitude_deg: 5.0 }
+    }
+}
+
+/// Where the expulsion force acts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ActsOn {
+    Trunk,
+    Pivot,
+}
+
+/// `[expulsion]`: the seed's generator, a sinusoid between a minimum and a
+/// maximum along the fetal spine.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ExpulsionSection {
+    /// Force between contractions, N (negative lets the fetus slide back).
+    pub force_min_n: f64,
+    /// Peak of a contraction, N. REFERENCE_DATA.md: 70-140 N of expulsive force.
+    pub force_max_n: f64,
+    /// Contraction period, s. REFERENCE_DATA.md: 150 s cycles in the
+    /// literature; compressed in time here (numerical choice).
+    pub period_s: f64,
+    pub acts_on: ActsOn,
+}
+
+impl Default for ExpulsionSection {
+    fn default() -> Self {
+        ExpulsionSection { force_min_n: 0.0, force_max_n: 120.0, period_s: 8.0, acts_on: ActsOn::Trunk }
+    }
+}
+
+/// `[contact]`: the penalty law with Coulomb friction (docs/CONTACT.md).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ContactSection {
+    /// Coulomb coefficient. REFERENCE_DATA.md: 0.35 (Shockey et al. 1985); 0 works.
+    pub friction: f64,
+    /// Numerical penalty stiffness, Pa/m (docs/CONTACT.md: 1 mm at 140 N).
+    pub penalty_stiffness_pa_per_m: f64,
+    /// Numerical Kelvin-Voigt time of the penalty, s (docs/CONTACT.md).
+    pub damping_time_s: f64,
+    /// Spacing of the contact samples on the fetal surface, mm (numerical).
+    pub sample_spacing_mm: f64,
+}
+
+impl Default for ContactSection {
+    fn default() -> Self {
+        let law = carus_contact::ContactLaw::default();
+        ContactSection {
+            friction: law.friction_coefficient,
+            penalty_stiffness_pa_per_m: law.penalty_stiffness_pa_per_m,
+            damping_time_s: law.damping_time_s,
+            sample_spacing_mm: 4.0,
+        }
+    }
+}
+
+/// `[neck]`: the six-degree-of-freedom spring at the atlanto-occipital
+/// pivot. REFERENCE_DATA.md (Lapeer et al. 2019 / Sadulaev 2019).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct NeckSection {
+    pub flexion_nm_per_deg: f64,
+    pub extension_nm_per_deg: f64,
+    pub lateral_bending_nm_per_deg: f64,
+    pub axial_rotation_nm_per_deg: f64,
+    pub compression_n_per_m: f64,
+    pub tension_n_per_m: f64,
+    /// No source gives it; the stiffer axial value (docs/CONTACT.md).
+    pub shear_n_per_m: f64,
+    /// Numerical, about critical for the flexion mode (docs/CONTACT.md).
+    pub rotational_damping_nm_s_per_rad: f64,
+    /// Numerical, about critical for the head on the compression spring.
+    pub linear_damping_n_s_per_m: f64,
+}
+
+impl Default for NeckSection {
+    fn default() -> Self {
+        let s = carus_contact::NeckStiffness::default();
+        NeckSection {
+            flexion_nm_per_deg: s.flexion_nm_per_deg,
+            extension_nm_per_deg: s.extension_nm_per_deg,
+            lateral_bending_nm_per_deg: s.lateral_bending_nm_per_deg,
+            axial_rotation_nm_per_deg: s.axial_rotation_nm_per_deg,
+            compression_n_per_m: s.compression_n_per_m,
+            tension_n_per_m: s.tension_n_per_m,
+            shear_n_per_m: s.shear_n_per_m,
+            rotational_damping_nm_s_per_rad: s.rotational_damping_nm_s_per_rad,
+            linear_damping_n_s_per_m: s.linear_damping_n_s_per_m,
+        }
+    }
+}
+
+impl NeckSection {
+    pub fn stiffness(&self) -> carus_contact::NeckStiffness {
+        carus_contact::NeckStiffness {
+            flexion_nm_per_deg: self.flexion_nm_per_deg,
+            extension_nm_per_deg: self.extension_nm_per_deg,
+            lateral_bending_nm_per_deg: self.lateral_bending_nm_per_deg,
+            axial_rotation_nm_per_deg: self.axial_rotation_nm_per_deg,
+            compression_n_per_m: self.compression_n_per_m,
+            tension_n_per_m: self.tension_n_per_m,
+            shear_n_per_m: self.shear_n_per_m,
+            rotational_damping_nm_s_per_rad: self.rotational_damping_nm_s_per_rad,
+            linear_damping_n_s_per_m: self.linear_damping_n_s_per_m,
+        }
+    }
+}
+
+/// `[fetus]`: mass and the resistance of the surroundings.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FetusSection {
+    /// Density of the fetal body, kg/m^3: soft tissue about 1050 (ICRP
+    /// 23 reference man, muscle 1040-1060); masses and inertias follow
+    /// from the head and trunk surfaces.
+    pub density_kg_per_m3: f64,
+    /// Viscous resistance to the trunk's translation, N s/m: the uterus
+    /// and amniotic fluid around the trunk. Numerical (time compression):
+    /// it sets the descent speed at a given net force, a quasi-static
+    /// surrogate for the hours of real labour.
+    pub trunk_linear_drag_n_s_per_m: f64,
+    /// Viscous resistance to the trunk's rotation, N m s/rad (numerical, as above).
+    pub trunk_angular_drag_nm_s_per_rad: f64,
+    /// Viscous resistance to the head's translation, N s/m (numerical).
+    pub head_linear_drag_n_s_per_m: f64,
+    /// Viscous resistance to the head's rotation, N m s/rad (numerical).
+    pub head_angular_drag_nm_s_per_rad: f64,
+}
+
+impl Default for FetusSection {
+    fn default() -> Self {
+        FetusSection {
+            density_kg_per_m3: 1050.0,
+            trunk_linear_drag_n_s_per_m: 3000.0,
+            trunk_angular_drag_nm_s_per_rad: 30.0,
+            head_linear_drag_n_s_per_m: 1000.0,
+            head_angular_drag_nm_s_per_rad: 0.5,
+        }
+    }
+}
+
+/// `[floor]`: the TLED pelvic floor.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FloorSection {
+    pub enabled: bool,
+    /// Neo-Hookean shear modulus, Pa. Engineering value for passive
+    /// skeletal muscle in the kPa range; REFERENCE_DATA.md asks for the
+    /// cited paper's constants before a default is final (docs/LABOUR.md).
+    pub shear_modulus_pa: f64,
+    /// Bulk modulus, Pa: 20 x shear (nearly incompressible, nu about 0.475; numerical).
+    pub bulk_modulus_pa: f64,
+    /// Muscle density, kg/m^3 (about 1060).
+    pub density_kg_per_m3: f64,
+    /// Mass-proportional damping, 1/s (numerical, quasi-static time compression).
+    pub damping_per_s: f64,
+    /// Shape and resolution of the mesh (carus-anatomy FloorParameters).
+    pub mesh: FloorParameters,
+}
+
+impl Default for FloorSection {
+    fn default() -> Self {
+        FloorSection {
+            enabled: true,
+            shear_modulus_pa: 20e3,
+            bulk_modulus_pa: 400e3,
+            density_kg_per_m3: 1060.0,
+            damping_per_s: 400.0,
+            mesh: FloorParameters { elements_around: 32, elements_across: 6, elements_through: 1, ..FloorParameters::default() },
+        }
+    }
+}
+
+/// `[numerics]`: numerical settings (none shapes the outcome beyond accuracy).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct NumericsSection {
+    /// Rigid-body step, s (contact stability: docs/CONTACT.md).
+    pub rigid_dt_s: f64,
+    /// Simulated time at which the run ends, s.
+    pub end_time_s: f64,
+    /// Stop early once the trunk's centre has passed the outlet.
+    pub stop_when_delivered: bool,
+    /// Geodesic subdivisions of the head surface (3-6).
+    pub head_subdivisions: u32,
+    /// Largest TLED sub-step as a fraction of the floor's critical step.
+    pub floor_step_fraction: f64,
+    /// Simulated seconds between checkpoints.
+    pub checkpoint_every_s: f64,
+}
+
+impl Default for NumericsSection {
+    fn default() -> Self {
+        NumericsSection {
+            rigid_dt_s: 5e-4,
+            end_time_s: 60.0,
+            stop_when_delivered: true,
+            head_subdivisions: 4,
+            floor_step_fraction: 0.8,
+            checkpoint_every_s: 5.0,
+        }
+    }
+}
+
+/// `[output]`: what is recorded.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct OutputSection {
+    /// Pose-history sample interval, s.
+    pub every_s: f64,
+    /// Write ParaView series (VTU/PVD).
+    pub vtu: bool,
+    /// Interval of VTU frames, s.
+    pub vtu_every_s: f64,
+}
+
+impl Default for OutputSection {
+    fn default() -> Self {
+        OutputSection { every_s: 0.1, vtu: true, vtu_every_s: 1.0 }
+    }
+}
+
+/// A whole scenario.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    pub name: String,
+    #[serde(default)]
+    pub description: String,
+    #[serde(default)]
+    pub pelvis: PelvisSpec,
+    #[serde(default)]
+    pub head: HeadDiameters,
+    #[serde(default)]
+    pub trunk: TrunkSection,
+    #[serde(default)]
+    pub start: StartSection,
+    #[serde(default)]
+    pub expulsion: ExpulsionSection,
+    #[serde(default)]
+    pub contact: ContactSection,
+    #[serde(default)]
+    pub neck: NeckSection,
+    #[serde(default)]
+    pub fetus: FetusSection,
+    #[serde(default)]
+    pub floor: FloorSection,
+    #[serde(default)]
+    pub numerics: NumericsSection,
+    #[serde(default)]
+    pub output: OutputSection,
+    /// Folder an imported pelvis path is relative to (the file's folder).
+    #[serde(skip)]
+    pub base_dir: PathBuf,
+}
+
+/// The built-in scenarios, embedded in the binary: (name, TOML text).
+pub const BUILTINS: [(&str, &str); 6] = [
+    ("normal", include_str!("../../../scenarios/normal.toml")),
+    ("real-pelvis", include_str!("../../../scenarios/real-pelvis.toml")),
+    ("contracted-inlet", include_str!("../../../scenarios/contracted-inlet.toml")),
+    ("face", include_str!("../../../scenarios/face.toml")),
+    ("occiput-posterior", include_str!("../../../scenarios/occiput-posterior.toml")),
+    ("large-shoulders", include_str!("../../../scenarios/large-shoulders.toml")),
+];
+
+impl Scenario {
+    /// A built-in scenario by name.
+    pub fn builtin(name: &str) -> Result<Scenario, ScenarioError> {
+        let (_, text) = BUILTINS.iter().find(|(n, _)| *n == name).ok_or_else(|| ScenarioError::UnknownBuiltin(name.into()))?;
+        Scenario::parse(Path::new(&format!("<built-in {name}>")), text, PathBuf::from("."))
+    }
+
+    /// Reads a scenario file.
+    pub fn from_file(path: &Path) -> Result<Scenario, ScenarioError> {
+        let text = std::fs::read_to_string(path).map_err(|source| ScenarioError::Io { path: path.to_path_buf(), source })?;
+        let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        Scenario::parse(path, &text, base)
+    }
+
+    /// Parses and checks scenario text; `path` names it in errors.
+    pub fn parse(path: &Path, text: &str, base_dir: PathBuf) -> Result<Scenario, ScenarioError> {
+        let deserializer = toml::Deserializer::parse(text).map_err(|e| syntax(path, text, String::new(), &e))?;
+        let mut scenario: Scenario =
+            serde_path_to_error::deserialize(deserializer).map_err(|e| syntax(path, text, e.path().to_string(), e.inner()))?;
+        scenario.base_dir = base_dir;
+        scenario.check(path)?;
+        Ok(scenario)
+    }
+
+    /// The scenario as a complete TOML file (every key explicit).
+    pub fn to_toml(&self) -> Result<String, ScenarioError> {
+        let mut text = String::new();
+        if !self.description.is_empty() {
+            text.push_str(&format!("# {}\n", self.description));
+        }
+        text.push_str("# Every key is written out; units are in the key names (CONVENTIONS.md).\n");
+        text.push_str(&toml::to_string(self)?);
+        Ok(text)
+    }
+
+    /// Impossible values, named by their key with a hint.
+    fn check(&self, path: &Path) -> Result<(), ScenarioError> {
+        let err = |key: &'static str, value: f64, problem: &str, hint: &str| ScenarioError::Value {
+            path: path.to_path_buf(),
+            key,
+            value: value.to_string(),
+            problem: problem.into(),
+            hint: hint.into(),
+        };
+        let positive: [(&'static str, f64, &str); 18] = [
+            ("trunk.bisacromial_mm", self.trunk.bisacromial_mm, "a diameter in mm, e.g. 120.0"),
+            ("trunk.bitrochanteric_mm", self.trunk.bitrochanteric_mm, "a diameter in mm, e.g. 95.0"),
+            ("expulsion.period_s", self.expulsion.period_s, "seconds per contraction, e.g. 8.0"),
+            ("contact.penalty_stiffness_pa_per_m", self.contact.penalty_stiffness_pa_per_m, "Pa/m, e.g. 9.4e8"),
+            ("contact.sample_spacing_mm", self.contact.sample_spacing_mm, "mm between contact samples, e.g. 4.0"),
+            ("fetus.density_kg_per_m3", self.fetus.density_kg_per_m3, "kg/m^3, e.g. 1050.0"),
+            ("floor.shear_modulus_pa", self.floor.shear_modulus_pa, "Pa (not kPa), e.g. 20000.0"),
+            ("floor.bulk_modulus_pa", self.floor.bulk_modulus_pa, "Pa, larger than the shear modulus"),
+            ("floor.density_kg_per_m3", self.floor.density_kg_per_m3, "kg/m^3, e.g. 1060.0"),
+            ("numerics.rigid_dt_s", self.numerics.rigid_dt_s, "seconds, e.g. 5e-4"),
+            ("numerics.end_time_s", self.numerics.end_time_s, "seconds of simulated time, e.g. 60.0"),
+            ("numerics.floor_step_fraction", self.numerics.floor_step_fraction, "a fraction of the critical step, at most 1"),
+            ("numerics.checkpoint_every_s", self.numerics.checkpoint_every_s, "seconds of simulated time, e.g. 5.0"),
+            ("output.every_s", self.output.every_s, "seconds between samples, e.g. 0.1"),
+            ("output.vtu_every_s", self.output.vtu_every_s, "seconds between VTU frames, e.g. 1.0"),
+            ("contact.damping_time_s", self.contact.damping_time_s + f64::MIN_POSITIVE, "seconds, 0 or more, e.g. 1e-3"),
+            ("expulsion.force_max_n", self.expulsion.force_max_n, "newtons, e.g. 120.0 (REFERENCE_DATA.md: 70-140 N)"),
+            ("fetus.trunk_linear_drag_n_s_per_m", self.fetus.trunk_linear_drag_n_s_per_m + f64::MIN_POSITIVE, "N s/m, 0 or more"),
+        ];
+        for (key, value, hint) in positive {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(err(key, value, "must be a positive, finite number", hint));
+            }
+        }
+        for (key, value) in [
+            ("contact.friction", self.contact.friction),
+            ("fetus.trunk_angular_drag_nm_s_per_rad", self.fetus.trunk_angular_drag_nm_s_per_rad),
+            ("fetus.head_linear_drag_n_s_per_m", self.fetus.head_linear_drag_n_s_per_m),
+            ("fetus.head_angular_drag_nm_s_per_rad", self.fetus.head_angular_drag_nm_s_per_rad),
+            ("floor.damping_per_s", self.floor.damping_per_s),
+            ("neck.flexion_nm_per_deg", self.neck.flexion_nm_per_deg),
+            ("neck.extension_nm_per_deg", self.neck.extension_nm_per_deg),
+            ("neck.lateral_bending_nm_per_deg", self.neck.lateral_bending_nm_per_deg),
+            ("neck.axial_rotation_nm_per_deg", self.neck.axial_rotation_nm_per_deg),
+            ("neck.compression_n_per_m", self.neck.compression_n_per_m),
+            ("neck.tension_n_per_m", self.neck.tension_n_per_m),
+            ("neck.shear_n_per_m", self.neck.shear_n_per_m),
+        ] {
+            if !(value.is_finite() && value >= 0.0) {
+                return Err(err(key, value, "must be zero or more and finite", "a non-negative number in the key's unit"));
+            }
+        }
+        if self.contact.friction > 2.0 {
+            return Err(err("contact.friction", self.contact.friction, "is not a plausible Coulomb coefficient", "0 to about 1; REFERENCE_DATA.md: 0.35"));
+        }
+        if self.expulsion.force_min_n > self.expulsion.force_max_n || !self.expulsion.force_min_n.is_finite() {
+            return Err(err("expulsion.force_min_n", self.expulsion.force_min_n, "must not exceed force_max_n", "the force between contractions, e.g. 0.0 or -10.0"));
+        }
+        if self.expulsion.force_max_n > 2000.0 {
+            return Err(err("expulsion.force_max_n", self.expulsion.force_max_n, "is far above any expulsive force", "newtons (not mN): REFERENCE_DATA.md gives 70-140 N"));
+        }
+        if self.floor.bulk_modulus_pa <= self.floor.shear_modulus_pa {
+            return Err(err("floor.bulk_modulus_pa", self.floor.bulk_modulus_pa, "must exceed the shear modulus (soft tissue is nearly incompressible)", "e.g. 20 x shear_modulus_pa"));
+        }
+        if self.numerics.floor_step_fraction > 1.0 {
+            return Err(err("numerics.floor_step_fraction", self.numerics.floor_step_fraction, "a step above the critical one is unstable", "0.5 to 0.9"));
+        }
+        if self.numerics.rigid_dt_s > 5e-3 {
+            return Err(err("numerics.rigid_dt_s", self.numerics.rigid_dt_s, "is above the contact's stable step (about 2 ms, docs/CONTACT.md)", "1e-4 to 1e-3 s"));
+        }
+        if !(3..=6).contains(&self.numerics.head_subdivisions) {
+            return Err(err("numerics.head_subdivisions", self.numerics.head_subdivisions as f64, "must be 3 to 6", "4 is the default"));
+        }
+        if !self.start.station_mm.is_finite() || self.start.station_mm.abs() > 200.0 {
+            return Err(err("start.station_mm", self.start.station_mm, "is outside the birth canal's reach", "mm from the spines, e.g. -55.0 (negative above)"));
+        }
+        if !self.start.attitude_deg.is_finite() || self.start.attitude_deg.abs() > 90.0 {
+            return Err(err("start.attitude_deg", self.start.attitude_deg, "is not a head attitude", "degrees, -90 to 90 (positive flexed)"));
+        }
+        let mentum = self.start.position.is_mentum();
+        match self.start.presentation {
+            Presentation::Face if !mentum => {
+                return Err(err("start.position", 0.0, "a face presentation is named by the chin", "use MA, MP, LMT or RMT with presentation = \"face\""))
+            }
+            Presentation::Vertex if mentum => {
+                return Err(err("start.position", 0.0, "a vertex presentation is named by the occiput", "use OA, LOA, LOT, LOP, OP, ROP, ROT or ROA, or set presentation = \"face\""))
+            }
+            _ => {}
+        }
+        if self.name.trim().is_empty() {
+            return Err(ScenarioError::Value {
+                path: path.to_path_buf(),
+                key: "name",
+                value: "\"\"".into(),
+                problem: "must not be empty".into(),
+                hint: "a short name, used for the output folder".into(),
+            });
+        }
+        Ok(())
+    }
+}
+
+fn syntax(path: &Path, text: &str, key: String, error: &toml::de::Error) -> ScenarioError {
+    let line = error.span().map_or(0, |s| text[..s.start.min(text.len())].matches('\n').count() + 1);
+    let message = error.message().trim().to_string();
+    let hint = if message.starts_with("unknown field") {
+        "check the spelling against `carus scenarios show normal`, which lists every key".to_string()
+    } else if message.starts_with("unknown variant") {
+        "use one of the values listed".to_string()
+    } else if message.starts_with("invalid type") {
+        "numbers without quotes, names in quotes; units are in the key names (mm, deg, s, n, pa)".to_string()
+    } else {
+        "see docs/SCENARIOS.md".to_string()
+    };
+    let key = if key == "." || key.is_empty() { String::new() } else { format!("`{key}`: ") };
+    ScenarioError::Syntax { path: path.to_path_buf(), line, key, message, hint }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<Scenario, ScenarioError> {
+        Scenario::parse(Path::new("test.toml"), text, PathBuf::from("."))
+    }
+
+    #[test]
+    fn every_builtin_parses_and_round_trips_through_show() {
+        for (name, _) in BUILTINS {
+            let s = Scenario::builtin(name).unwrap();
+            assert_eq!(s.name, name);
+            let shown = s.to_toml().unwrap();
+            let back = parse(&shown).unwrap();
+            assert_eq!(back, s, "{name} does not round-trip:\n{shown}");
+            for table in ["[pelvis]", "[head]", "[start]", "[expulsion]", "[contact]", "[neck]", "[floor]", "[numerics]"] {
+                assert!(shown.contains(table), "{name}: {table} missing");
+            }
+        }
+    }
+
+    #[test]
+    fn unknown_keys_are_named_with_their_path() {
+        let e = parse("name = \"x\"\n[expulsion]\nforce_max = 100.0\n").unwrap_err().to_string();
+        assert!(e.contains("expulsion") && e.contains("force_max") && e.contains("test.toml:3"), "{e}");
+        let e = parse("name = \"x\"\n[head]\nbiparietal = 95.0\n").unwrap_err().to_string();
+        assert!(e.contains("biparietal") && e.contains("hint"), "{e}");
+    }
+
+    #[test]
+    fn wrong_units_and_impossible_values_are_refused_with_a_hint() {
+        let e = parse("name = \"x\"\n[expulsion]\nforce_max_n = \"120 N\"\n").unwrap_err().to_string();
+        assert!(e.contains("expulsion.force_max_n") && e.contains("hint"), "{e}");
+        let e = parse("name = \"x\"\n[expulsion]\nforce_max_n = 120000.0\n").unwrap_err().to_string();
+        assert!(e.contains("expulsion.force_max_n") && e.contains("newtons"), "{e}");
+        let e = parse("name = \"x\"\n[floor]\nshear_modulus_pa = -3.0\n").unwrap_err().to_string();
+        assert!(e.contains("floor.shear_modulus_pa") && e.contains("positive"), "{e}");
+        let e = parse("name = \"x\"\n[expulsion]\nforce_min_n = 200.0\nforce_max_n = 100.0\n").unwrap_err().to_string();
+        assert!(e.contains("force_min_n"), "{e}");
+        let e = parse("name = \"x\"\n[start]\nposition = \"MP\"\n").unwrap_err().to_string();
+        assert!(e.contains("start.position") && e.contains("face"), "{e}");
+        let e = parse("name = \"x\"\n[start]\nposition = \"XYZ\"\n").unwrap_err().to_string();
+        assert!(e.contains("start.position") && e.contains("LOT"), "{e}");
+        let e = parse("name = \"x\"\n[pelvis]\ninlet_ap_mm = 0.11\ninlet_ap_m = 0.11\n").unwrap_err().to_string();
+        assert!(e.contains("inlet_ap_m"), "{e}");
+    }
+
+    #[test]
+    fn keys_left_out_take_the_defaults() {
+        let s = parse("name = \"minimal\"\n").unwrap();
+        assert_eq!(s.contact.friction, 0.35);
+        assert_eq!(s.start.position, Position::LOT);
+        assert_eq!(s.neck.extension_nm_per_deg, 0.04);
+        let frictionless = parse("name = \"x\"\n[contact]\nfriction = 0.0\n").unwrap();
+        assert_eq!(frictionless.contact.friction, 0.0);
+    }
+}

@@ -1,0 +1,351 @@
+//! The scene of one run, built once from a scenario: the rigid pelvis (with
+//! its contact regions), the fetal head and trunk as rigid bodies (surfaces,
+//! contact samples, mass properties from their volumes), the neck geometry,
+//! the TLED pelvic floor, and the starting pose. All constant: the mutable
+//! state lives in [`crate::state::SimState`].
+
+use std::sync::Arc;
+
+use carus_analysis::{BirthCanal, ContactSite, HeadGeometry, TrunkGeometry};
+use carus_anatomy::fetus::{FetalHead, Trunk, TrunkDiameters};
+use carus_anatomy::floor::{pelvic_floor, ATTACHED};
+use carus_anatomy::pelvis::PelvisSpec;
+use carus_anatomy::{Pelvis, TriSurface};
+use carus_contact::{
+    ContactLaw, HeadAxes, MassProperties, PelvisCollider, RegionTable, RigidBodyModel, RigidPose, SurfaceSamples,
+    TriangleCollider,
+};
+use carus_fem::{BoundaryConditions, Material, MaterialRegion, Mesh, ModelOptions, TledModel};
+use glam::{DMat3, DVec3};
+
+use crate::scenario::{Presentation, Scenario, VISIBLE_HUMAN};
+use crate::LabourError;
+
+/// Index of the head among the rigid bodies.
+pub const HEAD: usize = 0;
+/// Index of the trunk among the rigid bodies (when there is one).
+pub const TRUNK: usize = 1;
+
+/// One fetal part as a rigid body: its surface in its centre-of-mass frame,
+/// the contact samples on it, and the collider the floor nodes are tested against.
+#[derive(Debug)]
+pub struct FetalBody {
+    pub surface: TriSurface,
+    pub samples: SurfaceSamples,
+    pub collider: TriangleCollider,
+    pub mass: MassProperties,
+    /// Where the anatomy's own frame origin lies in the centre-of-mass frame.
+    pub frame_origin: DVec3,
+}
+
+/// The pelvic floor's constant data.
+#[derive(Debug)]
+pub struct FloorScene {
+    pub mesh: Mesh,
+    pub model: Arc<TledModel>,
+    pub bcs: BoundaryConditions,
+    /// Reference node positions, pelvis frame.
+    pub reference: Vec<DVec3>,
+    /// The floor's critical TLED step, s.
+    pub critical_step_s: f64,
+}
+
+/// Everything constant in a run.
+#[derive(Debug)]
+pub struct Scene {
+    pub scenario: Scenario,
+    pub pelvis: Pelvis,
+    pub canal: BirthCanal,
+    pub pelvis_collider: PelvisCollider,
+    /// The [`ContactSite`] of each pelvic region label.
+    pub sites: Vec<ContactSite>,
+    pub head: FetalBody,
+    pub head_geometry: HeadGeometry,
+    /// Head axes in the head's centre-of-mass frame.
+    pub head_axes: HeadAxes,
+    /// The atlanto-occipital pivot in the head's centre-of-mass frame.
+    pub pivot_in_head: DVec3,
+    pub trunk: Option<FetalBody>,
+    pub trunk_geometry: Option<TrunkGeometry>,
+    /// Spine axis k in the trunk's centre-of-mass frame.
+    pub spine_in_trunk: DVec3,
+    pub bodies: RigidBodyModel,
+    pub law: ContactLaw,
+    pub floor: Option<FloorScene>,
+    /// Starting poses (head, then trunk), pelvis frame.
+    pub start: Vec<RigidPose>,
+}
+
+impl Scene {
+    pub fn build(scenario: &Scenario) -> Result<Scene, LabourError> {
+        let pelvis = build_pelvis(scenario)?;
+        let canal = BirthCanal::from_pelvis(&pelvis).map_err(|e| LabourError::Anatomy(format!("pelvic axis: {e}")))?;
+        let (labels, sites) = regions(&pelvis);
+        let names = sites.iter().map(|s| s.name().to_string()).collect();
+        let pelvis_collider = PelvisCollider::new(
+            &pelvis.surface.vertices,
+            &pelvis.surface.triangles,
+            Some(RegionTable { names, labels }),
+        )?;
+
+        let s = scenario;
+        let head_anatomy = FetalHead::with_subdivisions(&s.head, s.numerics.head_subdivisions)
+            .map_err(|e| LabourError::Anatomy(format!("fetal head: {e}")))?;
+        let spacing = s.contact.sample_spacing_mm * 1e-3;
+        let head = FetalBody::new("head", &head_anatomy.surface, s.fetus.density_kg_per_m3, spacing)?;
+        let mut head_geometry = HeadGeometry::from_fetal_head(&head_anatomy);
+        head_geometry.centre_m += head.frame_origin;
+        for p in &mut head_geometry.skull_points_m {
+            *p += head.frame_origin;
+        }
+        let head_axes = HeadAxes { occipitofrontal: DVec3::X, vertex: DVec3::Z };
+        let pivot_in_head = head_anatomy.landmarks.atlanto_occipital + head.frame_origin;
+
+        let mut bodies = RigidBodyModel::default();
+        bodies.add(head.mass)?;
+        let (trunk, trunk_geometry, spine_in_trunk) = if s.trunk.enabled {
+            let d = TrunkDiameters { bisacromial_mm: s.trunk.bisacromial_mm, bitrochanteric_mm: s.trunk.bitrochanteric_mm };
+            let anatomy = Trunk::new(&d).map_err(|e| LabourError::Anatomy(format!("fetal trunk: {e}")))?;
+            let body = FetalBody::new("trunk", &anatomy.surface, s.fetus.density_kg_per_m3, spacing)?;
+            let mut g = TrunkGeometry::from_trunk(&anatomy);
+            g.centre_m += body.frame_origin;
+            g.right_acromion_m += body.frame_origin;
+            g.left_acromion_m += body.frame_origin;
+            bodies.add(body.mass)?;
+            (Some(body), Some(g), anatomy.spine_axis)
+        } else {
+            (None, None, DVec3::NEG_Z)
+        };
+
+        let law = ContactLaw {
+            penalty_stiffness_pa_per_m: s.contact.penalty_stiffness_pa_per_m,
+            damping_time_s: s.contact.damping_time_s,
+            friction_coefficient: s.contact.friction,
+            ..ContactLaw::default()
+        };
+        law.validate()?;
+
+        let floor = if s.floor.enabled { Some(build_floor(scenario, &pelvis)?) } else { None };
+        let mut scene = Scene {
+            scenario: scenario.clone(),
+            pelvis,
+            canal,
+            pelvis_collider,
+            sites,
+            head,
+            head_geometry,
+            head_axes,
+            pivot_in_head,
+            trunk,
+            trunk_geometry,
+            spine_in_trunk,
+            bodies,
+            law,
+            floor,
+            start: Vec::new(),
+        };
+        scene.start = scene.start_poses();
+        Ok(scene)
+    }
+
+    /// Head and trunk at the scenario's start: station of the leading point,
+    /// position of the denominator, attitude (all inputs).
+    fn start_poses(&self) -> Vec<RigidPose> {
+        let start = &self.scenario.start;
+        let axis = self.canal.axis();
+        let frame = axis.frame(0.0);
+        // The face is named by the chin, which lies opposite the occiput.
+        let occiput_theta = match start.presentation {
+            Presentation::Vertex => start.position.theta_deg(),
+            Presentation::Face => start.position.theta_deg() + 180.0,
+        };
+        let orient = |phi: f64| {
+            carus_analysis::synthetic::head_orientation(frame.tangent, frame.anterior, frame.transverse, occiput_theta, phi)
+        };
+        let (q_head, q_trunk) = (orient(start.attitude_deg), orient(0.0));
+        // Place the head centre on the axis so its leading point sits at the station.
+        let target = self.canal.spines_sigma() + start.station_mm * 1e-3;
+        let mut centre_sigma = target - 0.05;
+        let centre = self.head_geometry.centre_m;
+        let mut position = DVec3::ZERO;
+        for _ in 0..8 {
+            position = axis.point(centre_sigma) - q_head * centre;
+            let pose = carus_analysis::RigidPose { position_m: position, orientation: q_head };
+            if let Some((_, sigma)) = self.canal.leading_point(&self.head_geometry.skull_points_m, &pose, centre_sigma) {
+                centre_sigma += target - sigma;
+            }
+        }
+        let head = RigidPose::new(position, q_head);
+        let mut poses = vec![head];
+        if let Some(trunk) = &self.trunk {
+            let pivot = head.transform_point(self.pivot_in_head);
+            // The trunk frame's origin is the pivot; its centre of mass sits at -frame_origin from it.
+            poses.push(RigidPose::new(pivot - q_trunk * trunk.frame_origin, q_trunk));
+        }
+        poses
+    }
+
+    /// The pivot of the neck in the pelvis frame at the start.
+    pub fn start_pivot(&self) -> DVec3 {
+        self.start[HEAD].transform_point(self.pivot_in_head)
+    }
+}
+
+impl FetalBody {
+    fn new(what: &'static str, surface: &TriSurface, density: f64, spacing: f64) -> Result<FetalBody, LabourError> {
+        let (mass, com, inertia) = solid_properties(surface, density);
+        if !(mass > 0.0) {
+            return Err(LabourError::Anatomy(format!("the {what} surface encloses no volume (is it inside out?)")));
+        }
+        let vertices: Vec<DVec3> = surface.vertices.iter().map(|v| *v - com).collect();
+        let moved = TriSurface::new(vertices, surface.triangles.clone());
+        let samples = SurfaceSamples::with_spacing(what, &moved.vertices, &moved.triangles, spacing)?;
+        let collider = TriangleCollider::new(what, &moved.vertices, &moved.triangles)?;
+        Ok(FetalBody {
+            surface: moved,
+            samples,
+            collider,
+            mass: MassProperties { mass_kg: mass, inertia_kg_m2: inertia, rotation_locked: false },
+            frame_origin: -com,
+        })
+    }
+}
+
+/// Mass, centre of mass and inertia about it of a closed surface filled with
+/// uniform density (signed tetrahedra from the origin; Tonon 2004).
+pub fn solid_properties(surface: &TriSurface, density: f64) -> (f64, DVec3, DMat3) {
+    let mut volume = 0.0;
+    let mut first = DVec3::ZERO;
+    // Second moments: integral of x_i x_j over the solid.
+    let mut second = [[0.0f64; 3]; 3];
+    for t in 0..surface.triangles.len() {
+        let [a, b, c] = surface.corners(t);
+        let v = a.dot(b.cross(c)) / 6.0;
+        volume += v;
+        first += v * (a + b + c) / 4.0;
+        let p = [a, b, c];
+        for i in 0..3 {
+            for j in 0..3 {
+                let mut s = 0.0;
+                for k in 0..3 {
+                    for l in 0..3 {
+                        s += p[k][i] * p[l][j] * if k == l { 2.0 } else { 1.0 };
+                    }
+                }
+                second[i][j] += v * s / 20.0;
+            }
+        }
+    }
+    let mass = density * volume;
+    let com = first / volume;
+    let m = |i: usize, j: usize| density * second[i][j] - mass * com[i] * com[j];
+    let trace = m(0, 0) + m(1, 1) + m(2, 2);
+    let inertia = DMat3::from_cols_array(&[
+        trace - m(0, 0),
+        -m(1, 0),
+        -m(2, 0),
+        -m(0, 1),
+        trace - m(1, 1),
+        -m(2, 1),
+        -m(0, 2),
+        -m(1, 2),
+        trace - m(2, 2),
+    ]);
+    (mass, com, inertia)
+}
+
+fn build_pelvis(s: &Scenario) -> Result<Pelvis, LabourError> {
+    match &s.pelvis {
+        PelvisSpec::Imported { landmarks_file } if landmarks_file.as_os_str() == VISIBLE_HUMAN => {
+            carus_anatomy::import::visible_human_female_pelvis()
+                .map(|p| p.pelvis)
+                .map_err(|e| LabourError::Anatomy(format!("pelvis: {e}")))
+        }
+        spec => spec.build(&s.base_dir).map_err(|e| LabourError::Anatomy(format!("pelvis: {e}"))),
+    }
+}
+
+fn build_floor(s: &Scenario, pelvis: &Pelvis) -> Result<FloorScene, LabourError> {
+    let mesh = pelvic_floor(pelvis, &s.floor.mesh).map_err(|e| LabourError::Anatomy(format!("pelvic floor: {e}")))?;
+    let material = Material::neo_hookean(s.floor.shear_modulus_pa, s.floor.bulk_modulus_pa);
+    let region = MaterialRegion { element_set: None, material, density_kg_m3: s.floor.density_kg_per_m3 };
+    let options = ModelOptions { damping_per_s: s.floor.damping_per_s, ..ModelOptions::default() };
+    let model = Arc::new(TledModel::new(&mesh, &[region], &options)?);
+    let mut bcs = BoundaryConditions::default();
+    let attached = mesh
+        .node_sets
+        .get(ATTACHED)
+        .ok_or_else(|| LabourError::Anatomy("pelvic floor has no attached node set".into()))?;
+    bcs.fix_nodes(attached);
+    let reference = mesh.nodes.iter().map(|p| DVec3::from_array(*p)).collect();
+    let critical_step_s = model.critical_time_step();
+    Ok(FloorScene { mesh, model, bcs, reference, critical_step_s })
+}
+
+/// Labels each pelvis triangle with the part of the bony canal it belongs
+/// to: the nearest landmark group to its centroid (symphysis, pubic arch,
+/// promontory, sacrum, coccyx, spines, side wall). The floor is its own site.
+fn regions(pelvis: &Pelvis) -> (Vec<u16>, Vec<ContactSite>) {
+    let l = &pelvis.landmarks;
+    let sites = vec![
+        ContactSite::Symphysis,
+        ContactSite::PubicArch,
+        ContactSite::SacralPromontory,
+        ContactSite::Sacrum,
+        ContactSite::Coccyx,
+        ContactSite::IschialSpines,
+        ContactSite::PelvicSidewall,
+    ];
+    let anchors: Vec<(DVec3, u16)> = vec![
+        (l.symphysis_upper, 0),
+        (l.symphysis_lower, 0),
+        (l.symphysis_middle(), 0),
+        (l.ischial_tuberosity_left, 1),
+        (l.ischial_tuberosity_right, 1),
+        (0.5 * (l.symphysis_lower + l.ischial_tuberosity_left), 1),
+        (0.5 * (l.symphysis_lower + l.ischial_tuberosity_right), 1),
+        (l.sacral_promontory, 2),
+        (l.sacrum_s2_s3, 3),
+        (l.sacrum_s4_s5, 3),
+        (l.coccyx_tip, 4),
+        (l.ischial_spine_left, 5),
+        (l.ischial_spine_right, 5),
+        (l.iliopectineal_left, 6),
+        (l.iliopectineal_right, 6),
+    ];
+    let labels = (0..pelvis.surface.triangles.len())
+        .map(|t| {
+            let [a, b, c] = pelvis.surface.corners(t);
+            let centroid = (a + b + c) / 3.0;
+            anchors
+                .iter()
+                .min_by(|x, y| (x.0 - centroid).length_squared().total_cmp(&(y.0 - centroid).length_squared()))
+                .map_or(6, |a| a.1)
+        })
+        .collect();
+    (labels, sites)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_solid_box_has_the_textbook_mass_properties() {
+        // Unit cube [0,1]^3 as 12 outward triangles.
+        let v: Vec<DVec3> = (0..8).map(|i| DVec3::new((i & 1) as f64, ((i >> 1) & 1) as f64, ((i >> 2) & 1) as f64)).collect();
+        let t = vec![
+            [0, 2, 1], [1, 2, 3], [4, 5, 6], [5, 7, 6], [0, 1, 4], [1, 5, 4],
+            [2, 6, 3], [3, 6, 7], [0, 4, 2], [2, 4, 6], [1, 3, 5], [3, 7, 5],
+        ];
+        let s = TriSurface::new(v, t);
+        let (m, c, i) = solid_properties(&s, 2.0);
+        assert!((m - 2.0).abs() < 1e-12);
+        assert!((c - DVec3::splat(0.5)).length() < 1e-12);
+        let expected = 2.0 * (1.0 + 1.0) / 12.0;
+        for k in 0..3 {
+            assert!((i.col(k)[k] - expected).abs() < 1e-12, "{i:?}");
+            assert!(i.col(k)[(k + 1) % 3].abs() < 1e-12);
+        }
+    }
+}

@@ -1,0 +1,374 @@
+//! The forward simulation: the mutable state of a run and the step
+//! pipeline, a short sequence of named stages:
+//! expulsion -> pelvis contacts (head, trunk) -> neck -> floor reaction ->
+//! passive resistance -> rigid integration -> floor coupling -> record.
+//!
+//! Nothing here reads a way-point, a target rotation or any term that knows
+//! the expected outcome (CARDINAL_MOVEMENTS.md, "What the forward mode may
+//! use"): every force comes from the expulsion generator, contact with the
+//! bone and the floor (with friction), the neck's elasticity or the passive
+//! resistance of the surroundings.
+
+use carus_analysis::{ContactSite, PoseSample};
+use carus_contact::{
+    pelvis_contacts, BodyContactState, BodyMotion, ContactReport, Neck, NeckGeometry, RigidBodyState, RigidPose,
+    TissueContact, Wrench,
+};
+use carus_fem::{SolverSnapshot, StepControl, TledSolver};
+use glam::{DMat3, DVec3};
+use serde::{Deserialize, Serialize};
+
+use crate::expulsion::Expulsion;
+use crate::scene::{Scene, HEAD, TRUNK};
+use crate::LabourError;
+
+/// The floor's part of the mutable state.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FloorState {
+    pub solver: SolverSnapshot,
+    /// Contact of the head (then the trunk) with the floor's nodes.
+    pub contacts: Vec<TissueContact>,
+}
+
+/// One recorded floor figure: the largest principal stretch over the floor.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct FloorSample {
+    pub time_s: f64,
+    pub peak_stretch: f64,
+    pub peak_von_mises_pa: f64,
+    /// Floor nodes held by the fetus.
+    pub held_nodes: usize,
+}
+
+/// Everything that changes during a run; serializable, so a checkpoint
+/// resumes bit for bit.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SimState {
+    /// Completed rigid steps.
+    pub step: u64,
+    pub bodies: RigidBodyState,
+    pub neck: Option<Neck>,
+    pub bone_contacts: Vec<BodyContactState>,
+    pub floor: Option<FloorState>,
+    /// The floor's force on each body from the last coupling, applied at the next step.
+    pub floor_wrench: Vec<Wrench>,
+    /// Pose history samples so far.
+    pub samples: Vec<PoseSample>,
+    pub floor_samples: Vec<FloorSample>,
+}
+
+/// The running simulation: the scene, the state, and the live TLED solver
+/// (the state keeps its snapshot only at checkpoints).
+pub struct Simulation<'a> {
+    pub scene: &'a Scene,
+    pub state: SimState,
+    solver: Option<TledSolver>,
+    expulsion: Expulsion,
+    dt: f64,
+    /// TLED sub-steps per rigid step.
+    substeps: u32,
+    /// Rigid steps between pose samples.
+    sample_every: u64,
+}
+
+/// What one step found, for the record.
+struct StepForces {
+    expulsion: DVec3,
+    bone: DVec3,
+    floor: DVec3,
+    dominant: Option<ContactSite>,
+}
+
+impl<'a> Simulation<'a> {
+    /// A fresh run at the scenario's start.
+    pub fn new(scene: &'a Scene) -> Result<Self, LabourError> {
+        let bodies = RigidBodyState::at_rest(&scene.bodies, &scene.start)?;
+        let neck = match scene.trunk {
+            Some(_) => {
+                let q_trunk = scene.start[TRUNK].orientation;
+                let geometry = NeckGeometry {
+                    head: HEAD,
+                    trunk: TRUNK,
+                    pivot: scene.start_pivot(),
+                    axes: scene.head_axes,
+                    neck_axis: -(q_trunk * scene.spine_in_trunk),
+                };
+                Some(Neck::new(&scene.bodies, &bodies, geometry, scene.scenario.neck.stiffness())?)
+            }
+            None => None,
+        };
+        let mut bone_contacts = vec![BodyContactState::new(&scene.head.samples)];
+        if let Some(t) = &scene.trunk {
+            bone_contacts.push(BodyContactState::new(&t.samples));
+        }
+        let dt = scene.scenario.numerics.rigid_dt_s;
+        let solver = scene.floor.as_ref().map(|f| new_solver(scene, f, dt)).transpose()?;
+        let floor = solver.as_ref().map(|(s, _)| {
+            let reach = 0.01;
+            let n = if scene.trunk.is_some() { 2 } else { 1 };
+            FloorState {
+                solver: s.snapshot(),
+                contacts: (0..n).map(|_| TissueContact::new(reach).expect("positive reach")).collect(),
+            }
+        });
+        let body_count = scene.bodies.len();
+        let state = SimState {
+            step: 0,
+            bodies,
+            neck,
+            bone_contacts,
+            floor,
+            floor_wrench: vec![Wrench::default(); body_count],
+            samples: Vec::new(),
+            floor_samples: Vec::new(),
+        };
+        let mut sim = Simulation::from_state(scene, state)?;
+        sim.record(&StepForces { expulsion: sim.expulsion.force(0.0, sim.spine()), bone: DVec3::ZERO, floor: DVec3::ZERO, dominant: None });
+        Ok(sim)
+    }
+
+    /// Continues from a saved state (a checkpoint).
+    pub fn from_state(scene: &'a Scene, state: SimState) -> Result<Self, LabourError> {
+        let dt = scene.scenario.numerics.rigid_dt_s;
+        let (mut solver, substeps) = match (&scene.floor, &state.floor) {
+            (Some(f), Some(_)) => {
+                let (s, n) = new_solver(scene, f, dt)?;
+                (Some(s), n)
+            }
+            (None, None) => (None, 0),
+            _ => return Err(LabourError::Checkpoint("the checkpoint's floor does not match the scenario's".into())),
+        };
+        if let (Some(solver), Some(floor)) = (solver.as_mut(), &state.floor) {
+            solver.restore(&floor.solver)?;
+        }
+        let sample_every = ((scene.scenario.output.every_s / dt).round() as u64).max(1);
+        Ok(Simulation { scene, state, solver, expulsion: Expulsion::new(&scene.scenario.expulsion), dt, substeps, sample_every })
+    }
+
+    pub fn time_s(&self) -> f64 {
+        self.state.step as f64 * self.dt
+    }
+
+    pub fn dt_s(&self) -> f64 {
+        self.dt
+    }
+
+    /// TLED sub-steps per rigid step (0 without a floor).
+    pub fn floor_substeps(&self) -> u32 {
+        self.substeps
+    }
+
+    /// The state with the floor solver's snapshot brought up to date.
+    pub fn checkpoint_state(&mut self) -> &SimState {
+        if let (Some(solver), Some(floor)) = (&self.solver, self.state.floor.as_mut()) {
+            floor.solver = solver.snapshot();
+        }
+        &self.state
+    }
+
+    pub fn solver(&self) -> Option<&TledSolver> {
+        self.solver.as_ref()
+    }
+
+    /// The spine direction k (towards the breech), pelvis frame.
+    fn spine(&self) -> DVec3 {
+        match self.scene.trunk {
+            Some(_) => self.state.bodies.orientation[TRUNK] * self.scene.spine_in_trunk,
+            // No trunk: the spine leaves the head at its rest direction in the head frame.
+            None => self.state.bodies.orientation[HEAD] * -self.scene.head_axes.vertex,
+        }
+    }
+
+    fn motion(&self, b: usize) -> BodyMotion {
+        let s = &self.state.bodies;
+        BodyMotion {
+            pose: s.pose(b),
+            linear_velocity: s.linear_velocity[b],
+            angular_velocity: s.angular_velocity(&self.scene.bodies, b),
+        }
+    }
+
+    /// One rigid step with its floor sub-steps.
+    pub fn step(&mut self) -> Result<(), LabourError> {
+        let scene = self.scene;
+        let t = self.time_s();
+        let n = scene.bodies.len();
+        let mut wrenches = vec![Wrench::default(); n];
+
+        // Expulsion along the spine, from the breech towards the head.
+        let spine = self.spine();
+        let expulsion = self.expulsion.force(t, spine);
+        let pivot = self.pivot();
+        match (scene.trunk.is_some(), scene.scenario.expulsion.acts_on) {
+            (true, crate::scenario::ActsOn::Trunk) => wrenches[TRUNK].force += expulsion,
+            _ => wrenches[HEAD] += Wrench::at_point(expulsion, pivot, self.state.bodies.position[HEAD]),
+        }
+
+        // Contacts with the bony pelvis.
+        let mut reports: Vec<ContactReport> = Vec::with_capacity(n);
+        for b in 0..n {
+            let samples = if b == HEAD { &scene.head.samples } else { &scene.trunk.as_ref().expect("trunk").samples };
+            let motion = self.motion(b);
+            let report = pelvis_contacts(&scene.pelvis_collider, &scene.law, samples, &motion, pivot, &mut self.state.bone_contacts[b])?;
+            wrenches[b] += report.wrench();
+            reports.push(report);
+        }
+
+        // The neck.
+        if let Some(neck) = &self.state.neck {
+            let load = neck.load(&scene.bodies, &self.state.bodies);
+            wrenches[neck.head] += load.on_head;
+            wrenches[neck.trunk] += load.on_trunk;
+        }
+
+        // The floor's reaction from the last coupling.
+        for (w, f) in wrenches.iter_mut().zip(&self.state.floor_wrench) {
+            *w += *f;
+        }
+
+        let forces = self.classify(expulsion, &reports);
+
+        // Passive resistance of the surroundings, implicit so that it is
+        // stable at any step (it only damps).
+        for (b, w) in wrenches.iter_mut().enumerate() {
+            *w += self.implicit_drag(b, *w);
+        }
+
+        self.state.bodies.step(&scene.bodies, &wrenches, self.dt)?;
+        self.couple_floor()?;
+        self.state.step += 1;
+        if self.state.step % self.sample_every == 0 {
+            self.record(&forces);
+        }
+        Ok(())
+    }
+
+    /// The atlanto-occipital pivot as the head carries it.
+    pub fn pivot(&self) -> DVec3 {
+        self.state.bodies.pose(HEAD).transform_point(self.scene.pivot_in_head)
+    }
+
+    /// Drag force and torque that, added to `w`, give the backward-Euler
+    /// update of a linear dashpot to the surroundings.
+    fn implicit_drag(&self, b: usize, w: Wrench) -> Wrench {
+        let f = &self.scene.scenario.fetus;
+        let (c, ca) = if b == HEAD {
+            (f.head_linear_drag_n_s_per_m, f.head_angular_drag_nm_s_per_rad)
+        } else {
+            (f.trunk_linear_drag_n_s_per_m, f.trunk_angular_drag_nm_s_per_rad)
+        };
+        let s = &self.state.bodies;
+        let m = self.scene.bodies.mass_kg[b];
+        let dt = self.dt;
+        let v_new = (s.linear_velocity[b] + dt * w.force / m) / (1.0 + dt * c / m);
+        let inverse_inertia = self.scene.bodies.inverse_inertia_world(b, s.orientation[b]);
+        let torque = if inverse_inertia.determinant().abs() > 0.0 {
+            let inertia = inverse_inertia.inverse();
+            let omega_new = (inertia + DMat3::from_diagonal(DVec3::splat(dt * ca))).inverse()
+                * (s.angular_momentum[b] + dt * w.torque);
+            -ca * omega_new
+        } else {
+            DVec3::ZERO
+        };
+        Wrench { force: -c * v_new, torque }
+    }
+
+    /// The floor stage: hold the tissue nodes the fetus has entered on its
+    /// surface (partial Dirichlet-Neumann, Lapeer et al. 2019), sub-step the
+    /// tissue over the rigid step, and read back its reaction.
+    fn couple_floor(&mut self) -> Result<(), LabourError> {
+        let (Some(solver), Some(floor_state), Some(floor)) = (self.solver.as_mut(), self.state.floor.as_mut(), self.scene.floor.as_ref())
+        else {
+            return Ok(());
+        };
+        let scene = self.scene;
+        let u = solver.displacements();
+        let nodes: Vec<DVec3> = floor.reference.iter().zip(&u).map(|(x, d)| *x + DVec3::from_array(*d)).collect();
+        solver.release_imposed();
+        let mut held_by: Vec<Vec<u32>> = Vec::with_capacity(floor_state.contacts.len());
+        for (b, contact) in floor_state.contacts.iter_mut().enumerate() {
+            let collider = if b == HEAD { &scene.head.collider } else { &scene.trunk.as_ref().expect("trunk").collider };
+            let pose = self.state.bodies.pose(b);
+            let held = contact.update(collider, &pose, &nodes);
+            let ids: Vec<u32> = held.iter().map(|h| h.node).collect();
+            let targets: Vec<[f64; 3]> = held.iter().map(|h| (h.target - floor.reference[h.node as usize]).to_array()).collect();
+            // Fixed attachment nodes stay fixed: the solver's fixed dofs win.
+            solver.impose_displacements(&ids, &targets)?;
+            held_by.push(ids);
+        }
+        for _ in 0..self.substeps {
+            solver.step()?;
+        }
+        solver.update_internal_forces()?;
+        let pivot = self.state.bodies.pose(HEAD).transform_point(scene.pivot_in_head);
+        for (b, (contact, ids)) in floor_state.contacts.iter_mut().zip(&held_by).enumerate() {
+            let f = solver.internal_forces(ids)?;
+            let on_body: Vec<DVec3> = f.iter().map(|v| -DVec3::from_array(*v)).collect();
+            let r = contact.reaction(&on_body, self.state.bodies.position[b], pivot)?;
+            self.state.floor_wrench[b] = r.wrench();
+        }
+        Ok(())
+    }
+
+    /// Totals and the part that carried the largest force.
+    fn classify(&self, expulsion: DVec3, reports: &[ContactReport]) -> StepForces {
+        let sites = &self.scene.sites;
+        let mut by_site = vec![DVec3::ZERO; sites.len()];
+        let mut bone = DVec3::ZERO;
+        for r in reports {
+            bone += r.force;
+            for (k, f) in r.force_by_region(sites.len()).into_iter().enumerate() {
+                by_site[k] += f;
+            }
+        }
+        let floor: DVec3 = self.state.floor_wrench.iter().map(|w| w.force).sum();
+        let mut dominant = None;
+        let mut largest = 1e-6;
+        for (k, f) in by_site.iter().enumerate() {
+            if f.length() > largest {
+                largest = f.length();
+                dominant = Some(sites[k]);
+            }
+        }
+        if floor.length() > largest {
+            dominant = Some(ContactSite::PelvicFloor);
+        }
+        StepForces { expulsion, bone, floor, dominant }
+    }
+
+    fn record(&mut self, forces: &StepForces) {
+        let s = &self.state.bodies;
+        let pose = |b: usize| {
+            let p: RigidPose = s.pose(b);
+            carus_analysis::RigidPose { position_m: p.position, orientation: p.orientation }
+        };
+        self.state.samples.push(PoseSample {
+            time_s: self.time_s(),
+            head: pose(HEAD),
+            trunk: self.scene.trunk.as_ref().map(|_| pose(TRUNK)),
+            expulsion_force_n: forces.expulsion,
+            bone_contact_force_n: forces.bone,
+            floor_contact_force_n: forces.floor,
+            dominant_contact: forces.dominant,
+        });
+        if let (Some(solver), Some(floor)) = (&self.solver, &self.state.floor) {
+            let fields = solver.element_fields();
+            let peak = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
+            self.state.floor_samples.push(FloorSample {
+                time_s: self.time_s(),
+                peak_stretch: peak(&fields.max_principal_stretch),
+                peak_von_mises_pa: peak(&fields.von_mises_pa),
+                held_nodes: floor.contacts.iter().map(|c| c.held().len()).sum(),
+            });
+        }
+    }
+}
+
+/// The floor's solver with a sub-step of `dt / n`, n the fewest sub-steps
+/// at or below the chosen fraction of the critical step; returns it with n.
+fn new_solver(scene: &Scene, floor: &crate::scene::FloorScene, dt: f64) -> Result<(TledSolver, u32), LabourError> {
+    let h = scene.scenario.numerics.floor_step_fraction * floor.critical_step_s;
+    let substeps = (dt / h).ceil().max(1.0) as u32;
+    let solver = TledSolver::new(floor.model.clone(), &floor.bcs, dt / substeps as f64, StepControl::Refuse)?;
+    Ok((solver, substeps))
+}
