@@ -1151,4 +1151,32 @@ mod run_tests {
         let back = s.displacement(held[0]).unwrap();
         assert!(back[0].abs() < 1e-4, "{back:?}");
     }
+
+    #[test]
+    fn a_runaway_stops_with_the_last_good_state() {
+        let (mesh, m) = model(2, ModelOptions::default());
+        let mut bc = BoundaryConditions::default();
+        bc.fix_nodes(&mesh.node_sets["x0"]);
+        bc.forces.push(crate::loads::NodalForce {
+            nodes: vec![mesh.node_sets["x1"][0]],
+            force_n: [1e15, 0.0, 0.0],
+            shape: LoadShape::Step,
+        });
+        let mut s = TledSolver::new(
+            m.clone(),
+            &bc,
+            0.9 * m.critical_time_step(),
+            StepControl::Refuse,
+        )
+        .unwrap();
+        let before = s.snapshot();
+        match s.step() {
+            Err(FemError::Diverged {
+                last_good_time_s, ..
+            }) => assert_eq!(last_good_time_s, 0.0),
+            other => panic!("expected divergence, got {other:?}"),
+        }
+        assert_eq!(s.last_good_state(), before);
+        assert!(s.displacements().iter().flatten().all(|v| v.is_finite()));
+    }
 }
