@@ -374,6 +374,15 @@ impl TledModel {
                 });
             }
         }
+        // Force-copy slots are u32 offsets (about 24 per H8 element).
+        if ne.div_ceil(crate::kernel::lanes::LANES) * crate::kernel::lanes::LANES * npe * 3
+            > u32::MAX as usize
+        {
+            return Err(FemError::InvalidOption {
+                option: "mesh",
+                reason: format!("{ne} elements exceed the 32-bit force-slot table; split the mesh"),
+            });
+        }
         let region_of = assign_regions(mesh, materials)?;
         let (kernel, (element_time_step_s, critical_element, min_length)) = match options.precision
         {
