@@ -439,6 +439,14 @@ mod tests {
     }
 
     #[test]
+    fn the_imported_visible_human_pelvis_gets_a_floor() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../assets/anatomy/visible-human-female-pelvis.landmarks.toml");
+        let imported = crate::import::import_pelvis(&path).unwrap();
+        check(&imported.pelvis, &FloorParameters::default(), ANY_MIN_SCALED_JACOBIAN);
+    }
+
+    #[test]
     fn bad_parameters_are_named() {
         let pelvis = Pelvis::generate(&PelvisDiameters::default()).unwrap();
         let thin = FloorParameters { thickness_mm: 0.0, ..Default::default() };

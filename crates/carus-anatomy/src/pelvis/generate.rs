@@ -307,7 +307,63 @@ pub(crate) fn canal_surface(layout: &Layout) -> TriSurface {
             outer[r * columns + i] = inner[r * columns + i] + thickness(da(i as f64), kappa[r]) * away;
         }
     }
+    let landmark_vertices: Vec<usize> =
+        landmark_sites(&layout.landmarks).iter().map(|&(s, ring, _)| key_row(ring) * columns + column(s)).collect();
+    let (inner, outer) = cut_corners(&inner, &outer, &bone, rows, columns, &landmark_vertices);
     assemble(&inner, &outer, &bone, rows, columns)
+}
+
+/// How far (in grid cells) a staircase corner of the mask moves along the
+/// wall towards the diagonal, turning steps into chamfers.
+const CORNER_CUT: f64 = 0.35;
+
+/// Smooths the mask's staircase edges: a vertex with one bone cell of its
+/// four moves towards that cell, one with three moves towards the missing
+/// one, both along the wall (bilinear in the grid), landmarks excepted.
+fn cut_corners(
+    inner: &[DVec3],
+    outer: &[DVec3],
+    bone: &[bool],
+    rows: usize,
+    columns: usize,
+    fixed: &[usize],
+) -> (Vec<DVec3>, Vec<DVec3>) {
+    let cell = |r: isize, i: isize| {
+        r >= 0 && (r as usize) < rows - 1 && bone[r as usize * columns + i.rem_euclid(columns as isize) as usize]
+    };
+    let sample = |grid: &[DVec3], r: f64, i: f64| {
+        let (r0, i0) = (r.floor().clamp(0.0, (rows - 2) as f64), i.floor());
+        let (fr, fi) = (r - r0, i - i0);
+        let at = |dr: usize, di: isize| {
+            grid[(r0 as usize + dr) * columns + (i0 as isize + di).rem_euclid(columns as isize) as usize]
+        };
+        (at(0, 0) * (1.0 - fi) + at(0, 1) * fi) * (1.0 - fr) + (at(1, 0) * (1.0 - fi) + at(1, 1) * fi) * fr
+    };
+    let (mut new_inner, mut new_outer) = (inner.to_vec(), outer.to_vec());
+    for r in 1..rows - 1 {
+        for i in 0..columns {
+            if fixed.contains(&(r * columns + i)) {
+                continue;
+            }
+            let (ri, ii) = (r as isize, i as isize);
+            // The four cells round vertex (r, i), with their offsets from it.
+            let around = [(-1, -1), (-1, 0), (0, -1), (0, 0)].map(|(dr, di)| (cell(ri + dr, ii + di), dr, di));
+            let count = around.iter().filter(|c| c.0).count();
+            let odd_one = match count {
+                1 => around.iter().find(|c| c.0),
+                3 => around.iter().find(|c| !c.0),
+                _ => None,
+            };
+            if let Some(&(_, dr, di)) = odd_one {
+                // Towards the odd cell's centre, which sits at +-0.5 in each direction.
+                let (sr, si) = (if dr < 0 { -1.0 } else { 1.0 }, if di < 0 { -1.0 } else { 1.0 });
+                let (rr, ic) = (r as f64 + CORNER_CUT * sr, i as f64 + CORNER_CUT * si);
+                new_inner[r * columns + i] = sample(inner, rr, ic);
+                new_outer[r * columns + i] = sample(outer, rr, ic);
+            }
+        }
+    }
+    (new_inner, new_outer)
 }
 
 /// Makes bone any void cell that sits between two bone cells touching only
