@@ -20,9 +20,9 @@ use crate::text::finite_f64;
 
 /// Reads an Abaqus `.inp` file.
 pub fn read_inp(path: &Path) -> Result<MeshFile, ReadError> {
-    let bytes = std::fs::read(path).map_err(|source| ReadError::Io {
+    let bytes = std::fs::read(path).map_err(|cause| ReadError::Io {
         path: path.to_path_buf(),
-        source,
+        cause,
     })?;
     parse_inp(path, &bytes)
 }

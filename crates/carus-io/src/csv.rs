@@ -31,9 +31,9 @@ impl CsvWriter {
                 ),
             });
         }
-        let file = File::create(path).map_err(|source| WriteError::Io {
+        let file = File::create(path).map_err(|cause| WriteError::Io {
             path: path.to_path_buf(),
-            source,
+            cause,
         })?;
         let mut writer = CsvWriter {
             path: path.to_path_buf(),
@@ -46,9 +46,9 @@ impl CsvWriter {
     }
 
     fn write_line(&mut self, line: &str) -> Result<(), WriteError> {
-        writeln!(self.out, "{line}").map_err(|source| WriteError::Io {
+        writeln!(self.out, "{line}").map_err(|cause| WriteError::Io {
             path: self.path.clone(),
-            source,
+            cause,
         })
     }
 
@@ -76,9 +76,9 @@ impl CsvWriter {
     /// Flushes what is buffered to the file (done on drop too, but without
     /// a chance to see the error).
     pub fn flush(&mut self) -> Result<(), WriteError> {
-        self.out.flush().map_err(|source| WriteError::Io {
+        self.out.flush().map_err(|cause| WriteError::Io {
             path: self.path.clone(),
-            source,
+            cause,
         })
     }
 }

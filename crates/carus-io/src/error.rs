@@ -7,11 +7,10 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 pub enum ReadError {
     /// The file could not be opened or read.
-    #[error("{}: cannot read the file: {source}; fix: check the path and its permissions", path.display())]
+    #[error("{}: cannot read the file: {cause}; fix: check the path and its permissions", path.display())]
     Io {
         path: PathBuf,
-        #[source]
-        source: std::io::Error,
+        cause: std::io::Error,
     },
     /// The extension names no format Carus reads.
     #[error("{}: unknown mesh format {extension:?}; fix: use .msh (Gmsh), .vtk or .vtu (VTK) or .inp (Abaqus)", path.display())]
@@ -49,11 +48,10 @@ pub enum ReadError {
 #[derive(Debug, thiserror::Error)]
 pub enum WriteError {
     /// The operating system refused the write.
-    #[error("{}: cannot write the file: {source}; fix: check that the folder exists, is writable and the disk has room", path.display())]
+    #[error("{}: cannot write the file: {cause}; fix: check that the folder exists, is writable and the disk has room", path.display())]
     Io {
         path: PathBuf,
-        #[source]
-        source: std::io::Error,
+        cause: std::io::Error,
     },
     /// The data do not fit the mesh (a caller's bug, reported rather than panicking).
     #[error("{}: {problem}", path.display())]

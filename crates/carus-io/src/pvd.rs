@@ -48,9 +48,9 @@ impl PvdCollection {
     /// Writes the collection to `path` (rewritten whole, so a run cut off
     /// after any frame still leaves a valid series).
     pub fn write(&self, path: &Path) -> Result<(), WriteError> {
-        let io_error = |source| WriteError::Io {
+        let io_error = |cause| WriteError::Io {
             path: PathBuf::from(path),
-            source,
+            cause,
         };
         let mut file = std::fs::File::create(path).map_err(io_error)?;
         file.write_all(self.to_xml().as_bytes()).map_err(io_error)

@@ -67,9 +67,9 @@ fn content_error(path: &Path, problem: impl Into<String>, fix: &str) -> ReadErro
 const RESAVE_FIX: &str = "open it in ParaView and save it again as an unstructured grid (.vtu), or check the file is complete";
 
 fn load_unstructured(path: &Path) -> Result<UnstructuredGridPiece, ReadError> {
-    let bytes = std::fs::read(path).map_err(|source| ReadError::Io {
+    let bytes = std::fs::read(path).map_err(|cause| ReadError::Io {
         path: path.to_path_buf(),
-        source,
+        cause,
     })?;
     let extension = path
         .extension()
@@ -504,9 +504,9 @@ pub fn write_vtu(path: &Path, mesh: &Mesh, frame: &FrameFields) -> Result<(), Wr
         .map_err(|e| vtk_error(e.into()))?;
     let mut bytes = Vec::new();
     xml.write(&mut bytes).map_err(|e| vtk_error(e.into()))?;
-    let io_error = |source| WriteError::Io {
+    let io_error = |cause| WriteError::Io {
         path: path.to_path_buf(),
-        source,
+        cause,
     };
     let mut file = std::fs::File::create(path).map_err(io_error)?;
     file.write_all(&bytes).map_err(io_error)

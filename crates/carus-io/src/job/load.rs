@@ -8,9 +8,9 @@ use super::JobError;
 
 /// Reads and checks a job file.
 pub fn load_job(path: &Path) -> Result<JobSpec, JobError> {
-    let text = std::fs::read_to_string(path).map_err(|source| JobError::Io {
+    let text = std::fs::read_to_string(path).map_err(|cause| JobError::Io {
         path: path.to_path_buf(),
-        source,
+        cause,
     })?;
     parse_job(path, &text)
 }

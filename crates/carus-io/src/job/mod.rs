@@ -23,11 +23,10 @@ use crate::error::{ReadError, WriteError};
 #[derive(Debug, thiserror::Error)]
 pub enum JobError {
     /// The job file could not be read.
-    #[error("{}: cannot read the job file: {source}; fix: check the path", path.display())]
+    #[error("{}: cannot read the job file: {cause}; fix: check the path", path.display())]
     Io {
         path: PathBuf,
-        #[source]
-        source: std::io::Error,
+        cause: std::io::Error,
     },
     /// TOML syntax, an unknown key or a value of the wrong type or unit.
     #[error("{}:{line}:{column}: {}{message}; hint: {hint}", path.display(), if key.is_empty() { String::new() } else { format!("`{key}`: ") })]
@@ -68,12 +67,8 @@ pub enum JobError {
     #[error("{}: the output folder exists and is not empty; fix: choose another --out, or pass --force to replace the run in it", dir.display())]
     OutDirExists { dir: PathBuf },
     /// The output folder could not be prepared.
-    #[error("{}: cannot prepare the output folder: {source}; fix: check the path and its permissions", dir.display())]
-    OutDir {
-        dir: PathBuf,
-        #[source]
-        source: std::io::Error,
-    },
+    #[error("{}: cannot prepare the output folder: {cause}; fix: check the path and its permissions", dir.display())]
+    OutDir { dir: PathBuf, cause: std::io::Error },
     /// A result file could not be written.
     #[error(transparent)]
     Write(#[from] WriteError),

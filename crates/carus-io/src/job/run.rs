@@ -30,7 +30,7 @@ pub struct RunOptions {
     pub force: bool,
 }
 
-/// Where a run stands, reported after every frame.
+/// Where a run stands, reported after every frame and history row.
 #[derive(Debug, Clone, Copy)]
 pub struct Progress {
     pub time_s: f64,
@@ -256,9 +256,9 @@ fn occupied(dir: &Path) -> bool {
 /// Makes `dir/frames`; a non-empty `dir` needs `force`, which then removes
 /// only the files a run writes.
 fn prepare_out_dir(dir: &Path, force: bool) -> Result<(), JobError> {
-    let io = |source| JobError::OutDir {
+    let io = |cause| JobError::OutDir {
         dir: dir.to_path_buf(),
-        source,
+        cause,
     };
     if dir.exists() {
         if occupied(dir) && !force {
@@ -357,6 +357,58 @@ impl Recorder {
     }
 }
 
+/// The model and solver of a checked job on its mesh (in metres), and the
+/// supports whose reactions are reported.
+fn build_solver(
+    job_path: &Path,
+    spec: &JobSpec,
+    file: &MeshFile,
+) -> Result<(TledSolver, Supports), JobError> {
+    let mesh = &file.mesh;
+    let sets = Sets {
+        job: job_path,
+        mesh,
+    };
+    let regions = materials(spec, &sets)?;
+    let (bcs, supports) = boundary_conditions(spec, &sets)?;
+    let solver_spec = &spec.solver;
+    let model_options = ModelOptions {
+        tet_formulation: match solver_spec.tet_formulation {
+            TetSpec::T4 => TetFormulation::T4,
+            TetSpec::T4anp => TetFormulation::T4Anp,
+        },
+        hourglass_coefficient: solver_spec.hourglass_coefficient,
+        damping_per_s: solver_spec.damping_per_s,
+        precision: match solver_spec.precision {
+            PrecisionSpec::F64 => Precision::F64,
+            PrecisionSpec::F32 => Precision::F32,
+        },
+    };
+    let model_error = |e: FemError| JobError::Model {
+        path: file.source.clone(),
+        message: describe(&e, file),
+    };
+    let model = TledModel::new(mesh, &regions, &model_options).map_err(model_error)?;
+    let (dt_s, control) = match solver_spec.time_step_s {
+        TimeStep::Auto => (
+            AUTO_TIME_STEP_FRACTION * model.critical_time_step(),
+            StepControl::Refuse,
+        ),
+        TimeStep::Seconds(dt) if solver_spec.sub_stepping => (dt, StepControl::SubStep),
+        TimeStep::Seconds(dt) => (dt, StepControl::Refuse),
+    };
+    let solver = TledSolver::new(Arc::new(model), &bcs, dt_s, control).map_err(|e| match e {
+        FemError::TimeStepAboveCritical { .. } => JobError::Invalid {
+            path: job_path.to_path_buf(),
+            key: "solver.time_step_s".into(),
+            problem: e.to_string(),
+            fix: "lower time_step_s, set it to \"auto\", or set sub_stepping = true".into(),
+        },
+        other => model_error(other),
+    })?;
+    Ok((solver, supports))
+}
+
 /// Runs the job file at `job_path`, writing into `out_dir`:
 /// `frames/frame_NNNNN.vtu`, `solution.pvd`, `history.csv` and
 /// `summary.json`. A solver failure mid-run still writes the last good
@@ -377,49 +429,12 @@ pub fn run_job(
     }
     let file = crate::read_mesh(&mesh_path(job_path, &spec))?.to_metres(spec.mesh.length_unit);
     let mesh = &file.mesh;
-    let sets = Sets {
-        job: job_path,
-        mesh,
-    };
-    let regions = materials(&spec, &sets)?;
-    let (bcs, supports) = boundary_conditions(&spec, &sets)?;
-    let solver_spec = &spec.solver;
-    let model_options = ModelOptions {
-        tet_formulation: match solver_spec.tet_formulation {
-            TetSpec::T4 => TetFormulation::T4,
-            TetSpec::T4anp => TetFormulation::T4Anp,
-        },
-        hourglass_coefficient: solver_spec.hourglass_coefficient,
-        damping_per_s: solver_spec.damping_per_s,
-        precision: match solver_spec.precision {
-            PrecisionSpec::F64 => Precision::F64,
-            PrecisionSpec::F32 => Precision::F32,
-        },
-    };
-    let model_error = |e: FemError| JobError::Model {
-        path: file.source.clone(),
-        message: describe(&e, &file),
-    };
-    let model = TledModel::new(mesh, &regions, &model_options).map_err(model_error)?;
-    let critical_dt_s = model.critical_time_step();
-    let (dt_s, control) = match solver_spec.time_step_s {
-        TimeStep::Auto => (AUTO_TIME_STEP_FRACTION * critical_dt_s, StepControl::Refuse),
-        TimeStep::Seconds(dt) if solver_spec.sub_stepping => (dt, StepControl::SubStep),
-        TimeStep::Seconds(dt) => (dt, StepControl::Refuse),
-    };
-    let mut solver =
-        TledSolver::new(Arc::new(model), &bcs, dt_s, control).map_err(|e| match e {
-            FemError::TimeStepAboveCritical { .. } => JobError::Invalid {
-                path: job_path.to_path_buf(),
-                key: "solver.time_step_s".into(),
-                problem: e.to_string(),
-                fix: "lower time_step_s, set it to \"auto\", or set sub_stepping = true".into(),
-            },
-            other => model_error(other),
-        })?;
+    let (mut solver, supports) = build_solver(job_path, &spec, &file)?;
+    let critical_dt_s = solver.model().critical_time_step();
+    let dt_s = solver.dt_s();
 
     prepare_out_dir(out_dir, options.force)?;
-    let end_s = solver_spec.end_time_s;
+    let end_s = spec.solver.end_time_s;
     let frame_interval_s = spec.output.frame_interval_s.unwrap_or(end_s / 20.0);
     let history_interval_s = spec
         .output
@@ -465,13 +480,18 @@ pub fn run_job(
             break;
         }
         let t = solver.time_s() + 0.5 * dt_s;
+        let mut recorded = false;
         if t >= next_history as f64 * history_interval_s {
             recorder.history(&mut solver)?;
             next_history = (t / history_interval_s).floor() as u64 + 1;
+            recorded = true;
         }
         if t >= next_frame as f64 * frame_interval_s {
             recorder.frame(&solver, mesh)?;
             next_frame = (t / frame_interval_s).floor() as u64 + 1;
+            recorded = true;
+        }
+        if recorded {
             progress(&Progress {
                 time_s: solver.time_s(),
                 end_time_s: end_s,
@@ -504,9 +524,9 @@ pub fn run_job(
     };
     let summary = out_dir.join("summary.json");
     let json = serde_json::to_string_pretty(&report).unwrap_or_default();
-    std::fs::write(&summary, json + "\n").map_err(|source| crate::WriteError::Io {
+    std::fs::write(&summary, json + "\n").map_err(|cause| crate::WriteError::Io {
         path: summary,
-        source,
+        cause,
     })?;
     Ok(report)
 }
