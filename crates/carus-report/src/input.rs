@@ -1,0 +1,82 @@
+//! What a report is made from: plain data that any run (forward physics,
+//! imposed trajectory, synthetic history) can supply. The labour crate
+//! fills it in; this crate never depends on the simulation.
+
+use carus_analysis::{DetectorReport, PoseHistory};
+use carus_anatomy::TriSurface;
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+/// Everything one report shows.
+#[derive(Debug, Clone)]
+pub struct ReportInput<'a> {
+    /// Page title (the scenario's name, for example "normal").
+    pub title: String,
+    /// A notice shown in a box under the title, for what a reader must
+    /// know first (for example that the motion was imposed, not simulated).
+    pub notice: Option<String>,
+    /// The scenario file as run, shown verbatim in a collapsible block.
+    pub scenario_toml: Option<String>,
+    /// Figures of the run itself.
+    pub run: RunFigures,
+    /// The recorded poses, in the pelvis frame.
+    pub history: &'a PoseHistory,
+    /// The detector's verdict on `history` (carus_analysis::detect).
+    pub detector: &'a DetectorReport,
+    /// Peak principal stretch of the pelvic floor over time, `(time_s, stretch)`;
+    /// empty when the run had no floor.
+    pub floor_peak_stretch: Vec<(f64, f64)>,
+    /// The meshes for the pictures of the key moments; `None`: no pictures.
+    pub scene: Option<ReportScene>,
+}
+
+/// Figures of the run (not of the labour).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunFigures {
+    /// Simulated time, s.
+    pub simulated_s: f64,
+    /// Wall-clock time of the run, s; `None` for a history made without a solver.
+    pub wall_s: Option<f64>,
+    /// Rigid-body steps taken; `None` for a history made without a solver.
+    pub steps: Option<u64>,
+    /// Further rows for the figures table, `(name, value)` as shown.
+    pub extra: Vec<(String, String)>,
+}
+
+/// The surfaces drawn in the pictures, each in its own frame: the pose
+/// history places the head and the trunk at each moment.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReportScene {
+    /// Bony pelvis in the pelvis frame, m (drawn semi-transparent).
+    pub pelvis: Option<TriSurface>,
+    /// Fetal head in the head body frame of the history, m.
+    pub head: TriSurface,
+    /// Fetal trunk in the trunk body frame of the history, m; drawn only
+    /// when the history records trunk poses.
+    pub trunk: Option<TriSurface>,
+    /// The pelvic floor, deforming, coloured by stretch.
+    pub floor: Option<FloorSurface>,
+}
+
+/// The pelvic floor's boundary surface and its state at recorded instants.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FloorSurface {
+    /// Boundary triangles (indices into the node list), outward normals by
+    /// the right-hand rule.
+    pub triangles: Vec<[u32; 3]>,
+    /// Node positions at rest in the pelvis frame, m.
+    pub rest_positions_m: Vec<DVec3>,
+    /// Recorded states in time order; the picture of a moment uses the one
+    /// nearest in time. Empty: the floor is drawn at rest, uncoloured.
+    pub frames: Vec<FloorFrame>,
+}
+
+/// The pelvic floor at one instant.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FloorFrame {
+    pub time_s: f64,
+    /// Node positions in the pelvis frame, m (one per rest position).
+    pub positions_m: Vec<DVec3>,
+    /// Maximum principal stretch at each node (dimensionless, 1 at rest).
+    pub stretch: Vec<f64>,
+}

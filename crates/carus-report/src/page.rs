@@ -1,0 +1,581 @@
+//! The HTML page: headline, timeline, pictures, plots, figures, scenario.
+//! One file with everything inline (CSS, SVG, PNG as data: URIs); no
+//! script and no URL, so it opens offline and archives as it is.
+
+use std::fmt::Write as _;
+
+use carus_analysis::{ArrestStage, DetectorReport, Outcome};
+use plotters::style::RGBColor;
+
+use crate::error::ReportError;
+use crate::input::ReportInput;
+use crate::moments::{KeyMoment, MissedMoment};
+use crate::movements::{css, shown, size_text, Shown};
+use crate::pictures::{MomentPictures, PICTURE_SIZE};
+use crate::plots::{self, Band, Curve, Mark, PlotSpec};
+
+/// Escapes text for HTML element content and quoted attributes.
+pub fn escape(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&#39;"),
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+/// The headline: CSS class and sentence.
+pub fn headline(outcome: &Outcome) -> (&'static str, String) {
+    if outcome.delivered {
+        return ("delivered", "Delivered".to_string());
+    }
+    match &outcome.arrest {
+        Some(arrest) => {
+            let place = match arrest.stage {
+                ArrestStage::Inlet => "at the pelvic inlet",
+                ArrestStage::MidPelvis => "in the mid-pelvis",
+                ArrestStage::Outlet => "at the pelvic outlet",
+                ArrestStage::Shoulders => "at the shoulders (head born, trunk not)",
+            };
+            let against = if arrest.against == "unknown" {
+                "an unrecorded contact".to_string()
+            } else {
+                format!("the {}", arrest.against.replace('_', " "))
+            };
+            let station = match arrest.stage {
+                ArrestStage::Shoulders => "shoulders at",
+                _ => "station",
+            };
+            (
+                "arrested",
+                format!(
+                    "Arrested {place}, {station} {:+.0} mm, against {against}",
+                    arrest.station_mm
+                ),
+            )
+        }
+        None => (
+            "undecided",
+            "Not delivered: the run ended while the fetus was still progressing".to_string(),
+        ),
+    }
+}
+
+/// Everything the page needs besides the input.
+pub struct Parts<'a> {
+    pub moments: &'a [KeyMoment],
+    pub missed: &'a [MissedMoment],
+    /// `None`: pictures not attempted (no scene); `Some(Err)`: no renderer.
+    pub pictures: Option<Result<Vec<MomentPictures>, String>>,
+    pub stretch_range: Option<[f64; 2]>,
+}
+
+/// Builds the whole page.
+pub fn page(input: &ReportInput, parts: &Parts) -> Result<String, ReportError> {
+    let d = input.detector;
+    let rows = shown(d);
+    let series = &d.series;
+    let t0 = series.time_s[0];
+    let t1 = *series.time_s.last().unwrap_or(&t0);
+    let time_range = (t0, if t1 > t0 { t1 } else { t0 + 1.0 });
+    let (class, headline) = headline(&d.outcome);
+    let observed = d
+        .movements
+        .by_key()
+        .iter()
+        .filter(|(_, m)| m.observed)
+        .count();
+    let title = escape(&input.title);
+
+    let mut html = String::new();
+    let w = &mut html;
+    // Writing into a String cannot fail.
+    let _ = write!(
+        w,
+        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n\
+         <meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n\
+         <title>Carus report: {title}</title>\n<style>{STYLE}</style>\n</head>\n<body>\n<main>\n\
+         <header><p class=\"kicker\">Carus labour report</p><h1>{title}</h1>"
+    );
+    if let Some(notice) = &input.notice {
+        let _ = write!(
+            w,
+            "<p class=\"notice\" id=\"notice\">{}</p>",
+            escape(notice)
+        );
+    }
+    let _ = write!(
+        w,
+        "<p class=\"headline {class}\" id=\"outcome\" data-delivered=\"{}\">{}</p>\
+         <p class=\"sub\">{observed} of 7 cardinal movements observed &middot; {:.1} s simulated",
+        d.outcome.delivered,
+        escape(&headline),
+        input.run.simulated_s
+    );
+    if let Some(period) = d.contraction_period_s {
+        let _ = write!(w, " &middot; contraction period {period:.1} s");
+    }
+    let _ = write!(w, "</p></header>\n");
+
+    timeline(w, &rows, parts, time_range);
+    pictures(w, parts);
+    plots_section(w, input, &rows, parts, time_range)?;
+    figures(w, input);
+    reading_guide(w);
+    let _ = write!(w, "</main>\n</body>\n</html>\n");
+    Ok(html)
+}
+
+fn percent(t: f64, (t0, t1): (f64, f64)) -> f64 {
+    (100.0 * (t - t0) / (t1 - t0)).clamp(0.0, 100.0)
+}
+
+fn timeline(w: &mut String, rows: &[Shown], parts: &Parts, range: (f64, f64)) {
+    let _ = write!(
+        w,
+        "<section id=\"movements\"><h2>Cardinal movements</h2>\
+         <div class=\"timeline\"><div class=\"row axis\"><span class=\"name\"></span>\
+         <span class=\"flag\"></span><span class=\"track\">"
+    );
+    for m in parts.moments {
+        let _ = write!(
+            w,
+            "<span class=\"tick\" style=\"left:{:.2}%\" title=\"{} at {:.1} s\">{}</span>",
+            percent(m.time_s, range),
+            m.kind.label(),
+            m.time_s,
+            m.kind.mark()
+        );
+    }
+    let _ = write!(
+        w,
+        "</span><span class=\"when\">start &ndash; end</span><span class=\"size\">size</span></div>"
+    );
+    for row in rows {
+        let m = row.movement;
+        // The posterior rotation is listed only when it happened.
+        if row.key == "posterior_rotation" && !m.observed {
+            continue;
+        }
+        let colour = css(row.colour);
+        let _ = write!(
+            w,
+            "<div class=\"row\" data-movement=\"{}\" data-observed=\"{}\">\
+             <span class=\"name\"><i class=\"swatch\" style=\"background:{colour}\"></i>{}</span>",
+            row.key, m.observed, row.label
+        );
+        match (m.observed, m.start_s, m.end_s, m.size) {
+            (true, Some(start), Some(end), Some(size)) => {
+                let left = percent(start, range);
+                let width = (percent(end, range) - left).max(0.6);
+                let size = size_text(size, m.unit);
+                let _ = write!(
+                    w,
+                    "<span class=\"flag yes\">observed</span><span class=\"track\">\
+                     <span class=\"bar\" style=\"left:{left:.2}%;width:{width:.2}%;background:{colour}\" \
+                     title=\"{}: {start:.1} s to {end:.1} s, {size}\"></span></span>\
+                     <span class=\"when\">{start:.1} &ndash; {end:.1} s</span><span class=\"size\">{size}</span></div>",
+                    row.label
+                );
+            }
+            _ => {
+                let _ = write!(
+                    w,
+                    "<span class=\"flag no\">not observed</span><span class=\"track empty\"></span>\
+                     <span class=\"when\">&mdash;</span><span class=\"size\">&mdash;</span></div>"
+                );
+            }
+        }
+    }
+    let _ = write!(w, "</div></section>\n");
+}
+
+fn pictures(w: &mut String, parts: &Parts) {
+    let _ = write!(w, "<section id=\"pictures\"><h2>Key moments</h2>");
+    match &parts.pictures {
+        None => {
+            let _ = write!(
+                w,
+                "<p class=\"note\">No pictures: the run supplied no meshes to draw.</p>"
+            );
+        }
+        Some(Err(reason)) => {
+            let _ = write!(
+                w,
+                "<p class=\"note\" id=\"no-pictures\">Pictures could not be drawn: {}. \
+                 The rest of the report is complete.</p>",
+                escape(reason)
+            );
+        }
+        Some(Ok(moments)) => {
+            let _ = write!(
+                w,
+                "<p class=\"legend\">Lateral view from the mother's right (anterior to the right) \
+                 and inferior view of the outlet (pubis at the top); one scale for all pictures. \
+                 Bone semi-transparent, fetus opaque"
+            );
+            if let Some([low, high]) = parts.stretch_range {
+                let _ = write!(
+                    w,
+                    ", pelvic floor coloured by maximum principal stretch \
+                     <span class=\"ramp\"></span> {low:.2} &ndash; {high:.2}"
+                );
+            }
+            let _ = write!(w, ".</p><div class=\"moments\">");
+            for m in moments {
+                let _ = write!(
+                    w,
+                    "<figure class=\"moment\" data-moment=\"{}\"><figcaption><b>{}</b> \
+                     at {:.1} s<br><small>{}</small>",
+                    m.moment.kind.mark(),
+                    m.moment.kind.label(),
+                    m.moment.time_s,
+                    m.moment.kind.rule()
+                );
+                if let Some(t) = m.floor_time_s {
+                    let _ = write!(w, "<br><small>floor as recorded at {t:.1} s</small>");
+                }
+                let _ = write!(w, "</figcaption>");
+                match &m.pictures {
+                    Ok(views) => {
+                        for p in views {
+                            let _ = write!(
+                                w,
+                                "<img src=\"{}\" width=\"{}\" height=\"{}\" alt=\"{} at {:.1} s, {} view\" title=\"{} view\">",
+                                p.data_uri,
+                                PICTURE_SIZE.0,
+                                PICTURE_SIZE.1,
+                                m.moment.kind.label(),
+                                m.moment.time_s,
+                                p.view.name(),
+                                p.view.name()
+                            );
+                        }
+                    }
+                    Err(reason) => {
+                        let _ = write!(w, "<p class=\"note\">Not drawn: {}</p>", escape(reason));
+                    }
+                }
+                let _ = write!(w, "</figure>");
+            }
+            let _ = write!(w, "</div>");
+        }
+    }
+    if !parts.missed.is_empty() {
+        let _ = write!(w, "<p class=\"missed\">Not reached: ");
+        let missed: Vec<String> = parts
+            .missed
+            .iter()
+            .map(|m| format!("{} ({})", m.kind.label().to_lowercase(), escape(&m.reason)))
+            .collect();
+        let _ = write!(w, "{}.</p>", missed.join("; "));
+    }
+    let _ = write!(w, "</section>\n");
+}
+
+fn plots_section(
+    w: &mut String,
+    input: &ReportInput,
+    rows: &[Shown],
+    parts: &Parts,
+    time_range: (f64, f64),
+) -> Result<(), ReportError> {
+    let d: &DetectorReport = input.detector;
+    let s = &d.series;
+    let bands: Vec<Band> = rows
+        .iter()
+        .filter_map(|r| {
+            let m = r.movement;
+            match (m.observed, m.start_s, m.end_s) {
+                (true, Some(start_s), Some(end_s)) => Some(Band {
+                    start_s,
+                    end_s,
+                    colour: r.colour,
+                }),
+                _ => None,
+            }
+        })
+        .collect();
+    let marks: Vec<Mark> = parts
+        .moments
+        .iter()
+        .map(|m| Mark {
+            time_s: m.time_s,
+            label: m.kind.mark(),
+        })
+        .collect();
+    let blue = RGBColor(31, 87, 153);
+    let spec = |id, y_label, curves, references| PlotSpec {
+        id,
+        y_label,
+        time_s: &s.time_s,
+        curves,
+        references,
+        bands: &bands,
+        marks: &marks,
+        time_range,
+    };
+    let station = vec![Curve {
+        values: &s.station_mm,
+        colour: blue,
+    }];
+    let theta = vec![Curve {
+        values: &s.theta_deg,
+        colour: blue,
+    }];
+    let phi = vec![Curve {
+        values: &s.phi_deg,
+        colour: blue,
+    }];
+    let force = vec![
+        Curve {
+            values: &s.expulsion_force_n,
+            colour: blue,
+        },
+        Curve {
+            values: &s.contact_force_n,
+            colour: RGBColor(200, 82, 0),
+        },
+    ];
+    let figures = [
+        (
+            "station",
+            "Station of the leading point",
+            "mm below the ischial spines; 0 = spines, line at 0; up = deeper",
+            plots::svg(&spec("station", "station (mm)", station, vec![0.0]))?,
+        ),
+        (
+            "theta",
+            "Rotation theta",
+            "occiput position: 0 = OA, +90 = ROT, -90 = LOT, \u{b1}180 = OP",
+            plots::svg(&spec("theta", "theta (deg)", theta, vec![0.0]))?,
+        ),
+        (
+            "phi",
+            "Attitude phi",
+            "positive = flexion, negative = extension",
+            plots::svg(&spec("phi", "phi (deg)", phi, vec![0.0]))?,
+        ),
+        (
+            "force",
+            "Forces on the fetus",
+            "<span style=\"color:#1f5799\">&#9632; expulsion force along the spine</span> \
+             <span style=\"color:#c85200\">&#9632; magnitude of the total contact force (bone + floor)</span>",
+            plots::svg(&spec("force", "force (N)", force, vec![0.0]))?,
+        ),
+    ];
+    let _ = write!(
+        w,
+        "<section id=\"plots\"><h2>Against time</h2><p class=\"legend\">Shaded: the movements \
+         in the timeline's colours. Dashed: the key moments ({}).</p><div class=\"plots\">",
+        parts
+            .moments
+            .iter()
+            .map(|m| format!("{} = {}", m.kind.mark(), m.kind.label().to_lowercase()))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    for (id, heading, caption, svg) in figures {
+        let _ = write!(
+            w,
+            "<figure class=\"plot\" id=\"plot-{id}\"><figcaption><b>{heading}</b> \
+             <small>{caption}</small></figcaption>{svg}</figure>"
+        );
+    }
+    floor_plot(w, input, &bands, &marks, time_range)?;
+    let _ = write!(w, "</div></section>\n");
+    Ok(())
+}
+
+fn floor_plot(
+    w: &mut String,
+    input: &ReportInput,
+    bands: &[Band],
+    marks: &[Mark],
+    time_range: (f64, f64),
+) -> Result<(), ReportError> {
+    let _ = write!(
+        w,
+        "<figure class=\"plot\" id=\"plot-floor\"><figcaption><b>Pelvic floor: peak stretch</b> \
+         <small>largest maximum principal stretch anywhere in the floor (1 = at rest)</small></figcaption>"
+    );
+    if input.floor_peak_stretch.is_empty() {
+        let _ = write!(
+            w,
+            "<p class=\"note\">No pelvic floor was simulated in this run.</p></figure>"
+        );
+        return Ok(());
+    }
+    let (time_s, stretch): (Vec<f64>, Vec<f64>) = input.floor_peak_stretch.iter().copied().unzip();
+    if let Some(&bad) = stretch.iter().chain(&time_s).find(|v| !v.is_finite()) {
+        return Err(ReportError::NotFinite {
+            what: "floor_peak_stretch",
+            value: bad,
+        });
+    }
+    let spec = PlotSpec {
+        id: "floor",
+        y_label: "peak stretch",
+        time_s: &time_s,
+        curves: vec![Curve {
+            values: &stretch,
+            colour: RGBColor(68, 1, 84),
+        }],
+        references: vec![1.0],
+        bands,
+        marks,
+        time_range,
+    };
+    let peak = input
+        .floor_peak_stretch
+        .iter()
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .copied();
+    let svg = plots::svg(&spec)?;
+    let _ = write!(w, "{svg}");
+    if let Some((t, s)) = peak {
+        let _ = write!(w, "<p class=\"legend\">Greatest: {s:.3} at {t:.1} s.</p>");
+    }
+    let _ = write!(w, "</figure>");
+    Ok(())
+}
+
+fn figures(w: &mut String, input: &ReportInput) {
+    let run = &input.run;
+    let d = input.detector;
+    let _ = write!(
+        w,
+        "<section id=\"run\"><h2>Run</h2><table class=\"figures\">\
+         <tr><th>simulated time</th><td>{:.2} s</td></tr>",
+        run.simulated_s
+    );
+    let _ = write!(
+        w,
+        "<tr><th>wall time</th><td>{}</td></tr><tr><th>steps</th><td>{}</td></tr>",
+        run.wall_s
+            .map_or("&mdash; (no solver)".to_string(), |s| format!("{s:.1} s")),
+        run.steps
+            .map_or("&mdash; (no solver)".to_string(), |n| n.to_string())
+    );
+    let _ = write!(
+        w,
+        "<tr><th>pose samples</th><td>{}</td></tr><tr><th>trunk modelled</th><td>{}</td></tr>",
+        d.series.len(),
+        if input.history.trunk.is_some() {
+            "yes"
+        } else {
+            "no"
+        }
+    );
+    for (name, value) in &run.extra {
+        let _ = write!(
+            w,
+            "<tr><th>{}</th><td>{}</td></tr>",
+            escape(name),
+            escape(value)
+        );
+    }
+    let _ = write!(w, "</table>");
+    if let Some(toml) = &input.scenario_toml {
+        let _ = write!(
+            w,
+            "<details id=\"scenario\"><summary>Scenario (TOML, as run)</summary><pre>{}</pre></details>",
+            escape(toml)
+        );
+    }
+    let _ = write!(w, "</section>\n");
+}
+
+fn reading_guide(w: &mut String) {
+    let _ = write!(
+        w,
+        "<section id=\"guide\"><h2>How to read this report</h2><ul>\
+         <li><b>Station</b>: the depth of the head's leading point along the curve of Carus, \
+         in mm below the plane of the ischial spines (negative above).</li>\
+         <li><b>Theta</b>: where the occiput points in the canal's cross-section, \
+         0 = occiput anterior, \u{b1}90 = transverse, \u{b1}180 = occiput posterior.</li>\
+         <li><b>Phi</b>: the head's attitude relative to the fetal spine, positive in flexion.</li>\
+         <li>A movement counts as observed by the rules of CARDINAL_MOVEMENTS.md; its size is \
+         the change of its own quantity (station, phi or theta) from start to end.</li>\
+         <li>The outcome: delivered when head and trunk are past the outlet; arrested when \
+         the fetus stopped progressing over the last part of the run.</li></ul></section>\n"
+    );
+}
+
+/// Inline style: readable on screen and on paper, no web fonts.
+const STYLE: &str = "
+body{margin:0;background:#f4f3ef;color:#1d1d1b;font:15px/1.45 system-ui,-apple-system,'Segoe UI',Roboto,Helvetica,Arial,sans-serif}
+main{max-width:1200px;margin:0 auto;padding:24px 28px 48px;background:#fff}
+h1{margin:0 0 8px;font-size:28px}h2{font-size:19px;margin:28px 0 10px;border-bottom:1px solid #ddd;padding-bottom:4px}
+.kicker{margin:0;color:#777;text-transform:uppercase;letter-spacing:.08em;font-size:12px}
+.notice{background:#fff4d6;border:1px solid #e0b84c;border-radius:6px;padding:8px 12px;margin:8px 0}
+.headline{font-size:26px;font-weight:700;margin:12px 0 2px;padding:10px 14px;border-radius:8px}
+.headline.delivered{background:#e3f2e1;color:#1e5a1a}.headline.arrested{background:#fbe3e1;color:#8a1c14}
+.headline.undecided{background:#eee;color:#444}
+.sub{margin:4px 0 0;color:#555}
+.timeline{display:grid;gap:4px}
+.row{display:grid;grid-template-columns:250px 100px 1fr 120px 80px;align-items:center;gap:10px}
+.row.axis{font-size:12px;color:#777}
+.name{font-weight:600}.swatch{display:inline-block;width:12px;height:12px;border-radius:3px;margin-right:8px;vertical-align:-1px}
+.flag{font-size:12px;border-radius:10px;padding:1px 8px;text-align:center}
+.flag.yes{background:#e3f2e1;color:#1e5a1a}.flag.no{background:#eee;color:#888}
+.track{position:relative;height:16px;background:#f1f1f1;border-radius:3px}
+.row.axis .track{background:none}
+.track.empty{background:repeating-linear-gradient(45deg,#f6f6f6,#f6f6f6 6px,#ececec 6px,#ececec 12px)}
+.bar{position:absolute;top:1px;bottom:1px;border-radius:3px}
+.tick{position:absolute;transform:translateX(-50%);font-weight:700;color:#444}
+.when,.size{font-variant-numeric:tabular-nums;font-size:13px}
+.moments{display:grid;grid-template-columns:repeat(auto-fill,minmax(460px,1fr));gap:14px}
+.moment{margin:0;border:1px solid #e2e2e2;border-radius:8px;padding:8px}
+.moment img{width:calc(50% - 4px);height:auto;display:inline-block;margin-right:4px}
+.moment figcaption{margin-bottom:6px}
+.plots{display:grid;grid-template-columns:repeat(auto-fill,minmax(540px,1fr));gap:12px}
+.plot{margin:0}.plot svg{width:100%;height:auto;display:block}
+figcaption small,.legend,.note,.missed{color:#666;font-size:13px}
+.note{background:#f6f6f6;border-left:3px solid #bbb;padding:6px 10px}
+.ramp{display:inline-block;width:90px;height:10px;vertical-align:0;background:linear-gradient(90deg,#440154,#3b528b,#21918c,#5ec962,#fde725)}
+table.figures{border-collapse:collapse}table.figures th{text-align:left;font-weight:500;color:#555;padding:2px 16px 2px 0}
+table.figures td{font-variant-numeric:tabular-nums}
+details{margin-top:12px}pre{background:#f6f6f6;padding:10px;overflow:auto;font-size:12px}
+@media print{body{background:#fff}main{padding:0}details{display:none}}
+";
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use carus_analysis::Arrest;
+
+    #[test]
+    fn markup_characters_are_escaped() {
+        assert_eq!(escape("a<b & \"c\"'"), "a&lt;b &amp; &quot;c&quot;&#39;");
+    }
+
+    #[test]
+    fn an_arrest_says_where_and_against_what() {
+        let outcome = Outcome {
+            delivered: false,
+            arrest: Some(Arrest {
+                stage: ArrestStage::Inlet,
+                station_mm: -42.4,
+                against: "sacral_promontory".into(),
+            }),
+        };
+        let (class, text) = headline(&outcome);
+        assert_eq!(class, "arrested");
+        assert_eq!(
+            text,
+            "Arrested at the pelvic inlet, station -42 mm, against the sacral promontory"
+        );
+        let open = Outcome {
+            delivered: false,
+            arrest: None,
+        };
+        assert!(headline(&open).1.contains("still progressing"));
+    }
+}

@@ -1,0 +1,241 @@
+//! Pictures of the key moments: the pelvis semi-transparent, the fetus
+//! opaque where the history places it, the floor coloured by stretch;
+//! every picture of a report from one camera scale, so sizes compare.
+
+use base64::engine::general_purpose::STANDARD;
+use base64::Engine as _;
+use carus_analysis::{PoseHistory, RigidPose};
+use carus_anatomy::TriSurface;
+use carus_render::{Bounds, Camera, ColourMap, RenderError, RenderMesh, Renderer, Scene, View};
+use glam::DVec3;
+
+use crate::input::{FloorFrame, FloorSurface, ReportScene};
+use crate::moments::KeyMoment;
+
+/// The views of every key moment: from the mother's right (the curve of
+/// Carus in profile) and from below (the outlet, as the accoucheur sees it).
+pub const VIEWS: [View; 2] = [View::Lateral, View::Inferior];
+/// Picture size, px.
+pub const PICTURE_SIZE: (u32, u32) = (440, 400);
+/// Bone colour (sRGB) and opacity: see-through so the fetus shows inside.
+const PELVIS_RGB: [f32; 3] = [0.89, 0.85, 0.76];
+const PELVIS_OPACITY: f32 = 0.35;
+const HEAD_RGB: [f32; 3] = [0.93, 0.72, 0.62];
+const TRUNK_RGB: [f32; 3] = [0.86, 0.64, 0.56];
+/// Name of the trunk's mesh, which the camera's fit leaves out.
+const TRUNK: &str = "fetal trunk";
+/// Muscle colour for a floor without recorded stretch.
+const FLOOR_RGB: [f32; 3] = [0.78, 0.50, 0.50];
+/// Smallest upper end of the stretch colour scale, so a floor at rest is
+/// not stretched over the whole map by rounding noise.
+const MIN_STRETCH_TOP: f64 = 1.05;
+
+/// One picture as it goes into the page.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Picture {
+    pub view: View,
+    /// `data:image/png;base64,...`
+    pub data_uri: String,
+}
+
+/// The pictures of one moment, or why there are none.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MomentPictures {
+    pub moment: KeyMoment,
+    /// Time of the floor frame drawn, when it is not the moment's own.
+    pub floor_time_s: Option<f64>,
+    pub pictures: Result<Vec<Picture>, String>,
+}
+
+/// The stretch range of the colour scale, shared by every picture.
+pub fn stretch_range(floor: &FloorSurface) -> Option<[f64; 2]> {
+    let top = floor
+        .frames
+        .iter()
+        .flat_map(|f| f.stretch.iter().copied())
+        .filter(|s| s.is_finite())
+        .fold(f64::NEG_INFINITY, f64::max);
+    (top.is_finite()).then(|| [1.0, top.max(MIN_STRETCH_TOP)])
+}
+
+/// Draws every moment from every view. Failures of single pictures are
+/// kept per moment; the caller turns them into warnings.
+pub fn draw(
+    renderer: &mut Renderer,
+    scene: &ReportScene,
+    history: &PoseHistory,
+    moments: &[KeyMoment],
+) -> Vec<MomentPictures> {
+    let range = scene.floor.as_ref().and_then(stretch_range);
+    let posed: Vec<(Vec<RenderMesh>, Option<f64>)> = moments
+        .iter()
+        .map(|m| meshes_at(scene, history, m, range))
+        .collect();
+    // The trunk reaches far above the inlet early and far below the
+    // outlet late; fitting it would shrink the canal, so it may run off
+    // the picture's edge.
+    let bounds = posed
+        .iter()
+        .flat_map(|(meshes, _)| meshes.iter())
+        .filter(|mesh| mesh.name != TRUNK)
+        .filter_map(RenderMesh::bounds)
+        .reduce(Bounds::union);
+    moments
+        .iter()
+        .zip(posed)
+        .map(|(moment, (meshes, floor_time_s))| MomentPictures {
+            moment: *moment,
+            floor_time_s,
+            pictures: bounds
+                .ok_or_else(|| "the scene has no vertices".to_string())
+                .and_then(|b| render_views(renderer, meshes, &b).map_err(|e| e.to_string())),
+        })
+        .collect()
+}
+
+fn render_views(
+    renderer: &mut Renderer,
+    meshes: Vec<RenderMesh>,
+    bounds: &Bounds,
+) -> Result<Vec<Picture>, RenderError> {
+    let uploaded = renderer.upload(&Scene::new(meshes))?;
+    VIEWS
+        .iter()
+        .map(|&view| {
+            let camera = Camera::standard(view, bounds);
+            let image =
+                renderer.render_uploaded(&uploaded, &camera, PICTURE_SIZE.0, PICTURE_SIZE.1)?;
+            Ok(Picture {
+                view,
+                data_uri: format!(
+                    "data:image/png;base64,{}",
+                    STANDARD.encode(image.encode_png()?)
+                ),
+            })
+        })
+        .collect()
+}
+
+/// The meshes of one moment (opaque fetus first, then the see-through
+/// pelvis), and the time of the floor frame used when it differs from the
+/// moment's.
+fn meshes_at(
+    scene: &ReportScene,
+    history: &PoseHistory,
+    moment: &KeyMoment,
+    stretch_range: Option<[f64; 2]>,
+) -> (Vec<RenderMesh>, Option<f64>) {
+    let sample = &history.samples[moment.sample];
+    let mut meshes = vec![posed_mesh(
+        "fetal head",
+        &scene.head,
+        &sample.head,
+        HEAD_RGB,
+    )];
+    if let (Some(trunk), Some(pose)) = (&scene.trunk, &sample.trunk) {
+        meshes.push(posed_mesh(TRUNK, trunk, pose, TRUNK_RGB));
+    }
+    let mut floor_time_s = None;
+    if let Some(floor) = &scene.floor {
+        let (mesh, frame_time) = floor_mesh(floor, moment.time_s, stretch_range);
+        floor_time_s = frame_time.filter(|t| (t - moment.time_s).abs() > 1e-9);
+        meshes.push(mesh);
+    }
+    if let Some(pelvis) = &scene.pelvis {
+        meshes.push(
+            RenderMesh::new(
+                "pelvis",
+                to_f32(pelvis.vertices.iter().copied()),
+                indices(&pelvis.triangles),
+                PELVIS_RGB,
+            )
+            .with_opacity(PELVIS_OPACITY),
+        );
+    }
+    (meshes, floor_time_s)
+}
+
+fn posed_mesh(name: &str, surface: &TriSurface, pose: &RigidPose, rgb: [f32; 3]) -> RenderMesh {
+    RenderMesh::new(
+        name,
+        to_f32(surface.vertices.iter().map(|&v| pose.point(v))),
+        indices(&surface.triangles),
+        rgb,
+    )
+}
+
+/// The floor at the frame nearest `time_s`, coloured by its stretch; at
+/// rest and plain when no frame was recorded.
+fn floor_mesh(
+    floor: &FloorSurface,
+    time_s: f64,
+    range: Option<[f64; 2]>,
+) -> (RenderMesh, Option<f64>) {
+    let nearest: Option<&FloorFrame> = floor.frames.iter().min_by(|a, b| {
+        (a.time_s - time_s)
+            .abs()
+            .total_cmp(&(b.time_s - time_s).abs())
+    });
+    let triangles = indices(&floor.triangles);
+    match (nearest, range) {
+        (Some(frame), Some(range)) => (
+            RenderMesh::new(
+                "pelvic floor",
+                to_f32(frame.positions_m.iter().copied()),
+                triangles,
+                FLOOR_RGB,
+            )
+            .with_scalars(
+                frame.stretch.iter().map(|&s| s as f32).collect(),
+                [range[0] as f32, range[1] as f32],
+                ColourMap::Viridis,
+            ),
+            Some(frame.time_s),
+        ),
+        _ => (
+            RenderMesh::new(
+                "pelvic floor",
+                to_f32(floor.rest_positions_m.iter().copied()),
+                triangles,
+                FLOOR_RGB,
+            ),
+            None,
+        ),
+    }
+}
+
+fn to_f32(points: impl Iterator<Item = DVec3>) -> Vec<[f32; 3]> {
+    points.map(|p| p.as_vec3().to_array()).collect()
+}
+
+fn indices(triangles: &[[u32; 3]]) -> Vec<u32> {
+    triangles.iter().flatten().copied().collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_stretch_scale_starts_at_rest_and_never_collapses() {
+        let frame = |s: Vec<f64>| FloorFrame {
+            time_s: 0.0,
+            positions_m: vec![DVec3::ZERO; s.len()],
+            stretch: s,
+        };
+        let floor = |frames| FloorSurface {
+            triangles: vec![],
+            rest_positions_m: vec![DVec3::ZERO; 2],
+            frames,
+        };
+        assert_eq!(stretch_range(&floor(vec![])), None);
+        assert_eq!(
+            stretch_range(&floor(vec![frame(vec![1.0, 1.0])])),
+            Some([1.0, MIN_STRETCH_TOP])
+        );
+        assert_eq!(
+            stretch_range(&floor(vec![frame(vec![1.0, 1.3]), frame(vec![1.6, 1.1])])),
+            Some([1.0, 1.6])
+        );
+    }
+}

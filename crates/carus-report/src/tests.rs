@@ -1,0 +1,140 @@
+//! Reports built from the synthetic histories, checked as a reader would:
+//! one page, the outcome, every movement with its flag, the plots, the
+//! pictures inline, nothing fetched from elsewhere.
+
+use crate::demo::Demo;
+use crate::{write_report, write_report_with, ReportError};
+
+fn movement_row(html: &str, key: &str) -> String {
+    let start = html
+        .find(&format!("data-movement=\"{key}\""))
+        .unwrap_or_else(|| panic!("no row for {key}"));
+    html[start..start + 60].to_string()
+}
+
+fn assert_self_contained(html: &str) {
+    assert_eq!(html.matches("<html").count(), 1, "one page");
+    for external in [
+        "http://", "https://", "src=\"/", "<script", "<link", "@import",
+    ] {
+        assert!(
+            !html.contains(external),
+            "the page refers outside itself: {external}"
+        );
+    }
+}
+
+#[test]
+fn the_textbook_report_shows_everything_on_one_page() {
+    let demo = Demo::textbook().unwrap();
+    let report = write_report(&demo.input("textbook (synthetic)")).unwrap();
+    let html = &report.html;
+    assert!(report.warnings.is_empty(), "{:?}", report.warnings);
+    assert_self_contained(html);
+    assert!(html.contains("id=\"outcome\" data-delivered=\"true\">Delivered<"));
+    assert!(html.contains("7 of 7 cardinal movements observed"));
+    for (key, label) in [
+        ("engagement", "Engagement"),
+        ("descent", "Descent"),
+        ("flexion", "Flexion"),
+        ("internal_rotation", "Internal rotation"),
+        ("extension", "Extension"),
+        ("external_rotation", "External rotation"),
+        ("expulsion", "Expulsion"),
+    ] {
+        assert!(
+            movement_row(html, key).contains("data-observed=\"true\""),
+            "{key}"
+        );
+        assert!(html.contains(label), "{label}");
+    }
+    for plot in ["station", "theta", "phi", "force"] {
+        let at = html.find(&format!("id=\"plot-{plot}\"")).unwrap();
+        assert!(
+            html[at..].find("<svg").unwrap() < 400,
+            "plot {plot} has its SVG"
+        );
+    }
+    // Four key moments, two views each, as PNG data: URIs.
+    assert_eq!(html.matches("class=\"moment\"").count(), 4);
+    assert_eq!(html.matches("src=\"data:image/png;base64,").count(), 8);
+    assert!(html.contains("Synthetic demonstration"));
+    assert!(html.contains("No pelvic floor was simulated in this run."));
+}
+
+#[test]
+fn a_straight_push_reports_the_movements_it_lacks() {
+    let demo = Demo::straight_push().unwrap();
+    let report = write_report_with(&demo.input("straight push"), None).unwrap();
+    let html = &report.html;
+    assert_self_contained(html);
+    for key in ["engagement", "descent"] {
+        assert!(
+            movement_row(html, key).contains("data-observed=\"true\""),
+            "{key}"
+        );
+    }
+    for key in [
+        "flexion",
+        "internal_rotation",
+        "extension",
+        "external_rotation",
+        "expulsion",
+    ] {
+        assert!(
+            movement_row(html, key).contains("data-observed=\"false\""),
+            "{key}"
+        );
+    }
+    assert!(html.contains("2 of 7 cardinal movements observed"));
+    assert!(!html.contains("data-delivered=\"true\""));
+    assert!(
+        html.contains("Not reached: full internal rotation (internal rotation was not observed)")
+    );
+}
+
+#[test]
+fn without_a_renderer_the_report_is_written_with_a_note() {
+    let demo = Demo::textbook().unwrap();
+    let report = write_report_with(&demo.input("no pictures"), None).unwrap();
+    assert!(report.html.contains("id=\"no-pictures\""));
+    assert!(!report.html.contains("data:image/png"));
+    assert_eq!(report.warnings.len(), 1, "{:?}", report.warnings);
+    // The rest of the page is all there.
+    assert_eq!(report.html.matches("<svg").count(), 4);
+    assert!(report.html.contains("Delivered"));
+}
+
+#[test]
+fn a_detector_report_of_another_history_is_refused() {
+    let textbook = Demo::textbook().unwrap();
+    let push = Demo::straight_push().unwrap();
+    let mut input = textbook.input("mismatch");
+    input.detector = &push.detector;
+    let error = write_report_with(&input, None).unwrap_err();
+    assert!(
+        matches!(error, ReportError::SeriesMismatch { .. }),
+        "{error}"
+    );
+}
+
+#[test]
+fn floor_stretch_and_the_scenario_appear_when_given() {
+    let demo = Demo::straight_push().unwrap();
+    let mut input = demo.input("with floor");
+    input.floor_peak_stretch = vec![(0.0, 1.0), (10.0, 1.4), (20.0, 1.2)];
+    input.scenario_toml = Some("[forces]\nmax_n = 120 # <max>\n".into());
+    let html = write_report_with(&input, None).unwrap().html;
+    assert_eq!(
+        html.matches("<svg").count(),
+        5,
+        "four plots and the floor's"
+    );
+    assert!(html.contains("Greatest: 1.400 at 10.0 s."));
+    assert!(html.contains("max_n = 120 # &lt;max&gt;"));
+    input.floor_peak_stretch[1].1 = f64::NAN;
+    assert!(matches!(
+        write_report_with(&input, None),
+        Err(ReportError::NotFinite { .. })
+    ));
+}
