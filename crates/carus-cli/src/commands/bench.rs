@@ -1,13 +1,285 @@
-//! `carus bench` (being built; replaced by its owner).
+//! `carus bench tled`: times the TLED solver on the V3 cube and, in the same
+//! run, the plain single-threaded baseline of the same algorithm
+//! (`carus_fem::baseline`), so the speed-up is measured, not assumed. Also
+//! reports the process's peak resident memory per element.
+//!
+//! The cube: edge 0.1 m, n^3 H8 or 6 n^3 T4, the V3 tissue, x = 0 fixed,
+//! x = L pulled 0.03 m over 1 s (VALIDATION.md V3), dt the critical step.
 
-use super::Status;
+use std::time::Instant;
+
+use anyhow::{bail, Context};
+use carus_fem::baseline::{BaselineParameters, BaselineSolver, NodeConstraint};
+use carus_fem::gpu::{bench_tled, AdapterChoice, GpuDevice, GpuError};
+use carus_fem::validation::cube::{CubeElement, CubeSetup, CubeVariant, DAMPING_PER_S, HOURGLASS_COEFFICIENT, RAMP_S};
+use carus_fem::validation::{CUBE_BULK_MODULUS_PA, CUBE_DENSITY_KG_M3, CUBE_SHEAR_MODULUS_PA};
+use carus_fem::{ElementKind, LoadShape, Material, MaterialRegion, Precision, StepControl, TledModel, TledSolver};
+use serde::Serialize;
+
+use super::{print_json, Status};
 
 #[derive(clap::Subcommand)]
 pub enum BenchCommand {
-    /// Time the TLED solver.
-    Tled,
+    /// Time the TLED solver (and the plain baseline) on the V3 cube.
+    Tled(TledBenchArgs),
 }
 
-pub fn run(_cmd: &BenchCommand) -> anyhow::Result<Status> {
-    anyhow::bail!("`carus bench` is not built yet")
+#[derive(clap::Args)]
+pub struct TledBenchArgs {
+    /// Element type of the cube.
+    #[arg(long, value_enum, default_value = "h8")]
+    pub element: ElementArg,
+    /// Elements per edge (the cube has n^3 H8 or 6 n^3 T4).
+    #[arg(long, default_value_t = 20)]
+    pub n: usize,
+    /// Timed steps (default: about 2e7 element-steps, at least 10).
+    #[arg(long)]
+    pub steps: Option<u64>,
+    /// Worker threads of the CPU solver (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Precision of the CPU kernels.
+    #[arg(long, value_enum, default_value = "f64")]
+    pub precision: PrecisionArg,
+    /// Where the step loop runs: cpu, gpu, or auto (a real GPU if present).
+    #[arg(long, value_enum, default_value = "cpu")]
+    pub backend: BackendArg,
+    /// GPU: the device's peak memory bandwidth, GB/s, for the fraction of peak.
+    #[arg(long)]
+    pub peak_gbs: Option<f64>,
+    /// Print one JSON object on standard output and nothing else there.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum ElementArg {
+    H8,
+    T4,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum PrecisionArg {
+    F64,
+    F32,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum BackendArg {
+    Cpu,
+    Gpu,
+    Auto,
+}
+
+/// The figures of one CPU bench run; the first eight keys are issue 2's.
+#[derive(Serialize)]
+struct CpuBenchReport {
+    elements: usize,
+    nodes: usize,
+    steps: u64,
+    wall_s: f64,
+    us_per_element_step: f64,
+    element_steps_per_s: f64,
+    threads: usize,
+    backend: &'static str,
+    element: &'static str,
+    n: usize,
+    precision: &'static str,
+    dt_s: f64,
+    baseline_steps: u64,
+    baseline_wall_s: f64,
+    baseline_us_per_element_step: f64,
+    /// Baseline time per element-step over the solver's.
+    speedup: f64,
+    /// Peak resident set (VmHWM) after the solver's run, before the
+    /// baseline is built: mesh, model and solver state together.
+    peak_rss_bytes: Option<u64>,
+    bytes_per_element: Option<f64>,
+    /// The model's own arrays (mesh copy and kernel data) per element.
+    model_bytes_per_element: f64,
+}
+
+pub fn run(cmd: &BenchCommand) -> anyhow::Result<Status> {
+    match cmd {
+        BenchCommand::Tled(args) => tled(args),
+    }
+}
+
+fn tled(args: &TledBenchArgs) -> anyhow::Result<Status> {
+    if args.n == 0 {
+        bail!("--n must be at least 1");
+    }
+    if args.threads == Some(0) {
+        bail!("--threads must be at least 1");
+    }
+    let kind = match args.element {
+        ElementArg::H8 => ElementKind::H8,
+        ElementArg::T4 => ElementKind::T4,
+    };
+    let elements = args.n.pow(3) * if kind == ElementKind::H8 { 1 } else { 6 };
+    let steps = args.steps.unwrap_or((2e7 as u64 / elements as u64).clamp(10, 5000));
+    if args.backend != BackendArg::Cpu {
+        match gpu_bench(args, kind, steps)? {
+            Some(status) => return Ok(status),
+            None => eprintln!("notice: no real GPU adapter found; `--backend auto` runs on the CPU"),
+        }
+    }
+    let report = match args.threads {
+        Some(threads) => rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .context("could not start the worker threads")?
+            .install(|| cpu_bench(args, kind, steps))?,
+        None => cpu_bench(args, kind, steps)?,
+    };
+    if args.json {
+        print_json(&report)?;
+    } else {
+        println!(
+            "TLED {} n={} ({} elements, {} nodes), {} threads, {}, dt {:.3e} s",
+            report.element, report.n, report.elements, report.nodes, report.threads, report.precision, report.dt_s
+        );
+        println!(
+            "  solver:   {} steps in {:.3} s: {:.4} us per element-step, {:.3e} element-steps/s",
+            report.steps, report.wall_s, report.us_per_element_step, report.element_steps_per_s
+        );
+        println!(
+            "  baseline: {} steps in {:.3} s: {:.4} us per element-step (single-threaded scalar f64)",
+            report.baseline_steps, report.baseline_wall_s, report.baseline_us_per_element_step
+        );
+        println!("  speed-up: {:.2} x", report.speedup);
+        if let (Some(rss), Some(per)) = (report.peak_rss_bytes, report.bytes_per_element) {
+            println!(
+                "  memory:   peak RSS {:.1} MiB, {:.0} bytes per element ({:.0} in the model)",
+                rss as f64 / 1048576.0,
+                per,
+                report.model_bytes_per_element
+            );
+        }
+    }
+    Ok(Status::Success)
+}
+
+/// Runs the GPU bench; None when `auto` found no real GPU.
+fn gpu_bench(args: &TledBenchArgs, kind: ElementKind, steps: u64) -> anyhow::Result<Option<Status>> {
+    let choice = if args.backend == BackendArg::Gpu { AdapterChoice::BestAvailable } else { AdapterChoice::RealGpuOnly };
+    let device = match GpuDevice::headless(choice) {
+        Ok(device) => device,
+        Err(GpuError::NoAdapter { .. }) if args.backend == BackendArg::Auto => return Ok(None),
+        Err(error) => return Err(error.into()),
+    };
+    let report = bench_tled(&device, kind, args.n, steps, args.peak_gbs)?;
+    if args.json {
+        print_json(&report)?;
+    } else {
+        println!(
+            "TLED {} n={} ({} elements, {} nodes) on {}: {} steps in {:.3} s: {:.4} us per element-step, {:.3e} element-steps/s, {:.1} GB/s",
+            kind.name(),
+            args.n,
+            report.elements,
+            report.nodes,
+            report.adapter,
+            report.steps,
+            report.wall_s,
+            report.us_per_element_step,
+            report.element_steps_per_s,
+            report.achieved_bandwidth_gbs
+        );
+    }
+    Ok(Some(Status::Success))
+}
+
+fn cpu_bench(args: &TledBenchArgs, kind: ElementKind, steps: u64) -> anyhow::Result<CpuBenchReport> {
+    let element = if kind == ElementKind::H8 { CubeElement::H8 } else { CubeElement::T4 };
+    let precision = match args.precision {
+        PrecisionArg::F64 => Precision::F64,
+        PrecisionArg::F32 => Precision::F32,
+    };
+    let setup = CubeSetup { precision, ..CubeSetup::miller(args.n, element, CubeVariant::FreeLateral) };
+    let mesh = setup.mesh();
+    let region = MaterialRegion {
+        element_set: None,
+        material: Material::neo_hookean(CUBE_SHEAR_MODULUS_PA, CUBE_BULK_MODULUS_PA),
+        density_kg_m3: CUBE_DENSITY_KG_M3,
+    };
+    let model = std::sync::Arc::new(TledModel::new(&mesh, &[region], &setup.options())?);
+    let dt = model.critical_time_step();
+    let model_bytes_per_element = model.memory_bytes() as f64 / model.element_count() as f64;
+    let bcs = setup.boundary_conditions(&mesh);
+    let (elements, nodes) = (model.element_count(), model.node_count());
+    eprintln!("timing the solver: {steps} steps of {elements} elements ...");
+    let mut solver = TledSolver::new(model, &bcs, dt, StepControl::Refuse)?;
+    // Warm-up: first touches of the state arrays and the thread pool.
+    solver.step()?;
+    let start = Instant::now();
+    for _ in 0..steps {
+        solver.step()?;
+    }
+    let wall_s = start.elapsed().as_secs_f64();
+    let peak_rss_bytes = peak_rss_bytes();
+    drop(solver);
+
+    eprintln!("timing the single-threaded baseline: {steps} steps ...");
+    let mut constraints = Vec::new();
+    for node in &mesh.node_sets["x0"] {
+        constraints.push(NodeConstraint { node: *node, displacement_m: [Some(0.0); 3] });
+    }
+    for imposed in &bcs.displacements {
+        for node in &imposed.nodes {
+            constraints.push(NodeConstraint { node: *node, displacement_m: imposed.components });
+        }
+    }
+    let params = BaselineParameters {
+        shear_modulus_pa: CUBE_SHEAR_MODULUS_PA,
+        bulk_modulus_pa: CUBE_BULK_MODULUS_PA,
+        density_kg_m3: CUBE_DENSITY_KG_M3,
+        hourglass_coefficient: HOURGLASS_COEFFICIENT,
+        damping_per_s: DAMPING_PER_S,
+        dt_s: dt,
+    };
+    let mut baseline = BaselineSolver::new(&mesh, params, constraints)?;
+    let shape = LoadShape::RampHold { ramp_s: RAMP_S };
+    baseline.step(shape.value(dt))?;
+    let start = Instant::now();
+    for step in 2..steps + 2 {
+        baseline.step(shape.value(step as f64 * dt))?;
+    }
+    let baseline_wall_s = start.elapsed().as_secs_f64();
+
+    let element_steps = (elements as u64 * steps) as f64;
+    let us_per_element_step = wall_s * 1e6 / element_steps;
+    let baseline_us_per_element_step = baseline_wall_s * 1e6 / element_steps;
+    Ok(CpuBenchReport {
+        elements,
+        nodes,
+        steps,
+        wall_s,
+        us_per_element_step,
+        element_steps_per_s: element_steps / wall_s,
+        threads: rayon::current_num_threads(),
+        backend: "cpu",
+        element: kind.name(),
+        n: args.n,
+        precision: match precision {
+            Precision::F64 => "f64",
+            Precision::F32 => "f32",
+        },
+        dt_s: dt,
+        baseline_steps: steps,
+        baseline_wall_s,
+        baseline_us_per_element_step,
+        speedup: baseline_us_per_element_step / us_per_element_step,
+        peak_rss_bytes,
+        bytes_per_element: peak_rss_bytes.map(|b| b as f64 / elements as f64),
+        model_bytes_per_element,
+    })
+}
+
+/// Peak resident set size of this process (VmHWM in /proc/self/status),
+/// None where the file is absent (not Linux).
+fn peak_rss_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
 }

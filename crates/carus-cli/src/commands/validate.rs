@@ -1,10 +1,338 @@
-//! `carus validate` (being built; replaced by its owner).
+//! `carus validate`: the verification cases of VALIDATION.md (TLED table).
+//!
+//! `carus validate cube` runs V3 exactly as "V3 in detail" specifies and
+//! prints its figures; `carus validate all` runs V1-V7 at full size and
+//! prints PASS/FAIL per case with the figures; `carus validate v1` etc. run
+//! one case. Exit status 1 if any case fails.
 
-use super::Status;
+use std::collections::BTreeMap;
+
+use anyhow::bail;
+use carus_fem::validation::cube::{self, CubeElement, CubeResult, CubeSetup, CubeVariant};
+use carus_fem::validation::{
+    backend_comparison, critical_step, free_vibration, patch, refinement, uniaxial, CaseSize,
+};
+use serde::Serialize;
+use serde_json::{json, Value};
+
+use super::{print_json, Status};
 
 #[derive(clap::Args)]
-pub struct ValidateArgs {}
+pub struct ValidateArgs {
+    /// `cube` (V3 as VALIDATION.md specifies), `all` (V1-V7), or one case.
+    #[arg(value_enum)]
+    pub case: CaseArg,
+    /// Cube: elements per edge (VALIDATION.md: 10 and 20).
+    #[arg(long)]
+    pub n: Option<usize>,
+    /// Cube: element formulation.
+    #[arg(long, value_enum)]
+    pub element: Option<ElementArg>,
+    /// Cube: lateral condition on the loaded face.
+    #[arg(long, value_enum)]
+    pub variant: Option<VariantArg>,
+    /// Print one JSON object on standard output and nothing else there.
+    #[arg(long)]
+    pub json: bool,
+}
 
-pub fn run(_args: &ValidateArgs) -> anyhow::Result<Status> {
-    anyhow::bail!("`carus validate` is not built yet")
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum CaseArg {
+    Cube,
+    All,
+    V1,
+    V2,
+    V3,
+    V4,
+    V5,
+    V6,
+    V7,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum ElementArg {
+    H8,
+    T4,
+    T4anp,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum VariantArg {
+    Clamped,
+    FreeLateral,
+}
+
+pub fn run(args: &ValidateArgs) -> anyhow::Result<Status> {
+    if args.case == CaseArg::Cube {
+        return run_cube(args);
+    }
+    if args.n.is_some() || args.element.is_some() || args.variant.is_some() {
+        bail!("--n, --element and --variant apply to `carus validate cube` only");
+    }
+    let ids: Vec<CaseArg> = match args.case {
+        CaseArg::All => vec![CaseArg::V1, CaseArg::V2, CaseArg::V3, CaseArg::V4, CaseArg::V5, CaseArg::V6, CaseArg::V7],
+        one => vec![one],
+    };
+    let mut outcomes = Vec::new();
+    for id in ids {
+        eprintln!("running {} ({}) ...", label(id), title(id));
+        let outcome = run_case(id);
+        if !args.json {
+            println!("{}", outcome.line());
+        }
+        outcomes.push(outcome);
+    }
+    let failed = outcomes.iter().filter(|o| o.status == CaseStatus::Fail).count();
+    let passed = outcomes.iter().filter(|o| o.status == CaseStatus::Pass).count();
+    let not_run = outcomes.len() - failed - passed;
+    if args.json {
+        let cases: BTreeMap<String, &CaseOutcome> = outcomes.iter().map(|o| (o.id.to_lowercase(), o)).collect();
+        print_json(&json!({
+            "cases": cases,
+            "passed": passed,
+            "failed": failed,
+            "not_run": not_run,
+            "status": if failed == 0 { "pass" } else { "fail" },
+        }))?;
+    } else {
+        println!("{passed} passed, {failed} failed, {not_run} not run");
+    }
+    Ok(if failed == 0 { Status::Success } else { Status::Failed })
+}
+
+/// `carus validate cube`: the named combinations, or all of them.
+fn run_cube(args: &ValidateArgs) -> anyhow::Result<Status> {
+    let sizes = args.n.map_or(vec![10, 20], |n| vec![n]);
+    let elements = args.element.map_or(CubeElement::ALL.to_vec(), |e| vec![element(e)]);
+    let variants = args.variant.map_or(CubeVariant::ALL.to_vec(), |v| vec![variant(v)]);
+    let mut results: Vec<(String, CubeResult)> = Vec::new();
+    for &n in &sizes {
+        for &element in &elements {
+            for &variant in &variants {
+                let key = format!("{}_{}_n{}", element.name(), variant.name(), n);
+                eprintln!("running cube {key} ...");
+                let run = cube::run_cube(&CubeSetup::miller(n, element, variant))?;
+                if !args.json {
+                    print_cube(&key, &run.result);
+                }
+                results.push((key, run.result));
+            }
+        }
+    }
+    if args.json {
+        if results.len() == 1 {
+            print_json(&results[0].1)?;
+        } else {
+            let keyed: BTreeMap<String, CubeResult> = results.into_iter().collect();
+            print_json(&keyed)?;
+        }
+    }
+    Ok(Status::Success)
+}
+
+fn print_cube(key: &str, r: &CubeResult) {
+    let mm = |u: [f64; 3]| format!("[{:.4}, {:.4}, {:.4}] mm", u[0] * 1e3, u[1] * 1e3, u[2] * 1e3);
+    println!("{key}: {} steps of {} s in {:.2} s", r.steps, r.dt_s, r.wall_s);
+    println!("  cube_centre          {}", mm(r.nodes.cube_centre));
+    println!("  lateral_face_centre  {}", mm(r.nodes.lateral_face_centre));
+    println!("  lateral_edge_mid     {}", mm(r.nodes.lateral_edge_mid));
+    println!("  loaded_face_corner   {}", mm(r.nodes.loaded_face_corner));
+    let f = r.reaction_fixed_face_n;
+    println!("  reaction_fixed_face  [{:.5}, {:.5}, {:.5}] N", f[0], f[1], f[2]);
+}
+
+fn element(e: ElementArg) -> CubeElement {
+    match e {
+        ElementArg::H8 => CubeElement::H8,
+        ElementArg::T4 => CubeElement::T4,
+        ElementArg::T4anp => CubeElement::T4anp,
+    }
+}
+
+fn variant(v: VariantArg) -> CubeVariant {
+    match v {
+        VariantArg::Clamped => CubeVariant::Clamped,
+        VariantArg::FreeLateral => CubeVariant::FreeLateral,
+    }
+}
+
+fn label(id: CaseArg) -> &'static str {
+    match id {
+        CaseArg::V1 => "V1",
+        CaseArg::V2 => "V2",
+        CaseArg::V3 | CaseArg::Cube => "V3",
+        CaseArg::V4 => "V4",
+        CaseArg::V5 => "V5",
+        CaseArg::V6 => "V6",
+        CaseArg::V7 | CaseArg::All => "V7",
+    }
+}
+
+fn title(id: CaseArg) -> &'static str {
+    match id {
+        CaseArg::V1 => "uniaxial stretch of a neo-Hookean block",
+        CaseArg::V2 => "patch test on a distorted mesh",
+        CaseArg::V3 | CaseArg::Cube => "Miller et al. 2007 cube",
+        CaseArg::V4 => "undamped free vibration, energy",
+        CaseArg::V5 => "CPU against GPU backend",
+        CaseArg::V6 => "time step above the critical one",
+        CaseArg::V7 | CaseArg::All => "mesh refinement of the cube",
+    }
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+enum CaseStatus {
+    Pass,
+    Fail,
+    NotRun,
+}
+
+/// One case's verdict, its headline figures and its whole report.
+#[derive(Serialize)]
+struct CaseOutcome {
+    id: &'static str,
+    title: &'static str,
+    status: CaseStatus,
+    summary: String,
+    report: Value,
+}
+
+impl CaseOutcome {
+    fn line(&self) -> String {
+        let verdict = match self.status {
+            CaseStatus::Pass => "PASS",
+            CaseStatus::Fail => "FAIL",
+            CaseStatus::NotRun => "not run",
+        };
+        format!("{} {:<8} {} -- {}", self.id, verdict, self.title, self.summary)
+    }
+}
+
+fn outcome<T: Serialize>(id: CaseArg, pass: bool, summary: String, report: &T) -> CaseOutcome {
+    CaseOutcome {
+        id: label(id),
+        title: title(id),
+        status: if pass { CaseStatus::Pass } else { CaseStatus::Fail },
+        summary,
+        report: serde_json::to_value(report).unwrap_or(Value::Null),
+    }
+}
+
+/// Runs one case at full size; an error while running is a failure.
+fn run_case(id: CaseArg) -> CaseOutcome {
+    let size = CaseSize::Full;
+    let result: Result<CaseOutcome, carus_fem::validation::ValidationError> = (|| {
+        Ok(match id {
+            CaseArg::V1 => {
+                let r = uniaxial::run(size)?;
+                let summary = format!(
+                    "{} stretches 1.05-1.3, H8/T4/T4ANP: largest reaction error {:.4} % (tolerance {} %)",
+                    r.points.len(),
+                    100.0 * r.max_relative_error,
+                    100.0 * uniaxial::TOLERANCE
+                );
+                outcome(id, r.pass, summary, &r)
+            }
+            CaseArg::V2 => {
+                let r = patch::run(size)?;
+                let figures: Vec<String> = r
+                    .results
+                    .iter()
+                    .map(|p| format!("{}/{:?} {:.1e}{}", p.element.name(), p.precision, p.relative_error, if p.pass { "" } else { " (FAIL)" }))
+                    .collect();
+                let summary = format!("interior error, {}^3 distorted mesh: {}", r.elements_per_edge, figures.join(", "));
+                outcome(id, r.pass, summary, &r)
+            }
+            CaseArg::V3 | CaseArg::Cube => {
+                let r = cube::run(size)?;
+                let worst_baseline = r
+                    .cases
+                    .iter()
+                    .filter_map(|c| c.baseline)
+                    .map(|b| b.max_node_difference_of_edge.max(b.reaction_difference))
+                    .fold(0.0, f64::max);
+                let worst_hourglass = r.cases.iter().filter_map(|c| c.hourglass_to_strain_energy).fold(0.0, f64::max);
+                let failing: Vec<String> =
+                    r.cases.iter().filter(|c| !c.pass).map(|c| format!("{}_{}_n{}", c.element.name(), c.variant.name(), c.n)).collect();
+                let summary = format!(
+                    "{} runs; baseline TLED agreement within {:.1e}; hourglass/strain energy up to {:.2} % (limit 1 %); hourglass off: {}{}",
+                    r.cases.len(),
+                    worst_baseline,
+                    100.0 * worst_hourglass,
+                    r.hourglass_off.outcome,
+                    if failing.is_empty() { String::new() } else { format!("; failing: {}", failing.join(", ")) }
+                );
+                outcome(id, r.pass, summary, &r)
+            }
+            CaseArg::V4 => {
+                let r = free_vibration::run(size)?;
+                let figures: Vec<String> = r
+                    .results
+                    .iter()
+                    .map(|v| match (&v.failure, v.drift) {
+                        (Some(f), _) => format!("{}: {f}", v.element.name()),
+                        (None, Some(d)) => format!("{} drift {:.3} %", v.element.name(), 100.0 * d),
+                        (None, None) => format!("{}: no energy", v.element.name()),
+                    })
+                    .collect();
+                let summary = format!("{} steps at 0.9 dt_crit, {}^3 cube: {} (limit 1 %)", free_vibration::STEPS, r.elements_per_edge, figures.join(", "));
+                outcome(id, r.pass, summary, &r)
+            }
+            CaseArg::V5 => {
+                let comparison = backend_comparison(size);
+                match comparison.verdict() {
+                    Some(pass) => outcome(id, pass, comparison.summary(), &comparison),
+                    None => CaseOutcome {
+                        id: label(id),
+                        title: title(id),
+                        status: CaseStatus::NotRun,
+                        summary: comparison.summary(),
+                        report: serde_json::to_value(&comparison).unwrap_or(Value::Null),
+                    },
+                }
+            }
+            CaseArg::V6 => {
+                let r = critical_step::run(size)?;
+                let figures: Vec<String> = r
+                    .results
+                    .iter()
+                    .map(|c| {
+                        format!(
+                            "{} dt_crit {:.3e} s, refused: {}, {} sub-steps, difference {:.1e} L",
+                            c.element.name(),
+                            c.critical_time_step_s,
+                            c.refusal_names_critical_step,
+                            c.substeps_per_step,
+                            c.substep_difference_of_edge
+                        )
+                    })
+                    .collect();
+                outcome(id, r.pass, figures.join("; "), &r)
+            }
+            CaseArg::V7 | CaseArg::All => {
+                let r = refinement::run(size)?;
+                let figures: Vec<String> = r
+                    .series
+                    .iter()
+                    .map(|s| {
+                        let levels: Vec<String> = s
+                            .levels
+                            .iter()
+                            .map(|l| format!("n={} u {:.2e} L, R {:.2} %", l.n, l.displacement_error_of_edge, 100.0 * l.reaction_error))
+                            .collect();
+                        format!("{} vs n={}: {}", s.variant.name(), s.finest_n, levels.join(", "))
+                    })
+                    .collect();
+                outcome(id, r.pass, figures.join("; "), &r)
+            }
+        })
+    })();
+    result.unwrap_or_else(|error| CaseOutcome {
+        id: label(id),
+        title: title(id),
+        status: CaseStatus::Fail,
+        summary: format!("error: {error}"),
+        report: json!({ "error": error.to_string() }),
+    })
 }
