@@ -30,16 +30,28 @@ pub struct SolveArgs {
 }
 
 pub fn run(args: &SolveArgs) -> anyhow::Result<Status> {
-    let show_progress = !args.quiet && std::io::stderr().is_terminal();
+    let show = !args.quiet && std::io::stderr().is_terminal();
     if !args.quiet {
         eprintln!("solving {} into {}", args.job.display(), args.out.display());
     }
+    let bar = show.then(|| {
+        let bar = indicatif::ProgressBar::new(1000);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{spinner} [{elapsed_precise}] {wide_bar} {msg}, about {eta} left",
+            )
+            .expect("valid template"),
+        );
+        bar
+    });
     let mut progress = |p: &Progress| {
-        if show_progress {
-            eprint!(
-                "\r  t = {:.4} / {:.4} s, {} steps, {} frames   ",
+        if let Some(bar) = &bar {
+            bar.set_length((p.end_time_s * 1e6) as u64);
+            bar.set_position((p.time_s * 1e6) as u64);
+            bar.set_message(format!(
+                "t = {:.4} / {:.4} s, {} steps, {} frames",
                 p.time_s, p.end_time_s, p.steps, p.frames
-            );
+            ));
         }
     };
     let report = run_job(
@@ -48,8 +60,8 @@ pub fn run(args: &SolveArgs) -> anyhow::Result<Status> {
         &RunOptions { force: args.force },
         &mut progress,
     );
-    if show_progress {
-        eprintln!();
+    if let Some(bar) = &bar {
+        bar.finish_and_clear();
     }
     let report = report?;
     if !args.quiet {
