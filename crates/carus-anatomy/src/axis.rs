@@ -53,15 +53,15 @@ pub struct AxisFrame {
 /// Why the axis cannot be built from the given planes.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum AxisError {
-    #[error("plane {index} has a non-finite centre or normal")]
+    #[error("pelvic axis: plane {index} has a non-finite centre or normal")]
     NonFinite { index: usize },
-    #[error("plane {index} has a zero normal")]
+    #[error("pelvic axis: plane {index} has a zero normal")]
     ZeroNormal { index: usize },
-    #[error("the centres of planes {index} and {next} coincide: the axis has no length there")]
+    #[error("pelvic axis: the centres of planes {index} and {next} coincide, so the axis has no length there")]
     CoincidentCentres { index: usize, next: usize },
-    #[error("plane {index}'s normal points cranially relative to the way from the previous centre: the planes are not ordered from inlet to outlet")]
+    #[error("pelvic axis: plane {index} (0 inlet, 1 greatest dimensions, 2 mid-pelvis, 3 outlet) faces against the way between its neighbouring centres: the planes do not follow each other from inlet to outlet; check the landmarks that define them")]
     Backwards { index: usize },
-    #[error("the axis runs along the mother's transverse direction at sigma = {sigma_m} m: no anterior axis can be defined")]
+    #[error("pelvic axis: it runs along the mother's transverse direction at sigma = {sigma_m} m, so no anterior axis can be defined")]
     TangentAlongTransverse { sigma_m: f64 },
 }
 

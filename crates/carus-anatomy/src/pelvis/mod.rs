@@ -36,9 +36,9 @@ pub enum PelvisError {
     NonFiniteLandmark { name: &'static str },
     #[error("the {plane} plane is degenerate: its antero-posterior line ({posterior} to {anterior}) is parallel to its transverse line or has no length; check those landmarks")]
     DegeneratePlane { plane: &'static str, posterior: &'static str, anterior: &'static str },
-    #[error("the pelvic axis cannot be built: {0}")]
+    #[error(transparent)]
     Axis(#[from] AxisError),
-    #[error("impossible pelvis diameters: {0}")]
+    #[error(transparent)]
     Diameters(#[from] DiameterError),
 }
 
