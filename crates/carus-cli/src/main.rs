@@ -31,6 +31,8 @@ enum Command {
     Measure(commands::measure::MeasureArgs),
     /// Write anatomy surfaces (STL) and volume meshes (VTU) for inspection.
     Mesh(commands::mesh::MeshArgs),
+    /// Draw anatomy from standard views into a PNG contact sheet.
+    Render(commands::render::RenderArgs),
 }
 
 fn main() -> ExitCode {
@@ -41,6 +43,7 @@ fn main() -> ExitCode {
         Command::Solve(args) => commands::solve::run(args),
         Command::Measure(args) => commands::measure::run(args),
         Command::Mesh(args) => commands::mesh::run(args),
+        Command::Render(args) => commands::render::run(args),
     };
     match result {
         Ok(Status::Success) => ExitCode::SUCCESS,

@@ -3,6 +3,7 @@
 pub mod bench;
 pub mod measure;
 pub mod mesh;
+pub mod render;
 pub mod solve;
 pub mod validate;
 
