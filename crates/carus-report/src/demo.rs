@@ -17,10 +17,15 @@ use glam::DVec3;
 use crate::error::ReportError;
 use crate::input::{FloorSurface, ReportInput, ReportScene, RunFigures};
 
-/// What the page says first about a synthetic report.
-pub const SYNTHETIC_NOTICE: &str = "Synthetic demonstration: the fetus follows an imposed \
-    textbook trajectory (carus-analysis synthetic::textbook), not the physics. The detector \
-    judged it like any run. No pelvic floor was simulated: the floor is drawn at rest.";
+/// What the page says first about a synthetic report made by `function`
+/// of carus-analysis's `synthetic` module.
+pub fn synthetic_notice(function: &str) -> String {
+    format!(
+        "Synthetic demonstration: the fetus follows an imposed trajectory \
+         (carus-analysis synthetic::{function}), not the physics. The detector judged it like \
+         any run. No pelvic floor was simulated: the floor is drawn at rest."
+    )
+}
 
 /// The anatomy, history and detector report of a demonstration.
 pub struct Demo {
@@ -29,20 +34,25 @@ pub struct Demo {
     pub floor: FloorSurface,
     pub history: PoseHistory,
     pub detector: DetectorReport,
+    /// The synthetic history's name in carus-analysis ("textbook").
+    pub source: &'static str,
 }
 
 impl Demo {
     /// The textbook normal labour through the default pelvis.
     pub fn textbook() -> Result<Self, ReportError> {
-        Self::build(|canal, head, trunk| textbook_plan(canal).history_with(canal, head, trunk))
+        Self::build("textbook", |canal, head, trunk| {
+            textbook_plan(canal).history_with(canal, head, trunk)
+        })
     }
 
     /// The straight push (no rotation, no trunk) through the default pelvis.
     pub fn straight_push() -> Result<Self, ReportError> {
-        Self::build(|canal, _, _| straight_push(canal))
+        Self::build("straight_push", |canal, _, _| straight_push(canal))
     }
 
     fn build(
+        source: &'static str,
         history: impl Fn(&BirthCanal, &HeadGeometry, &TrunkGeometry) -> PoseHistory,
     ) -> Result<Self, ReportError> {
         let fail = |e: &dyn std::fmt::Display| ReportError::Demo(e.to_string());
@@ -73,6 +83,7 @@ impl Demo {
             floor,
             history,
             detector,
+            source,
         })
     }
 
@@ -82,7 +93,7 @@ impl Demo {
         let simulated_s = series.time_s.last().copied().unwrap_or(0.0) - series.time_s[0];
         ReportInput {
             title: title.to_string(),
-            notice: Some(SYNTHETIC_NOTICE.to_string()),
+            notice: Some(synthetic_notice(self.source)),
             scenario_toml: None,
             run: RunFigures {
                 simulated_s,

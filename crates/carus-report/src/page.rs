@@ -121,14 +121,14 @@ pub fn page(input: &ReportInput, parts: &Parts) -> Result<String, ReportError> {
     if let Some(period) = d.contraction_period_s {
         let _ = write!(w, " &middot; contraction period {period:.1} s");
     }
-    let _ = write!(w, "</p></header>\n");
+    let _ = writeln!(w, "</p></header>");
 
     timeline(w, &rows, parts, time_range);
     pictures(w, parts);
     plots_section(w, input, &rows, parts, time_range)?;
     figures(w, input);
     reading_guide(w);
-    let _ = write!(w, "</main>\n</body>\n</html>\n");
+    let _ = writeln!(w, "</main>\n</body>\n</html>");
     Ok(html)
 }
 
@@ -193,7 +193,7 @@ fn timeline(w: &mut String, rows: &[Shown], parts: &Parts, range: (f64, f64)) {
             }
         }
     }
-    let _ = write!(w, "</div></section>\n");
+    let _ = writeln!(w, "</div></section>");
 }
 
 fn pictures(w: &mut String, parts: &Parts) {
@@ -247,7 +247,8 @@ fn pictures(w: &mut String, parts: &Parts) {
                         for p in views {
                             let _ = write!(
                                 w,
-                                "<img src=\"{}\" width=\"{}\" height=\"{}\" alt=\"{} at {:.1} s, {} view\" title=\"{} view\">",
+                                "<span class=\"view\"><img src=\"{}\" width=\"{}\" height=\"{}\" \
+                                 alt=\"{} at {:.1} s, {} view\"><small>{} view</small></span>",
                                 p.data_uri,
                                 PICTURE_SIZE.0,
                                 PICTURE_SIZE.1,
@@ -276,7 +277,7 @@ fn pictures(w: &mut String, parts: &Parts) {
             .collect();
         let _ = write!(w, "{}.</p>", missed.join("; "));
     }
-    let _ = write!(w, "</section>\n");
+    let _ = writeln!(w, "</section>");
 }
 
 fn plots_section(
@@ -389,7 +390,7 @@ fn plots_section(
         );
     }
     floor_plot(w, input, &bands, &marks, time_range)?;
-    let _ = write!(w, "</div></section>\n");
+    let _ = writeln!(w, "</div></section>");
     Ok(())
 }
 
@@ -489,12 +490,11 @@ fn figures(w: &mut String, input: &ReportInput) {
             escape(toml)
         );
     }
-    let _ = write!(w, "</section>\n");
+    let _ = writeln!(w, "</section>");
 }
 
 fn reading_guide(w: &mut String) {
-    let _ = write!(
-        w,
+    w.push_str(
         "<section id=\"guide\"><h2>How to read this report</h2><ul>\
          <li><b>Station</b>: the depth of the head's leading point along the curve of Carus, \
          in mm below the plane of the ischial spines (negative above).</li>\
@@ -504,7 +504,7 @@ fn reading_guide(w: &mut String) {
          <li>A movement counts as observed by the rules of CARDINAL_MOVEMENTS.md; its size is \
          the change of its own quantity (station, phi or theta) from start to end.</li>\
          <li>The outcome: delivered when head and trunk are past the outlet; arrested when \
-         the fetus stopped progressing over the last part of the run.</li></ul></section>\n"
+         the fetus stopped progressing over the last part of the run.</li></ul></section>\n",
     );
 }
 
@@ -533,7 +533,8 @@ h1{margin:0 0 8px;font-size:28px}h2{font-size:19px;margin:28px 0 10px;border-bot
 .when,.size{font-variant-numeric:tabular-nums;font-size:13px}
 .moments{display:grid;grid-template-columns:repeat(auto-fill,minmax(460px,1fr));gap:14px}
 .moment{margin:0;border:1px solid #e2e2e2;border-radius:8px;padding:8px}
-.moment img{width:calc(50% - 4px);height:auto;display:inline-block;margin-right:4px}
+.view{display:inline-block;width:calc(50% - 4px);margin-right:4px;text-align:center;color:#888}
+.view img{width:100%;height:auto;display:block}
 .moment figcaption{margin-bottom:6px}
 .plots{display:grid;grid-template-columns:repeat(auto-fill,minmax(540px,1fr));gap:12px}
 .plot{margin:0}.plot svg{width:100%;height:auto;display:block}

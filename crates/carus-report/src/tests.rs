@@ -3,7 +3,7 @@
 //! pictures inline, nothing fetched from elsewhere.
 
 use crate::demo::Demo;
-use crate::{write_report, write_report_with, ReportError};
+use crate::{write_report, write_report_with, FloorFrame, ReportError};
 
 fn movement_row(html: &str, key: &str) -> String {
     let start = html
@@ -58,7 +58,7 @@ fn the_textbook_report_shows_everything_on_one_page() {
     // Four key moments, two views each, as PNG data: URIs.
     assert_eq!(html.matches("class=\"moment\"").count(), 4);
     assert_eq!(html.matches("src=\"data:image/png;base64,").count(), 8);
-    assert!(html.contains("Synthetic demonstration"));
+    assert!(html.contains("imposed trajectory (carus-analysis synthetic::textbook), not the physics"));
     assert!(html.contains("No pelvic floor was simulated in this run."));
 }
 
@@ -137,4 +137,51 @@ fn floor_stretch_and_the_scenario_appear_when_given() {
         write_report_with(&input, None),
         Err(ReportError::NotFinite { .. })
     ));
+}
+
+#[test]
+fn a_recorded_floor_is_coloured_by_stretch_and_a_bad_frame_costs_only_its_pictures() {
+    let demo = Demo::textbook().unwrap();
+    let mut input = demo.input("floor frames");
+    let scene = input.scene.as_mut().unwrap();
+    let floor = scene.floor.as_mut().unwrap();
+    let rest = floor.rest_positions_m.clone();
+    // Stretch growing towards the back of the floor, recorded at two instants.
+    let stretch: Vec<f64> = rest.iter().map(|p| 1.0 + (0.05 - p.y).max(0.0)).collect();
+    let top = stretch.iter().copied().fold(1.0, f64::max);
+    floor.frames = vec![
+        FloorFrame {
+            time_s: 0.0,
+            positions_m: rest.clone(),
+            stretch: vec![1.0; rest.len()],
+        },
+        FloorFrame {
+            time_s: 60.0,
+            positions_m: rest.clone(),
+            stretch,
+        },
+    ];
+    let report = write_report(&input).unwrap();
+    assert!(report.warnings.is_empty(), "{:?}", report.warnings);
+    assert!(report.html.contains(&format!(
+        "<span class=\"ramp\"></span> 1.00 &ndash; {top:.2}"
+    )));
+    assert!(report.html.contains("floor as recorded at 60.0 s"));
+    assert_eq!(
+        report.html.matches("src=\"data:image/png;base64,").count(),
+        8
+    );
+
+    // A frame with too few stretch values: those pictures fail, the page does not.
+    let floor = input.scene.as_mut().unwrap().floor.as_mut().unwrap();
+    floor.frames[1].stretch.truncate(3);
+    let report = write_report(&input).unwrap();
+    assert!(!report.warnings.is_empty());
+    assert!(
+        report.warnings.iter().all(|w| w.contains("not drawn")),
+        "{:?}",
+        report.warnings
+    );
+    assert!(report.html.contains("Not drawn: "));
+    assert!(report.html.contains("Delivered"));
 }
