@@ -155,7 +155,7 @@ impl CubeSetup {
     }
 
     fn check(&self) -> Result<(), ValidationError> {
-        if self.n < 2 || self.n % 2 != 0 {
+        if self.n < 2 || self.n % 2 == 1 {
             return Err(ValidationError::InvalidSetting(format!(
                 "cube n = {} must be even and at least 2 so the cube centre and edge midpoints are nodes",
                 self.n

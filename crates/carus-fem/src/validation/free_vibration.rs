@@ -66,6 +66,9 @@ fn initial_shape(x: [f64; 3]) -> [f64; 3] {
     [0.001 * x[0], 0.001 * CUBE_EDGE_M * s * s, 0.0005 * CUBE_EDGE_M * s * s]
 }
 
+/// Displacements, stored energy and internal forces at the start of a step.
+type StepStart = (Vec<[f64; 3]>, f64, Vec<[f64; 3]>);
+
 /// Runs the free vibration of one element type at `step_fraction` of the
 /// critical step (V4: undamped at 0.9; a damped run shows the energy
 /// measure catches a loss).
@@ -111,7 +114,7 @@ pub fn vibrate(
     // The step from u_n to u_{n+1} also leaves F(u_n) in the solver.
     let mut u_n = solver.displacements();
     let mut stored_n = initial_energy_j;
-    let mut previous: Option<(Vec<[f64; 3]>, f64, Vec<[f64; 3]>)> = None;
+    let mut previous: Option<StepStart> = None;
     let mut energies = Vec::with_capacity(steps);
     let mut failure = None;
     for _ in 0..=steps {

@@ -131,6 +131,20 @@ impl BackendComparison {
             BackendComparison::NotRun { .. } => None,
         }
     }
+
+    /// One line with the headline figure or the reason.
+    pub fn summary(&self) -> String {
+        match self {
+            #[cfg(feature = "gpu")]
+            BackendComparison::Ran(report) => {
+                let worst = report.cases.iter().map(|c| c.max_difference_cpu_f64_m.max(c.max_difference_cpu_f32_m)).fold(0.0, f64::max);
+                format!("on {}: largest node difference {:.2e} m (tolerance {:.1e} m)", report.adapter, worst, report.tolerance_m)
+            }
+            #[cfg(feature = "gpu")]
+            BackendComparison::Failed { error } => format!("error: {error}"),
+            BackendComparison::NotRun { reason } => format!("not run: {reason}"),
+        }
+    }
 }
 
 /// Runs V5 where this build has a GPU backend and an adapter opens.
