@@ -267,7 +267,7 @@ mod tests {
         assert_eq!(a.history, b.history, "two runs of one scenario differ");
         assert_eq!(a.floor, b.floor);
         // It moved: the head descended under the expulsion force.
-        let series = &a.detector.series;
+        let series = &a.detector.as_ref().unwrap().series;
         assert!(series.station_mm.last().unwrap() - series.station_mm[0] > 10.0, "{:?}", series.station_mm);
         for file in [output::RUN_FILE, output::MOVEMENTS_FILE, output::HISTORY_CSV, output::HISTORY_JSON, output::CHECKPOINT_FILE] {
             assert!(dir.path().join(file).exists(), "{file} missing");
@@ -283,7 +283,7 @@ mod tests {
         let (_, b) = run_in(&fine, &RunOptions::default());
         // The TLED sub-step is chosen per rigid step: halving dt halves the sub-steps per step.
         assert_ne!(a.summary.floor_substeps_per_step, b.summary.floor_substeps_per_step);
-        let (sa, sb) = (&a.detector.series, &b.detector.series);
+        let (sa, sb) = (&a.detector.as_ref().unwrap().series, &b.detector.as_ref().unwrap().series);
         assert_eq!(sa.time_s.len(), sb.time_s.len());
         for k in 0..sa.time_s.len() {
             let (ds, dtheta, dphi) = (sa.station_mm[k] - sb.station_mm[k], sa.theta_deg[k] - sb.theta_deg[k], sa.phi_deg[k] - sb.phi_deg[k]);

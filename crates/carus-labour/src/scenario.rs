@@ -158,6 +158,14 @@ pub struct ContactSection {
     pub penalty_stiffness_pa_per_m: f64,
     /// Numerical Kelvin-Voigt time of the penalty, s (docs/CONTACT.md).
     pub damping_time_s: f64,
+    /// Penalty stiffness of the trunk on bone, Pa/m. The shoulders are soft
+    /// tissue over a mobile shoulder girdle (the clavicles fold forward and
+    /// the bisacromial diameter shortens as the shoulders are pressed
+    /// together), not bone on bone: a tenth of the bone's numerical
+    /// penalty, so a shoulder pressed with the full expulsive force sinks
+    /// about 3 mm (docs/LABOUR.md; an engineering value, no measured
+    /// shoulder compliance is cited yet).
+    pub trunk_penalty_stiffness_pa_per_m: f64,
     /// Spacing of the contact samples on the fetal surface, mm (numerical).
     pub sample_spacing_mm: f64,
 }
@@ -169,6 +177,7 @@ impl Default for ContactSection {
             friction: law.friction_coefficient,
             penalty_stiffness_pa_per_m: law.penalty_stiffness_pa_per_m,
             damping_time_s: law.damping_time_s,
+            trunk_penalty_stiffness_pa_per_m: 0.1 * law.penalty_stiffness_pa_per_m,
             sample_spacing_mm: 4.0,
         }
     }
@@ -252,7 +261,7 @@ impl Default for FetusSection {
         FetusSection {
             density_kg_per_m3: 1050.0,
             trunk_linear_drag_n_s_per_m: 3000.0,
-            trunk_angular_drag_nm_s_per_rad: 30.0,
+            trunk_angular_drag_nm_s_per_rad: 3.0,
             head_linear_drag_n_s_per_m: 1000.0,
             head_angular_drag_nm_s_per_rad: 0.5,
         }
@@ -312,7 +321,7 @@ pub struct NumericsSection {
 impl Default for NumericsSection {
     fn default() -> Self {
         NumericsSection {
-            rigid_dt_s: 5e-4,
+            rigid_dt_s: 1e-3,
             end_time_s: 60.0,
             stop_when_delivered: true,
             head_subdivisions: 4,
@@ -428,12 +437,13 @@ impl Scenario {
             problem: problem.into(),
             hint: hint.into(),
         };
-        let positive: [(&'static str, f64, &str); 18] = [
+        let positive: [(&'static str, f64, &str); 19] = [
             ("trunk.bisacromial_mm", self.trunk.bisacromial_mm, "a diameter in mm, e.g. 120.0"),
             ("trunk.bitrochanteric_mm", self.trunk.bitrochanteric_mm, "a diameter in mm, e.g. 95.0"),
             ("expulsion.period_s", self.expulsion.period_s, "seconds per contraction, e.g. 8.0"),
             ("contact.penalty_stiffness_pa_per_m", self.contact.penalty_stiffness_pa_per_m, "Pa/m, e.g. 9.4e8"),
             ("contact.sample_spacing_mm", self.contact.sample_spacing_mm, "mm between contact samples, e.g. 4.0"),
+            ("contact.trunk_penalty_stiffness_pa_per_m", self.contact.trunk_penalty_stiffness_pa_per_m, "Pa/m, e.g. 9.4e7"),
             ("fetus.density_kg_per_m3", self.fetus.density_kg_per_m3, "kg/m^3, e.g. 1050.0"),
             ("floor.shear_modulus_pa", self.floor.shear_modulus_pa, "Pa (not kPa), e.g. 20000.0"),
             ("floor.bulk_modulus_pa", self.floor.bulk_modulus_pa, "Pa, larger than the shear modulus"),

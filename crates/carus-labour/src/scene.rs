@@ -71,6 +71,8 @@ pub struct Scene {
     pub spine_in_trunk: DVec3,
     pub bodies: RigidBodyModel,
     pub law: ContactLaw,
+    /// The trunk's law on bone (softer: the shoulders are soft tissue).
+    pub trunk_law: ContactLaw,
     pub floor: Option<FloorScene>,
     /// Starting poses (head, then trunk), pelvis frame.
     pub start: Vec<RigidPose>,
@@ -124,6 +126,8 @@ impl Scene {
             ..ContactLaw::default()
         };
         law.validate()?;
+        let trunk_law = ContactLaw { penalty_stiffness_pa_per_m: s.contact.trunk_penalty_stiffness_pa_per_m, ..law };
+        trunk_law.validate()?;
 
         let floor = if s.floor.enabled { Some(build_floor(scenario, &pelvis)?) } else { None };
         let mut scene = Scene {
@@ -141,6 +145,7 @@ impl Scene {
             spine_in_trunk,
             bodies,
             law,
+            trunk_law,
             floor,
             start: Vec::new(),
         };

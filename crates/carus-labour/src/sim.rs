@@ -209,7 +209,8 @@ impl<'a> Simulation<'a> {
         for b in 0..n {
             let samples = if b == HEAD { &scene.head.samples } else { &scene.trunk.as_ref().expect("trunk").samples };
             let motion = self.motion(b);
-            let report = pelvis_contacts(&scene.pelvis_collider, &scene.law, samples, &motion, pivot, &mut self.state.bone_contacts[b])?;
+            let law = if b == HEAD { &scene.law } else { &scene.trunk_law };
+            let report = pelvis_contacts(&scene.pelvis_collider, law, samples, &motion, pivot, &mut self.state.bone_contacts[b])?;
             wrenches[b] += report.wrench();
             reports.push(report);
         }
