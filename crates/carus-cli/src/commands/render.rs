@@ -83,21 +83,27 @@ pub struct RenderArgs {
 
 pub fn run(args: &RenderArgs) -> anyhow::Result<Status> {
     let meshes = match args.part {
-        RenderPart::Pelvis => pelvis_meshes(&AnatomyFile::load(args.file.as_deref())?.pelvis()?, BONE_OPACITY_ALONE),
+        RenderPart::Pelvis => pelvis_meshes(
+            &AnatomyFile::load(args.file.as_deref())?.pelvis()?,
+            BONE_OPACITY_ALONE,
+        ),
         RenderPart::Head => {
             let file = AnatomyFile::load(args.file.as_deref())?;
-            let head = FetalHead::new(&file.head).context("the [head] diameters cannot be built")?;
+            let head =
+                FetalHead::new(&file.head).context("the [head] diameters cannot be built")?;
             head_meshes(&head, HEAD_OPACITY_ALONE)
         }
         RenderPart::Fetus => {
             let file = AnatomyFile::load(args.file.as_deref())?;
-            let fetus = Fetus::new(&file.head, &Default::default()).context("the fetus cannot be built")?;
+            let fetus =
+                Fetus::new(&file.head, &Default::default()).context("the fetus cannot be built")?;
             fetus_meshes(&fetus)
         }
         RenderPart::Floor => {
             let file = AnatomyFile::load(args.file.as_deref())?;
             let pelvis = file.pelvis()?;
-            let floor = pelvic_floor(&pelvis, &file.floor).context("the [floor] cannot be built for this pelvis")?;
+            let floor = pelvic_floor(&pelvis, &file.floor)
+                .context("the [floor] cannot be built for this pelvis")?;
             floor_meshes(&pelvis, &floor)
         }
         RenderPart::Scene => {
@@ -105,11 +111,13 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<Status> {
                 Some(path) => Scenario::from_file(path)?,
                 None => Scenario::builtin("normal")?,
             };
-            let scene = LabourScene::build(&scenario).with_context(|| format!("scenario `{}`", scenario.name))?;
+            let scene = LabourScene::build(&scenario)
+                .with_context(|| format!("scenario `{}`", scenario.name))?;
             scene_meshes(&scene)
         }
     };
-    let mut renderer = Renderer::new_headless().context("cannot draw without a graphics adapter")?;
+    let mut renderer =
+        Renderer::new_headless().context("cannot draw without a graphics adapter")?;
     let sheet = ContactSheet {
         views: args.views.iter().map(|&v| v.into()).collect(),
         tile_size: [args.size, args.size],
@@ -117,9 +125,12 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<Status> {
     };
     let picture = renderer.contact_sheet(&Scene::new(meshes), &sheet)?;
     if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("cannot create the folder {}", dir.display()))?;
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("cannot create the folder {}", dir.display()))?;
     }
-    picture.save_png(&args.out).with_context(|| format!("cannot write {}", args.out.display()))?;
+    picture
+        .save_png(&args.out)
+        .with_context(|| format!("cannot write {}", args.out.display()))?;
     if args.json {
         let views: Vec<&str> = sheet.views.iter().map(|v| v.name()).collect();
         print_json(&serde_json::json!({
@@ -129,7 +140,12 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<Status> {
             "views": views,
         }))?;
     } else {
-        println!("wrote {} ({} x {})", args.out.display(), picture.width(), picture.height());
+        println!(
+            "wrote {} ({} x {})",
+            args.out.display(),
+            picture.width(),
+            picture.height()
+        );
     }
     Ok(Status::Success)
 }
@@ -153,7 +169,12 @@ const AUXILIARY_LANDMARK_RGB: [f32; 3] = [0.15, 0.30, 0.75];
 const ATTACHED_RGB: [f32; 3] = [0.20, 0.20, 0.20];
 const AXIS_RGB: [f32; 3] = [0.10, 0.55, 0.25];
 /// Inlet, greatest dimensions, mid-pelvis, outlet.
-const PLANE_RGB: [[f32; 3]; 4] = [[0.20, 0.45, 0.90], [0.15, 0.70, 0.45], [0.95, 0.60, 0.10], [0.60, 0.25, 0.75]];
+const PLANE_RGB: [[f32; 3]; 4] = [
+    [0.20, 0.45, 0.90],
+    [0.15, 0.70, 0.45],
+    [0.95, 0.60, 0.10],
+    [0.60, 0.25, 0.75],
+];
 const PLANE_OPACITY: f32 = 0.3;
 /// Marker sizes, m: visible on a 384 px tile of the whole pelvis.
 const PELVIS_MARKER_M: f32 = 3.5e-3;
@@ -188,16 +209,35 @@ fn f32_point(p: DVec3) -> [f32; 3] {
 }
 
 /// A closed surface, each vertex mapped by `place` (metres, pelvis frame).
-fn surface_mesh(name: &str, surface: &TriSurface, place: impl Fn(DVec3) -> DVec3, rgb: [f32; 3]) -> RenderMesh {
-    let positions = surface.vertices.iter().map(|&v| f32_point(place(v))).collect();
-    RenderMesh::new(name, positions, surface.triangles.iter().flatten().copied().collect(), rgb)
+fn surface_mesh(
+    name: &str,
+    surface: &TriSurface,
+    place: impl Fn(DVec3) -> DVec3,
+    rgb: [f32; 3],
+) -> RenderMesh {
+    let positions = surface
+        .vertices
+        .iter()
+        .map(|&v| f32_point(place(v)))
+        .collect();
+    RenderMesh::new(
+        name,
+        positions,
+        surface.triangles.iter().flatten().copied().collect(),
+        rgb,
+    )
 }
 
 /// The pelvis: bone, landmarks, the four obstetric planes and the pelvic axis.
 fn pelvis_meshes(pelvis: &Pelvis, bone_opacity: f32) -> Vec<RenderMesh> {
-    let mut meshes = vec![surface_mesh("pelvis", &pelvis.surface, |v| v, BONE_RGB).with_opacity(bone_opacity)];
+    let mut meshes =
+        vec![surface_mesh("pelvis", &pelvis.surface, |v| v, BONE_RGB).with_opacity(bone_opacity)];
     for (name, p) in pelvis.landmarks.named() {
-        let rgb = if CONVENTIONS_LANDMARKS.contains(&name) { LANDMARK_RGB } else { AUXILIARY_LANDMARK_RGB };
+        let rgb = if CONVENTIONS_LANDMARKS.contains(&name) {
+            LANDMARK_RGB
+        } else {
+            AUXILIARY_LANDMARK_RGB
+        };
         meshes.push(RenderMesh::sphere(name, f32_point(p), PELVIS_MARKER_M, rgb));
     }
     for ((name, outline), rgb) in plane_outlines(pelvis).into_iter().zip(PLANE_RGB) {
@@ -211,8 +251,9 @@ fn pelvis_meshes(pelvis: &Pelvis, bone_opacity: f32) -> Vec<RenderMesh> {
 /// The curve of Carus from the inlet centre to the outlet centre.
 fn axis_tube(pelvis: &Pelvis) -> RenderMesh {
     let axis = &pelvis.axis;
-    let points: Vec<[f32; 3]> =
-        (0..=AXIS_SAMPLES).map(|k| f32_point(axis.point(axis.length() * k as f64 / AXIS_SAMPLES as f64))).collect();
+    let points: Vec<[f32; 3]> = (0..=AXIS_SAMPLES)
+        .map(|k| f32_point(axis.point(axis.length() * k as f64 / AXIS_SAMPLES as f64)))
+        .collect();
     RenderMesh::tube("pelvic axis", &points, AXIS_RADIUS_M, AXIS_RGB)
 }
 
@@ -225,10 +266,21 @@ fn plane_outlines(pelvis: &Pelvis) -> [(&'static str, Vec<DVec3>); 4] {
     let p = &pelvis.planes;
     let right = (l.iliopectineal_right - l.iliopectineal_left).normalize();
     // The greatest transverse is measured on the surface through the plane's centre.
-    let greatest_half = measure(pelvis).planes["greatest_dimensions"].transverse_mm.map_or(0.0, |t| 0.5e-3 * t);
+    let greatest_half = measure(pelvis).planes["greatest_dimensions"]
+        .transverse_mm
+        .map_or(0.0, |t| 0.5e-3 * t);
     let greatest_right = (right - right.dot(p.greatest.normal) * p.greatest.normal).normalize();
     [
-        ("inlet plane", egg(p.inlet.normal, l.sacral_promontory, l.symphysis_upper, l.iliopectineal_left, l.iliopectineal_right)),
+        (
+            "inlet plane",
+            egg(
+                p.inlet.normal,
+                l.sacral_promontory,
+                l.symphysis_upper,
+                l.iliopectineal_left,
+                l.iliopectineal_right,
+            ),
+        ),
         (
             "greatest dimensions plane",
             egg(
@@ -239,10 +291,25 @@ fn plane_outlines(pelvis: &Pelvis) -> [(&'static str, Vec<DVec3>); 4] {
                 p.greatest.centre + greatest_half * greatest_right,
             ),
         ),
-        ("mid-pelvis plane", egg(p.mid.normal, l.sacrum_s4_s5, l.symphysis_lower, l.ischial_spine_left, l.ischial_spine_right)),
+        (
+            "mid-pelvis plane",
+            egg(
+                p.mid.normal,
+                l.sacrum_s4_s5,
+                l.symphysis_lower,
+                l.ischial_spine_left,
+                l.ischial_spine_right,
+            ),
+        ),
         (
             "outlet plane",
-            egg(p.outlet.normal, l.coccyx_tip, l.symphysis_lower, l.ischial_tuberosity_left, l.ischial_tuberosity_right),
+            egg(
+                p.outlet.normal,
+                l.coccyx_tip,
+                l.symphysis_lower,
+                l.ischial_tuberosity_left,
+                l.ischial_tuberosity_right,
+            ),
         ),
     ]
 }
@@ -253,7 +320,11 @@ fn plane_outlines(pelvis: &Pelvis) -> [(&'static str, Vec<DVec3>); 4] {
 fn egg(normal: DVec3, posterior: DVec3, anterior: DVec3, left: DVec3, right: DVec3) -> Vec<DVec3> {
     let forward = (anterior - posterior).normalize();
     let across = normal.cross(forward).normalize();
-    let across = if across.dot(right - left) < 0.0 { -across } else { across };
+    let across = if across.dot(right - left) < 0.0 {
+        -across
+    } else {
+        across
+    };
     let u = |q: DVec3| (q - posterior).dot(forward);
     let w = |q: DVec3| (q - posterior).dot(across);
     let centre = 0.5 * (u(left) + u(right));
@@ -272,8 +343,13 @@ fn egg(normal: DVec3, posterior: DVec3, anterior: DVec3, left: DVec3, right: DVe
 /// The head and its landmarks, face towards the viewer of the anterior view.
 fn head_meshes(head: &FetalHead, opacity: f32) -> Vec<RenderMesh> {
     let place = |v: DVec3| HEAD_TO_PICTURE * v;
-    let mut meshes = vec![surface_mesh("fetal head", &head.surface, place, HEAD_RGB).with_opacity(opacity)];
-    meshes.extend(landmark_markers(head.landmarks.named(), place, HEAD_MARKER_M));
+    let mut meshes =
+        vec![surface_mesh("fetal head", &head.surface, place, HEAD_RGB).with_opacity(opacity)];
+    meshes.extend(landmark_markers(
+        head.landmarks.named(),
+        place,
+        HEAD_MARKER_M,
+    ));
     meshes
 }
 
@@ -282,7 +358,10 @@ fn landmark_markers<'a>(
     place: impl Fn(DVec3) -> DVec3,
     radius: f32,
 ) -> Vec<RenderMesh> {
-    named.into_iter().map(|(name, p)| RenderMesh::sphere(name, f32_point(place(p)), radius, LANDMARK_RGB)).collect()
+    named
+        .into_iter()
+        .map(|(name, p)| RenderMesh::sphere(name, f32_point(place(p)), radius, LANDMARK_RGB))
+        .collect()
 }
 
 /// Head, trunk and limbs with the neck straight, in the head's picture frame.
@@ -290,7 +369,12 @@ fn fetus_meshes(fetus: &Fetus) -> Vec<RenderMesh> {
     let to_head = fetus.trunk_to_head();
     let place_trunk = |v: DVec3| HEAD_TO_PICTURE * to_head.transform_point3(v);
     let mut meshes = head_meshes(&fetus.head, 1.0);
-    meshes.push(surface_mesh("fetal trunk", &fetus.trunk.surface, place_trunk, TRUNK_RGB));
+    meshes.push(surface_mesh(
+        "fetal trunk",
+        &fetus.trunk.surface,
+        place_trunk,
+        TRUNK_RGB,
+    ));
     for (name, chain) in fetus.limbs.named() {
         meshes.extend(capsules(name, chain, place_trunk));
     }
@@ -314,30 +398,63 @@ fn capsules(name: &str, chain: &CapsuleChain, place: impl Fn(DVec3) -> DVec3) ->
 fn floor_meshes(pelvis: &Pelvis, floor: &Mesh) -> Vec<RenderMesh> {
     let mut meshes = floor_parts(floor, |p| p);
     meshes.extend(
-        floor.node_sets.get(ATTACHED).into_iter().flatten().map(|&n| {
-            RenderMesh::sphere("attached node", f32_point(floor.nodes[n as usize].into()), ATTACHED_MARKER_M, ATTACHED_RGB)
-        }),
+        floor
+            .node_sets
+            .get(ATTACHED)
+            .into_iter()
+            .flatten()
+            .map(|&n| {
+                RenderMesh::sphere(
+                    "attached node",
+                    f32_point(floor.nodes[n as usize].into()),
+                    ATTACHED_MARKER_M,
+                    ATTACHED_RGB,
+                )
+            }),
     );
-    meshes.push(surface_mesh("pelvis", &pelvis.surface, |v| v, BONE_RGB).with_opacity(BONE_OPACITY_CONTEXT));
+    meshes.push(
+        surface_mesh("pelvis", &pelvis.surface, |v| v, BONE_RGB).with_opacity(BONE_OPACITY_CONTEXT),
+    );
     meshes
 }
 
 /// The outer faces of each element set of the floor (levator ani, perineal body).
 fn floor_parts(floor: &Mesh, place: impl Fn(DVec3) -> DVec3) -> Vec<RenderMesh> {
-    let positions: Vec<[f32; 3]> = floor.nodes.iter().map(|&p| f32_point(place(p.into()))).collect();
+    let positions: Vec<[f32; 3]> = floor
+        .nodes
+        .iter()
+        .map(|&p| f32_point(place(p.into())))
+        .collect();
     let mut meshes = Vec::new();
-    for (set, rgb) in [(LEVATOR_ANI, LEVATOR_RGB), (PERINEAL_BODY, PERINEAL_BODY_RGB)] {
-        let Some(elements) = floor.element_sets.get(set) else { continue };
+    for (set, rgb) in [
+        (LEVATOR_ANI, LEVATOR_RGB),
+        (PERINEAL_BODY, PERINEAL_BODY_RGB),
+    ] {
+        let Some(elements) = floor.element_sets.get(set) else {
+            continue;
+        };
         let triangles = boundary_triangles(floor, elements);
         if !triangles.is_empty() {
-            meshes.push(RenderMesh::new(set.replace('_', " "), positions.clone(), triangles, rgb));
+            meshes.push(RenderMesh::new(
+                set.replace('_', " "),
+                positions.clone(),
+                triangles,
+                rgb,
+            ));
         }
     }
     meshes
 }
 
 /// Element faces in VTK node order, wound counter-clockwise seen from outside.
-const H8_FACES: [[usize; 4]; 6] = [[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [3, 0, 4, 7]];
+const H8_FACES: [[usize; 4]; 6] = [
+    [0, 3, 2, 1],
+    [4, 5, 6, 7],
+    [0, 1, 5, 4],
+    [1, 2, 6, 5],
+    [2, 3, 7, 6],
+    [3, 0, 4, 7],
+];
 const T4_FACES: [[usize; 3]; 4] = [[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]];
 
 /// Triangles of the faces that only one of `elements` has: the outside of
@@ -347,8 +464,16 @@ fn boundary_triangles(mesh: &Mesh, elements: &[u32]) -> Vec<u32> {
     for &e in elements {
         let nodes = mesh.element(e as usize);
         match mesh.kind {
-            ElementKind::H8 => faces.extend(H8_FACES.iter().map(|f| f.iter().map(|&k| nodes[k]).collect())),
-            ElementKind::T4 => faces.extend(T4_FACES.iter().map(|f| f.iter().map(|&k| nodes[k]).collect())),
+            ElementKind::H8 => faces.extend(
+                H8_FACES
+                    .iter()
+                    .map(|f| f.iter().map(|&k| nodes[k]).collect()),
+            ),
+            ElementKind::T4 => faces.extend(
+                T4_FACES
+                    .iter()
+                    .map(|f| f.iter().map(|&k| nodes[k]).collect()),
+            ),
         }
     }
     let key = |f: &[u32]| {
@@ -374,15 +499,28 @@ fn boundary_triangles(mesh: &Mesh, elements: &[u32]) -> Vec<u32> {
 /// rest and the fetus (head and trunk) at its starting pose.
 fn scene_meshes(scene: &LabourScene) -> Vec<RenderMesh> {
     let head_pose = scene.start[HEAD];
-    let mut meshes = vec![surface_mesh("fetal head", &scene.head.surface, |v| head_pose.transform_point(v), HEAD_RGB)];
+    let mut meshes = vec![surface_mesh(
+        "fetal head",
+        &scene.head.surface,
+        |v| head_pose.transform_point(v),
+        HEAD_RGB,
+    )];
     if let (Some(trunk), Some(pose)) = (&scene.trunk, scene.start.get(TRUNK)) {
-        meshes.push(surface_mesh("fetal trunk", &trunk.surface, |v| pose.transform_point(v), TRUNK_RGB));
+        meshes.push(surface_mesh(
+            "fetal trunk",
+            &trunk.surface,
+            |v| pose.transform_point(v),
+            TRUNK_RGB,
+        ));
     }
     if let Some(floor) = &scene.floor {
         meshes.extend(floor_parts(&floor.mesh, |p| p));
     }
     meshes.push(axis_tube(&scene.pelvis));
-    meshes.push(surface_mesh("pelvis", &scene.pelvis.surface, |v| v, BONE_RGB).with_opacity(BONE_OPACITY_CONTEXT));
+    meshes.push(
+        surface_mesh("pelvis", &scene.pelvis.surface, |v| v, BONE_RGB)
+            .with_opacity(BONE_OPACITY_CONTEXT),
+    );
     meshes
 }
 
@@ -400,7 +538,11 @@ mod tests {
         let nodes: Vec<DVec3> = mesh.nodes.iter().map(|&p| p.into()).collect();
         let centre = DVec3::new(1.0, 0.5, 0.5);
         for t in triangles.chunks_exact(3) {
-            let [a, b, c] = [nodes[t[0] as usize], nodes[t[1] as usize], nodes[t[2] as usize]];
+            let [a, b, c] = [
+                nodes[t[0] as usize],
+                nodes[t[1] as usize],
+                nodes[t[2] as usize],
+            ];
             let outward = (b - a).cross(c - a).dot((a + b + c) / 3.0 - centre);
             assert!(outward > 0.0, "triangle {t:?} faces inwards");
         }
@@ -413,12 +555,24 @@ mod tests {
         let l = &pelvis.landmarks;
         let plane = pelvis.planes.inlet;
         for end in [l.sacral_promontory, l.symphysis_upper] {
-            let nearest = inlet.iter().map(|p| (*p - end).length()).fold(f64::INFINITY, f64::min);
-            assert!(nearest < 1e-9, "an outline point misses {end} by {nearest} m");
+            let nearest = inlet
+                .iter()
+                .map(|p| (*p - end).length())
+                .fold(f64::INFINITY, f64::min);
+            assert!(
+                nearest < 1e-9,
+                "an outline point misses {end} by {nearest} m"
+            );
         }
         for end in [l.iliopectineal_left, l.iliopectineal_right] {
-            let nearest = inlet.iter().map(|p| (*p - plane.project(end)).length()).fold(f64::INFINITY, f64::min);
-            assert!(nearest < 1e-3, "the outline passes {nearest} m from a transverse end");
+            let nearest = inlet
+                .iter()
+                .map(|p| (*p - plane.project(end)).length())
+                .fold(f64::INFINITY, f64::min);
+            assert!(
+                nearest < 1e-3,
+                "the outline passes {nearest} m from a transverse end"
+            );
         }
         assert!(inlet.iter().all(|p| plane.signed_distance(*p).abs() < 1e-9));
     }
@@ -434,9 +588,76 @@ mod tests {
         assert!((HEAD_TO_PICTURE.determinant() - 1.0).abs() < 1e-12);
     }
 
+    #[derive(clap::Parser)]
+    struct Command {
+        #[command(flatten)]
+        args: RenderArgs,
+    }
+
+    #[test]
+    fn the_command_line_takes_views_and_a_size() {
+        use clap::Parser;
+        let plain = Command::try_parse_from(["render", "head", "--out", "head.png"])
+            .unwrap()
+            .args;
+        assert_eq!(
+            plain.views,
+            [ViewName::Anterior, ViewName::Lateral, ViewName::Inferior]
+        );
+        assert_eq!(plain.size, 512);
+        let chosen = Command::try_parse_from([
+            "render",
+            "pelvis",
+            "p.toml",
+            "--out",
+            "p.png",
+            "--views",
+            "superior,oblique",
+            "--size",
+            "300",
+        ])
+        .unwrap()
+        .args;
+        assert_eq!(chosen.views, [ViewName::Superior, ViewName::Oblique]);
+        assert_eq!(
+            (chosen.size, chosen.file),
+            (300, Some(PathBuf::from("p.toml")))
+        );
+        assert!(
+            Command::try_parse_from(["render", "head", "--out", "h.png", "--size", "8"]).is_err()
+        );
+        assert!(Command::try_parse_from([
+            "render",
+            "head",
+            "--out",
+            "h.png",
+            "--views",
+            "posterior"
+        ])
+        .is_err());
+    }
+
+    #[test]
+    fn a_missing_file_is_named() {
+        let args = RenderArgs {
+            part: RenderPart::Pelvis,
+            file: Some(PathBuf::from("no/such/anatomy.toml")),
+            out: std::env::temp_dir().join("carus-render-never-written.png"),
+            views: vec![ViewName::Anterior],
+            size: 32,
+            json: false,
+        };
+        let Err(error) = run(&args) else {
+            panic!("a missing file was accepted")
+        };
+        let message = format!("{error:#}");
+        assert!(message.contains("no/such/anatomy.toml"), "{message}");
+    }
+
     #[test]
     fn render_head_writes_a_png_of_the_sheet_size() {
-        let out = std::env::temp_dir().join(format!("carus-render-head-{}.png", std::process::id()));
+        let out =
+            std::env::temp_dir().join(format!("carus-render-head-{}.png", std::process::id()));
         let args = RenderArgs {
             part: RenderPart::Head,
             file: None,
@@ -452,8 +673,14 @@ mod tests {
         // Three 64 px tiles, an 8 px gap around and between, a label strip above.
         let sheet = ContactSheet::default();
         assert_eq!(picture.width(), 3 * 64 + 4 * sheet.gap);
-        assert_eq!(picture.height(), 64 + carus_render::LABEL_STRIP + 2 * sheet.gap);
+        assert_eq!(
+            picture.height(),
+            64 + carus_render::LABEL_STRIP + 2 * sheet.gap
+        );
         // Something was drawn: not every pixel is the white background.
-        assert!(picture.pixels().chunks_exact(4).any(|p| p[..3] != [255, 255, 255]));
+        assert!(picture
+            .pixels()
+            .chunks_exact(4)
+            .any(|p| p[..3] != [255, 255, 255]));
     }
 }
