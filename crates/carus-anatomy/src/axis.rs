@@ -70,11 +70,11 @@ const TABLE_STEPS_PER_SEGMENT: usize = 64;
 
 /// Five-point Gauss-Legendre nodes and weights on [0, 1].
 const GAUSS_NODES: [f64; 5] = [
-    0.046_910_077_030_668_0,
+    0.046_910_077_030_668,
     0.230_765_344_947_158_5,
     0.5,
     0.769_234_655_052_841_5,
-    0.953_089_922_969_332_0,
+    0.953_089_922_969_332,
 ];
 const GAUSS_WEIGHTS: [f64; 5] = [
     0.118_463_442_528_094_5,

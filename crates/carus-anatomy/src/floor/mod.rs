@@ -137,7 +137,7 @@ impl FloorParameters {
                 return Err(FloorError::TooFewElements { key, value, min });
             }
         }
-        if self.elements_around % 2 != 0 {
+        if !self.elements_around.is_multiple_of(2) {
             return Err(FloorError::OddAround(self.elements_around));
         }
         Ok(())
