@@ -33,6 +33,10 @@ enum Command {
     Mesh(commands::mesh::MeshArgs),
     /// Draw anatomy from standard views into a PNG contact sheet.
     Render(commands::render::RenderArgs),
+    /// Simulate labour forward from physics and detect the cardinal movements.
+    Run(commands::run::RunArgs),
+    /// List the built-in scenarios, or print one as TOML.
+    Scenarios(commands::scenarios::ScenariosArgs),
 }
 
 fn main() -> ExitCode {
@@ -44,6 +48,8 @@ fn main() -> ExitCode {
         Command::Measure(args) => commands::measure::run(args),
         Command::Mesh(args) => commands::mesh::run(args),
         Command::Render(args) => commands::render::run(args),
+        Command::Run(args) => commands::run::run(args),
+        Command::Scenarios(args) => commands::scenarios::run(args),
     };
     match result {
         Ok(Status::Success) => ExitCode::SUCCESS,

@@ -4,6 +4,8 @@ pub mod bench;
 pub mod measure;
 pub mod mesh;
 pub mod render;
+pub mod run;
+pub mod scenarios;
 pub mod solve;
 pub mod validate;
 

@@ -1,0 +1,194 @@
+//! `carus run [NAME|FILE] [--out DIR] [--json] [--force] [--quiet] [--resume DIR]`:
+//! the forward simulation of labour (carus-labour). No argument runs the
+//! built-in normal scenario. Writes into an out dir it names on start and
+//! never overwrites an existing run unless `--force`. Ctrl-C stops cleanly
+//! with everything so far written; `--resume DIR` continues from the last checkpoint.
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+
+use anyhow::{bail, Context};
+use carus_analysis::{Movement, Unit};
+use carus_labour::{Observer, RunOptions, RunRecord, Scenario, BUILTINS};
+use serde_json::json;
+
+use super::{print_json, Status};
+
+#[derive(clap::Args)]
+pub struct RunArgs {
+    /// A built-in scenario name (`carus scenarios`) or a scenario file (TOML). Default: normal.
+    pub scenario: Option<String>,
+    /// Output folder; default runs/<scenario>-<n>, the first free n.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Print one JSON object on standard output and nothing else there.
+    #[arg(long)]
+    pub json: bool,
+    /// Replace an existing run in the output folder.
+    #[arg(long)]
+    pub force: bool,
+    /// No progress or notes on standard error.
+    #[arg(long)]
+    pub quiet: bool,
+    /// Continue the run in DIR from its last checkpoint.
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["scenario", "out", "force"])]
+    pub resume: Option<PathBuf>,
+}
+
+/// A progress bar with simulated time and the estimated time left.
+struct Bar(Option<indicatif::ProgressBar>);
+
+impl Observer for Bar {
+    fn progress(&mut self, simulated_s: f64, end_s: f64) {
+        if let Some(bar) = &self.0 {
+            bar.set_length((end_s * 1000.0) as u64);
+            bar.set_position((simulated_s * 1000.0) as u64);
+            bar.set_message(format!("t = {simulated_s:.2} / {end_s:.0} s simulated"));
+        }
+    }
+}
+
+pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
+    let stop = Arc::new(AtomicBool::new(false));
+    {
+        let stop = stop.clone();
+        // A second Ctrl-C is left to the default handler only if this fails to install.
+        let _ = ctrlc::set_handler(move || stop.store(true, Ordering::Relaxed));
+    }
+    let options = RunOptions { stop: Some(stop.clone()), stop_at_s: None };
+    let show = !args.quiet && std::io::stderr().is_terminal();
+    let bar = show.then(|| {
+        let bar = indicatif::ProgressBar::new(1000);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {msg}, about {eta} left")
+                .expect("valid template"),
+        );
+        bar
+    });
+    let mut observer = Bar(bar);
+
+    let (out_dir, record) = match &args.resume {
+        Some(dir) => {
+            if !args.quiet {
+                eprintln!("resuming the run in {}", dir.display());
+            }
+            (dir.clone(), carus_labour::resume(dir, &options, &mut observer))
+        }
+        None => {
+            let scenario = load(args.scenario.as_deref())?;
+            let out_dir = prepare_out_dir(args.out.as_deref(), &scenario.name, args.force)?;
+            if !args.quiet {
+                eprintln!("running scenario `{}` into {}", scenario.name, out_dir.display());
+            }
+            let record = carus_labour::run(&scenario, &out_dir, &options, &mut observer);
+            (out_dir, record)
+        }
+    };
+    if let Some(bar) = &observer.0 {
+        bar.finish_and_clear();
+    }
+    let record = record?;
+    if !record.summary.completed && !args.quiet {
+        eprintln!("stopped at t = {:.2} s; continue with: carus run --resume {}", record.summary.simulated_s, out_dir.display());
+    }
+    if args.json {
+        print_json(&json_summary(&record, &out_dir))?;
+    } else {
+        print_summary(&record, &out_dir);
+    }
+    Ok(Status::Success)
+}
+
+fn load(name: Option<&str>) -> anyhow::Result<Scenario> {
+    let name = name.unwrap_or("normal");
+    if BUILTINS.iter().any(|(n, _)| *n == name) {
+        return Ok(Scenario::builtin(name)?);
+    }
+    let path = Path::new(name);
+    if !path.exists() {
+        let names: Vec<&str> = BUILTINS.iter().map(|(n, _)| *n).collect();
+        bail!("`{name}` is neither a built-in scenario ({}) nor a file", names.join(", "));
+    }
+    Ok(Scenario::from_file(path)?)
+}
+
+/// The out dir: as given, or runs/<name>-<n> with the first free n. An
+/// existing run is never overwritten without `--force`.
+fn prepare_out_dir(out: Option<&Path>, name: &str, force: bool) -> anyhow::Result<PathBuf> {
+    let dir = match out {
+        Some(d) => d.to_path_buf(),
+        None => (1..)
+            .map(|n| PathBuf::from("runs").join(format!("{name}-{n}")))
+            .find(|d| !d.exists())
+            .expect("a free name"),
+    };
+    if dir.exists() && std::fs::read_dir(&dir).with_context(|| format!("{}", dir.display()))?.next().is_some() {
+        if !force {
+            bail!("{} already holds files; choose another --out, or add --force to replace them", dir.display());
+        }
+        std::fs::remove_dir_all(&dir).with_context(|| format!("cannot clear {}", dir.display()))?;
+    }
+    std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    Ok(dir)
+}
+
+fn json_summary(record: &RunRecord, out_dir: &Path) -> serde_json::Value {
+    let movements: serde_json::Map<String, serde_json::Value> = movements(record)
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), serde_json::to_value(v).expect("plain data")))
+        .collect();
+    json!({
+        "outcome": record.summary.outcome,
+        "movements": movements,
+        "simulated_s": record.summary.simulated_s,
+        "wall_s": record.summary.wall_s,
+        "out_dir": out_dir.display().to_string(),
+        "completed": record.summary.completed,
+        "posterior_rotation": record.detector.as_ref().map(|d| d.posterior_rotation),
+        "scenario": record.summary.scenario,
+    })
+}
+
+/// The seven movements under their canonical keys; all unobserved when the
+/// run stopped before there was anything to detect.
+fn movements(record: &RunRecord) -> Vec<(&'static str, Movement)> {
+    match &record.detector {
+        Some(d) => d.movements.by_key().iter().map(|(k, m)| (*k, **m)).collect(),
+        None => [
+            ("engagement", Unit::Mm),
+            ("descent", Unit::Mm),
+            ("flexion", Unit::Deg),
+            ("internal_rotation", Unit::Deg),
+            ("extension", Unit::Deg),
+            ("external_rotation", Unit::Deg),
+            ("expulsion", Unit::Mm),
+        ]
+        .into_iter()
+        .map(|(k, unit)| (k, Movement { observed: false, start_s: None, end_s: None, size: None, unit }))
+        .collect(),
+    }
+}
+
+fn print_summary(record: &RunRecord, out_dir: &Path) {
+    let s = &record.summary;
+    let outcome = if s.outcome.delivered {
+        "delivered".to_string()
+    } else {
+        match &s.outcome.arrest {
+            Some(a) => format!("arrested at the {:?} stage, station {:+.0} mm, against {}", a.stage, a.station_mm, a.against),
+            None => "neither delivered nor arrested (the run ended too soon to tell)".to_string(),
+        }
+    };
+    println!("scenario {}: {outcome}", s.scenario);
+    println!("simulated {:.1} s in {:.1} s wall time ({} rigid steps)", s.simulated_s, s.wall_s, s.rigid_steps);
+    for (key, m) in movements(record) {
+        let unit = serde_json::to_value(m.unit).ok().and_then(|v| v.as_str().map(str::to_string)).unwrap_or_default();
+        match (m.observed, m.start_s, m.end_s, m.size) {
+            (true, Some(a), Some(b), Some(size)) => println!("  {key:18} observed  {a:6.1}-{b:6.1} s  {size:6.1} {unit}"),
+            _ => println!("  {key:18} not observed"),
+        }
+    }
+    println!("results in {} (run.json, movements.json, pose_history.csv, *.pvd)", out_dir.display());
+}
