@@ -89,21 +89,26 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<Status> {
         ),
         RenderPart::Head => {
             let file = AnatomyFile::load(args.file.as_deref())?;
-            let head =
-                FetalHead::new(&file.head).context("the [head] diameters cannot be built")?;
+            let head = FetalHead::new(&file.head).with_context(|| {
+                format!("{}: the [head] diameters cannot be built", file.describe())
+            })?;
             head_meshes(&head, HEAD_OPACITY_ALONE)
         }
         RenderPart::Fetus => {
             let file = AnatomyFile::load(args.file.as_deref())?;
-            let fetus =
-                Fetus::new(&file.head, &Default::default()).context("the fetus cannot be built")?;
+            let fetus = Fetus::new(&file.head, &Default::default())
+                .with_context(|| format!("{}: the fetus cannot be built", file.describe()))?;
             fetus_meshes(&fetus)
         }
         RenderPart::Floor => {
             let file = AnatomyFile::load(args.file.as_deref())?;
             let pelvis = file.pelvis()?;
-            let floor = pelvic_floor(&pelvis, &file.floor)
-                .context("the [floor] cannot be built for this pelvis")?;
+            let floor = pelvic_floor(&pelvis, &file.floor).with_context(|| {
+                format!(
+                    "{}: the [floor] cannot be built for this pelvis",
+                    file.describe()
+                )
+            })?;
             floor_meshes(&pelvis, &floor)
         }
         RenderPart::Scene => {
