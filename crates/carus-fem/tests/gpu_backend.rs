@@ -6,32 +6,61 @@
 use std::sync::Arc;
 
 use carus_fem::generate::{box_h8, box_t4};
-use carus_fem::gpu::{open_solver, AdapterChoice, Backend, BackendSolver, GpuDevice, GpuError, GpuOptions, GpuSolver};
+use carus_fem::gpu::{
+    open_solver, AdapterChoice, Backend, BackendSolver, GpuDevice, GpuError, GpuOptions, GpuSolver,
+};
 use carus_fem::validation::v5;
 use carus_fem::validation::CaseSize;
 use carus_fem::{
-    BoundaryConditions, FemError, FixedDofs, ImposedDisplacement, LoadShape, Material, MaterialRegion, Mesh, ModelOptions, MooneyRivlin, NodalForce,
-    Precision, StepControl, SurfacePressure, TetFormulation, TledModel, TledSolver,
+    BoundaryConditions, FemError, FixedDofs, ImposedDisplacement, LoadShape, Material,
+    MaterialRegion, Mesh, ModelOptions, MooneyRivlin, NodalForce, Precision, StepControl,
+    SurfacePressure, TetFormulation, TledModel, TledSolver,
 };
 
 const EDGE_M: f64 = 0.1;
 
 fn device() -> GpuDevice {
-    GpuDevice::headless(AdapterChoice::BestAvailable).unwrap_or_else(|e| panic!("the GPU tests need a Vulkan adapter (CI installs lavapipe): {e}"))
+    GpuDevice::headless(AdapterChoice::BestAvailable).unwrap_or_else(|e| {
+        panic!("the GPU tests need a Vulkan adapter (CI installs lavapipe): {e}")
+    })
 }
 
 fn model(mesh: &Mesh, tet_formulation: TetFormulation, precision: Precision) -> Arc<TledModel> {
-    model_of(mesh, Material::neo_hookean(1006.711409, 50_000.0), tet_formulation, precision)
+    model_of(
+        mesh,
+        Material::neo_hookean(1006.711409, 50_000.0),
+        tet_formulation,
+        precision,
+    )
 }
 
-fn model_of(mesh: &Mesh, material: Material, tet_formulation: TetFormulation, precision: Precision) -> Arc<TledModel> {
-    let region = MaterialRegion { element_set: None, material, density_kg_m3: 1000.0 };
-    let options = ModelOptions { tet_formulation, hourglass_coefficient: 0.075, damping_per_s: 5.0, precision };
+fn model_of(
+    mesh: &Mesh,
+    material: Material,
+    tet_formulation: TetFormulation,
+    precision: Precision,
+) -> Arc<TledModel> {
+    let region = MaterialRegion {
+        element_set: None,
+        material,
+        density_kg_m3: 1000.0,
+    };
+    let options = ModelOptions {
+        tet_formulation,
+        hourglass_coefficient: 0.075,
+        damping_per_s: 5.0,
+        precision,
+    };
     Arc::new(TledModel::new(mesh, &[region], &options).unwrap())
 }
 
 fn max_distance(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
-    a.iter().zip(b).map(|(p, q)| ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()).fold(0.0, f64::max)
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| {
+            ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
+        })
+        .fold(0.0, f64::max)
 }
 
 fn largest(a: &[[f64; 3]]) -> f64 {
@@ -50,7 +79,11 @@ fn v5_small_cubes_agree_with_the_cpu_backend() {
         assert!(c.max_displacement_m > 0.01, "{c:?}");
         assert!(c.passed, "{c:?}");
         for i in 0..3 {
-            assert!((c.reaction_gpu_n[i] - c.reaction_cpu_n[i]).abs() < 1e-3 * c.reaction_cpu_n[0].abs(), "{c:?}");
+            assert!(
+                (c.reaction_gpu_n[i] - c.reaction_cpu_n[i]).abs()
+                    < 1e-3 * c.reaction_cpu_n[0].abs(),
+                "{c:?}"
+            );
         }
     }
     assert!(report.passed);
@@ -61,14 +94,25 @@ fn v5_small_cubes_agree_with_the_cpu_backend() {
 /// Mooney-Rivlin T4ANP).
 fn all_loads(mesh: &Mesh) -> BoundaryConditions {
     BoundaryConditions {
-        fixed: vec![FixedDofs { nodes: mesh.node_sets["x0"].clone(), components: [true; 3] }],
+        fixed: vec![FixedDofs {
+            nodes: mesh.node_sets["x0"].clone(),
+            components: [true; 3],
+        }],
         displacements: vec![ImposedDisplacement {
             nodes: mesh.node_sets["x1"].clone(),
             components: [Some(0.01), None, Some(-0.005)],
             shape: LoadShape::Smooth345 { duration_s: 0.3 },
         }],
-        forces: vec![NodalForce { nodes: mesh.node_sets["y1"].clone(), force_n: [0.0, 0.02, 0.01], shape: LoadShape::Ramp { duration_s: 0.2 } }],
-        pressures: vec![SurfacePressure { triangles: mesh.surfaces["z1"].clone(), pressure_pa: 150.0, shape: LoadShape::RampHold { ramp_s: 0.25 } }],
+        forces: vec![NodalForce {
+            nodes: mesh.node_sets["y1"].clone(),
+            force_n: [0.0, 0.02, 0.01],
+            shape: LoadShape::Ramp { duration_s: 0.2 },
+        }],
+        pressures: vec![SurfacePressure {
+            triangles: mesh.surfaces["z1"].clone(),
+            pressure_pa: 150.0,
+            shape: LoadShape::RampHold { ramp_s: 0.25 },
+        }],
         gravity_m_s2: Some([0.0, 0.0, -9.81]),
     }
 }
@@ -76,10 +120,22 @@ fn all_loads(mesh: &Mesh) -> BoundaryConditions {
 #[test]
 fn every_load_kind_agrees_with_the_cpu_backend() {
     let gpu = device();
-    let mooney_rivlin = Material::MooneyRivlin(MooneyRivlin { c10_pa: 300.0, c01_pa: 200.0, bulk_modulus_pa: 50_000.0 });
+    let mooney_rivlin = Material::MooneyRivlin(MooneyRivlin {
+        c10_pa: 300.0,
+        c01_pa: 200.0,
+        bulk_modulus_pa: 50_000.0,
+    });
     for (mesh, material, tet) in [
-        (box_h8([EDGE_M; 3], [3, 3, 3]), Material::neo_hookean(1006.711409, 50_000.0), TetFormulation::T4),
-        (box_t4([EDGE_M; 3], [2, 2, 2]), mooney_rivlin, TetFormulation::T4Anp),
+        (
+            box_h8([EDGE_M; 3], [3, 3, 3]),
+            Material::neo_hookean(1006.711409, 50_000.0),
+            TetFormulation::T4,
+        ),
+        (
+            box_t4([EDGE_M; 3], [2, 2, 2]),
+            mooney_rivlin,
+            TetFormulation::T4Anp,
+        ),
     ] {
         let m = model_of(&mesh, material, tet, Precision::F64);
         let bcs = all_loads(&mesh);
@@ -89,18 +145,33 @@ fn every_load_kind_agrees_with_the_cpu_backend() {
         for _ in 0..steps {
             cpu.step().unwrap();
         }
-        let mut g = GpuSolver::new(&gpu, m, &bcs, dt, StepControl::Refuse, GpuOptions::default()).unwrap();
+        let mut g = GpuSolver::new(
+            &gpu,
+            m,
+            &bcs,
+            dt,
+            StepControl::Refuse,
+            GpuOptions::default(),
+        )
+        .unwrap();
         g.advance_steps(steps).unwrap();
         assert_eq!((g.steps(), g.time_s()), (cpu.steps(), cpu.time_s()));
         let (a, b) = (cpu.displacements(), g.displacements().unwrap());
         let d = max_distance(&a, &b);
-        eprintln!("{:?} {tet:?} all loads, {steps} steps: max |u| {:.3e} m, GPU-CPU {d:.3e} m", mesh.kind, largest(&a));
+        eprintln!(
+            "{:?} {tet:?} all loads, {steps} steps: max |u| {:.3e} m, GPU-CPU {d:.3e} m",
+            mesh.kind,
+            largest(&a)
+        );
         assert!(largest(&a) > 0.005);
         assert!(d < 1e-4 * EDGE_M, "{d}");
         // Output fields come from the CPU fields code on the downloaded state.
         let (fa, fb) = (cpu.element_fields(), g.element_fields().unwrap());
         for (x, y) in fa.von_mises_pa.iter().zip(&fb.von_mises_pa) {
-            assert!((x - y).abs() < 1e-3 * fa.von_mises_pa.iter().fold(0.0f64, |m, v| m.max(*v)), "{x} vs {y}");
+            assert!(
+                (x - y).abs() < 1e-3 * fa.von_mises_pa.iter().fold(0.0f64, |m, v| m.max(*v)),
+                "{x} vs {y}"
+            );
         }
     }
 }
@@ -113,10 +184,26 @@ fn coupling_hooks_agree_with_the_cpu_backend() {
     let mut bcs = BoundaryConditions::default();
     bcs.fix_nodes(&mesh.node_sets["x0"]);
     let dt = 0.5 * m.critical_time_step();
-    let mut cpu = BackendSolver::Cpu(Box::new(TledSolver::new(Arc::clone(&m), &bcs, dt, StepControl::Refuse).unwrap()));
-    let mut g = BackendSolver::Gpu(Box::new(GpuSolver::new(&gpu, m, &bcs, dt, StepControl::Refuse, GpuOptions::default()).unwrap()));
+    let mut cpu = BackendSolver::Cpu(Box::new(
+        TledSolver::new(Arc::clone(&m), &bcs, dt, StepControl::Refuse).unwrap(),
+    ));
+    let mut g = BackendSolver::Gpu(Box::new(
+        GpuSolver::new(
+            &gpu,
+            m,
+            &bcs,
+            dt,
+            StepControl::Refuse,
+            GpuOptions::default(),
+        )
+        .unwrap(),
+    ));
     // A "fetal head" pressing on part of the far face, deeper each coupling step.
-    let pushed: Vec<u32> = mesh.node_sets["x1"].iter().copied().filter(|&n| mesh.nodes[n as usize][1] < 0.05).collect();
+    let pushed: Vec<u32> = mesh.node_sets["x1"]
+        .iter()
+        .copied()
+        .filter(|&n| mesh.nodes[n as usize][1] < 0.05)
+        .collect();
     for coupling_step in 1..=15 {
         let depth = -0.001 * coupling_step as f64;
         let imposed = vec![[depth, 0.0, 0.0]; pushed.len()];
@@ -129,12 +216,19 @@ fn coupling_hooks_agree_with_the_cpu_backend() {
         let scale = largest(&fa);
         assert!(scale > 0.0);
         for (x, y) in fa.iter().flatten().zip(fb.iter().flatten()) {
-            assert!((x - y).abs() < 1e-3 * scale, "coupling step {coupling_step}: {x} vs {y}");
+            assert!(
+                (x - y).abs() < 1e-3 * scale,
+                "coupling step {coupling_step}: {x} vs {y}"
+            );
         }
     }
     let (ua, ub) = (cpu.displacements().unwrap(), g.displacements().unwrap());
     for &n in &pushed {
-        assert!((ub[n as usize][0] + 0.015).abs() < 1e-7, "held node {n} at {:?}", ub[n as usize]);
+        assert!(
+            (ub[n as usize][0] + 0.015).abs() < 1e-7,
+            "held node {n} at {:?}",
+            ub[n as usize]
+        );
     }
     assert!(max_distance(&ua, &ub) < 1e-4 * EDGE_M);
     // Released nodes move freely again (spring back towards the rest shape).
@@ -154,7 +248,18 @@ fn snapshots_resume_bit_for_bit() {
     let m = model(&mesh, TetFormulation::T4, Precision::F32);
     let bcs = all_loads(&mesh);
     let dt = 0.5 * m.critical_time_step();
-    let mut g = GpuSolver::new(&gpu, m, &bcs, dt, StepControl::Refuse, GpuOptions { max_steps_per_submission: 7, ..GpuOptions::default() }).unwrap();
+    let mut g = GpuSolver::new(
+        &gpu,
+        m,
+        &bcs,
+        dt,
+        StepControl::Refuse,
+        GpuOptions {
+            max_steps_per_submission: 7,
+            ..GpuOptions::default()
+        },
+    )
+    .unwrap();
     g.advance_steps(30).unwrap();
     let snap = g.snapshot().unwrap();
     g.advance_steps(40).unwrap();
@@ -173,19 +278,44 @@ fn an_inverting_element_is_named_and_the_last_good_state_kept() {
     let mut bcs = BoundaryConditions::default();
     bcs.fix_nodes(&mesh.node_sets["x0"]);
     // The far corner node yanked back through the cube.
-    bcs.forces.push(NodalForce { nodes: vec![mesh.node_count() as u32 - 1], force_n: [-400.0, -400.0, -400.0], shape: LoadShape::Step });
+    bcs.forces.push(NodalForce {
+        nodes: vec![mesh.node_count() as u32 - 1],
+        force_n: [-400.0, -400.0, -400.0],
+        shape: LoadShape::Step,
+    });
     let dt = 0.5 * m.critical_time_step();
     let mut cpu = TledSolver::new(Arc::clone(&m), &bcs, dt, StepControl::Refuse).unwrap();
-    let cpu_error = (0..100_000).find_map(|_| cpu.step().err()).expect("the CPU run inverts an element");
-    let mut g = GpuSolver::new(&gpu, m, &bcs, dt, StepControl::Refuse, GpuOptions::default()).unwrap();
+    let cpu_error = (0..100_000)
+        .find_map(|_| cpu.step().err())
+        .expect("the CPU run inverts an element");
+    let mut g = GpuSolver::new(
+        &gpu,
+        m,
+        &bcs,
+        dt,
+        StepControl::Refuse,
+        GpuOptions::default(),
+    )
+    .unwrap();
     let gpu_error = g.advance_steps(100_000).unwrap_err();
     eprintln!("CPU: {cpu_error}\nGPU: {gpu_error}");
     let element = match (&cpu_error, &gpu_error) {
-        (FemError::ElementInvertedDuringRun { element: a, .. }, GpuError::Solver(FemError::ElementInvertedDuringRun { element: b, time_s, jacobian })) => {
+        (
+            FemError::ElementInvertedDuringRun { element: a, .. },
+            GpuError::Solver(FemError::ElementInvertedDuringRun {
+                element: b,
+                time_s,
+                jacobian,
+            }),
+        ) => {
             assert_eq!(a, b);
             assert!(*jacobian <= 0.0);
             // f32 and f64 may cross J = 0 a sub-step apart.
-            assert!((time_s - cpu.time_s()).abs() <= 1.5 * dt, "{time_s} vs {}", cpu.time_s());
+            assert!(
+                (time_s - cpu.time_s()).abs() <= 1.5 * dt,
+                "{time_s} vs {}",
+                cpu.time_s()
+            );
             *b
         }
         other => panic!("expected both to name an inverted element, got {other:?}"),
@@ -193,27 +323,51 @@ fn an_inverting_element_is_named_and_the_last_good_state_kept() {
     // The kept state is the one the failing sub-step started from (as on
     // the CPU): finite, with the named element inverted in it.
     assert!((g.time_s() - cpu.time_s()).abs() <= 1.5 * dt);
-    assert!(g.displacements().unwrap().iter().flatten().all(|v| v.is_finite()));
+    assert!(g
+        .displacements()
+        .unwrap()
+        .iter()
+        .flatten()
+        .all(|v| v.is_finite()));
     assert!(g.element_fields().unwrap().jacobian[element] <= 0.0);
 }
 
 #[test]
 fn a_buffer_over_the_device_limit_is_refused_before_allocating() {
-    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+    let instance =
+        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
     let adapter = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()))
         .into_iter()
         .next()
         .expect("the GPU tests need a Vulkan adapter (CI installs lavapipe)");
-    let limits = wgpu::Limits { max_storage_buffer_binding_size: 64 * 1024, ..adapter.limits() };
-    let (device, queue) =
-        pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor { required_limits: limits, ..Default::default() })).unwrap();
+    let limits = wgpu::Limits {
+        max_storage_buffer_binding_size: 64 * 1024,
+        ..adapter.limits()
+    };
+    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        required_limits: limits,
+        ..Default::default()
+    }))
+    .unwrap();
     let gpu = GpuDevice::from_device(device, queue, adapter.get_info());
     let mesh = box_h8([EDGE_M; 3], [12, 12, 12]);
     let m = model(&mesh, TetFormulation::T4, Precision::F64);
-    let err = GpuSolver::new(&gpu, m, &BoundaryConditions::default(), 1e-5, StepControl::Refuse, GpuOptions::default()).err().unwrap();
+    let err = GpuSolver::new(
+        &gpu,
+        m,
+        &BoundaryConditions::default(),
+        1e-5,
+        StepControl::Refuse,
+        GpuOptions::default(),
+    )
+    .err()
+    .unwrap();
     let text = err.to_string();
     assert!(matches!(err, GpuError::BufferTooLarge { .. }), "{text}");
-    assert!(text.contains("max_storage_buffer_binding_size") && text.contains("1728 elements"), "{text}");
+    assert!(
+        text.contains("max_storage_buffer_binding_size") && text.contains("1728 elements"),
+        "{text}"
+    );
 }
 
 #[test]
@@ -221,29 +375,74 @@ fn auto_uses_a_real_gpu_or_falls_back_to_the_cpu_with_a_notice() {
     let mesh = box_h8([EDGE_M; 3], [2, 2, 2]);
     let m = model(&mesh, TetFormulation::T4, Precision::F64);
     let real_gpu = GpuDevice::headless(AdapterChoice::RealGpuOnly).is_ok();
-    let opened = open_solver(Backend::Auto, Arc::clone(&m), &BoundaryConditions::default(), 1e-5, StepControl::Refuse, GpuOptions::default()).unwrap();
+    let opened = open_solver(
+        Backend::Auto,
+        Arc::clone(&m),
+        &BoundaryConditions::default(),
+        1e-5,
+        StepControl::Refuse,
+        GpuOptions::default(),
+    )
+    .unwrap();
     if real_gpu {
-        assert_eq!((opened.solver.backend(), opened.notice), (Backend::Gpu, None));
+        assert_eq!(
+            (opened.solver.backend(), opened.notice),
+            (Backend::Gpu, None)
+        );
     } else {
         assert_eq!(opened.solver.backend(), Backend::Cpu);
         let notice = opened.notice.expect("a fallback notice");
-        assert!(notice.contains("running on the CPU") && notice.contains("mesa-vulkan-drivers"), "{notice}");
+        assert!(
+            notice.contains("running on the CPU") && notice.contains("mesa-vulkan-drivers"),
+            "{notice}"
+        );
     }
     // `gpu` takes lavapipe where there is no real GPU.
-    let opened = open_solver(Backend::Gpu, m, &BoundaryConditions::default(), 1e-5, StepControl::Refuse, GpuOptions::default()).unwrap();
+    let opened = open_solver(
+        Backend::Gpu,
+        m,
+        &BoundaryConditions::default(),
+        1e-5,
+        StepControl::Refuse,
+        GpuOptions::default(),
+    )
+    .unwrap();
     assert_eq!(opened.solver.backend(), Backend::Gpu);
     assert!(opened.solver.adapter_name().is_some());
 }
 
 #[test]
 fn the_bench_reports_the_cpu_bench_figures_and_bandwidth() {
-    let r = carus_fem::gpu::bench_tled(&device(), carus_fem::ElementKind::H8, 4, 20, Some(100.0)).unwrap();
-    assert_eq!((r.elements, r.nodes, r.steps, r.threads, r.backend.as_str()), (64, 125, 20, 64, "gpu"));
-    assert!(r.wall_s > 0.0 && (r.us_per_element_step * r.element_steps_per_s - 1e6).abs() < 1e-6 * 1e6);
-    assert!((r.achieved_bandwidth_gbs - r.bytes_per_element_step * r.element_steps_per_s / 1e9).abs() < 1e-9 * r.achieved_bandwidth_gbs);
-    assert_eq!((r.peak_bandwidth_gbs, r.peak_source.as_deref()), (Some(100.0), Some("--peak-gbs")));
+    let r = carus_fem::gpu::bench_tled(&device(), carus_fem::ElementKind::H8, 4, 20, Some(100.0))
+        .unwrap();
+    assert_eq!(
+        (r.elements, r.nodes, r.steps, r.threads, r.backend.as_str()),
+        (64, 125, 20, 64, "gpu")
+    );
+    assert!(
+        r.wall_s > 0.0 && (r.us_per_element_step * r.element_steps_per_s - 1e6).abs() < 1e-6 * 1e6
+    );
+    assert!(
+        (r.achieved_bandwidth_gbs - r.bytes_per_element_step * r.element_steps_per_s / 1e9).abs()
+            < 1e-9 * r.achieved_bandwidth_gbs
+    );
+    assert_eq!(
+        (r.peak_bandwidth_gbs, r.peak_source.as_deref()),
+        (Some(100.0), Some("--peak-gbs"))
+    );
     let json = serde_json::to_value(&r).unwrap();
-    for key in ["elements", "nodes", "steps", "wall_s", "us_per_element_step", "element_steps_per_s", "threads", "backend", "achieved_bandwidth_gbs", "adapter"] {
+    for key in [
+        "elements",
+        "nodes",
+        "steps",
+        "wall_s",
+        "us_per_element_step",
+        "element_steps_per_s",
+        "threads",
+        "backend",
+        "achieved_bandwidth_gbs",
+        "adapter",
+    ] {
         assert!(json.get(key).is_some(), "{key}");
     }
 }

@@ -82,21 +82,39 @@ pub fn open_solver(
     options: GpuOptions,
 ) -> Result<OpenedSolver, GpuError> {
     let cpu = |model, notice| -> Result<OpenedSolver, GpuError> {
-        Ok(OpenedSolver { solver: BackendSolver::Cpu(Box::new(TledSolver::new(model, bcs, dt_s, control)?)), notice })
+        Ok(OpenedSolver {
+            solver: BackendSolver::Cpu(Box::new(TledSolver::new(model, bcs, dt_s, control)?)),
+            notice,
+        })
     };
     match backend {
         Backend::Cpu => cpu(model, None),
         Backend::Gpu => {
             let gpu = GpuDevice::headless(AdapterChoice::BestAvailable)?;
-            Ok(OpenedSolver { solver: BackendSolver::Gpu(Box::new(GpuSolver::new(&gpu, model, bcs, dt_s, control, options)?)), notice: None })
+            Ok(OpenedSolver {
+                solver: BackendSolver::Gpu(Box::new(GpuSolver::new(
+                    &gpu, model, bcs, dt_s, control, options,
+                )?)),
+                notice: None,
+            })
         }
         Backend::Auto => match GpuDevice::headless(AdapterChoice::RealGpuOnly) {
-            Ok(gpu) => match GpuSolver::new(&gpu, Arc::clone(&model), bcs, dt_s, control, options) {
-                Ok(s) => Ok(OpenedSolver { solver: BackendSolver::Gpu(Box::new(s)), notice: None }),
-                // Model errors are the caller's to fix on either backend.
-                Err(GpuError::Solver(e)) => Err(e.into()),
-                Err(e) => cpu(model, Some(format!("the GPU backend could not run this model ({e}); running on the CPU"))),
-            },
+            Ok(gpu) => {
+                match GpuSolver::new(&gpu, Arc::clone(&model), bcs, dt_s, control, options) {
+                    Ok(s) => Ok(OpenedSolver {
+                        solver: BackendSolver::Gpu(Box::new(s)),
+                        notice: None,
+                    }),
+                    // Model errors are the caller's to fix on either backend.
+                    Err(GpuError::Solver(e)) => Err(e.into()),
+                    Err(e) => cpu(
+                        model,
+                        Some(format!(
+                            "the GPU backend could not run this model ({e}); running on the CPU"
+                        )),
+                    ),
+                }
+            }
             Err(e) => cpu(model, Some(format!("{e}; running on the CPU"))),
         },
     }
@@ -166,7 +184,11 @@ impl BackendSolver {
         }
     }
 
-    pub fn impose_displacements(&mut self, nodes: &[u32], displacements_m: &[[f64; 3]]) -> Result<(), GpuError> {
+    pub fn impose_displacements(
+        &mut self,
+        nodes: &[u32],
+        displacements_m: &[[f64; 3]],
+    ) -> Result<(), GpuError> {
         match self {
             BackendSolver::Cpu(s) => Ok(s.impose_displacements(nodes, displacements_m)?),
             BackendSolver::Gpu(g) => g.impose_displacements(nodes, displacements_m),
@@ -239,6 +261,9 @@ mod tests {
         for b in [Backend::Cpu, Backend::Gpu, Backend::Auto] {
             assert_eq!(b.name().parse::<Backend>(), Ok(b));
         }
-        assert!("cuda".parse::<Backend>().unwrap_err().contains("cpu, gpu or auto"));
+        assert!("cuda"
+            .parse::<Backend>()
+            .unwrap_err()
+            .contains("cpu, gpu or auto"));
     }
 }

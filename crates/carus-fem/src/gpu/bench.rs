@@ -60,16 +60,32 @@ fn cube(element: ElementKind, n: usize) -> Result<(Arc<TledModel>, BoundaryCondi
     };
     let setup = CubeSetup::miller(n, element, CubeVariant::FreeLateral);
     let mesh = setup.mesh();
-    Ok((tissue_model(&mesh, &setup.options())?, setup.boundary_conditions(&mesh)))
+    Ok((
+        tissue_model(&mesh, &setup.options())?,
+        setup.boundary_conditions(&mesh),
+    ))
 }
 
 /// Times `steps` steps of the n-cube on `gpu`, after a short warm-up;
 /// the model upload is not timed, the wait for the GPU to finish is.
-pub fn bench_tled(gpu: &GpuDevice, element: ElementKind, n: usize, steps: u64, peak_gbs: Option<f64>) -> Result<GpuBenchReport, GpuError> {
+pub fn bench_tled(
+    gpu: &GpuDevice,
+    element: ElementKind,
+    n: usize,
+    steps: u64,
+    peak_gbs: Option<f64>,
+) -> Result<GpuBenchReport, GpuError> {
     let (model, bcs) = cube(element, n)?;
     let dt = model.critical_time_step();
     let (elements, nodes) = (model.element_count(), model.node_count());
-    let mut solver = GpuSolver::new(gpu, model, &bcs, dt, StepControl::Refuse, GpuOptions::default())?;
+    let mut solver = GpuSolver::new(
+        gpu,
+        model,
+        &bcs,
+        dt,
+        StepControl::Refuse,
+        GpuOptions::default(),
+    )?;
     solver.advance_steps(WARM_UP_STEPS)?;
     let start = Instant::now();
     solver.advance_steps(steps)?;

@@ -22,7 +22,12 @@ pub struct Planned {
 
 /// Refuses any buffer over the device's per-binding or per-buffer limit
 /// (lavapipe: 128 MiB per storage binding), before allocating.
-pub fn check_limits(gpu: &GpuDevice, planned: &[Planned], elements: usize, nodes: usize) -> Result<(), GpuError> {
+pub fn check_limits(
+    gpu: &GpuDevice,
+    planned: &[Planned],
+    elements: usize,
+    nodes: usize,
+) -> Result<(), GpuError> {
     let limits = gpu.device().limits();
     let adapter = gpu.adapter_info().name.clone();
     if limits.max_storage_buffers_per_shader_stage < super::kernels::STORAGE_BUFFERS_PER_KERNEL {
@@ -34,11 +39,23 @@ pub fn check_limits(gpu: &GpuDevice, planned: &[Planned], elements: usize, nodes
         });
     }
     for p in planned {
-        for (limit_name, limit) in
-            [("largest storage binding (max_storage_buffer_binding_size)", limits.max_storage_buffer_binding_size), ("largest buffer (max_buffer_size)", limits.max_buffer_size)]
-        {
+        for (limit_name, limit) in [
+            (
+                "largest storage binding (max_storage_buffer_binding_size)",
+                limits.max_storage_buffer_binding_size,
+            ),
+            ("largest buffer (max_buffer_size)", limits.max_buffer_size),
+        ] {
             if p.bytes > limit {
-                return Err(GpuError::BufferTooLarge { buffer: p.name, bytes: p.bytes, limit_name, limit, adapter: adapter.clone(), elements, nodes });
+                return Err(GpuError::BufferTooLarge {
+                    buffer: p.name,
+                    bytes: p.bytes,
+                    limit_name,
+                    limit,
+                    adapter: adapter.clone(),
+                    elements,
+                    nodes,
+                });
             }
         }
     }
@@ -94,9 +111,19 @@ fn arrays<T: Real>(k: &KernelData<T>, model: &TledModel) -> ModelArrays {
         hourglass_vectors: to_f32(&eb.hourglass),
         quarter_volume: to_f32(&eb.quarter_volume),
         node_table,
-        node_mass: nt.mass.iter().zip(&nt.inv_mass).flat_map(|(m, im)| [m.to_f64() as f32, im.to_f64() as f32]).collect(),
+        node_mass: nt
+            .mass
+            .iter()
+            .zip(&nt.inv_mass)
+            .flat_map(|(m, im)| [m.to_f64() as f32, im.to_f64() as f32])
+            .collect(),
         inv_nodal_volume: to_f32(&nt.inv_nodal_volume),
-        reference: model.mesh().nodes.iter().flat_map(|p| p.map(|c| c as f32)).collect(),
+        reference: model
+            .mesh()
+            .nodes
+            .iter()
+            .flat_map(|p| p.map(|c| c as f32))
+            .collect(),
         force_copy_len: eb.force_copy_len(),
     }
 }
@@ -112,7 +139,10 @@ impl ModelArrays {
 
     /// Every buffer the model needs, with its size.
     pub fn planned(&self) -> Vec<Planned> {
-        let b = |name, words: usize| Planned { name, bytes: 4 * words.max(1) as u64 };
+        let b = |name, words: usize| Planned {
+            name,
+            bytes: 4 * words.max(1) as u64,
+        };
         vec![
             b("element connectivity", self.connectivity.len()),
             b("shape derivative", self.shape_derivatives.len()),
@@ -129,14 +159,23 @@ impl ModelArrays {
 }
 
 /// A storage buffer holding `data` (at least one word: empty bindings are invalid).
-pub fn storage<T: bytemuck::Pod + Default>(gpu: &GpuDevice, label: &str, data: &[T], extra: wgpu::BufferUsages) -> wgpu::Buffer {
+pub fn storage<T: bytemuck::Pod + Default>(
+    gpu: &GpuDevice,
+    label: &str,
+    data: &[T],
+    extra: wgpu::BufferUsages,
+) -> wgpu::Buffer {
     let one = [T::default()];
     let contents: &[T] = if data.is_empty() { &one } else { data };
-    gpu.device().create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some(label),
-        contents: bytemuck::cast_slice(contents),
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST | extra,
-    })
+    gpu.device()
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: bytemuck::cast_slice(contents),
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST
+                | extra,
+        })
 }
 
 /// The constant model buffers.
@@ -166,7 +205,12 @@ impl ModelBuffers {
             node_table: storage(gpu, "node-to-slot table", &a.node_table, none),
             node_mass: storage(gpu, "nodal masses", &a.node_mass, none),
             inv_nodal_volume: storage(gpu, "nodal volumes", &a.inv_nodal_volume, none),
-            reference: storage(gpu, "reference coordinates", &a.reference, wgpu::BufferUsages::VERTEX),
+            reference: storage(
+                gpu,
+                "reference coordinates",
+                &a.reference,
+                wgpu::BufferUsages::VERTEX,
+            ),
         })
     }
 }

@@ -39,7 +39,10 @@ pub struct GpuDevice {
 
 impl std::fmt::Debug for GpuDevice {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("GpuDevice").field("adapter", &self.adapter.name).field("backend", &self.adapter.backend).finish()
+        f.debug_struct("GpuDevice")
+            .field("adapter", &self.adapter.name)
+            .field("backend", &self.adapter.backend)
+            .finish()
     }
 }
 
@@ -74,22 +77,38 @@ impl GpuDevice {
     }
 
     /// [`Self::headless`] on the given backends only.
-    pub fn headless_on(backends: wgpu::Backends, choice: AdapterChoice) -> Result<GpuDevice, GpuError> {
+    pub fn headless_on(
+        backends: wgpu::Backends,
+        choice: AdapterChoice,
+    ) -> Result<GpuDevice, GpuError> {
         let mut descriptor = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
         descriptor.backends = backends;
         let instance = wgpu::Instance::new(descriptor);
-        let adapters = if backends.is_empty() { Vec::new() } else { pollster::block_on(instance.enumerate_adapters(backends)) };
-        let found: Vec<String> = adapters.iter().map(|a| format!("`{}` ({:?})", a.get_info().name, a.get_info().device_type)).collect();
+        let adapters = if backends.is_empty() {
+            Vec::new()
+        } else {
+            pollster::block_on(instance.enumerate_adapters(backends))
+        };
+        let found: Vec<String> = adapters
+            .iter()
+            .map(|a| format!("`{}` ({:?})", a.get_info().name, a.get_info().device_type))
+            .collect();
         let adapter = adapters
             .into_iter()
-            .filter(|a| choice == AdapterChoice::BestAvailable || a.get_info().device_type != wgpu::DeviceType::Cpu)
+            .filter(|a| {
+                choice == AdapterChoice::BestAvailable
+                    || a.get_info().device_type != wgpu::DeviceType::Cpu
+            })
             .min_by_key(|a| preference(a.get_info().device_type))
             .ok_or_else(|| GpuError::NoAdapter {
                 backends: backend_names(backends),
                 found: if found.is_empty() {
                     "no adapter".into()
                 } else {
-                    format!("only software adapters ({}) where a real GPU was asked for", found.join(", "))
+                    format!(
+                        "only software adapters ({}) where a real GPU was asked for",
+                        found.join(", ")
+                    )
                 },
             })?;
         let info = adapter.get_info();
@@ -100,20 +119,37 @@ impl GpuDevice {
             required_limits: adapter.limits(),
             ..Default::default()
         }))
-        .map_err(|e| GpuError::DeviceRequest { adapter: info.name.clone(), reason: e.to_string() })?;
+        .map_err(|e| GpuError::DeviceRequest {
+            adapter: info.name.clone(),
+            reason: e.to_string(),
+        })?;
         let gpu = Self::from_device(device, queue, info);
         let sink = Arc::clone(&gpu.faults);
-        gpu.device.on_uncaptured_error(Arc::new(move |error: wgpu::Error| record(&sink, Fault::Error(error.to_string()))));
+        gpu.device
+            .on_uncaptured_error(Arc::new(move |error: wgpu::Error| {
+                record(&sink, Fault::Error(error.to_string()))
+            }));
         let sink = Arc::clone(&gpu.faults);
-        gpu.device.set_device_lost_callback(move |reason, message| record(&sink, Fault::Lost(format!("{reason:?}: {message}"))));
+        gpu.device.set_device_lost_callback(move |reason, message| {
+            record(&sink, Fault::Lost(format!("{reason:?}: {message}")))
+        });
         Ok(gpu)
     }
 
     /// Wraps a device opened elsewhere (for example by carus-render's
     /// `GpuContext` or the viewer's window), so the solver's buffers live on
     /// the device that draws them.
-    pub fn from_device(device: wgpu::Device, queue: wgpu::Queue, adapter: wgpu::AdapterInfo) -> GpuDevice {
-        GpuDevice { device, queue, adapter, faults: Arc::new(Mutex::new(None)) }
+    pub fn from_device(
+        device: wgpu::Device,
+        queue: wgpu::Queue,
+        adapter: wgpu::AdapterInfo,
+    ) -> GpuDevice {
+        GpuDevice {
+            device,
+            queue,
+            adapter,
+            faults: Arc::new(Mutex::new(None)),
+        }
     }
 
     pub fn device(&self) -> &wgpu::Device {
@@ -135,7 +171,11 @@ impl GpuDevice {
 
     /// Runs `work` inside out-of-memory, validation and internal error
     /// scopes and returns its value, or the first error the device reported.
-    pub(crate) fn scoped<T>(&self, during: &'static str, work: impl FnOnce() -> T) -> Result<T, GpuError> {
+    pub(crate) fn scoped<T>(
+        &self,
+        during: &'static str,
+        work: impl FnOnce() -> T,
+    ) -> Result<T, GpuError> {
         let internal = self.device.push_error_scope(wgpu::ErrorFilter::Internal);
         let memory = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
@@ -143,7 +183,10 @@ impl GpuDevice {
         // Scopes pop innermost first.
         let errors = [validation.pop(), memory.pop(), internal.pop()].map(pollster::block_on);
         if let Some(error) = errors.into_iter().flatten().next() {
-            return Err(GpuError::Device { during, message: error.to_string() });
+            return Err(GpuError::Device {
+                during,
+                message: error.to_string(),
+            });
         }
         self.check_faults(during)?;
         Ok(value)
@@ -151,7 +194,11 @@ impl GpuDevice {
 
     /// Fails with a fault recorded outside the scopes, such as device loss.
     pub(crate) fn check_faults(&self, during: &'static str) -> Result<(), GpuError> {
-        let fault = self.faults.lock().map(|mut slot| slot.take()).unwrap_or(None);
+        let fault = self
+            .faults
+            .lock()
+            .map(|mut slot| slot.take())
+            .unwrap_or(None);
         match fault {
             Some(Fault::Lost(message)) => Err(GpuError::DeviceLost { during, message }),
             Some(Fault::Error(message)) => Err(GpuError::Device { during, message }),
@@ -162,17 +209,33 @@ impl GpuDevice {
     /// Blocks until everything submitted has finished, at most `timeout`.
     pub(crate) fn wait(&self, during: &'static str, timeout: Duration) -> Result<(), GpuError> {
         self.device
-            .poll(wgpu::PollType::Wait { submission_index: None, timeout: Some(timeout) })
+            .poll(wgpu::PollType::Wait {
+                submission_index: None,
+                timeout: Some(timeout),
+            })
             .map_err(|error| match error {
-                wgpu::PollError::Timeout => GpuError::Timeout { during, seconds: timeout.as_secs().max(1) },
-                other => GpuError::Device { during, message: other.to_string() },
+                wgpu::PollError::Timeout => GpuError::Timeout {
+                    during,
+                    seconds: timeout.as_secs().max(1),
+                },
+                other => GpuError::Device {
+                    during,
+                    message: other.to_string(),
+                },
             })?;
         self.check_faults(during)
     }
 
     /// Copies `bytes` bytes of `source` into host memory (a staging copy,
     /// a bounded wait, a map).
-    pub(crate) fn read_buffer(&self, source: &wgpu::Buffer, offset: u64, bytes: u64, during: &'static str, timeout: Duration) -> Result<Vec<u8>, GpuError> {
+    pub(crate) fn read_buffer(
+        &self,
+        source: &wgpu::Buffer,
+        offset: u64,
+        bytes: u64,
+        during: &'static str,
+        timeout: Duration,
+    ) -> Result<Vec<u8>, GpuError> {
         if bytes == 0 {
             return Ok(Vec::new());
         }
@@ -183,7 +246,11 @@ impl GpuDevice {
                 usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             });
-            let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("tled readback") });
+            let mut encoder = self
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("tled readback"),
+                });
             encoder.copy_buffer_to_buffer(source, offset, &staging, 0, bytes);
             self.queue.submit([encoder.finish()]);
             staging
@@ -197,9 +264,21 @@ impl GpuDevice {
         self.wait(during, timeout)?;
         receiver
             .try_recv()
-            .map_err(|_| GpuError::Timeout { during, seconds: timeout.as_secs().max(1) })?
-            .map_err(|e| GpuError::Device { during, message: e.to_string() })?;
-        let data = slice.get_mapped_range().map_err(|e| GpuError::Device { during, message: e.to_string() })?.to_vec();
+            .map_err(|_| GpuError::Timeout {
+                during,
+                seconds: timeout.as_secs().max(1),
+            })?
+            .map_err(|e| GpuError::Device {
+                during,
+                message: e.to_string(),
+            })?;
+        let data = slice
+            .get_mapped_range()
+            .map_err(|e| GpuError::Device {
+                during,
+                message: e.to_string(),
+            })?
+            .to_vec();
         staging.unmap();
         Ok(data)
     }
@@ -218,17 +297,34 @@ mod tests {
 
     #[test]
     fn real_gpus_are_preferred_to_software() {
-        let mut kinds = [wgpu::DeviceType::Cpu, wgpu::DeviceType::Other, wgpu::DeviceType::IntegratedGpu, wgpu::DeviceType::DiscreteGpu];
+        let mut kinds = [
+            wgpu::DeviceType::Cpu,
+            wgpu::DeviceType::Other,
+            wgpu::DeviceType::IntegratedGpu,
+            wgpu::DeviceType::DiscreteGpu,
+        ];
         kinds.sort_by_key(|k| preference(*k));
-        assert_eq!(kinds, [wgpu::DeviceType::DiscreteGpu, wgpu::DeviceType::IntegratedGpu, wgpu::DeviceType::Other, wgpu::DeviceType::Cpu]);
+        assert_eq!(
+            kinds,
+            [
+                wgpu::DeviceType::DiscreteGpu,
+                wgpu::DeviceType::IntegratedGpu,
+                wgpu::DeviceType::Other,
+                wgpu::DeviceType::Cpu
+            ]
+        );
     }
 
     #[test]
     fn no_backend_fails_with_the_fix() {
-        let err = GpuDevice::headless_on(wgpu::Backends::empty(), AdapterChoice::BestAvailable).unwrap_err();
+        let err = GpuDevice::headless_on(wgpu::Backends::empty(), AdapterChoice::BestAvailable)
+            .unwrap_err();
         let text = err.to_string();
         assert!(matches!(err, GpuError::NoAdapter { .. }), "{text}");
-        assert!(text.contains("mesa-vulkan-drivers") && text.contains("no backend"), "{text}");
+        assert!(
+            text.contains("mesa-vulkan-drivers") && text.contains("no backend"),
+            "{text}"
+        );
     }
 
     #[test]

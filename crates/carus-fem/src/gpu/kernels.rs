@@ -59,35 +59,57 @@ fn layout(gpu: &GpuDevice, label: &str, storage: &[(u32, Access)]) -> wgpu::Bind
         },
         count: None,
     };
-    let mut entries = vec![uniform(0, false, PARAMS_BYTES), uniform(1, true, STEP_BYTES)];
-    entries.extend(storage.iter().map(|&(binding, access)| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only: matches!(access, Access::Read) },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }));
-    gpu.device().create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries: &entries })
+    let mut entries = vec![
+        uniform(0, false, PARAMS_BYTES),
+        uniform(1, true, STEP_BYTES),
+    ];
+    entries.extend(
+        storage
+            .iter()
+            .map(|&(binding, access)| wgpu::BindGroupLayoutEntry {
+                binding,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Storage {
+                        read_only: matches!(access, Access::Read),
+                    },
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            }),
+    );
+    gpu.device()
+        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some(label),
+            entries: &entries,
+        })
 }
 
-fn kernel(gpu: &GpuDevice, module: &wgpu::ShaderModule, entry: &'static str, storage: &[(u32, Access)]) -> Kernel {
+fn kernel(
+    gpu: &GpuDevice,
+    module: &wgpu::ShaderModule,
+    entry: &'static str,
+    storage: &[(u32, Access)],
+) -> Kernel {
     let layout = layout(gpu, entry, storage);
-    let pipeline_layout = gpu.device().create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some(entry),
-        bind_group_layouts: &[Some(&layout)],
-        immediate_size: 0,
-    });
-    let pipeline = gpu.device().create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some(entry),
-        layout: Some(&pipeline_layout),
-        module,
-        entry_point: Some(entry),
-        compilation_options: Default::default(),
-        cache: None,
-    });
+    let pipeline_layout = gpu
+        .device()
+        .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(entry),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+    let pipeline = gpu
+        .device()
+        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(entry),
+            layout: Some(&pipeline_layout),
+            module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            cache: None,
+        });
     Kernel { pipeline, layout }
 }
 
@@ -98,14 +120,22 @@ pub fn source(body: &str, nodes_per_element: u32, hourglass: bool, anp: bool) ->
 
 impl Kernels {
     /// Compiles the pipelines; a shader the device rejects is an error, not a panic.
-    pub fn new(gpu: &GpuDevice, nodes_per_element: u32, hourglass: bool, anp: bool) -> Result<Kernels, GpuError> {
+    pub fn new(
+        gpu: &GpuDevice,
+        nodes_per_element: u32,
+        hourglass: bool,
+        anp: bool,
+    ) -> Result<Kernels, GpuError> {
         use Access::{Read, ReadWrite};
         gpu.scoped("compiling the TLED kernels", || {
             let module = |label: &str, body: &str| {
-                gpu.device().create_shader_module(wgpu::ShaderModuleDescriptor {
-                    label: Some(label),
-                    source: wgpu::ShaderSource::Wgsl(source(body, nodes_per_element, hourglass, anp).into()),
-                })
+                gpu.device()
+                    .create_shader_module(wgpu::ShaderModuleDescriptor {
+                        label: Some(label),
+                        source: wgpu::ShaderSource::Wgsl(
+                            source(body, nodes_per_element, hourglass, anp).into(),
+                        ),
+                    })
             };
             let element = module("element.wgsl", ELEMENT);
             let node = module("node.wgsl", NODE);
@@ -113,8 +143,25 @@ impl Kernels {
             let (volume_shares, nodal_dilatation) = if anp {
                 let m = module("anp.wgsl", ANP);
                 (
-                    Some(kernel(gpu, &m, "volume_shares", &[(2, Read), (3, Read), (4, Read), (5, Read), (6, ReadWrite), (7, ReadWrite)])),
-                    Some(kernel(gpu, &m, "nodal_dilatation", &[(4, Read), (6, ReadWrite), (8, Read), (9, ReadWrite)])),
+                    Some(kernel(
+                        gpu,
+                        &m,
+                        "volume_shares",
+                        &[
+                            (2, Read),
+                            (3, Read),
+                            (4, Read),
+                            (5, Read),
+                            (6, ReadWrite),
+                            (7, ReadWrite),
+                        ],
+                    )),
+                    Some(kernel(
+                        gpu,
+                        &m,
+                        "nodal_dilatation",
+                        &[(4, Read), (6, ReadWrite), (8, Read), (9, ReadWrite)],
+                    )),
                 )
             } else {
                 (None, None)
@@ -124,7 +171,16 @@ impl Kernels {
                     gpu,
                     &element,
                     "element_forces",
-                    &[(2, Read), (3, Read), (4, Read), (5, Read), (6, Read), (7, Read), (8, ReadWrite), (9, ReadWrite)],
+                    &[
+                        (2, Read),
+                        (3, Read),
+                        (4, Read),
+                        (5, Read),
+                        (6, Read),
+                        (7, Read),
+                        (8, ReadWrite),
+                        (9, ReadWrite),
+                    ],
                 ),
                 volume_shares,
                 nodal_dilatation,
@@ -132,11 +188,30 @@ impl Kernels {
                     gpu,
                     &node,
                     "advance_nodes",
-                    &[(2, Read), (3, Read), (4, Read), (5, Read), (6, Read), (7, Read), (8, ReadWrite), (9, ReadWrite)],
+                    &[
+                        (2, Read),
+                        (3, Read),
+                        (4, Read),
+                        (5, Read),
+                        (6, Read),
+                        (7, Read),
+                        (8, ReadWrite),
+                        (9, ReadWrite),
+                    ],
                 ),
-                pressure: kernel(gpu, &boundary, "surface_pressure", &[(2, Read), (3, Read), (4, Read), (5, ReadWrite)]),
+                pressure: kernel(
+                    gpu,
+                    &boundary,
+                    "surface_pressure",
+                    &[(2, Read), (3, Read), (4, Read), (5, ReadWrite)],
+                ),
                 coupled: kernel(gpu, &boundary, "hold_coupled", &[(2, Read), (7, ReadWrite)]),
-                probe: kernel(gpu, &boundary, "probe_forces", &[(2, Read), (5, ReadWrite), (6, Read), (8, ReadWrite)]),
+                probe: kernel(
+                    gpu,
+                    &boundary,
+                    "probe_forces",
+                    &[(2, Read), (5, ReadWrite), (6, Read), (8, ReadWrite)],
+                ),
             }
         })
     }
@@ -161,13 +236,22 @@ mod tests {
     /// (what wgpu runs before handing the shader to the driver).
     #[test]
     fn shaders_validate_for_every_element_kind() {
-        for (npe, hourglass, anp) in [(8, true, false), (8, false, false), (4, false, false), (4, false, true)] {
+        for (npe, hourglass, anp) in [
+            (8, true, false),
+            (8, false, false),
+            (4, false, false),
+            (4, false, true),
+        ] {
             for body in [ELEMENT, NODE, BOUNDARY, ANP] {
                 let src = source(body, npe, hourglass, anp);
-                let module = wgpu::naga::front::wgsl::parse_str(&src).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
-                wgpu::naga::valid::Validator::new(wgpu::naga::valid::ValidationFlags::all(), wgpu::naga::valid::Capabilities::empty())
-                    .validate(&module)
+                let module = wgpu::naga::front::wgsl::parse_str(&src)
                     .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
+                wgpu::naga::valid::Validator::new(
+                    wgpu::naga::valid::ValidationFlags::all(),
+                    wgpu::naga::valid::Capabilities::empty(),
+                )
+                .validate(&module)
+                .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
             }
         }
     }

@@ -53,7 +53,11 @@ fn check_node(what: &'static str, n: u32, nn: usize) -> Result<(), FemError> {
     if (n as usize) < nn {
         Ok(())
     } else {
-        Err(FemError::BoundaryNodeOutOfRange { what, node: n, node_count: nn })
+        Err(FemError::BoundaryNodeOutOfRange {
+            what,
+            node: n,
+            node_count: nn,
+        })
     }
 }
 
@@ -65,7 +69,11 @@ impl CompiledLoads {
     /// Compiles `bc` for a mesh of `node_count` nodes whose triangle force
     /// copies start at `triangle_forces_at` in the force buffer. Refuses
     /// what the CPU solver refuses, with the same errors.
-    pub fn new(bc: &BoundaryConditions, node_count: usize, triangle_forces_at: u32) -> Result<CompiledLoads, GpuError> {
+    pub fn new(
+        bc: &BoundaryConditions,
+        node_count: usize,
+        triangle_forces_at: u32,
+    ) -> Result<CompiledLoads, GpuError> {
         let mut shapes: Vec<LoadShape> = Vec::new();
         let mut shape_index = |shape: LoadShape| -> Result<u32, GpuError> {
             shape.validate().map_err(invalid)?;
@@ -99,7 +107,10 @@ impl CompiledLoads {
                 for c in 0..3 {
                     if let Some(v) = d.components[c] {
                         if !v.is_finite() {
-                            return Err(invalid(format!("imposed displacement of node {n} is not finite")).into());
+                            return Err(invalid(format!(
+                                "imposed displacement of node {n} is not finite"
+                            ))
+                            .into());
                         }
                         r.kinds = (r.kinds & !(3 << (2 * c))) | (IMPOSED << (2 * c));
                         r.shapes = (r.shapes & !(0xff << (8 * c))) | (s << (8 * c));
@@ -116,30 +127,51 @@ impl CompiledLoads {
             for &n in &f.nodes {
                 check_node("a nodal force", n, node_count)?;
                 let r = records[n as usize].get_or_insert_with(NodeRecord::default);
-                r.forces.push([s, (f.force_n[0] as f32).to_bits(), (f.force_n[1] as f32).to_bits(), (f.force_n[2] as f32).to_bits()]);
+                r.forces.push([
+                    s,
+                    (f.force_n[0] as f32).to_bits(),
+                    (f.force_n[1] as f32).to_bits(),
+                    (f.force_n[2] as f32).to_bits(),
+                ]);
             }
         }
         let mut triangles = Vec::new();
         for p in &bc.pressures {
             let s = shape_index(p.shape)?;
             if !p.pressure_pa.is_finite() {
-                return Err(invalid(format!("surface pressure {} Pa is not finite", p.pressure_pa)).into());
+                return Err(invalid(format!(
+                    "surface pressure {} Pa is not finite",
+                    p.pressure_pa
+                ))
+                .into());
             }
             for tri in &p.triangles {
                 let t = (triangles.len() / 5) as u32;
                 for (a, &n) in tri.iter().enumerate() {
                     check_node("a pressure triangle", n, node_count)?;
                     let r = records[n as usize].get_or_insert_with(NodeRecord::default);
-                    r.pressure_slots.push(triangle_forces_at + 9 * t + 3 * a as u32);
+                    r.pressure_slots
+                        .push(triangle_forces_at + 9 * t + 3 * a as u32);
                 }
-                triangles.extend_from_slice(&[tri[0], tri[1], tri[2], s, (p.pressure_pa as f32).to_bits()]);
+                triangles.extend_from_slice(&[
+                    tri[0],
+                    tri[1],
+                    tri[2],
+                    s,
+                    (p.pressure_pa as f32).to_bits(),
+                ]);
             }
         }
         if shapes.len() > MAX_LOAD_SHAPES {
-            return Err(GpuError::TooManyLoadShapes { count: shapes.len(), max: MAX_LOAD_SHAPES });
+            return Err(GpuError::TooManyLoadShapes {
+                count: shapes.len(),
+                max: MAX_LOAD_SHAPES,
+            });
         }
         let gravity_m_s2 = match bc.gravity_m_s2 {
-            Some(g) if !g.iter().all(|v| v.is_finite()) => return Err(invalid(format!("gravity {g:?} m/s^2 is not finite")).into()),
+            Some(g) if !g.iter().all(|v| v.is_finite()) => {
+                return Err(invalid(format!("gravity {g:?} m/s^2 is not finite")).into())
+            }
             Some(g) => g,
             None => [0.0; 3],
         };
@@ -148,12 +180,25 @@ impl CompiledLoads {
             if let Some(r) = r {
                 node_loads[n] = node_loads.len() as u32;
                 let v = r.values.map(f32::to_bits);
-                node_loads.extend_from_slice(&[r.kinds, r.shapes, v[0], v[1], v[2], r.forces.len() as u32, r.pressure_slots.len() as u32]);
+                node_loads.extend_from_slice(&[
+                    r.kinds,
+                    r.shapes,
+                    v[0],
+                    v[1],
+                    v[2],
+                    r.forces.len() as u32,
+                    r.pressure_slots.len() as u32,
+                ]);
                 node_loads.extend(r.forces.iter().flatten());
                 node_loads.extend_from_slice(&r.pressure_slots);
             }
         }
-        Ok(CompiledLoads { shapes, node_loads, triangles, gravity_m_s2 })
+        Ok(CompiledLoads {
+            shapes,
+            node_loads,
+            triangles,
+            gravity_m_s2,
+        })
     }
 
     pub fn triangle_count(&self) -> usize {
@@ -178,14 +223,32 @@ mod tests {
     #[test]
     fn free_nodes_have_no_record_and_later_conditions_win() {
         let bc = BoundaryConditions {
-            fixed: vec![FixedDofs { nodes: vec![1], components: [true, true, false] }],
-            displacements: vec![ImposedDisplacement { nodes: vec![1], components: [Some(0.5), None, None], shape: LoadShape::Ramp { duration_s: 1.0 } }],
-            forces: vec![NodalForce { nodes: vec![2, 2], force_n: [1.0, 0.0, 0.0], shape: LoadShape::Step }],
-            pressures: vec![SurfacePressure { triangles: vec![[0, 1, 2]], pressure_pa: 10.0, shape: LoadShape::Ramp { duration_s: 1.0 } }],
+            fixed: vec![FixedDofs {
+                nodes: vec![1],
+                components: [true, true, false],
+            }],
+            displacements: vec![ImposedDisplacement {
+                nodes: vec![1],
+                components: [Some(0.5), None, None],
+                shape: LoadShape::Ramp { duration_s: 1.0 },
+            }],
+            forces: vec![NodalForce {
+                nodes: vec![2, 2],
+                force_n: [1.0, 0.0, 0.0],
+                shape: LoadShape::Step,
+            }],
+            pressures: vec![SurfacePressure {
+                triangles: vec![[0, 1, 2]],
+                pressure_pa: 10.0,
+                shape: LoadShape::Ramp { duration_s: 1.0 },
+            }],
             gravity_m_s2: None,
         };
         let c = CompiledLoads::new(&bc, 4, 1000).unwrap();
-        assert_eq!(c.shapes, vec![LoadShape::Ramp { duration_s: 1.0 }, LoadShape::Step]);
+        assert_eq!(
+            c.shapes,
+            vec![LoadShape::Ramp { duration_s: 1.0 }, LoadShape::Step]
+        );
         assert_eq!(c.node_loads[3], NONE);
         let r1 = c.node_loads[1] as usize;
         // x imposed (shape 0), y fixed, z free.
@@ -203,13 +266,28 @@ mod tests {
     fn bad_conditions_are_refused_like_the_cpu_solver() {
         let mut bc = BoundaryConditions::default();
         bc.fix_nodes(&[7]);
-        assert!(matches!(CompiledLoads::new(&bc, 4, 0), Err(GpuError::Solver(FemError::BoundaryNodeOutOfRange { node: 7, .. }))));
+        assert!(matches!(
+            CompiledLoads::new(&bc, 4, 0),
+            Err(GpuError::Solver(FemError::BoundaryNodeOutOfRange {
+                node: 7,
+                ..
+            }))
+        ));
         let many = BoundaryConditions {
             forces: (0..=MAX_LOAD_SHAPES)
-                .map(|i| NodalForce { nodes: vec![0], force_n: [1.0; 3], shape: LoadShape::Ramp { duration_s: 1.0 + i as f64 } })
+                .map(|i| NodalForce {
+                    nodes: vec![0],
+                    force_n: [1.0; 3],
+                    shape: LoadShape::Ramp {
+                        duration_s: 1.0 + i as f64,
+                    },
+                })
                 .collect(),
             ..BoundaryConditions::default()
         };
-        assert!(matches!(CompiledLoads::new(&many, 4, 0), Err(GpuError::TooManyLoadShapes { .. })));
+        assert!(matches!(
+            CompiledLoads::new(&many, 4, 0),
+            Err(GpuError::TooManyLoadShapes { .. })
+        ));
     }
 }

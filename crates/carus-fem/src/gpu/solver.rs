@@ -51,7 +51,11 @@ pub struct GpuOptions {
 
 impl Default for GpuOptions {
     fn default() -> Self {
-        GpuOptions { max_steps_per_submission: 512, target_submission_s: 0.25, wait_timeout: Duration::from_secs(120) }
+        GpuOptions {
+            max_steps_per_submission: 512,
+            target_submission_s: 0.25,
+            wait_timeout: Duration::from_secs(120),
+        }
     }
 }
 
@@ -142,11 +146,17 @@ fn substeps_for(dt_s: f64, critical: f64, control: StepControl) -> Result<u32, F
         return Ok(1);
     }
     match control {
-        StepControl::Refuse => Err(FemError::TimeStepAboveCritical { dt_s, critical_s: critical }),
+        StepControl::Refuse => Err(FemError::TimeStepAboveCritical {
+            dt_s,
+            critical_s: critical,
+        }),
         StepControl::SubStep => {
             let n = (dt_s / critical).ceil();
             if n > u32::MAX as f64 {
-                return Err(FemError::TimeStepAboveCritical { dt_s, critical_s: critical });
+                return Err(FemError::TimeStepAboveCritical {
+                    dt_s,
+                    critical_s: critical,
+                });
             }
             let mut n = n as u32;
             while dt_s / n as f64 > critical {
@@ -158,11 +168,16 @@ fn substeps_for(dt_s: f64, critical: f64, control: StepControl) -> Result<u32, F
 }
 
 fn words(bytes: &[u8]) -> Vec<f32> {
-    bytes.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect()
+    bytes
+        .chunks_exact(4)
+        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect()
 }
 
 fn vec3s(v: &[f32]) -> Vec<[f64; 3]> {
-    v.chunks_exact(3).map(|c| [c[0] as f64, c[1] as f64, c[2] as f64]).collect()
+    v.chunks_exact(3)
+        .map(|c| [c[0] as f64, c[1] as f64, c[2] as f64])
+        .collect()
 }
 
 impl GpuSolver {
@@ -183,17 +198,36 @@ impl GpuSolver {
         let triangle_forces_at = arrays.force_copy_len as u32;
         let loads = CompiledLoads::new(bcs, model.node_count(), triangle_forces_at)?;
         let limits = gpu.device().limits();
-        let step_stride = STEP_BYTES.next_multiple_of(limits.min_uniform_buffer_offset_alignment as u64);
-        let options = GpuOptions { max_steps_per_submission: options.max_steps_per_submission.max(1), ..options };
+        let step_stride =
+            STEP_BYTES.next_multiple_of(limits.min_uniform_buffer_offset_alignment as u64);
+        let options = GpuOptions {
+            max_steps_per_submission: options.max_steps_per_submission.max(1),
+            ..options
+        };
         let (ne, nn) = (model.element_count(), model.node_count());
         let force_words = arrays.force_copy_len + 9 * loads.triangle_count();
         let mut planned = arrays.planned();
         planned.extend([
-            Planned { name: "displacement", bytes: 12 * nn as u64 },
-            Planned { name: "element force copy", bytes: 4 * force_words as u64 },
-            Planned { name: "boundary condition", bytes: 4 * loads.node_loads.len() as u64 },
-            Planned { name: "pressure triangle", bytes: 4 * loads.triangles.len().max(1) as u64 },
-            Planned { name: "T4ANP volume share", bytes: 4 * ne as u64 },
+            Planned {
+                name: "displacement",
+                bytes: 12 * nn as u64,
+            },
+            Planned {
+                name: "element force copy",
+                bytes: 4 * force_words as u64,
+            },
+            Planned {
+                name: "boundary condition",
+                bytes: 4 * loads.node_loads.len() as u64,
+            },
+            Planned {
+                name: "pressure triangle",
+                bytes: 4 * loads.triangles.len().max(1) as u64,
+            },
+            Planned {
+                name: "T4ANP volume share",
+                bytes: 4 * ne as u64,
+            },
         ]);
         check_limits(gpu, &planned, ne, nn)?;
         let kernels = Kernels::new(gpu, arrays.nodes_per_element, arrays.hourglass, arrays.anp)?;
@@ -202,7 +236,8 @@ impl GpuSolver {
             let none = wgpu::BufferUsages::empty();
             let zeros = |label: &str, words: usize| storage(gpu, label, &vec![0f32; words], none);
             // Displacements double as vertex data for a viewer on the same device.
-            let field = |label: &str| storage(gpu, label, &vec![0f32; 3 * nn], wgpu::BufferUsages::VERTEX);
+            let field =
+                |label: &str| storage(gpu, label, &vec![0f32; 3 * nn], wgpu::BufferUsages::VERTEX);
             let uniform = |label: &str, bytes: u64| {
                 gpu.device().create_buffer(&wgpu::BufferDescriptor {
                     label: Some(label),
@@ -217,11 +252,19 @@ impl GpuSolver {
                 forces: zeros("force copies", force_words),
                 status: storage(gpu, "status", &CLEAR_STATUS, none),
                 shares: zeros("volume shares", if arrays.anp { ne } else { 1 }),
-                nodal_j: storage(gpu, "nodal dilatation", &vec![1f32; if arrays.anp { nn } else { 1 }], none),
+                nodal_j: storage(
+                    gpu,
+                    "nodal dilatation",
+                    &vec![1f32; if arrays.anp { nn } else { 1 }],
+                    none,
+                ),
                 node_loads: storage(gpu, "boundary conditions", &loads.node_loads, none),
                 triangles: storage(gpu, "pressure triangles", &loads.triangles, none),
                 params: uniform("run parameters", PARAMS_BYTES),
-                steps: uniform("sub-step records", step_stride * options.max_steps_per_submission as u64),
+                steps: uniform(
+                    "sub-step records",
+                    step_stride * options.max_steps_per_submission as u64,
+                ),
                 coupled: storage::<u32>(gpu, "coupled nodes", &[], none),
                 probe_nodes: storage::<u32>(gpu, "probed nodes", &[], none),
                 probed: storage::<f32>(gpu, "probed forces", &[], none),
@@ -260,11 +303,19 @@ impl GpuSolver {
         Ok(solver)
     }
 
-    fn bind_groups(gpu: &GpuDevice, k: &Kernels, m: &ModelBuffers, s: &StateBuffers) -> Result<BindGroups, GpuError> {
+    fn bind_groups(
+        gpu: &GpuDevice,
+        k: &Kernels,
+        m: &ModelBuffers,
+        s: &StateBuffers,
+    ) -> Result<BindGroups, GpuError> {
         gpu.scoped("binding the solver buffers", || {
             let bind = |kernel: &super::kernels::Kernel, storage: &[(u32, &wgpu::Buffer)]| {
                 let mut entries = vec![
-                    wgpu::BindGroupEntry { binding: 0, resource: s.params.as_entire_binding() },
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: s.params.as_entire_binding(),
+                    },
                     wgpu::BindGroupEntry {
                         binding: 1,
                         resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
@@ -274,11 +325,26 @@ impl GpuSolver {
                         }),
                     },
                 ];
-                entries.extend(storage.iter().map(|&(binding, buffer)| wgpu::BindGroupEntry { binding, resource: buffer.as_entire_binding() }));
-                gpu.device().create_bind_group(&wgpu::BindGroupDescriptor { label: None, layout: &kernel.layout, entries: &entries })
+                entries.extend(
+                    storage
+                        .iter()
+                        .map(|&(binding, buffer)| wgpu::BindGroupEntry {
+                            binding,
+                            resource: buffer.as_entire_binding(),
+                        }),
+                );
+                gpu.device().create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: None,
+                    layout: &kernel.layout,
+                    entries: &entries,
+                })
             };
             let anp = k.volume_shares.is_some();
-            let extra = if anp { &s.nodal_j } else { &m.hourglass_vectors };
+            let extra = if anp {
+                &s.nodal_j
+            } else {
+                &m.hourglass_vectors
+            };
             let rot = |r: usize| (&s.u[r % 3], &s.u[(r + 1) % 3], &s.u[(r + 2) % 3]);
             BindGroups {
                 element: std::array::from_fn(|r| {
@@ -300,29 +366,71 @@ impl GpuSolver {
                 volume_shares: k.volume_shares.as_ref().map(|vs| {
                     std::array::from_fn(|r| {
                         let (curr, _, _) = rot(r);
-                        bind(vs, &[(2, &m.connectivity), (3, &m.shape_derivatives), (4, &m.quarter_volume), (5, curr), (6, &s.shares), (7, &s.status)])
+                        bind(
+                            vs,
+                            &[
+                                (2, &m.connectivity),
+                                (3, &m.shape_derivatives),
+                                (4, &m.quarter_volume),
+                                (5, curr),
+                                (6, &s.shares),
+                                (7, &s.status),
+                            ],
+                        )
                     })
                 }),
-                nodal_dilatation: k
-                    .nodal_dilatation
-                    .as_ref()
-                    .map(|nd| bind(nd, &[(4, &m.inv_nodal_volume), (6, &s.shares), (8, &m.node_table), (9, &s.nodal_j)])),
+                nodal_dilatation: k.nodal_dilatation.as_ref().map(|nd| {
+                    bind(
+                        nd,
+                        &[
+                            (4, &m.inv_nodal_volume),
+                            (6, &s.shares),
+                            (8, &m.node_table),
+                            (9, &s.nodal_j),
+                        ],
+                    )
+                }),
                 node: std::array::from_fn(|r| {
                     let (curr, next, prev) = rot(r);
                     bind(
                         &k.node,
-                        &[(2, &m.node_table), (3, &m.node_mass), (4, &s.node_loads), (5, &s.forces), (6, prev), (7, curr), (8, next), (9, &s.status)],
+                        &[
+                            (2, &m.node_table),
+                            (3, &m.node_mass),
+                            (4, &s.node_loads),
+                            (5, &s.forces),
+                            (6, prev),
+                            (7, curr),
+                            (8, next),
+                            (9, &s.status),
+                        ],
                     )
                 }),
                 pressure: std::array::from_fn(|r| {
                     let (curr, _, _) = rot(r);
-                    bind(&k.pressure, &[(2, &s.triangles), (3, &m.reference), (4, curr), (5, &s.forces)])
+                    bind(
+                        &k.pressure,
+                        &[
+                            (2, &s.triangles),
+                            (3, &m.reference),
+                            (4, curr),
+                            (5, &s.forces),
+                        ],
+                    )
                 }),
                 coupled: std::array::from_fn(|r| {
                     let (_, next, _) = rot(r);
                     bind(&k.coupled, &[(2, &s.coupled), (7, next)])
                 }),
-                probe: bind(&k.probe, &[(2, &s.probe_nodes), (5, &s.forces), (6, &m.node_table), (8, &s.probed)]),
+                probe: bind(
+                    &k.probe,
+                    &[
+                        (2, &s.probe_nodes),
+                        (5, &s.forces),
+                        (6, &m.node_table),
+                        (8, &s.probed),
+                    ],
+                ),
             }
         })
     }
@@ -352,7 +460,9 @@ impl GpuSolver {
             it(100.0 * self.model.size_m()),
             0,
         ];
-        self.gpu.queue().write_buffer(&self.state.params, 0, bytemuck::cast_slice(&words));
+        self.gpu
+            .queue()
+            .write_buffer(&self.state.params, 0, bytemuck::cast_slice(&words));
     }
 
     /// The per-sub-step records of a submission starting at sub-step `k0`.
@@ -361,18 +471,33 @@ impl GpuSolver {
         let mut bytes = vec![0u8; stride * n as usize];
         for i in 0..n as u64 {
             let k = k0 + i;
-            let t = if i == 0 { self.time_s } else { k as f64 * self.h_s };
+            let t = if i == 0 {
+                self.time_s
+            } else {
+                k as f64 * self.h_s
+            };
             let now = self.loads.shape_values(t);
             let next = self.loads.shape_values((k + 1) as f64 * self.h_s);
             let record = &mut bytes[i as usize * stride..];
             record[..4].copy_from_slice(&(i as u32).to_le_bytes());
-            let values: Vec<u8> = now.iter().chain(&next).flat_map(|v| v.to_le_bytes()).collect();
+            let values: Vec<u8> = now
+                .iter()
+                .chain(&next)
+                .flat_map(|v| v.to_le_bytes())
+                .collect();
             record[16..16 + 8 * MAX_LOAD_SHAPES].copy_from_slice(&values);
         }
         self.gpu.queue().write_buffer(&self.state.steps, 0, &bytes);
     }
 
-    fn dispatch(&self, pass: &mut wgpu::ComputePass<'_>, kernel: &super::kernels::Kernel, group: &wgpu::BindGroup, offset: u32, count: u32) {
+    fn dispatch(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        kernel: &super::kernels::Kernel,
+        group: &wgpu::BindGroup,
+        offset: u32,
+        count: u32,
+    ) {
         let (x, y) = workgroups(count, self.max_workgroups);
         pass.set_pipeline(&kernel.pipeline);
         pass.set_bind_group(0, group, &[offset]);
@@ -381,29 +506,59 @@ impl GpuSolver {
 
     /// The internal-force stage (T4ANP passes, element kernel) at rotation `r`.
     fn encode_forces(&self, pass: &mut wgpu::ComputePass<'_>, r: usize, offset: u32) {
-        if let (Some(vs), Some(vsg), Some(nd), Some(ndg)) =
-            (&self.kernels.volume_shares, &self.groups.volume_shares, &self.kernels.nodal_dilatation, &self.groups.nodal_dilatation)
-        {
+        if let (Some(vs), Some(vsg), Some(nd), Some(ndg)) = (
+            &self.kernels.volume_shares,
+            &self.groups.volume_shares,
+            &self.kernels.nodal_dilatation,
+            &self.groups.nodal_dilatation,
+        ) {
             self.dispatch(pass, vs, &vsg[r], offset, self.element_count);
             self.dispatch(pass, nd, ndg, offset, self.node_count);
         }
-        self.dispatch(pass, &self.kernels.element, &self.groups.element[r], offset, self.element_count);
+        self.dispatch(
+            pass,
+            &self.kernels.element,
+            &self.groups.element[r],
+            offset,
+            self.element_count,
+        );
     }
 
     /// Records `n` sub-steps from sub-step `k0` into one compute pass.
     fn encode_substeps(&self, encoder: &mut wgpu::CommandEncoder, k0: u64, n: u32) {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("tled sub-steps"), timestamp_writes: None });
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("tled sub-steps"),
+            timestamp_writes: None,
+        });
         let triangles = self.loads.triangle_count() as u32;
         for i in 0..n {
             let r = ((k0 + i as u64) % 3) as usize;
             let offset = (i as u64 * self.step_stride) as u32;
             if triangles > 0 {
-                self.dispatch(&mut pass, &self.kernels.pressure, &self.groups.pressure[r], offset, triangles);
+                self.dispatch(
+                    &mut pass,
+                    &self.kernels.pressure,
+                    &self.groups.pressure[r],
+                    offset,
+                    triangles,
+                );
             }
             self.encode_forces(&mut pass, r, offset);
-            self.dispatch(&mut pass, &self.kernels.node, &self.groups.node[r], offset, self.node_count);
+            self.dispatch(
+                &mut pass,
+                &self.kernels.node,
+                &self.groups.node[r],
+                offset,
+                self.node_count,
+            );
             if !self.coupled.is_empty() {
-                self.dispatch(&mut pass, &self.kernels.coupled, &self.groups.coupled[r], offset, self.coupled.len() as u32);
+                self.dispatch(
+                    &mut pass,
+                    &self.kernels.coupled,
+                    &self.groups.coupled[r],
+                    offset,
+                    self.coupled.len() as u32,
+                );
             }
         }
     }
@@ -418,17 +573,35 @@ impl GpuSolver {
         if self.coupled_uploaded {
             return Ok(());
         }
-        let records: Vec<u32> =
-            self.coupled.iter().flat_map(|(n, u)| [*n, (u[0] as f32).to_bits(), (u[1] as f32).to_bits(), (u[2] as f32).to_bits()]).collect();
+        let records: Vec<u32> = self
+            .coupled
+            .iter()
+            .flat_map(|(n, u)| {
+                [
+                    *n,
+                    (u[0] as f32).to_bits(),
+                    (u[1] as f32).to_bits(),
+                    (u[2] as f32).to_bits(),
+                ]
+            })
+            .collect();
         let bytes = 4 * records.len() as u64;
         if bytes > self.state.coupled.size() {
             self.state.coupled = self.gpu.scoped("growing the coupled-node buffer", || {
-                storage::<u32>(&self.gpu, "coupled nodes", &vec![0; records.len().next_power_of_two()], wgpu::BufferUsages::empty())
+                storage::<u32>(
+                    &self.gpu,
+                    "coupled nodes",
+                    &vec![0; records.len().next_power_of_two()],
+                    wgpu::BufferUsages::empty(),
+                )
             })?;
-            self.groups = Self::bind_groups(&self.gpu, &self.kernels, &self.model_buffers, &self.state)?;
+            self.groups =
+                Self::bind_groups(&self.gpu, &self.kernels, &self.model_buffers, &self.state)?;
         }
         if !records.is_empty() {
-            self.gpu.queue().write_buffer(&self.state.coupled, 0, bytemuck::cast_slice(&records));
+            self.gpu
+                .queue()
+                .write_buffer(&self.state.coupled, 0, bytemuck::cast_slice(&records));
         }
         self.write_params();
         self.coupled_uploaded = true;
@@ -436,9 +609,22 @@ impl GpuSolver {
     }
 
     fn read_status(&self) -> Result<Status, GpuError> {
-        let bytes = self.gpu.read_buffer(&self.state.status, 0, 16, "reading the step status", self.options.wait_timeout)?;
-        let w: Vec<u32> = bytes.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
-        Ok(Status { first_bad_substep: w[0], element: w[1], node: w[2] })
+        let bytes = self.gpu.read_buffer(
+            &self.state.status,
+            0,
+            16,
+            "reading the step status",
+            self.options.wait_timeout,
+        )?;
+        let w: Vec<u32> = bytes
+            .chunks_exact(4)
+            .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect();
+        Ok(Status {
+            first_bad_substep: w[0],
+            element: w[1],
+            node: w[2],
+        })
     }
 
     /// Submits `n` sub-steps from the current state and waits for them;
@@ -447,20 +633,40 @@ impl GpuSolver {
         self.upload_coupled()?;
         let k0 = self.substeps;
         self.write_step_records(k0, n);
-        self.gpu.queue().write_buffer(&self.state.status, 0, bytemuck::cast_slice(&CLEAR_STATUS));
+        self.gpu
+            .queue()
+            .write_buffer(&self.state.status, 0, bytemuck::cast_slice(&CLEAR_STATUS));
         let started = Instant::now();
         self.gpu.scoped("recording the TLED steps", || {
-            let mut encoder = self.gpu.device().create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("tled steps") });
+            let mut encoder =
+                self.gpu
+                    .device()
+                    .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                        label: Some("tled steps"),
+                    });
             if backup {
                 let (curr, prev) = Self::current_slots(k0);
                 let bytes = self.state.u[0].size();
-                encoder.copy_buffer_to_buffer(&self.state.u[curr], 0, &self.state.backup[0], 0, bytes);
-                encoder.copy_buffer_to_buffer(&self.state.u[prev], 0, &self.state.backup[1], 0, bytes);
+                encoder.copy_buffer_to_buffer(
+                    &self.state.u[curr],
+                    0,
+                    &self.state.backup[0],
+                    0,
+                    bytes,
+                );
+                encoder.copy_buffer_to_buffer(
+                    &self.state.u[prev],
+                    0,
+                    &self.state.backup[1],
+                    0,
+                    bytes,
+                );
             }
             self.encode_substeps(&mut encoder, k0, n);
             self.gpu.queue().submit([encoder.finish()]);
         })?;
-        self.gpu.wait("running the TLED steps", self.options.wait_timeout)?;
+        self.gpu
+            .wait("running the TLED steps", self.options.wait_timeout)?;
         let status = self.read_status()?;
         self.substep_wall_s = Some(started.elapsed().as_secs_f64() / n as f64);
         Ok(status)
@@ -470,13 +676,19 @@ impl GpuSolver {
     fn restore_backup(&self, k0: u64) -> Result<(), GpuError> {
         let (curr, prev) = Self::current_slots(k0);
         self.gpu.scoped("restoring the last good state", || {
-            let mut encoder = self.gpu.device().create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("tled restore") });
+            let mut encoder =
+                self.gpu
+                    .device()
+                    .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                        label: Some("tled restore"),
+                    });
             let bytes = self.state.u[0].size();
             encoder.copy_buffer_to_buffer(&self.state.backup[0], 0, &self.state.u[curr], 0, bytes);
             encoder.copy_buffer_to_buffer(&self.state.backup[1], 0, &self.state.u[prev], 0, bytes);
             self.gpu.queue().submit([encoder.finish()]);
         })?;
-        self.gpu.wait("restoring the last good state", self.options.wait_timeout)
+        self.gpu
+            .wait("restoring the last good state", self.options.wait_timeout)
     }
 
     fn commit(&mut self, n: u32) {
@@ -491,10 +703,14 @@ impl GpuSolver {
     fn run_substeps(&mut self, mut n: u64) -> Result<(), GpuError> {
         while n > 0 {
             let fitted = match self.substep_wall_s {
-                Some(s) if s > 0.0 => (self.options.target_submission_s / s).clamp(1.0, u32::MAX as f64) as u64,
+                Some(s) if s > 0.0 => {
+                    (self.options.target_submission_s / s).clamp(1.0, u32::MAX as f64) as u64
+                }
                 _ => 4,
             };
-            let batch = n.min(fitted).min(self.options.max_steps_per_submission as u64) as u32;
+            let batch = n
+                .min(fitted)
+                .min(self.options.max_steps_per_submission as u64) as u32;
             let status = self.submit_substeps(batch, true)?;
             if status.first_bad_substep != u32::MAX {
                 return Err(self.recover(status.first_bad_substep));
@@ -523,14 +739,27 @@ impl GpuSolver {
                 let element = status.element as usize;
                 let jacobian = self.element_fields()?.jacobian[element];
                 if jacobian.is_finite() {
-                    return Ok(FemError::ElementInvertedDuringRun { element, jacobian, time_s: t }.into());
+                    return Ok(FemError::ElementInvertedDuringRun {
+                        element,
+                        jacobian,
+                        time_s: t,
+                    }
+                    .into());
                 }
-                return Ok(FemError::Diverged { time_s: t, last_good_time_s: t, what: format!("element {element} has a non-finite deformation") }.into());
+                return Ok(FemError::Diverged {
+                    time_s: t,
+                    last_good_time_s: t,
+                    what: format!("element {element} has a non-finite deformation"),
+                }
+                .into());
             }
             Ok(FemError::Diverged {
                 time_s: t + self.h_s,
                 last_good_time_s: t,
-                what: format!("node {} displacement is non-finite or beyond 100 x the model size", status.node),
+                what: format!(
+                    "node {} displacement is non-finite or beyond 100 x the model size",
+                    status.node
+                ),
             }
             .into())
         })();
@@ -610,30 +839,55 @@ impl GpuSolver {
 
     fn read_slot(&self, slot: usize, during: &'static str) -> Result<Vec<f32>, GpuError> {
         let bytes = self.state.u[slot].size();
-        Ok(words(&self.gpu.read_buffer(&self.state.u[slot], 0, bytes, during, self.options.wait_timeout)?))
+        Ok(words(&self.gpu.read_buffer(
+            &self.state.u[slot],
+            0,
+            bytes,
+            during,
+            self.options.wait_timeout,
+        )?))
     }
 
     /// Current displacement of every node, m (reads the whole field back:
     /// for output every N steps, not every step).
     pub fn displacements(&self) -> Result<Vec<[f64; 3]>, GpuError> {
-        Ok(vec3s(&self.read_slot(Self::current_slots(self.substeps).0, "reading the displacements back")?))
+        Ok(vec3s(&self.read_slot(
+            Self::current_slots(self.substeps).0,
+            "reading the displacements back",
+        )?))
     }
 
     /// Holds the given displacements on those nodes from the next sub-step
     /// on, until [`Self::release_imposed`]; only these nodes are uploaded.
-    pub fn impose_displacements(&mut self, nodes: &[u32], displacements_m: &[[f64; 3]]) -> Result<(), GpuError> {
+    pub fn impose_displacements(
+        &mut self,
+        nodes: &[u32],
+        displacements_m: &[[f64; 3]],
+    ) -> Result<(), GpuError> {
         if nodes.len() != displacements_m.len() {
             return Err(FemError::InvalidBoundaryCondition {
-                reason: format!("{} nodes but {} displacements given to impose_displacements", nodes.len(), displacements_m.len()),
+                reason: format!(
+                    "{} nodes but {} displacements given to impose_displacements",
+                    nodes.len(),
+                    displacements_m.len()
+                ),
             }
             .into());
         }
         for (&n, d) in nodes.iter().zip(displacements_m) {
             if n >= self.node_count {
-                return Err(FemError::BoundaryNodeOutOfRange { what: "impose_displacements", node: n, node_count: self.node_count as usize }.into());
+                return Err(FemError::BoundaryNodeOutOfRange {
+                    what: "impose_displacements",
+                    node: n,
+                    node_count: self.node_count as usize,
+                }
+                .into());
             }
             if !d.iter().all(|v| v.is_finite()) {
-                return Err(FemError::InvalidBoundaryCondition { reason: format!("imposed displacement of node {n} is not finite") }.into());
+                return Err(FemError::InvalidBoundaryCondition {
+                    reason: format!("imposed displacement of node {n} is not finite"),
+                }
+                .into());
             }
             match self.coupled.binary_search_by_key(&n, |&(m, _)| m) {
                 Ok(i) => self.coupled[i].1 = *d,
@@ -660,21 +914,37 @@ impl GpuSolver {
     pub fn update_internal_forces(&mut self) -> Result<(), GpuError> {
         let k = self.substeps;
         self.write_step_records(k, 1);
-        self.gpu.queue().write_buffer(&self.state.status, 0, bytemuck::cast_slice(&CLEAR_STATUS));
+        self.gpu
+            .queue()
+            .write_buffer(&self.state.status, 0, bytemuck::cast_slice(&CLEAR_STATUS));
         self.gpu.scoped("evaluating the internal forces", || {
-            let mut encoder = self.gpu.device().create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("tled forces") });
+            let mut encoder =
+                self.gpu
+                    .device()
+                    .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                        label: Some("tled forces"),
+                    });
             {
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("tled forces"), timestamp_writes: None });
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("tled forces"),
+                    timestamp_writes: None,
+                });
                 self.encode_forces(&mut pass, Self::current_slots(k).0, 0);
             }
             self.gpu.queue().submit([encoder.finish()]);
         })?;
-        self.gpu.wait("evaluating the internal forces", self.options.wait_timeout)?;
+        self.gpu
+            .wait("evaluating the internal forces", self.options.wait_timeout)?;
         let status = self.read_status()?;
         if status.element != u32::MAX {
             let element = status.element as usize;
             let jacobian = self.element_fields()?.jacobian[element];
-            return Err(FemError::ElementInvertedDuringRun { element, jacobian, time_s: self.time_s }.into());
+            return Err(FemError::ElementInvertedDuringRun {
+                element,
+                jacobian,
+                time_s: self.time_s,
+            }
+            .into());
         }
         Ok(())
     }
@@ -685,7 +955,12 @@ impl GpuSolver {
     /// per node.
     pub fn internal_forces(&mut self, nodes: &[u32]) -> Result<Vec<[f64; 3]>, GpuError> {
         if let Some(&n) = nodes.iter().find(|&&n| n >= self.node_count) {
-            return Err(FemError::BoundaryNodeOutOfRange { what: "internal_forces", node: n, node_count: self.node_count as usize }.into());
+            return Err(FemError::BoundaryNodeOutOfRange {
+                what: "internal_forces",
+                node: n,
+                node_count: self.node_count as usize,
+            }
+            .into());
         }
         if nodes.is_empty() {
             return Ok(Vec::new());
@@ -696,38 +971,69 @@ impl GpuSolver {
                 let capacity = nodes.len().next_power_of_two();
                 let (probe_nodes, probed) = self.gpu.scoped("growing the probe buffers", || {
                     let none = wgpu::BufferUsages::empty();
-                    (storage::<u32>(&self.gpu, "probed nodes", &vec![0; capacity], none), storage::<f32>(&self.gpu, "probed forces", &vec![0.0; 3 * capacity], none))
+                    (
+                        storage::<u32>(&self.gpu, "probed nodes", &vec![0; capacity], none),
+                        storage::<f32>(&self.gpu, "probed forces", &vec![0.0; 3 * capacity], none),
+                    )
                 })?;
                 self.state.probe_nodes = probe_nodes;
                 self.state.probed = probed;
-                self.groups = Self::bind_groups(&self.gpu, &self.kernels, &self.model_buffers, &self.state)?;
+                self.groups =
+                    Self::bind_groups(&self.gpu, &self.kernels, &self.model_buffers, &self.state)?;
             }
-            self.gpu.queue().write_buffer(&self.state.probe_nodes, 0, bytemuck::cast_slice(nodes));
+            self.gpu
+                .queue()
+                .write_buffer(&self.state.probe_nodes, 0, bytemuck::cast_slice(nodes));
             self.probe_nodes = nodes.to_vec();
             self.write_params();
         }
         self.gpu.scoped("gathering the probed forces", || {
-            let mut encoder = self.gpu.device().create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("tled probe") });
+            let mut encoder =
+                self.gpu
+                    .device()
+                    .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                        label: Some("tled probe"),
+                    });
             {
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("tled probe"), timestamp_writes: None });
-                self.dispatch(&mut pass, &self.kernels.probe, &self.groups.probe, 0, nodes.len() as u32);
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("tled probe"),
+                    timestamp_writes: None,
+                });
+                self.dispatch(
+                    &mut pass,
+                    &self.kernels.probe,
+                    &self.groups.probe,
+                    0,
+                    nodes.len() as u32,
+                );
             }
             self.gpu.queue().submit([encoder.finish()]);
         })?;
-        let bytes = self.gpu.read_buffer(&self.state.probed, 0, 12 * nodes.len() as u64, "reading the probed forces", self.options.wait_timeout)?;
+        let bytes = self.gpu.read_buffer(
+            &self.state.probed,
+            0,
+            12 * nodes.len() as u64,
+            "reading the probed forces",
+            self.options.wait_timeout,
+        )?;
         Ok(vec3s(&words(&bytes)))
     }
 
     /// Sum of the internal forces over a node set, N.
     pub fn reaction_force(&mut self, nodes: &[u32]) -> Result<[f64; 3], GpuError> {
         let f = self.internal_forces(nodes)?;
-        Ok(f.iter().fold([0.0; 3], |acc, v| [acc[0] + v[0], acc[1] + v[1], acc[2] + v[2]]))
+        Ok(f.iter().fold([0.0; 3], |acc, v| {
+            [acc[0] + v[0], acc[1] + v[1], acc[2] + v[2]]
+        }))
     }
 
     /// Von Mises stress, maximum principal stretch and J per element,
     /// computed by the CPU fields code from the downloaded displacements.
     pub fn element_fields(&self) -> Result<ElementFields, GpuError> {
-        let u = self.read_slot(Self::current_slots(self.substeps).0, "reading the displacements back")?;
+        let u = self.read_slot(
+            Self::current_slots(self.substeps).0,
+            "reading the displacements back",
+        )?;
         let anp = self.anp;
         Ok(match self.model.kernel() {
             KernelModel::F32(k) => fields::evaluate(k, anp, &u).0,
@@ -740,9 +1046,19 @@ impl GpuSolver {
         let (curr, prev) = Self::current_slots(self.substeps);
         let u = self.read_slot(curr, "reading the displacements back")?;
         let u_prev = self.read_slot(prev, "reading the displacements back")?;
-        fn energies<T: Real>(k: &KernelData<T>, anp: bool, u: &[T], u_prev: &[T], h: f64) -> Energies {
+        fn energies<T: Real>(
+            k: &KernelData<T>,
+            anp: bool,
+            u: &[T],
+            u_prev: &[T],
+            h: f64,
+        ) -> Energies {
             let (_, strain_j, hourglass_j) = fields::evaluate(k, anp, u);
-            Energies { kinetic_j: fields::kinetic_energy(k, u, u_prev, h), strain_j, hourglass_j }
+            Energies {
+                kinetic_j: fields::kinetic_energy(k, u, u_prev, h),
+                strain_j,
+                hourglass_j,
+            }
         }
         Ok(match self.model.kernel() {
             KernelModel::F32(k) => energies(k, self.anp, &u, &u_prev, self.h_s),
@@ -766,19 +1082,41 @@ impl GpuSolver {
     /// Puts the solver into a snapshot's state (uploads both displacement fields).
     pub fn restore(&mut self, snap: &SolverSnapshot) -> Result<(), GpuError> {
         let nn = self.node_count as usize;
-        for len in [snap.displacements_m.len(), snap.previous_displacements_m.len()] {
+        for len in [
+            snap.displacements_m.len(),
+            snap.previous_displacements_m.len(),
+        ] {
             if len != nn {
-                return Err(FemError::SnapshotMismatch { got: len, expected: nn }.into());
+                return Err(FemError::SnapshotMismatch {
+                    got: len,
+                    expected: nn,
+                }
+                .into());
             }
         }
         if let Some(&(n, _)) = snap.coupled.iter().find(|(n, _)| *n as usize >= nn) {
-            return Err(FemError::BoundaryNodeOutOfRange { what: "a snapshot's coupled displacement", node: n, node_count: nn }.into());
+            return Err(FemError::BoundaryNodeOutOfRange {
+                what: "a snapshot's coupled displacement",
+                node: n,
+                node_count: nn,
+            }
+            .into());
         }
         let (curr, prev) = Self::current_slots(snap.substeps);
-        let flat = |v: &[[f64; 3]]| -> Vec<f32> { v.iter().flat_map(|p| p.map(|c| c as f32)).collect() };
-        self.gpu.queue().write_buffer(&self.state.u[curr], 0, bytemuck::cast_slice(&flat(&snap.displacements_m)));
-        self.gpu.queue().write_buffer(&self.state.u[prev], 0, bytemuck::cast_slice(&flat(&snap.previous_displacements_m)));
-        self.gpu.wait("uploading a snapshot", self.options.wait_timeout)?;
+        let flat =
+            |v: &[[f64; 3]]| -> Vec<f32> { v.iter().flat_map(|p| p.map(|c| c as f32)).collect() };
+        self.gpu.queue().write_buffer(
+            &self.state.u[curr],
+            0,
+            bytemuck::cast_slice(&flat(&snap.displacements_m)),
+        );
+        self.gpu.queue().write_buffer(
+            &self.state.u[prev],
+            0,
+            bytemuck::cast_slice(&flat(&snap.previous_displacements_m)),
+        );
+        self.gpu
+            .wait("uploading a snapshot", self.options.wait_timeout)?;
         self.time_s = snap.time_s;
         self.steps = snap.steps;
         self.substeps = snap.substeps;
@@ -800,7 +1138,13 @@ mod tests {
     fn substeps_follow_the_cpu_rule() {
         assert_eq!(substeps_for(1e-3, 2e-3, StepControl::Refuse), Ok(1));
         assert_eq!(substeps_for(2.5e-3, 1e-3, StepControl::SubStep), Ok(3));
-        assert!(matches!(substeps_for(2.5e-3, 1e-3, StepControl::Refuse), Err(FemError::TimeStepAboveCritical { .. })));
-        assert!(matches!(substeps_for(-1.0, 1e-3, StepControl::SubStep), Err(FemError::InvalidTimeStep { .. })));
+        assert!(matches!(
+            substeps_for(2.5e-3, 1e-3, StepControl::Refuse),
+            Err(FemError::TimeStepAboveCritical { .. })
+        ));
+        assert!(matches!(
+            substeps_for(-1.0, 1e-3, StepControl::SubStep),
+            Err(FemError::InvalidTimeStep { .. })
+        ));
     }
 }

@@ -51,7 +51,13 @@ impl Traffic {
             + 12 * nn; // next displacement written
         let triangles = loads.triangle_count() as u64;
         let pressure_bytes = triangles * (20 + 3 * 24 + 36);
-        Traffic { element_kernel_bytes, node_kernel_bytes, anp_bytes, pressure_bytes, elements: ne }
+        Traffic {
+            element_kernel_bytes,
+            node_kernel_bytes,
+            anp_bytes,
+            pressure_bytes,
+            elements: ne,
+        }
     }
 
     pub fn bytes_per_substep(&self) -> u64 {
@@ -74,7 +80,10 @@ const KNOWN_PEAKS: [(&str, f64, &str); 3] = [
 
 /// The peak bandwidth of an adapter by name, when it is a known device.
 pub fn known_peak_bandwidth(adapter_name: &str) -> Option<(f64, &'static str)> {
-    KNOWN_PEAKS.iter().find(|(name, _, _)| adapter_name.contains(name)).map(|&(_, gbs, source)| (gbs, source))
+    KNOWN_PEAKS
+        .iter()
+        .find(|(name, _, _)| adapter_name.contains(name))
+        .map(|&(_, gbs, source)| (gbs, source))
 }
 
 #[cfg(test)]
@@ -83,10 +92,22 @@ mod tests {
 
     #[test]
     fn known_devices_by_name() {
-        assert_eq!(known_peak_bandwidth("NVIDIA H100 80GB HBM3").map(|p| p.0), Some(3350.0));
-        assert_eq!(known_peak_bandwidth("NVIDIA H100 PCIe").map(|p| p.0), Some(2000.0));
-        assert_eq!(known_peak_bandwidth("NVIDIA H200").map(|p| p.0), Some(4800.0));
-        assert_eq!(known_peak_bandwidth("llvmpipe (LLVM 19.1.7, 256 bits)"), None);
+        assert_eq!(
+            known_peak_bandwidth("NVIDIA H100 80GB HBM3").map(|p| p.0),
+            Some(3350.0)
+        );
+        assert_eq!(
+            known_peak_bandwidth("NVIDIA H100 PCIe").map(|p| p.0),
+            Some(2000.0)
+        );
+        assert_eq!(
+            known_peak_bandwidth("NVIDIA H200").map(|p| p.0),
+            Some(4800.0)
+        );
+        assert_eq!(
+            known_peak_bandwidth("llvmpipe (LLVM 19.1.7, 256 bits)"),
+            None
+        );
     }
 
     #[test]
@@ -96,16 +117,27 @@ mod tests {
         use crate::material::Material;
         use crate::model::{MaterialRegion, ModelOptions, TledModel};
         let mesh = box_h8([1.0; 3], [4, 4, 4]);
-        let region = MaterialRegion { element_set: None, material: Material::neo_hookean(1e3, 5e4), density_kg_m3: 1e3 };
+        let region = MaterialRegion {
+            element_set: None,
+            material: Material::neo_hookean(1e3, 5e4),
+            density_kg_m3: 1e3,
+        };
         let model = TledModel::new(&mesh, &[region], &ModelOptions::default()).unwrap();
         let arrays = ModelArrays::new(&model);
-        let loads = CompiledLoads::new(&BoundaryConditions::default(), model.node_count(), 0).unwrap();
+        let loads =
+            CompiledLoads::new(&BoundaryConditions::default(), model.node_count(), 0).unwrap();
         let t = Traffic::new(&arrays, &loads);
         // 8 node indices, 24 shape derivatives, weight, 3 coefficients,
         // 32 hourglass values, 8 gathered displacements, 24 forces written.
-        assert_eq!(t.element_kernel_bytes, 64 * (32 + 96 + 4 + 12 + 128 + 96 + 96));
+        assert_eq!(
+            t.element_kernel_bytes,
+            64 * (32 + 96 + 4 + 12 + 128 + 96 + 96)
+        );
         // 125 nodes: table, 512 slots, gathered forces, mass, records, 3 displacement fields.
-        assert_eq!(t.node_kernel_bytes, 4 * 126 + 4 * 512 + 12 * 512 + 8 * 125 + 4 * 125 + 36 * 125);
+        assert_eq!(
+            t.node_kernel_bytes,
+            4 * 126 + 4 * 512 + 12 * 512 + 8 * 125 + 4 * 125 + 36 * 125
+        );
         assert_eq!((t.anp_bytes, t.pressure_bytes), (0, 0));
     }
 }

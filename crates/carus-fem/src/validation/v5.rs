@@ -71,25 +71,56 @@ struct CpuRun {
 fn run_cpu(model: Arc<TledModel>, setup: &CubeSetup, steps: u64) -> Result<CpuRun, GpuError> {
     let start = Instant::now();
     let mesh = setup.mesh();
-    let mut solver = TledSolver::new(model, &setup.boundary_conditions(&mesh), setup.dt_s(), StepControl::SubStep)?;
+    let mut solver = TledSolver::new(
+        model,
+        &setup.boundary_conditions(&mesh),
+        setup.dt_s(),
+        StepControl::SubStep,
+    )?;
     for _ in 0..steps {
         solver.step()?;
     }
     solver.update_internal_forces()?;
     let reaction = solver.reaction_force(&mesh.node_sets["x0"])?;
-    Ok(CpuRun { displacements_m: solver.displacements(), reaction_n: reaction, wall_s: start.elapsed().as_secs_f64() })
+    Ok(CpuRun {
+        displacements_m: solver.displacements(),
+        reaction_n: reaction,
+        wall_s: start.elapsed().as_secs_f64(),
+    })
 }
 
 /// Runs one element kind on both backends.
-pub fn run_case(gpu: &GpuDevice, element: CubeElement, n: usize, steps: u64) -> Result<V5Case, GpuError> {
-    let setup = CubeSetup { precision: Precision::F64, ..CubeSetup::miller(n, element, CubeVariant::FreeLateral) };
+pub fn run_case(
+    gpu: &GpuDevice,
+    element: CubeElement,
+    n: usize,
+    steps: u64,
+) -> Result<V5Case, GpuError> {
+    let setup = CubeSetup {
+        precision: Precision::F64,
+        ..CubeSetup::miller(n, element, CubeVariant::FreeLateral)
+    };
     let mesh = setup.mesh();
     let model64 = tissue_model(&mesh, &setup.options())?;
-    let model32 = tissue_model(&mesh, &CubeSetup { precision: Precision::F32, ..setup }.options())?;
+    let model32 = tissue_model(
+        &mesh,
+        &CubeSetup {
+            precision: Precision::F32,
+            ..setup
+        }
+        .options(),
+    )?;
     let cpu64 = run_cpu(Arc::clone(&model64), &setup, steps)?;
     let cpu32 = run_cpu(model32, &setup, steps)?;
     let start = Instant::now();
-    let mut solver = GpuSolver::new(gpu, model64, &setup.boundary_conditions(&mesh), setup.dt_s(), StepControl::SubStep, GpuOptions::default())?;
+    let mut solver = GpuSolver::new(
+        gpu,
+        model64,
+        &setup.boundary_conditions(&mesh),
+        setup.dt_s(),
+        StepControl::SubStep,
+        GpuOptions::default(),
+    )?;
     solver.advance_steps(steps)?;
     solver.update_internal_forces()?;
     let reaction_gpu_n = solver.reaction_force(&mesh.node_sets["x0"])?;
@@ -103,7 +134,11 @@ pub fn run_case(gpu: &GpuDevice, element: CubeElement, n: usize, steps: u64) -> 
         n,
         steps,
         dt_s: setup.dt_s(),
-        max_displacement_m: cpu64.displacements_m.iter().map(|p| (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt()).fold(0.0, f64::max),
+        max_displacement_m: cpu64
+            .displacements_m
+            .iter()
+            .map(|p| (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt())
+            .fold(0.0, f64::max),
         max_difference_cpu_f64_m,
         max_difference_cpu_f32_m,
         reaction_cpu_n: cpu64.reaction_n,
@@ -117,7 +152,10 @@ pub fn run_case(gpu: &GpuDevice, element: CubeElement, n: usize, steps: u64) -> 
 /// V5 on a given device, for H8, T4 and T4ANP.
 pub fn run_on(gpu: &GpuDevice, size: CaseSize) -> Result<V5Report, GpuError> {
     let (n, steps) = size_of(size);
-    let cases = CubeElement::ALL.iter().map(|&e| run_case(gpu, e, n, steps)).collect::<Result<Vec<_>, _>>()?;
+    let cases = CubeElement::ALL
+        .iter()
+        .map(|&e| run_case(gpu, e, n, steps))
+        .collect::<Result<Vec<_>, _>>()?;
     Ok(V5Report {
         adapter: gpu.adapter_info().name.clone(),
         edge_m: CUBE_EDGE_M,
