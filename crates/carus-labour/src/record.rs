@@ -15,8 +15,11 @@ pub struct RunSummary {
     pub simulated_s: f64,
     /// Wall-clock time of this invocation, s (a resumed run counts its part).
     pub wall_s: f64,
-    /// Whether the run reached its end (false: stopped, resumable).
+    /// Whether the run reached its end (false: stopped, resumable, or failed).
     pub completed: bool,
+    /// Why the run ended early, when the physics failed (for example a floor
+    /// element crushed inside out); everything up to then is written.
+    pub failure: Option<String>,
     pub rigid_steps: u64,
     pub rigid_dt_s: f64,
     pub floor_substeps_per_step: u32,

@@ -93,8 +93,9 @@ fn drive(
             break;
         }
         if let Err(e) = sim.step() {
-            // Keep what was simulated: write it all, then report the error.
-            failure = Some(e);
+            // Keep what was simulated: write it all and say why it ended.
+            failure = Some(e.to_string());
+            completed = false;
             break;
         }
         let k = sim.state.step;
@@ -113,11 +114,7 @@ fn drive(
     }
     observer.progress(sim.time_s(), s.numerics.end_time_s);
     save_checkpoint(&mut sim, out_dir, &frame_times)?;
-    let record = finish(&mut sim, out_dir, &frame_times, completed, started)?;
-    match failure {
-        Some(e) => Err(e),
-        None => Ok(record),
-    }
+    finish(&mut sim, out_dir, &frame_times, completed, failure, started)
 }
 
 /// The trunk's centre (or, without a trunk, the head's) is well past the outlet.
@@ -178,7 +175,14 @@ pub fn history(sim: &Simulation<'_>) -> PoseHistory {
     }
 }
 
-fn finish(sim: &mut Simulation<'_>, out_dir: &Path, frame_times: &[f64], completed: bool, started: Instant) -> Result<RunRecord, LabourError> {
+fn finish(
+    sim: &mut Simulation<'_>,
+    out_dir: &Path,
+    frame_times: &[f64],
+    completed: bool,
+    failure: Option<String>,
+    started: Instant,
+) -> Result<RunRecord, LabourError> {
     let scene = sim.scene;
     let history = history(sim);
     // A run stopped before its second sample has nothing to detect yet.
@@ -197,6 +201,7 @@ fn finish(sim: &mut Simulation<'_>, out_dir: &Path, frame_times: &[f64], complet
         simulated_s: sim.time_s(),
         wall_s: started.elapsed().as_secs_f64(),
         completed,
+        failure,
         rigid_steps: sim.state.step,
         rigid_dt_s: sim.dt_s(),
         floor_substeps_per_step: sim.floor_substeps(),
@@ -263,7 +268,7 @@ mod tests {
         let s = coarse(2.4);
         let (dir, a) = run_in(&s, &RunOptions::default());
         let (_, b) = run_in(&s, &RunOptions::default());
-        assert!(a.summary.completed);
+        assert!(a.summary.completed && a.summary.failure.is_none());
         assert_eq!(a.history, b.history, "two runs of one scenario differ");
         assert_eq!(a.floor, b.floor);
         // It moved: the head descended under the expulsion force.

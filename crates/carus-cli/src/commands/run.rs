@@ -90,7 +90,9 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
         bar.finish_and_clear();
     }
     let record = record?;
-    if !record.summary.completed && !args.quiet {
+    if let Some(failure) = &record.summary.failure {
+        eprintln!("error: the run ended early at t = {:.2} s: {failure} (everything up to then is written)", record.summary.simulated_s);
+    } else if !record.summary.completed && !args.quiet {
         eprintln!("stopped at t = {:.2} s; continue with: carus run --resume {}", record.summary.simulated_s, out_dir.display());
     }
     if args.json {
@@ -98,7 +100,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
     } else {
         print_summary(&record, &out_dir);
     }
-    Ok(Status::Success)
+    Ok(if record.summary.failure.is_some() { Status::Failed } else { Status::Success })
 }
 
 fn load(name: Option<&str>) -> anyhow::Result<Scenario> {
@@ -146,6 +148,7 @@ fn json_summary(record: &RunRecord, out_dir: &Path) -> serde_json::Value {
         "wall_s": record.summary.wall_s,
         "out_dir": out_dir.display().to_string(),
         "completed": record.summary.completed,
+        "failure": record.summary.failure,
         "posterior_rotation": record.detector.as_ref().map(|d| d.posterior_rotation),
         "scenario": record.summary.scenario,
     })
