@@ -199,7 +199,7 @@ impl Scene {
 impl FetalBody {
     fn new(what: &'static str, surface: &TriSurface, density: f64, spacing: f64) -> Result<FetalBody, LabourError> {
         let (mass, com, inertia) = solid_properties(surface, density);
-        if !(mass > 0.0) {
+        if mass.is_nan() || mass <= 0.0 {
             return Err(LabourError::Anatomy(format!("the {what} surface encloses no volume (is it inside out?)")));
         }
         let vertices: Vec<DVec3> = surface.vertices.iter().map(|v| *v - com).collect();

@@ -206,12 +206,12 @@ impl<'a> Simulation<'a> {
 
         // Contacts with the bony pelvis.
         let mut reports: Vec<ContactReport> = Vec::with_capacity(n);
-        for b in 0..n {
+        for (b, wrench) in wrenches.iter_mut().enumerate() {
             let samples = if b == HEAD { &scene.head.samples } else { &scene.trunk.as_ref().expect("trunk").samples };
             let motion = self.motion(b);
             let law = if b == HEAD { &scene.law } else { &scene.trunk_law };
             let report = pelvis_contacts(&scene.pelvis_collider, law, samples, &motion, pivot, &mut self.state.bone_contacts[b])?;
-            wrenches[b] += report.wrench();
+            *wrench += report.wrench();
             reports.push(report);
         }
 
