@@ -15,7 +15,11 @@ pub struct Expulsion {
 
 impl Expulsion {
     pub fn new(s: &ExpulsionSection) -> Self {
-        Expulsion { min_n: s.force_min_n, max_n: s.force_max_n, period_s: s.period_s }
+        Expulsion {
+            min_n: s.force_min_n,
+            max_n: s.force_max_n,
+            period_s: s.period_s,
+        }
     }
 
     /// Magnitude at time `t`: f_min + (f_max - f_min) (1 - cos(2 pi t / T)) / 2,
@@ -37,7 +41,11 @@ mod tests {
 
     #[test]
     fn the_sinusoid_runs_between_its_bounds_along_minus_k() {
-        let e = Expulsion { min_n: -10.0, max_n: 120.0, period_s: 8.0 };
+        let e = Expulsion {
+            min_n: -10.0,
+            max_n: 120.0,
+            period_s: 8.0,
+        };
         assert_eq!(e.magnitude(0.0), -10.0);
         assert!((e.magnitude(4.0) - 120.0).abs() < 1e-12);
         assert!((e.magnitude(8.0) + 10.0).abs() < 1e-9);

@@ -38,7 +38,10 @@ pub enum LabourError {
     #[error("pose history: {0}")]
     History(#[from] carus_analysis::HistoryError),
     #[error("{path}: {message}")]
-    Output { path: std::path::PathBuf, message: String },
+    Output {
+        path: std::path::PathBuf,
+        message: String,
+    },
     #[error("checkpoint: {0}")]
     Checkpoint(String),
 }

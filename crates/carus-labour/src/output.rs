@@ -27,7 +27,10 @@ pub const TRUNK_BODY_VTU: &str = "trunk_body.vtu";
 pub const FRAMES_DIR: &str = "frames";
 
 fn output_error(path: &Path, e: impl std::fmt::Display) -> LabourError {
-    LabourError::Output { path: path.to_path_buf(), message: e.to_string() }
+    LabourError::Output {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    }
 }
 
 pub fn write_text(path: &Path, text: &str) -> Result<(), LabourError> {
@@ -62,14 +65,25 @@ pub fn read_checkpoint(dir: &Path) -> Result<Checkpoint, LabourError> {
     let path = dir.join(CHECKPOINT_FILE);
     let text = std::fs::read_to_string(&path)
         .map_err(|e| output_error(&path, format!("{e}; is this the out dir of a `carus run`?")))?;
-    serde_json::from_str(&text).map_err(|e| output_error(&path, format!("not a Carus checkpoint: {e}")))
+    serde_json::from_str(&text)
+        .map_err(|e| output_error(&path, format!("not a Carus checkpoint: {e}")))
 }
 
 /// A triangle surface as a VTU file (ASCII), placed by `pose`.
-pub fn write_surface_vtu(path: &Path, vertices: &[DVec3], triangles: &[[u32; 3]], pose: &RigidPose) -> Result<(), LabourError> {
+pub fn write_surface_vtu(
+    path: &Path,
+    vertices: &[DVec3],
+    triangles: &[[u32; 3]],
+    pose: &RigidPose,
+) -> Result<(), LabourError> {
     let mut s = String::with_capacity(64 * vertices.len() + 32 * triangles.len());
     s.push_str("<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\">\n<UnstructuredGrid>\n");
-    let _ = writeln!(s, "<Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">", vertices.len(), triangles.len());
+    let _ = writeln!(
+        s,
+        "<Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">",
+        vertices.len(),
+        triangles.len()
+    );
     s.push_str("<Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n");
     for v in vertices {
         let p = pose.transform_point(*v);
@@ -124,28 +138,81 @@ pub fn frame_name(stem: &str, k: usize) -> String {
 
 /// The pose history as CSV: the detector's series (station, theta, phi,
 /// forces...) beside the head and trunk poses in the pelvis frame.
-pub fn write_history_csv(path: &Path, history: &PoseHistory, report: Option<&DetectorReport>, floor: &[FloorSample]) -> Result<(), LabourError> {
+pub fn write_history_csv(
+    path: &Path,
+    history: &PoseHistory,
+    report: Option<&DetectorReport>,
+    floor: &[FloorSample],
+) -> Result<(), LabourError> {
     let (series_columns, rows) = match report {
         Some(r) => r.series.table(),
-        None => (vec!["time_s"], history.samples.iter().map(|s| vec![Some(s.time_s)]).collect()),
+        None => (
+            vec!["time_s"],
+            history
+                .samples
+                .iter()
+                .map(|s| vec![Some(s.time_s)])
+                .collect(),
+        ),
     };
     let mut header: Vec<&str> = series_columns.clone();
     let poses = [
-        "head_x_m", "head_y_m", "head_z_m", "head_qx", "head_qy", "head_qz", "head_qw", "trunk_x_m", "trunk_y_m", "trunk_z_m",
-        "trunk_qx", "trunk_qy", "trunk_qz", "trunk_qw", "expulsion_fx_n", "expulsion_fy_n", "expulsion_fz_n", "bone_fx_n",
-        "bone_fy_n", "bone_fz_n", "floor_fx_n", "floor_fy_n", "floor_fz_n", "floor_peak_stretch",
+        "head_x_m",
+        "head_y_m",
+        "head_z_m",
+        "head_qx",
+        "head_qy",
+        "head_qz",
+        "head_qw",
+        "trunk_x_m",
+        "trunk_y_m",
+        "trunk_z_m",
+        "trunk_qx",
+        "trunk_qy",
+        "trunk_qz",
+        "trunk_qw",
+        "expulsion_fx_n",
+        "expulsion_fy_n",
+        "expulsion_fz_n",
+        "bone_fx_n",
+        "bone_fy_n",
+        "bone_fz_n",
+        "floor_fx_n",
+        "floor_fy_n",
+        "floor_fz_n",
+        "floor_peak_stretch",
     ];
     header.extend_from_slice(&poses);
     let mut csv = CsvWriter::create(path, &header).map_err(|e| output_error(path, e))?;
     for (k, (row, sample)) in rows.iter().zip(&history.samples).enumerate() {
         let mut values: Vec<f64> = row.iter().map(|v| v.unwrap_or(f64::NAN)).collect();
         let h = sample.head;
-        values.extend([h.position_m.x, h.position_m.y, h.position_m.z, h.orientation.x, h.orientation.y, h.orientation.z, h.orientation.w]);
+        values.extend([
+            h.position_m.x,
+            h.position_m.y,
+            h.position_m.z,
+            h.orientation.x,
+            h.orientation.y,
+            h.orientation.z,
+            h.orientation.w,
+        ]);
         match sample.trunk {
-            Some(t) => values.extend([t.position_m.x, t.position_m.y, t.position_m.z, t.orientation.x, t.orientation.y, t.orientation.z, t.orientation.w]),
+            Some(t) => values.extend([
+                t.position_m.x,
+                t.position_m.y,
+                t.position_m.z,
+                t.orientation.x,
+                t.orientation.y,
+                t.orientation.z,
+                t.orientation.w,
+            ]),
             None => values.extend([f64::NAN; 7]),
         }
-        for f in [sample.expulsion_force_n, sample.bone_contact_force_n, sample.floor_contact_force_n] {
+        for f in [
+            sample.expulsion_force_n,
+            sample.bone_contact_force_n,
+            sample.floor_contact_force_n,
+        ] {
             values.extend(f.to_array());
         }
         values.push(floor.get(k).map_or(f64::NAN, |f| f.peak_stretch));

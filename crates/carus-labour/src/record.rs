@@ -75,9 +75,18 @@ pub struct Files {
 }
 
 /// The key moments the detector's report marks.
-pub fn key_moments(history: &PoseHistory, report: &DetectorReport, frame_times: &[f64]) -> Vec<KeyMoment> {
+pub fn key_moments(
+    history: &PoseHistory,
+    report: &DetectorReport,
+    frame_times: &[f64],
+) -> Vec<KeyMoment> {
     let m = &report.movements;
-    let crowning = report.series.head_delivered.iter().position(|&d| d).map(|i| report.series.time_s[i]);
+    let crowning = report
+        .series
+        .head_delivered
+        .iter()
+        .position(|&d| d)
+        .map(|i| report.series.time_s[i]);
     let candidates = [
         ("engagement", m.engagement.end_s),
         ("internal_rotation", m.internal_rotation.end_s),
@@ -88,9 +97,22 @@ pub fn key_moments(history: &PoseHistory, report: &DetectorReport, frame_times: 
         .iter()
         .filter_map(|(name, t)| {
             let t = (*t)?;
-            let sample = history.samples.iter().min_by(|a, b| (a.time_s - t).abs().total_cmp(&(b.time_s - t).abs()))?;
-            let frame = (0..frame_times.len()).min_by(|&a, &b| (frame_times[a] - t).abs().total_cmp(&(frame_times[b] - t).abs()));
-            Some(KeyMoment { name: name.to_string(), time_s: sample.time_s, head: sample.head, trunk: sample.trunk, frame })
+            let sample = history
+                .samples
+                .iter()
+                .min_by(|a, b| (a.time_s - t).abs().total_cmp(&(b.time_s - t).abs()))?;
+            let frame = (0..frame_times.len()).min_by(|&a, &b| {
+                (frame_times[a] - t)
+                    .abs()
+                    .total_cmp(&(frame_times[b] - t).abs())
+            });
+            Some(KeyMoment {
+                name: name.to_string(),
+                time_s: sample.time_s,
+                head: sample.head,
+                trunk: sample.trunk,
+                frame,
+            })
         })
         .collect()
 }

@@ -44,7 +44,12 @@ impl Observer for SilentObserver {
 const POLL_STEPS: u64 = 200;
 
 /// Runs `scenario` from its start, writing into `out_dir` (which must exist).
-pub fn run(scenario: &Scenario, out_dir: &Path, options: &RunOptions, observer: &mut dyn Observer) -> Result<RunRecord, LabourError> {
+pub fn run(
+    scenario: &Scenario,
+    out_dir: &Path,
+    options: &RunOptions,
+    observer: &mut dyn Observer,
+) -> Result<RunRecord, LabourError> {
     let started = Instant::now();
     let scene = Scene::build(scenario)?;
     output::write_text(&out_dir.join(output::SCENARIO_FILE), &scenario.to_toml()?)?;
@@ -54,13 +59,28 @@ pub fn run(scenario: &Scenario, out_dir: &Path, options: &RunOptions, observer: 
 }
 
 /// Continues the run in `out_dir` from its last checkpoint.
-pub fn resume(out_dir: &Path, options: &RunOptions, observer: &mut dyn Observer) -> Result<RunRecord, LabourError> {
+pub fn resume(
+    out_dir: &Path,
+    options: &RunOptions,
+    observer: &mut dyn Observer,
+) -> Result<RunRecord, LabourError> {
     let started = Instant::now();
     let checkpoint = output::read_checkpoint(out_dir)?;
-    let scenario = Scenario::parse(&out_dir.join(output::CHECKPOINT_FILE), &checkpoint.scenario_toml, checkpoint.base_dir.clone())?;
+    let scenario = Scenario::parse(
+        &out_dir.join(output::CHECKPOINT_FILE),
+        &checkpoint.scenario_toml,
+        checkpoint.base_dir.clone(),
+    )?;
     let scene = Scene::build(&scenario)?;
     let sim = Simulation::from_state(&scene, checkpoint.state)?;
-    drive(sim, out_dir, options, observer, checkpoint.frame_times, started)
+    drive(
+        sim,
+        out_dir,
+        options,
+        observer,
+        checkpoint.frame_times,
+        started,
+    )
 }
 
 fn drive(
@@ -80,7 +100,10 @@ fn drive(
     let stop_step = options.stop_at_s.map(|t| (t / dt).round() as u64);
     let frames_dir = out_dir.join(output::FRAMES_DIR);
     if s.output.vtu {
-        std::fs::create_dir_all(&frames_dir).map_err(|e| LabourError::Output { path: frames_dir.clone(), message: e.to_string() })?;
+        std::fs::create_dir_all(&frames_dir).map_err(|e| LabourError::Output {
+            path: frames_dir.clone(),
+            message: e.to_string(),
+        })?;
         if sim.state.step == 0 && frame_times.is_empty() {
             write_frame(&sim, out_dir, &mut frame_times)?;
         }
@@ -88,7 +111,12 @@ fn drive(
     let mut completed = true;
     let mut failure = None;
     while sim.state.step < end_steps {
-        if stop_step.is_some_and(|k| sim.state.step >= k) || options.stop.as_ref().is_some_and(|f| f.load(Ordering::Relaxed)) {
+        if stop_step.is_some_and(|k| sim.state.step >= k)
+            || options
+                .stop
+                .as_ref()
+                .is_some_and(|f| f.load(Ordering::Relaxed))
+        {
             completed = false;
             break;
         }
@@ -124,41 +152,92 @@ fn delivered(sim: &Simulation<'_>) -> bool {
     let bodies = &sim.state.bodies;
     match &scene.trunk_geometry {
         Some(g) => outlet.signed_distance(bodies.pose(TRUNK).transform_point(g.centre_m)) > 0.03,
-        None => outlet.signed_distance(bodies.pose(HEAD).transform_point(scene.head_geometry.centre_m)) > 0.08,
+        None => {
+            outlet.signed_distance(
+                bodies
+                    .pose(HEAD)
+                    .transform_point(scene.head_geometry.centre_m),
+            ) > 0.08
+        }
     }
 }
 
-fn save_checkpoint(sim: &mut Simulation<'_>, out_dir: &Path, frame_times: &[f64]) -> Result<(), LabourError> {
+fn save_checkpoint(
+    sim: &mut Simulation<'_>,
+    out_dir: &Path,
+    frame_times: &[f64],
+) -> Result<(), LabourError> {
     let scenario_toml = sim.scene.scenario.to_toml()?;
     let base_dir = sim.scene.scenario.base_dir.clone();
     let state = sim.checkpoint_state().clone();
-    output::write_checkpoint(out_dir, &Checkpoint { scenario_toml, base_dir, state, frame_times: frame_times.to_vec() })
+    output::write_checkpoint(
+        out_dir,
+        &Checkpoint {
+            scenario_toml,
+            base_dir,
+            state,
+            frame_times: frame_times.to_vec(),
+        },
+    )
 }
 
 /// The surfaces that do not move: the pelvis, and the fetal parts in their body frames.
 fn write_static(scene: &Scene, out_dir: &Path) -> Result<(), LabourError> {
     let identity = RigidPose::default();
     let p = &scene.pelvis.surface;
-    output::write_surface_vtu(&out_dir.join(output::PELVIS_VTU), &p.vertices, &p.triangles, &identity)?;
+    output::write_surface_vtu(
+        &out_dir.join(output::PELVIS_VTU),
+        &p.vertices,
+        &p.triangles,
+        &identity,
+    )?;
     let h = &scene.head.surface;
-    output::write_surface_vtu(&out_dir.join(output::HEAD_BODY_VTU), &h.vertices, &h.triangles, &identity)?;
+    output::write_surface_vtu(
+        &out_dir.join(output::HEAD_BODY_VTU),
+        &h.vertices,
+        &h.triangles,
+        &identity,
+    )?;
     if let Some(t) = &scene.trunk {
-        output::write_surface_vtu(&out_dir.join(output::TRUNK_BODY_VTU), &t.surface.vertices, &t.surface.triangles, &identity)?;
+        output::write_surface_vtu(
+            &out_dir.join(output::TRUNK_BODY_VTU),
+            &t.surface.vertices,
+            &t.surface.triangles,
+            &identity,
+        )?;
     }
     Ok(())
 }
 
-fn write_frame(sim: &Simulation<'_>, out_dir: &Path, frame_times: &mut Vec<f64>) -> Result<(), LabourError> {
+fn write_frame(
+    sim: &Simulation<'_>,
+    out_dir: &Path,
+    frame_times: &mut Vec<f64>,
+) -> Result<(), LabourError> {
     let scene = sim.scene;
     let k = frame_times.len();
     let bodies = &sim.state.bodies;
     let h = &scene.head.surface;
-    output::write_surface_vtu(&out_dir.join(output::frame_name("head", k)), &h.vertices, &h.triangles, &bodies.pose(HEAD))?;
+    output::write_surface_vtu(
+        &out_dir.join(output::frame_name("head", k)),
+        &h.vertices,
+        &h.triangles,
+        &bodies.pose(HEAD),
+    )?;
     if let Some(t) = &scene.trunk {
-        output::write_surface_vtu(&out_dir.join(output::frame_name("trunk", k)), &t.surface.vertices, &t.surface.triangles, &bodies.pose(TRUNK))?;
+        output::write_surface_vtu(
+            &out_dir.join(output::frame_name("trunk", k)),
+            &t.surface.vertices,
+            &t.surface.triangles,
+            &bodies.pose(TRUNK),
+        )?;
     }
     if let (Some(floor), Some(solver)) = (&scene.floor, sim.solver()) {
-        output::write_floor_vtu(&out_dir.join(output::frame_name("floor", k)), &floor.mesh, solver)?;
+        output::write_floor_vtu(
+            &out_dir.join(output::frame_name("floor", k)),
+            &floor.mesh,
+            solver,
+        )?;
     }
     frame_times.push(sim.time_s());
     Ok(())
@@ -186,18 +265,47 @@ fn finish(
     let scene = sim.scene;
     let history = history(sim);
     // A run stopped before its second sample has nothing to detect yet.
-    let report = if history.samples.len() >= 2 { Some(detect(&history)?) } else { None };
+    let report = if history.samples.len() >= 2 {
+        Some(detect(&history)?)
+    } else {
+        None
+    };
     output::write_json(&out_dir.join(output::HISTORY_JSON), &history)?;
     output::write_json(&out_dir.join(output::MOVEMENTS_FILE), &report)?;
-    output::write_history_csv(&out_dir.join(output::HISTORY_CSV), &history, report.as_ref(), &sim.state.floor_samples)?;
+    output::write_history_csv(
+        &out_dir.join(output::HISTORY_CSV),
+        &history,
+        report.as_ref(),
+        &sim.state.floor_samples,
+    )?;
     let vtu = scene.scenario.output.vtu && !frame_times.is_empty();
-    let pvd = |stem: &str| if vtu { output::write_pvd(out_dir, stem, frame_times).map(Some) } else { Ok(None) };
+    let pvd = |stem: &str| {
+        if vtu {
+            output::write_pvd(out_dir, stem, frame_times).map(Some)
+        } else {
+            Ok(None)
+        }
+    };
     let head_pvd = pvd("head")?;
-    let trunk_pvd = if scene.trunk.is_some() { pvd("trunk")? } else { None };
-    let floor_pvd = if scene.floor.is_some() { pvd("floor")? } else { None };
+    let trunk_pvd = if scene.trunk.is_some() {
+        pvd("trunk")?
+    } else {
+        None
+    };
+    let floor_pvd = if scene.floor.is_some() {
+        pvd("floor")?
+    } else {
+        None
+    };
     let summary = RunSummary {
         scenario: scene.scenario.name.clone(),
-        outcome: report.as_ref().map_or(Outcome { delivered: false, arrest: None }, |r| r.outcome.clone()),
+        outcome: report.as_ref().map_or(
+            Outcome {
+                delivered: false,
+                arrest: None,
+            },
+            |r| r.outcome.clone(),
+        ),
         simulated_s: sim.time_s(),
         wall_s: started.elapsed().as_secs_f64(),
         completed,
@@ -214,7 +322,9 @@ fn finish(
     let record = RunRecord {
         scenario: scene.scenario.clone(),
         summary,
-        key_moments: report.as_ref().map_or_else(Vec::new, |r| key_moments(&history, r, frame_times)),
+        key_moments: report
+            .as_ref()
+            .map_or_else(Vec::new, |r| key_moments(&history, r, frame_times)),
         history,
         detector: report,
         floor: sim.state.floor_samples.clone(),
@@ -273,8 +383,18 @@ mod tests {
         assert_eq!(a.floor, b.floor);
         // It moved: the head descended under the expulsion force.
         let series = &a.detector.as_ref().unwrap().series;
-        assert!(series.station_mm.last().unwrap() - series.station_mm[0] > 10.0, "{:?}", series.station_mm);
-        for file in [output::RUN_FILE, output::MOVEMENTS_FILE, output::HISTORY_CSV, output::HISTORY_JSON, output::CHECKPOINT_FILE] {
+        assert!(
+            series.station_mm.last().unwrap() - series.station_mm[0] > 10.0,
+            "{:?}",
+            series.station_mm
+        );
+        for file in [
+            output::RUN_FILE,
+            output::MOVEMENTS_FILE,
+            output::HISTORY_CSV,
+            output::HISTORY_JSON,
+            output::CHECKPOINT_FILE,
+        ] {
             assert!(dir.path().join(file).exists(), "{file} missing");
         }
     }
@@ -287,12 +407,26 @@ mod tests {
         let (_, a) = run_in(&s, &RunOptions::default());
         let (_, b) = run_in(&fine, &RunOptions::default());
         // The TLED sub-step is chosen per rigid step: halving dt halves the sub-steps per step.
-        assert_ne!(a.summary.floor_substeps_per_step, b.summary.floor_substeps_per_step);
-        let (sa, sb) = (&a.detector.as_ref().unwrap().series, &b.detector.as_ref().unwrap().series);
+        assert_ne!(
+            a.summary.floor_substeps_per_step,
+            b.summary.floor_substeps_per_step
+        );
+        let (sa, sb) = (
+            &a.detector.as_ref().unwrap().series,
+            &b.detector.as_ref().unwrap().series,
+        );
         assert_eq!(sa.time_s.len(), sb.time_s.len());
         for k in 0..sa.time_s.len() {
-            let (ds, dtheta, dphi) = (sa.station_mm[k] - sb.station_mm[k], sa.theta_deg[k] - sb.theta_deg[k], sa.phi_deg[k] - sb.phi_deg[k]);
-            assert!(ds.abs() < 1.0 && dtheta.abs() < 2.0 && dphi.abs() < 2.0, "t = {}: station {ds} mm, theta {dtheta}, phi {dphi} deg apart", sa.time_s[k]);
+            let (ds, dtheta, dphi) = (
+                sa.station_mm[k] - sb.station_mm[k],
+                sa.theta_deg[k] - sb.theta_deg[k],
+                sa.phi_deg[k] - sb.phi_deg[k],
+            );
+            assert!(
+                ds.abs() < 1.0 && dtheta.abs() < 2.0 && dphi.abs() < 2.0,
+                "t = {}: station {ds} mm, theta {dtheta}, phi {dphi} deg apart",
+                sa.time_s[k]
+            );
         }
     }
 
@@ -300,7 +434,13 @@ mod tests {
     fn a_resumed_run_equals_an_uninterrupted_one_bit_for_bit() {
         let s = coarse(2.0);
         let (_, whole) = run_in(&s, &RunOptions::default());
-        let (dir, half) = run_in(&s, &RunOptions { stop_at_s: Some(1.0), ..RunOptions::default() });
+        let (dir, half) = run_in(
+            &s,
+            &RunOptions {
+                stop_at_s: Some(1.0),
+                ..RunOptions::default()
+            },
+        );
         assert!(!half.summary.completed);
         assert_eq!(half.summary.simulated_s, 1.0);
         let resumed = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).unwrap();
@@ -315,10 +455,22 @@ mod tests {
     fn the_stop_flag_stops_cleanly_with_everything_written() {
         let s = coarse(2.0);
         let flag = Arc::new(AtomicBool::new(true));
-        let (dir, record) = run_in(&s, &RunOptions { stop: Some(flag), ..RunOptions::default() });
+        let (dir, record) = run_in(
+            &s,
+            &RunOptions {
+                stop: Some(flag),
+                ..RunOptions::default()
+            },
+        );
         assert!(!record.summary.completed);
         assert_eq!(record.summary.simulated_s, 0.0);
-        for file in [output::RUN_FILE, output::MOVEMENTS_FILE, output::HISTORY_CSV, output::CHECKPOINT_FILE, output::SCENARIO_FILE] {
+        for file in [
+            output::RUN_FILE,
+            output::MOVEMENTS_FILE,
+            output::HISTORY_CSV,
+            output::CHECKPOINT_FILE,
+            output::SCENARIO_FILE,
+        ] {
             assert!(dir.path().join(file).exists(), "{file} missing");
         }
     }

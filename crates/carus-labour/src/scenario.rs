@@ -18,11 +18,26 @@ pub const VISIBLE_HUMAN: &str = "visible-human-female";
 #[derive(Debug, thiserror::Error)]
 pub enum ScenarioError {
     #[error("{path}: cannot read: {source}")]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
     #[error("{path}:{line}: {key}{message}\n  hint: {hint}")]
-    Syntax { path: PathBuf, line: usize, key: String, message: String, hint: String },
+    Syntax {
+        path: PathBuf,
+        line: usize,
+        key: String,
+        message: String,
+        hint: String,
+    },
     #[error("{path}: `{key}` = {value}: {problem}\n  hint: {hint}")]
-    Value { path: PathBuf, key: &'static str, value: String, problem: String, hint: String },
+    Value {
+        path: PathBuf,
+        key: &'static str,
+        value: String,
+        problem: String,
+        hint: String,
+    },
     #[error("no built-in scenario named `{0}`; `carus scenarios` lists them")]
     UnknownBuiltin(String),
     #[error("cannot write the scenario as TOML: {0}")]
@@ -76,7 +91,10 @@ impl Position {
     }
 
     fn is_mentum(self) -> bool {
-        matches!(self, Position::MA | Position::MP | Position::LMT | Position::RMT)
+        matches!(
+            self,
+            Position::MA | Position::MP | Position::LMT | Position::RMT
+        )
     }
 }
 
@@ -95,7 +113,11 @@ pub struct TrunkSection {
 impl Default for TrunkSection {
     fn default() -> Self {
         let d = TrunkDiameters::default();
-        TrunkSection { enabled: true, bisacromial_mm: d.bisacromial_mm, bitrochanteric_mm: d.bitrochanteric_mm }
+        TrunkSection {
+            enabled: true,
+            bisacromial_mm: d.bisacromial_mm,
+            bitrochanteric_mm: d.bitrochanteric_mm,
+        }
     }
 }
 
@@ -115,7 +137,12 @@ impl Default for StartSection {
     fn default() -> Self {
         // LOT, head above the inlet, slightly flexed: the normal labour of
         // CARDINAL_MOVEMENTS.md ("Clinical sanity cases").
-        StartSection { station_mm: -55.0, presentation: Presentation::Vertex, position: Position::LOT, attitude_deg: 5.0 }
+        StartSection {
+            station_mm: -55.0,
+            presentation: Presentation::Vertex,
+            position: Position::LOT,
+            attitude_deg: 5.0,
+        }
     }
 }
 
@@ -144,7 +171,12 @@ pub struct ExpulsionSection {
 
 impl Default for ExpulsionSection {
     fn default() -> Self {
-        ExpulsionSection { force_min_n: 0.0, force_max_n: 120.0, period_s: 8.0, acts_on: ActsOn::Trunk }
+        ExpulsionSection {
+            force_min_n: 0.0,
+            force_max_n: 120.0,
+            period_s: 8.0,
+            acts_on: ActsOn::Trunk,
+        }
     }
 }
 
@@ -295,7 +327,12 @@ impl Default for FloorSection {
             bulk_modulus_pa: 400e3,
             density_kg_per_m3: 1060.0,
             damping_per_s: 400.0,
-            mesh: FloorParameters { elements_around: 32, elements_across: 6, elements_through: 1, ..FloorParameters::default() },
+            mesh: FloorParameters {
+                elements_around: 32,
+                elements_across: 6,
+                elements_through: 1,
+                ..FloorParameters::default()
+            },
         }
     }
 }
@@ -345,7 +382,11 @@ pub struct OutputSection {
 
 impl Default for OutputSection {
     fn default() -> Self {
-        OutputSection { every_s: 0.1, vtu: true, vtu_every_s: 1.0 }
+        OutputSection {
+            every_s: 0.1,
+            vtu: true,
+            vtu_every_s: 1.0,
+        }
     }
 }
 
@@ -386,32 +427,55 @@ pub struct Scenario {
 /// The built-in scenarios, embedded in the binary: (name, TOML text).
 pub const BUILTINS: [(&str, &str); 6] = [
     ("normal", include_str!("../../../scenarios/normal.toml")),
-    ("real-pelvis", include_str!("../../../scenarios/real-pelvis.toml")),
-    ("contracted-inlet", include_str!("../../../scenarios/contracted-inlet.toml")),
+    (
+        "real-pelvis",
+        include_str!("../../../scenarios/real-pelvis.toml"),
+    ),
+    (
+        "contracted-inlet",
+        include_str!("../../../scenarios/contracted-inlet.toml"),
+    ),
     ("face", include_str!("../../../scenarios/face.toml")),
-    ("occiput-posterior", include_str!("../../../scenarios/occiput-posterior.toml")),
-    ("large-shoulders", include_str!("../../../scenarios/large-shoulders.toml")),
+    (
+        "occiput-posterior",
+        include_str!("../../../scenarios/occiput-posterior.toml"),
+    ),
+    (
+        "large-shoulders",
+        include_str!("../../../scenarios/large-shoulders.toml"),
+    ),
 ];
 
 impl Scenario {
     /// A built-in scenario by name.
     pub fn builtin(name: &str) -> Result<Scenario, ScenarioError> {
-        let (_, text) = BUILTINS.iter().find(|(n, _)| *n == name).ok_or_else(|| ScenarioError::UnknownBuiltin(name.into()))?;
-        Scenario::parse(Path::new(&format!("<built-in {name}>")), text, PathBuf::from("."))
+        let (_, text) = BUILTINS
+            .iter()
+            .find(|(n, _)| *n == name)
+            .ok_or_else(|| ScenarioError::UnknownBuiltin(name.into()))?;
+        Scenario::parse(
+            Path::new(&format!("<built-in {name}>")),
+            text,
+            PathBuf::from("."),
+        )
     }
 
     /// Reads a scenario file.
     pub fn from_file(path: &Path) -> Result<Scenario, ScenarioError> {
-        let text = std::fs::read_to_string(path).map_err(|source| ScenarioError::Io { path: path.to_path_buf(), source })?;
+        let text = std::fs::read_to_string(path).map_err(|source| ScenarioError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
         let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
         Scenario::parse(path, &text, base)
     }
 
     /// Parses and checks scenario text; `path` names it in errors.
     pub fn parse(path: &Path, text: &str, base_dir: PathBuf) -> Result<Scenario, ScenarioError> {
-        let deserializer = toml::Deserializer::parse(text).map_err(|e| syntax(path, text, String::new(), &e))?;
-        let mut scenario: Scenario =
-            serde_path_to_error::deserialize(deserializer).map_err(|e| syntax(path, text, e.path().to_string(), e.inner()))?;
+        let deserializer =
+            toml::Deserializer::parse(text).map_err(|e| syntax(path, text, String::new(), &e))?;
+        let mut scenario: Scenario = serde_path_to_error::deserialize(deserializer)
+            .map_err(|e| syntax(path, text, e.path().to_string(), e.inner()))?;
         scenario.base_dir = base_dir;
         scenario.check(path)?;
         Ok(scenario)
@@ -438,25 +502,101 @@ impl Scenario {
             hint: hint.into(),
         };
         let positive: [(&'static str, f64, &str); 19] = [
-            ("trunk.bisacromial_mm", self.trunk.bisacromial_mm, "a diameter in mm, e.g. 120.0"),
-            ("trunk.bitrochanteric_mm", self.trunk.bitrochanteric_mm, "a diameter in mm, e.g. 95.0"),
-            ("expulsion.period_s", self.expulsion.period_s, "seconds per contraction, e.g. 8.0"),
-            ("contact.penalty_stiffness_pa_per_m", self.contact.penalty_stiffness_pa_per_m, "Pa/m, e.g. 9.4e8"),
-            ("contact.sample_spacing_mm", self.contact.sample_spacing_mm, "mm between contact samples, e.g. 4.0"),
-            ("contact.trunk_penalty_stiffness_pa_per_m", self.contact.trunk_penalty_stiffness_pa_per_m, "Pa/m, e.g. 9.4e7"),
-            ("fetus.density_kg_per_m3", self.fetus.density_kg_per_m3, "kg/m^3, e.g. 1050.0"),
-            ("floor.shear_modulus_pa", self.floor.shear_modulus_pa, "Pa (not kPa), e.g. 20000.0"),
-            ("floor.bulk_modulus_pa", self.floor.bulk_modulus_pa, "Pa, larger than the shear modulus"),
-            ("floor.density_kg_per_m3", self.floor.density_kg_per_m3, "kg/m^3, e.g. 1060.0"),
-            ("numerics.rigid_dt_s", self.numerics.rigid_dt_s, "seconds, e.g. 5e-4"),
-            ("numerics.end_time_s", self.numerics.end_time_s, "seconds of simulated time, e.g. 60.0"),
-            ("numerics.floor_step_fraction", self.numerics.floor_step_fraction, "a fraction of the critical step, at most 1"),
-            ("numerics.checkpoint_every_s", self.numerics.checkpoint_every_s, "seconds of simulated time, e.g. 5.0"),
-            ("output.every_s", self.output.every_s, "seconds between samples, e.g. 0.1"),
-            ("output.vtu_every_s", self.output.vtu_every_s, "seconds between VTU frames, e.g. 1.0"),
-            ("contact.damping_time_s", self.contact.damping_time_s + f64::MIN_POSITIVE, "seconds, 0 or more, e.g. 1e-3"),
-            ("expulsion.force_max_n", self.expulsion.force_max_n, "newtons, e.g. 120.0 (REFERENCE_DATA.md: 70-140 N)"),
-            ("fetus.trunk_linear_drag_n_s_per_m", self.fetus.trunk_linear_drag_n_s_per_m + f64::MIN_POSITIVE, "N s/m, 0 or more"),
+            (
+                "trunk.bisacromial_mm",
+                self.trunk.bisacromial_mm,
+                "a diameter in mm, e.g. 120.0",
+            ),
+            (
+                "trunk.bitrochanteric_mm",
+                self.trunk.bitrochanteric_mm,
+                "a diameter in mm, e.g. 95.0",
+            ),
+            (
+                "expulsion.period_s",
+                self.expulsion.period_s,
+                "seconds per contraction, e.g. 8.0",
+            ),
+            (
+                "contact.penalty_stiffness_pa_per_m",
+                self.contact.penalty_stiffness_pa_per_m,
+                "Pa/m, e.g. 9.4e8",
+            ),
+            (
+                "contact.sample_spacing_mm",
+                self.contact.sample_spacing_mm,
+                "mm between contact samples, e.g. 4.0",
+            ),
+            (
+                "contact.trunk_penalty_stiffness_pa_per_m",
+                self.contact.trunk_penalty_stiffness_pa_per_m,
+                "Pa/m, e.g. 9.4e7",
+            ),
+            (
+                "fetus.density_kg_per_m3",
+                self.fetus.density_kg_per_m3,
+                "kg/m^3, e.g. 1050.0",
+            ),
+            (
+                "floor.shear_modulus_pa",
+                self.floor.shear_modulus_pa,
+                "Pa (not kPa), e.g. 20000.0",
+            ),
+            (
+                "floor.bulk_modulus_pa",
+                self.floor.bulk_modulus_pa,
+                "Pa, larger than the shear modulus",
+            ),
+            (
+                "floor.density_kg_per_m3",
+                self.floor.density_kg_per_m3,
+                "kg/m^3, e.g. 1060.0",
+            ),
+            (
+                "numerics.rigid_dt_s",
+                self.numerics.rigid_dt_s,
+                "seconds, e.g. 5e-4",
+            ),
+            (
+                "numerics.end_time_s",
+                self.numerics.end_time_s,
+                "seconds of simulated time, e.g. 60.0",
+            ),
+            (
+                "numerics.floor_step_fraction",
+                self.numerics.floor_step_fraction,
+                "a fraction of the critical step, at most 1",
+            ),
+            (
+                "numerics.checkpoint_every_s",
+                self.numerics.checkpoint_every_s,
+                "seconds of simulated time, e.g. 5.0",
+            ),
+            (
+                "output.every_s",
+                self.output.every_s,
+                "seconds between samples, e.g. 0.1",
+            ),
+            (
+                "output.vtu_every_s",
+                self.output.vtu_every_s,
+                "seconds between VTU frames, e.g. 1.0",
+            ),
+            (
+                "contact.damping_time_s",
+                self.contact.damping_time_s + f64::MIN_POSITIVE,
+                "seconds, 0 or more, e.g. 1e-3",
+            ),
+            (
+                "expulsion.force_max_n",
+                self.expulsion.force_max_n,
+                "newtons, e.g. 120.0 (REFERENCE_DATA.md: 70-140 N)",
+            ),
+            (
+                "fetus.trunk_linear_drag_n_s_per_m",
+                self.fetus.trunk_linear_drag_n_s_per_m + f64::MIN_POSITIVE,
+                "N s/m, 0 or more",
+            ),
         ];
         for (key, value, hint) in positive {
             if !(value.is_finite() && value > 0.0) {
@@ -465,56 +605,133 @@ impl Scenario {
         }
         for (key, value) in [
             ("contact.friction", self.contact.friction),
-            ("fetus.trunk_angular_drag_nm_s_per_rad", self.fetus.trunk_angular_drag_nm_s_per_rad),
-            ("fetus.head_linear_drag_n_s_per_m", self.fetus.head_linear_drag_n_s_per_m),
-            ("fetus.head_angular_drag_nm_s_per_rad", self.fetus.head_angular_drag_nm_s_per_rad),
+            (
+                "fetus.trunk_angular_drag_nm_s_per_rad",
+                self.fetus.trunk_angular_drag_nm_s_per_rad,
+            ),
+            (
+                "fetus.head_linear_drag_n_s_per_m",
+                self.fetus.head_linear_drag_n_s_per_m,
+            ),
+            (
+                "fetus.head_angular_drag_nm_s_per_rad",
+                self.fetus.head_angular_drag_nm_s_per_rad,
+            ),
             ("floor.damping_per_s", self.floor.damping_per_s),
             ("neck.flexion_nm_per_deg", self.neck.flexion_nm_per_deg),
             ("neck.extension_nm_per_deg", self.neck.extension_nm_per_deg),
-            ("neck.lateral_bending_nm_per_deg", self.neck.lateral_bending_nm_per_deg),
-            ("neck.axial_rotation_nm_per_deg", self.neck.axial_rotation_nm_per_deg),
+            (
+                "neck.lateral_bending_nm_per_deg",
+                self.neck.lateral_bending_nm_per_deg,
+            ),
+            (
+                "neck.axial_rotation_nm_per_deg",
+                self.neck.axial_rotation_nm_per_deg,
+            ),
             ("neck.compression_n_per_m", self.neck.compression_n_per_m),
             ("neck.tension_n_per_m", self.neck.tension_n_per_m),
             ("neck.shear_n_per_m", self.neck.shear_n_per_m),
         ] {
             if !(value.is_finite() && value >= 0.0) {
-                return Err(err(key, value, "must be zero or more and finite", "a non-negative number in the key's unit"));
+                return Err(err(
+                    key,
+                    value,
+                    "must be zero or more and finite",
+                    "a non-negative number in the key's unit",
+                ));
             }
         }
         if self.contact.friction > 2.0 {
-            return Err(err("contact.friction", self.contact.friction, "is not a plausible Coulomb coefficient", "0 to about 1; REFERENCE_DATA.md: 0.35"));
+            return Err(err(
+                "contact.friction",
+                self.contact.friction,
+                "is not a plausible Coulomb coefficient",
+                "0 to about 1; REFERENCE_DATA.md: 0.35",
+            ));
         }
-        if self.expulsion.force_min_n > self.expulsion.force_max_n || !self.expulsion.force_min_n.is_finite() {
-            return Err(err("expulsion.force_min_n", self.expulsion.force_min_n, "must not exceed force_max_n", "the force between contractions, e.g. 0.0 or -10.0"));
+        if self.expulsion.force_min_n > self.expulsion.force_max_n
+            || !self.expulsion.force_min_n.is_finite()
+        {
+            return Err(err(
+                "expulsion.force_min_n",
+                self.expulsion.force_min_n,
+                "must not exceed force_max_n",
+                "the force between contractions, e.g. 0.0 or -10.0",
+            ));
         }
         if self.expulsion.force_max_n > 2000.0 {
-            return Err(err("expulsion.force_max_n", self.expulsion.force_max_n, "is far above any expulsive force", "newtons (not mN): REFERENCE_DATA.md gives 70-140 N"));
+            return Err(err(
+                "expulsion.force_max_n",
+                self.expulsion.force_max_n,
+                "is far above any expulsive force",
+                "newtons (not mN): REFERENCE_DATA.md gives 70-140 N",
+            ));
         }
         if self.floor.bulk_modulus_pa <= self.floor.shear_modulus_pa {
-            return Err(err("floor.bulk_modulus_pa", self.floor.bulk_modulus_pa, "must exceed the shear modulus (soft tissue is nearly incompressible)", "e.g. 20 x shear_modulus_pa"));
+            return Err(err(
+                "floor.bulk_modulus_pa",
+                self.floor.bulk_modulus_pa,
+                "must exceed the shear modulus (soft tissue is nearly incompressible)",
+                "e.g. 20 x shear_modulus_pa",
+            ));
         }
         if self.numerics.floor_step_fraction > 1.0 {
-            return Err(err("numerics.floor_step_fraction", self.numerics.floor_step_fraction, "a step above the critical one is unstable", "0.5 to 0.9"));
+            return Err(err(
+                "numerics.floor_step_fraction",
+                self.numerics.floor_step_fraction,
+                "a step above the critical one is unstable",
+                "0.5 to 0.9",
+            ));
         }
         if self.numerics.rigid_dt_s > 5e-3 {
-            return Err(err("numerics.rigid_dt_s", self.numerics.rigid_dt_s, "is above the contact's stable step (about 2 ms, docs/CONTACT.md)", "1e-4 to 1e-3 s"));
+            return Err(err(
+                "numerics.rigid_dt_s",
+                self.numerics.rigid_dt_s,
+                "is above the contact's stable step (about 2 ms, docs/CONTACT.md)",
+                "1e-4 to 1e-3 s",
+            ));
         }
         if !(3..=6).contains(&self.numerics.head_subdivisions) {
-            return Err(err("numerics.head_subdivisions", self.numerics.head_subdivisions as f64, "must be 3 to 6", "4 is the default"));
+            return Err(err(
+                "numerics.head_subdivisions",
+                self.numerics.head_subdivisions as f64,
+                "must be 3 to 6",
+                "4 is the default",
+            ));
         }
         if !self.start.station_mm.is_finite() || self.start.station_mm.abs() > 200.0 {
-            return Err(err("start.station_mm", self.start.station_mm, "is outside the birth canal's reach", "mm from the spines, e.g. -55.0 (negative above)"));
+            return Err(err(
+                "start.station_mm",
+                self.start.station_mm,
+                "is outside the birth canal's reach",
+                "mm from the spines, e.g. -55.0 (negative above)",
+            ));
         }
         if !self.start.attitude_deg.is_finite() || self.start.attitude_deg.abs() > 90.0 {
-            return Err(err("start.attitude_deg", self.start.attitude_deg, "is not a head attitude", "degrees, -90 to 90 (positive flexed)"));
+            return Err(err(
+                "start.attitude_deg",
+                self.start.attitude_deg,
+                "is not a head attitude",
+                "degrees, -90 to 90 (positive flexed)",
+            ));
         }
         let mentum = self.start.position.is_mentum();
         match self.start.presentation {
             Presentation::Face if !mentum => {
-                return Err(err("start.position", 0.0, "a face presentation is named by the chin", "use MA, MP, LMT or RMT with presentation = \"face\""))
+                return Err(err(
+                    "start.position",
+                    0.0,
+                    "a face presentation is named by the chin",
+                    "use MA, MP, LMT or RMT with presentation = \"face\"",
+                ))
             }
             Presentation::Vertex if mentum => {
-                return Err(err("start.position", 0.0, "a vertex presentation is named by the occiput", "use OA, LOA, LOT, LOP, OP, ROP, ROT or ROA, or set presentation = \"face\""))
+                return Err(err(
+                    "start.position",
+                    0.0,
+                    "a vertex presentation is named by the occiput",
+                    "use OA, LOA, LOT, LOP, OP, ROP, ROT or ROA, or set presentation = \"face\"",
+                ))
             }
             _ => {}
         }
@@ -532,19 +749,33 @@ impl Scenario {
 }
 
 fn syntax(path: &Path, text: &str, key: String, error: &toml::de::Error) -> ScenarioError {
-    let line = error.span().map_or(0, |s| text[..s.start.min(text.len())].matches('\n').count() + 1);
+    let line = error.span().map_or(0, |s| {
+        text[..s.start.min(text.len())].matches('\n').count() + 1
+    });
     let message = error.message().trim().to_string();
     let hint = if message.starts_with("unknown field") {
-        "check the spelling against `carus scenarios show normal`, which lists every key".to_string()
+        "check the spelling against `carus scenarios show normal`, which lists every key"
+            .to_string()
     } else if message.starts_with("unknown variant") {
         "use one of the values listed".to_string()
     } else if message.starts_with("invalid type") {
-        "numbers without quotes, names in quotes; units are in the key names (mm, deg, s, n, pa)".to_string()
+        "numbers without quotes, names in quotes; units are in the key names (mm, deg, s, n, pa)"
+            .to_string()
     } else {
         "see docs/SCENARIOS.md".to_string()
     };
-    let key = if key == "." || key.is_empty() { String::new() } else { format!("`{key}`: ") };
-    ScenarioError::Syntax { path: path.to_path_buf(), line, key, message, hint }
+    let key = if key == "." || key.is_empty() {
+        String::new()
+    } else {
+        format!("`{key}`: ")
+    };
+    ScenarioError::Syntax {
+        path: path.to_path_buf(),
+        line,
+        key,
+        message,
+        hint,
+    }
 }
 
 #[cfg(test)]
@@ -563,7 +794,16 @@ mod tests {
             let shown = s.to_toml().unwrap();
             let back = parse(&shown).unwrap();
             assert_eq!(back, s, "{name} does not round-trip:\n{shown}");
-            for table in ["[pelvis]", "[head]", "[start]", "[expulsion]", "[contact]", "[neck]", "[floor]", "[numerics]"] {
+            for table in [
+                "[pelvis]",
+                "[head]",
+                "[start]",
+                "[expulsion]",
+                "[contact]",
+                "[neck]",
+                "[floor]",
+                "[numerics]",
+            ] {
                 assert!(shown.contains(table), "{name}: {table} missing");
             }
         }
@@ -571,27 +811,57 @@ mod tests {
 
     #[test]
     fn unknown_keys_are_named_with_their_path() {
-        let e = parse("name = \"x\"\n[expulsion]\nforce_max = 100.0\n").unwrap_err().to_string();
-        assert!(e.contains("expulsion") && e.contains("force_max") && e.contains("test.toml:3"), "{e}");
-        let e = parse("name = \"x\"\n[head]\nbiparietal = 95.0\n").unwrap_err().to_string();
+        let e = parse("name = \"x\"\n[expulsion]\nforce_max = 100.0\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("expulsion") && e.contains("force_max") && e.contains("test.toml:3"),
+            "{e}"
+        );
+        let e = parse("name = \"x\"\n[head]\nbiparietal = 95.0\n")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("biparietal") && e.contains("hint"), "{e}");
     }
 
     #[test]
     fn wrong_units_and_impossible_values_are_refused_with_a_hint() {
-        let e = parse("name = \"x\"\n[expulsion]\nforce_max_n = \"120 N\"\n").unwrap_err().to_string();
-        assert!(e.contains("expulsion.force_max_n") && e.contains("hint"), "{e}");
-        let e = parse("name = \"x\"\n[expulsion]\nforce_max_n = 120000.0\n").unwrap_err().to_string();
-        assert!(e.contains("expulsion.force_max_n") && e.contains("newtons"), "{e}");
-        let e = parse("name = \"x\"\n[floor]\nshear_modulus_pa = -3.0\n").unwrap_err().to_string();
-        assert!(e.contains("floor.shear_modulus_pa") && e.contains("positive"), "{e}");
-        let e = parse("name = \"x\"\n[expulsion]\nforce_min_n = 200.0\nforce_max_n = 100.0\n").unwrap_err().to_string();
+        let e = parse("name = \"x\"\n[expulsion]\nforce_max_n = \"120 N\"\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("expulsion.force_max_n") && e.contains("hint"),
+            "{e}"
+        );
+        let e = parse("name = \"x\"\n[expulsion]\nforce_max_n = 120000.0\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("expulsion.force_max_n") && e.contains("newtons"),
+            "{e}"
+        );
+        let e = parse("name = \"x\"\n[floor]\nshear_modulus_pa = -3.0\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("floor.shear_modulus_pa") && e.contains("positive"),
+            "{e}"
+        );
+        let e = parse("name = \"x\"\n[expulsion]\nforce_min_n = 200.0\nforce_max_n = 100.0\n")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("force_min_n"), "{e}");
-        let e = parse("name = \"x\"\n[start]\nposition = \"MP\"\n").unwrap_err().to_string();
+        let e = parse("name = \"x\"\n[start]\nposition = \"MP\"\n")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("start.position") && e.contains("face"), "{e}");
-        let e = parse("name = \"x\"\n[start]\nposition = \"XYZ\"\n").unwrap_err().to_string();
+        let e = parse("name = \"x\"\n[start]\nposition = \"XYZ\"\n")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("start.position") && e.contains("LOT"), "{e}");
-        let e = parse("name = \"x\"\n[pelvis]\ninlet_ap_mm = 0.11\ninlet_ap_m = 0.11\n").unwrap_err().to_string();
+        let e = parse("name = \"x\"\n[pelvis]\ninlet_ap_mm = 0.11\ninlet_ap_m = 0.11\n")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("inlet_ap_m"), "{e}");
     }
 

@@ -12,8 +12,8 @@ use carus_anatomy::floor::{pelvic_floor, ATTACHED};
 use carus_anatomy::pelvis::PelvisSpec;
 use carus_anatomy::{Pelvis, TriSurface};
 use carus_contact::{
-    ContactLaw, HeadAxes, MassProperties, PelvisCollider, RegionTable, RigidBodyModel, RigidPose, SurfaceSamples,
-    TriangleCollider,
+    ContactLaw, HeadAxes, MassProperties, PelvisCollider, RegionTable, RigidBodyModel, RigidPose,
+    SurfaceSamples, TriangleCollider,
 };
 use carus_fem::{BoundaryConditions, Material, MaterialRegion, Mesh, ModelOptions, TledModel};
 use glam::{DMat3, DVec3};
@@ -81,7 +81,8 @@ pub struct Scene {
 impl Scene {
     pub fn build(scenario: &Scenario) -> Result<Scene, LabourError> {
         let pelvis = build_pelvis(scenario)?;
-        let canal = BirthCanal::from_pelvis(&pelvis).map_err(|e| LabourError::Anatomy(format!("pelvic axis: {e}")))?;
+        let canal = BirthCanal::from_pelvis(&pelvis)
+            .map_err(|e| LabourError::Anatomy(format!("pelvic axis: {e}")))?;
         let (labels, sites) = regions(&pelvis);
         let names = sites.iter().map(|s| s.name().to_string()).collect();
         let pelvis_collider = PelvisCollider::new(
@@ -94,21 +95,38 @@ impl Scene {
         let head_anatomy = FetalHead::with_subdivisions(&s.head, s.numerics.head_subdivisions)
             .map_err(|e| LabourError::Anatomy(format!("fetal head: {e}")))?;
         let spacing = s.contact.sample_spacing_mm * 1e-3;
-        let head = FetalBody::new("head", &head_anatomy.surface, s.fetus.density_kg_per_m3, spacing)?;
+        let head = FetalBody::new(
+            "head",
+            &head_anatomy.surface,
+            s.fetus.density_kg_per_m3,
+            spacing,
+        )?;
         let mut head_geometry = HeadGeometry::from_fetal_head(&head_anatomy);
         head_geometry.centre_m += head.frame_origin;
         for p in &mut head_geometry.skull_points_m {
             *p += head.frame_origin;
         }
-        let head_axes = HeadAxes { occipitofrontal: DVec3::X, vertex: DVec3::Z };
+        let head_axes = HeadAxes {
+            occipitofrontal: DVec3::X,
+            vertex: DVec3::Z,
+        };
         let pivot_in_head = head_anatomy.landmarks.atlanto_occipital + head.frame_origin;
 
         let mut bodies = RigidBodyModel::default();
         bodies.add(head.mass)?;
         let (trunk, trunk_geometry, spine_in_trunk) = if s.trunk.enabled {
-            let d = TrunkDiameters { bisacromial_mm: s.trunk.bisacromial_mm, bitrochanteric_mm: s.trunk.bitrochanteric_mm };
-            let anatomy = Trunk::new(&d).map_err(|e| LabourError::Anatomy(format!("fetal trunk: {e}")))?;
-            let body = FetalBody::new("trunk", &anatomy.surface, s.fetus.density_kg_per_m3, spacing)?;
+            let d = TrunkDiameters {
+                bisacromial_mm: s.trunk.bisacromial_mm,
+                bitrochanteric_mm: s.trunk.bitrochanteric_mm,
+            };
+            let anatomy =
+                Trunk::new(&d).map_err(|e| LabourError::Anatomy(format!("fetal trunk: {e}")))?;
+            let body = FetalBody::new(
+                "trunk",
+                &anatomy.surface,
+                s.fetus.density_kg_per_m3,
+                spacing,
+            )?;
             let mut g = TrunkGeometry::from_trunk(&anatomy);
             g.centre_m += body.frame_origin;
             g.right_acromion_m += body.frame_origin;
@@ -126,10 +144,17 @@ impl Scene {
             ..ContactLaw::default()
         };
         law.validate()?;
-        let trunk_law = ContactLaw { penalty_stiffness_pa_per_m: s.contact.trunk_penalty_stiffness_pa_per_m, ..law };
+        let trunk_law = ContactLaw {
+            penalty_stiffness_pa_per_m: s.contact.trunk_penalty_stiffness_pa_per_m,
+            ..law
+        };
         trunk_law.validate()?;
 
-        let floor = if s.floor.enabled { Some(build_floor(scenario, &pelvis)?) } else { None };
+        let floor = if s.floor.enabled {
+            Some(build_floor(scenario, &pelvis)?)
+        } else {
+            None
+        };
         let mut scene = Scene {
             scenario: scenario.clone(),
             pelvis,
@@ -165,7 +190,13 @@ impl Scene {
             Presentation::Face => start.position.theta_deg() + 180.0,
         };
         let orient = |phi: f64| {
-            carus_analysis::synthetic::head_orientation(frame.tangent, frame.anterior, frame.transverse, occiput_theta, phi)
+            carus_analysis::synthetic::head_orientation(
+                frame.tangent,
+                frame.anterior,
+                frame.transverse,
+                occiput_theta,
+                phi,
+            )
         };
         let (q_head, q_trunk) = (orient(start.attitude_deg), orient(0.0));
         // Place the head centre on the axis so its leading point sits at the station.
@@ -175,8 +206,14 @@ impl Scene {
         let mut position = DVec3::ZERO;
         for _ in 0..8 {
             position = axis.point(centre_sigma) - q_head * centre;
-            let pose = carus_analysis::RigidPose { position_m: position, orientation: q_head };
-            if let Some((_, sigma)) = self.canal.leading_point(&self.head_geometry.skull_points_m, &pose, centre_sigma) {
+            let pose = carus_analysis::RigidPose {
+                position_m: position,
+                orientation: q_head,
+            };
+            if let Some((_, sigma)) =
+                self.canal
+                    .leading_point(&self.head_geometry.skull_points_m, &pose, centre_sigma)
+            {
                 centre_sigma += target - sigma;
             }
         }
@@ -185,7 +222,10 @@ impl Scene {
         if let Some(trunk) = &self.trunk {
             let pivot = head.transform_point(self.pivot_in_head);
             // The trunk frame's origin is the pivot; its centre of mass sits at -frame_origin from it.
-            poses.push(RigidPose::new(pivot - q_trunk * trunk.frame_origin, q_trunk));
+            poses.push(RigidPose::new(
+                pivot - q_trunk * trunk.frame_origin,
+                q_trunk,
+            ));
         }
         poses
     }
@@ -197,20 +237,32 @@ impl Scene {
 }
 
 impl FetalBody {
-    fn new(what: &'static str, surface: &TriSurface, density: f64, spacing: f64) -> Result<FetalBody, LabourError> {
+    fn new(
+        what: &'static str,
+        surface: &TriSurface,
+        density: f64,
+        spacing: f64,
+    ) -> Result<FetalBody, LabourError> {
         let (mass, com, inertia) = solid_properties(surface, density);
         if mass.is_nan() || mass <= 0.0 {
-            return Err(LabourError::Anatomy(format!("the {what} surface encloses no volume (is it inside out?)")));
+            return Err(LabourError::Anatomy(format!(
+                "the {what} surface encloses no volume (is it inside out?)"
+            )));
         }
         let vertices: Vec<DVec3> = surface.vertices.iter().map(|v| *v - com).collect();
         let moved = TriSurface::new(vertices, surface.triangles.clone());
-        let samples = SurfaceSamples::with_spacing(what, &moved.vertices, &moved.triangles, spacing)?;
+        let samples =
+            SurfaceSamples::with_spacing(what, &moved.vertices, &moved.triangles, spacing)?;
         let collider = TriangleCollider::new(what, &moved.vertices, &moved.triangles)?;
         Ok(FetalBody {
             surface: moved,
             samples,
             collider,
-            mass: MassProperties { mass_kg: mass, inertia_kg_m2: inertia, rotation_locked: false },
+            mass: MassProperties {
+                mass_kg: mass,
+                inertia_kg_m2: inertia,
+                rotation_locked: false,
+            },
             frame_origin: -com,
         })
     }
@@ -266,15 +318,25 @@ fn build_pelvis(s: &Scenario) -> Result<Pelvis, LabourError> {
                 .map(|p| p.pelvis)
                 .map_err(|e| LabourError::Anatomy(format!("pelvis: {e}")))
         }
-        spec => spec.build(&s.base_dir).map_err(|e| LabourError::Anatomy(format!("pelvis: {e}"))),
+        spec => spec
+            .build(&s.base_dir)
+            .map_err(|e| LabourError::Anatomy(format!("pelvis: {e}"))),
     }
 }
 
 fn build_floor(s: &Scenario, pelvis: &Pelvis) -> Result<FloorScene, LabourError> {
-    let mesh = pelvic_floor(pelvis, &s.floor.mesh).map_err(|e| LabourError::Anatomy(format!("pelvic floor: {e}")))?;
+    let mesh = pelvic_floor(pelvis, &s.floor.mesh)
+        .map_err(|e| LabourError::Anatomy(format!("pelvic floor: {e}")))?;
     let material = Material::neo_hookean(s.floor.shear_modulus_pa, s.floor.bulk_modulus_pa);
-    let region = MaterialRegion { element_set: None, material, density_kg_m3: s.floor.density_kg_per_m3 };
-    let options = ModelOptions { damping_per_s: s.floor.damping_per_s, ..ModelOptions::default() };
+    let region = MaterialRegion {
+        element_set: None,
+        material,
+        density_kg_m3: s.floor.density_kg_per_m3,
+    };
+    let options = ModelOptions {
+        damping_per_s: s.floor.damping_per_s,
+        ..ModelOptions::default()
+    };
     let model = Arc::new(TledModel::new(&mesh, &[region], &options)?);
     let mut bcs = BoundaryConditions::default();
     let attached = mesh
@@ -284,7 +346,13 @@ fn build_floor(s: &Scenario, pelvis: &Pelvis) -> Result<FloorScene, LabourError>
     bcs.fix_nodes(attached);
     let reference = mesh.nodes.iter().map(|p| DVec3::from_array(*p)).collect();
     let critical_step_s = model.critical_time_step();
-    Ok(FloorScene { mesh, model, bcs, reference, critical_step_s })
+    Ok(FloorScene {
+        mesh,
+        model,
+        bcs,
+        reference,
+        critical_step_s,
+    })
 }
 
 /// Labels each pelvis triangle with the part of the bony canal it belongs
@@ -324,7 +392,11 @@ fn regions(pelvis: &Pelvis) -> (Vec<u16>, Vec<ContactSite>) {
             let centroid = (a + b + c) / 3.0;
             anchors
                 .iter()
-                .min_by(|x, y| (x.0 - centroid).length_squared().total_cmp(&(y.0 - centroid).length_squared()))
+                .min_by(|x, y| {
+                    (x.0 - centroid)
+                        .length_squared()
+                        .total_cmp(&(y.0 - centroid).length_squared())
+                })
                 .map_or(6, |a| a.1)
         })
         .collect();
@@ -338,10 +410,22 @@ mod tests {
     #[test]
     fn a_solid_box_has_the_textbook_mass_properties() {
         // Unit cube [0,1]^3 as 12 outward triangles.
-        let v: Vec<DVec3> = (0..8).map(|i| DVec3::new((i & 1) as f64, ((i >> 1) & 1) as f64, ((i >> 2) & 1) as f64)).collect();
+        let v: Vec<DVec3> = (0..8)
+            .map(|i| DVec3::new((i & 1) as f64, ((i >> 1) & 1) as f64, ((i >> 2) & 1) as f64))
+            .collect();
         let t = vec![
-            [0, 2, 1], [1, 2, 3], [4, 5, 6], [5, 7, 6], [0, 1, 4], [1, 5, 4],
-            [2, 6, 3], [3, 6, 7], [0, 4, 2], [2, 4, 6], [1, 3, 5], [3, 7, 5],
+            [0, 2, 1],
+            [1, 2, 3],
+            [4, 5, 6],
+            [5, 7, 6],
+            [0, 1, 4],
+            [1, 5, 4],
+            [2, 6, 3],
+            [3, 6, 7],
+            [0, 4, 2],
+            [2, 4, 6],
+            [1, 3, 5],
+            [3, 7, 5],
         ];
         let s = TriSurface::new(v, t);
         let (m, c, i) = solid_properties(&s, 2.0);

@@ -11,8 +11,8 @@
 
 use carus_analysis::{ContactSite, PoseSample};
 use carus_contact::{
-    pelvis_contacts, BodyContactState, BodyMotion, ContactReport, Neck, NeckGeometry, RigidBodyState, RigidPose,
-    TissueContact, Wrench,
+    pelvis_contacts, BodyContactState, BodyMotion, ContactReport, Neck, NeckGeometry,
+    RigidBodyState, RigidPose, TissueContact, Wrench,
 };
 use carus_fem::{SolverSnapshot, StepControl, TledSolver};
 use glam::{DMat3, DVec3};
@@ -93,7 +93,12 @@ impl<'a> Simulation<'a> {
                     axes: scene.head_axes,
                     neck_axis: -(q_trunk * scene.spine_in_trunk),
                 };
-                Some(Neck::new(&scene.bodies, &bodies, geometry, scene.scenario.neck.stiffness())?)
+                Some(Neck::new(
+                    &scene.bodies,
+                    &bodies,
+                    geometry,
+                    scene.scenario.neck.stiffness(),
+                )?)
             }
             None => None,
         };
@@ -102,13 +107,19 @@ impl<'a> Simulation<'a> {
             bone_contacts.push(BodyContactState::new(&t.samples));
         }
         let dt = scene.scenario.numerics.rigid_dt_s;
-        let solver = scene.floor.as_ref().map(|f| new_solver(scene, f, dt)).transpose()?;
+        let solver = scene
+            .floor
+            .as_ref()
+            .map(|f| new_solver(scene, f, dt))
+            .transpose()?;
         let floor = solver.as_ref().map(|(s, _)| {
             let reach = 0.01;
             let n = if scene.trunk.is_some() { 2 } else { 1 };
             FloorState {
                 solver: s.snapshot(),
-                contacts: (0..n).map(|_| TissueContact::new(reach).expect("positive reach")).collect(),
+                contacts: (0..n)
+                    .map(|_| TissueContact::new(reach).expect("positive reach"))
+                    .collect(),
             }
         });
         let body_count = scene.bodies.len();
@@ -123,7 +134,12 @@ impl<'a> Simulation<'a> {
             floor_samples: Vec::new(),
         };
         let mut sim = Simulation::from_state(scene, state)?;
-        sim.record(&StepForces { expulsion: sim.expulsion.force(0.0, sim.spine()), bone: DVec3::ZERO, floor: DVec3::ZERO, dominant: None });
+        sim.record(&StepForces {
+            expulsion: sim.expulsion.force(0.0, sim.spine()),
+            bone: DVec3::ZERO,
+            floor: DVec3::ZERO,
+            dominant: None,
+        });
         Ok(sim)
     }
 
@@ -136,13 +152,25 @@ impl<'a> Simulation<'a> {
                 (Some(s), n)
             }
             (None, None) => (None, 0),
-            _ => return Err(LabourError::Checkpoint("the checkpoint's floor does not match the scenario's".into())),
+            _ => {
+                return Err(LabourError::Checkpoint(
+                    "the checkpoint's floor does not match the scenario's".into(),
+                ))
+            }
         };
         if let (Some(solver), Some(floor)) = (solver.as_mut(), &state.floor) {
             solver.restore(&floor.solver)?;
         }
         let sample_every = ((scene.scenario.output.every_s / dt).round() as u64).max(1);
-        Ok(Simulation { scene, state, solver, expulsion: Expulsion::new(&scene.scenario.expulsion), dt, substeps, sample_every })
+        Ok(Simulation {
+            scene,
+            state,
+            solver,
+            expulsion: Expulsion::new(&scene.scenario.expulsion),
+            dt,
+            substeps,
+            sample_every,
+        })
     }
 
     pub fn time_s(&self) -> f64 {
@@ -201,16 +229,34 @@ impl<'a> Simulation<'a> {
         let pivot = self.pivot();
         match (scene.trunk.is_some(), scene.scenario.expulsion.acts_on) {
             (true, crate::scenario::ActsOn::Trunk) => wrenches[TRUNK].force += expulsion,
-            _ => wrenches[HEAD] += Wrench::at_point(expulsion, pivot, self.state.bodies.position[HEAD]),
+            _ => {
+                wrenches[HEAD] +=
+                    Wrench::at_point(expulsion, pivot, self.state.bodies.position[HEAD])
+            }
         }
 
         // Contacts with the bony pelvis.
         let mut reports: Vec<ContactReport> = Vec::with_capacity(n);
         for (b, wrench) in wrenches.iter_mut().enumerate() {
-            let samples = if b == HEAD { &scene.head.samples } else { &scene.trunk.as_ref().expect("trunk").samples };
+            let samples = if b == HEAD {
+                &scene.head.samples
+            } else {
+                &scene.trunk.as_ref().expect("trunk").samples
+            };
             let motion = self.motion(b);
-            let law = if b == HEAD { &scene.law } else { &scene.trunk_law };
-            let report = pelvis_contacts(&scene.pelvis_collider, law, samples, &motion, pivot, &mut self.state.bone_contacts[b])?;
+            let law = if b == HEAD {
+                &scene.law
+            } else {
+                &scene.trunk_law
+            };
+            let report = pelvis_contacts(
+                &scene.pelvis_collider,
+                law,
+                samples,
+                &motion,
+                pivot,
+                &mut self.state.bone_contacts[b],
+            )?;
             *wrench += report.wrench();
             reports.push(report);
         }
@@ -246,7 +292,10 @@ impl<'a> Simulation<'a> {
 
     /// The atlanto-occipital pivot as the head carries it.
     pub fn pivot(&self) -> DVec3 {
-        self.state.bodies.pose(HEAD).transform_point(self.scene.pivot_in_head)
+        self.state
+            .bodies
+            .pose(HEAD)
+            .transform_point(self.scene.pivot_in_head)
     }
 
     /// Drag force and torque that, added to `w`, give the backward-Euler
@@ -254,9 +303,15 @@ impl<'a> Simulation<'a> {
     fn implicit_drag(&self, b: usize, w: Wrench) -> Wrench {
         let f = &self.scene.scenario.fetus;
         let (c, ca) = if b == HEAD {
-            (f.head_linear_drag_n_s_per_m, f.head_angular_drag_nm_s_per_rad)
+            (
+                f.head_linear_drag_n_s_per_m,
+                f.head_angular_drag_nm_s_per_rad,
+            )
         } else {
-            (f.trunk_linear_drag_n_s_per_m, f.trunk_angular_drag_nm_s_per_rad)
+            (
+                f.trunk_linear_drag_n_s_per_m,
+                f.trunk_angular_drag_nm_s_per_rad,
+            )
         };
         let s = &self.state.bodies;
         let m = self.scene.bodies.mass_kg[b];
@@ -271,28 +326,46 @@ impl<'a> Simulation<'a> {
         } else {
             DVec3::ZERO
         };
-        Wrench { force: -c * v_new, torque }
+        Wrench {
+            force: -c * v_new,
+            torque,
+        }
     }
 
     /// The floor stage: hold the tissue nodes the fetus has entered on its
     /// surface (partial Dirichlet-Neumann, Lapeer et al. 2019), sub-step the
     /// tissue over the rigid step, and read back its reaction.
     fn couple_floor(&mut self) -> Result<(), LabourError> {
-        let (Some(solver), Some(floor_state), Some(floor)) = (self.solver.as_mut(), self.state.floor.as_mut(), self.scene.floor.as_ref())
-        else {
+        let (Some(solver), Some(floor_state), Some(floor)) = (
+            self.solver.as_mut(),
+            self.state.floor.as_mut(),
+            self.scene.floor.as_ref(),
+        ) else {
             return Ok(());
         };
         let scene = self.scene;
         let u = solver.displacements();
-        let nodes: Vec<DVec3> = floor.reference.iter().zip(&u).map(|(x, d)| *x + DVec3::from_array(*d)).collect();
+        let nodes: Vec<DVec3> = floor
+            .reference
+            .iter()
+            .zip(&u)
+            .map(|(x, d)| *x + DVec3::from_array(*d))
+            .collect();
         solver.release_imposed();
         let mut held_by: Vec<Vec<u32>> = Vec::with_capacity(floor_state.contacts.len());
         for (b, contact) in floor_state.contacts.iter_mut().enumerate() {
-            let collider = if b == HEAD { &scene.head.collider } else { &scene.trunk.as_ref().expect("trunk").collider };
+            let collider = if b == HEAD {
+                &scene.head.collider
+            } else {
+                &scene.trunk.as_ref().expect("trunk").collider
+            };
             let pose = self.state.bodies.pose(b);
             let held = contact.update(collider, &pose, &nodes);
             let ids: Vec<u32> = held.iter().map(|h| h.node).collect();
-            let targets: Vec<[f64; 3]> = held.iter().map(|h| (h.target - floor.reference[h.node as usize]).to_array()).collect();
+            let targets: Vec<[f64; 3]> = held
+                .iter()
+                .map(|h| (h.target - floor.reference[h.node as usize]).to_array())
+                .collect();
             // Fixed attachment nodes stay fixed: the solver's fixed dofs win.
             solver.impose_displacements(&ids, &targets)?;
             held_by.push(ids);
@@ -301,7 +374,11 @@ impl<'a> Simulation<'a> {
             solver.step()?;
         }
         solver.update_internal_forces()?;
-        let pivot = self.state.bodies.pose(HEAD).transform_point(scene.pivot_in_head);
+        let pivot = self
+            .state
+            .bodies
+            .pose(HEAD)
+            .transform_point(scene.pivot_in_head);
         for (b, (contact, ids)) in floor_state.contacts.iter_mut().zip(&held_by).enumerate() {
             let f = solver.internal_forces(ids)?;
             let on_body: Vec<DVec3> = f.iter().map(|v| -DVec3::from_array(*v)).collect();
@@ -334,14 +411,22 @@ impl<'a> Simulation<'a> {
         if floor.length() > largest {
             dominant = Some(ContactSite::PelvicFloor);
         }
-        StepForces { expulsion, bone, floor, dominant }
+        StepForces {
+            expulsion,
+            bone,
+            floor,
+            dominant,
+        }
     }
 
     fn record(&mut self, forces: &StepForces) {
         let s = &self.state.bodies;
         let pose = |b: usize| {
             let p: RigidPose = s.pose(b);
-            carus_analysis::RigidPose { position_m: p.position, orientation: p.orientation }
+            carus_analysis::RigidPose {
+                position_m: p.position,
+                orientation: p.orientation,
+            }
         };
         self.state.samples.push(PoseSample {
             time_s: self.time_s(),
@@ -367,9 +452,18 @@ impl<'a> Simulation<'a> {
 
 /// The floor's solver with a sub-step of `dt / n`, n the fewest sub-steps
 /// at or below the chosen fraction of the critical step; returns it with n.
-fn new_solver(scene: &Scene, floor: &crate::scene::FloorScene, dt: f64) -> Result<(TledSolver, u32), LabourError> {
+fn new_solver(
+    scene: &Scene,
+    floor: &crate::scene::FloorScene,
+    dt: f64,
+) -> Result<(TledSolver, u32), LabourError> {
     let h = scene.scenario.numerics.floor_step_fraction * floor.critical_step_s;
     let substeps = (dt / h).ceil().max(1.0) as u32;
-    let solver = TledSolver::new(floor.model.clone(), &floor.bcs, dt / substeps as f64, StepControl::Refuse)?;
+    let solver = TledSolver::new(
+        floor.model.clone(),
+        &floor.bcs,
+        dt / substeps as f64,
+        StepControl::Refuse,
+    )?;
     Ok((solver, substeps))
 }

@@ -57,13 +57,18 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
         // A second Ctrl-C is left to the default handler only if this fails to install.
         let _ = ctrlc::set_handler(move || stop.store(true, Ordering::Relaxed));
     }
-    let options = RunOptions { stop: Some(stop.clone()), stop_at_s: None };
+    let options = RunOptions {
+        stop: Some(stop.clone()),
+        stop_at_s: None,
+    };
     let show = !args.quiet && std::io::stderr().is_terminal();
     let bar = show.then(|| {
         let bar = indicatif::ProgressBar::new(1000);
         bar.set_style(
-            indicatif::ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {msg}, about {eta} left")
-                .expect("valid template"),
+            indicatif::ProgressStyle::with_template(
+                "{spinner} [{elapsed_precise}] {wide_bar} {msg}, about {eta} left",
+            )
+            .expect("valid template"),
         );
         bar
     });
@@ -74,13 +79,20 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
             if !args.quiet {
                 eprintln!("resuming the run in {}", dir.display());
             }
-            (dir.clone(), carus_labour::resume(dir, &options, &mut observer))
+            (
+                dir.clone(),
+                carus_labour::resume(dir, &options, &mut observer),
+            )
         }
         None => {
             let scenario = load(args.scenario.as_deref())?;
             let out_dir = prepare_out_dir(args.out.as_deref(), &scenario.name, args.force)?;
             if !args.quiet {
-                eprintln!("running scenario `{}` into {}", scenario.name, out_dir.display());
+                eprintln!(
+                    "running scenario `{}` into {}",
+                    scenario.name,
+                    out_dir.display()
+                );
             }
             let record = carus_labour::run(&scenario, &out_dir, &options, &mut observer);
             (out_dir, record)
@@ -93,14 +105,22 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
     if let Some(failure) = &record.summary.failure {
         eprintln!("error: the run ended early at t = {:.2} s: {failure} (everything up to then is written)", record.summary.simulated_s);
     } else if !record.summary.completed && !args.quiet {
-        eprintln!("stopped at t = {:.2} s; continue with: carus run --resume {}", record.summary.simulated_s, out_dir.display());
+        eprintln!(
+            "stopped at t = {:.2} s; continue with: carus run --resume {}",
+            record.summary.simulated_s,
+            out_dir.display()
+        );
     }
     if args.json {
         print_json(&json_summary(&record, &out_dir))?;
     } else {
         print_summary(&record, &out_dir);
     }
-    Ok(if record.summary.failure.is_some() { Status::Failed } else { Status::Success })
+    Ok(if record.summary.failure.is_some() {
+        Status::Failed
+    } else {
+        Status::Success
+    })
 }
 
 fn load(name: Option<&str>) -> anyhow::Result<Scenario> {
@@ -111,7 +131,10 @@ fn load(name: Option<&str>) -> anyhow::Result<Scenario> {
     let path = Path::new(name);
     if !path.exists() {
         let names: Vec<&str> = BUILTINS.iter().map(|(n, _)| *n).collect();
-        bail!("`{name}` is neither a built-in scenario ({}) nor a file", names.join(", "));
+        bail!(
+            "`{name}` is neither a built-in scenario ({}) nor a file",
+            names.join(", ")
+        );
     }
     Ok(Scenario::from_file(path)?)
 }
@@ -126,9 +149,17 @@ fn prepare_out_dir(out: Option<&Path>, name: &str, force: bool) -> anyhow::Resul
             .find(|d| !d.exists())
             .expect("a free name"),
     };
-    if dir.exists() && std::fs::read_dir(&dir).with_context(|| format!("{}", dir.display()))?.next().is_some() {
+    if dir.exists()
+        && std::fs::read_dir(&dir)
+            .with_context(|| format!("{}", dir.display()))?
+            .next()
+            .is_some()
+    {
         if !force {
-            bail!("{} already holds files; choose another --out, or add --force to replace them", dir.display());
+            bail!(
+                "{} already holds files; choose another --out, or add --force to replace them",
+                dir.display()
+            );
         }
         std::fs::remove_dir_all(&dir).with_context(|| format!("cannot clear {}", dir.display()))?;
     }
@@ -158,7 +189,12 @@ fn json_summary(record: &RunRecord, out_dir: &Path) -> serde_json::Value {
 /// run stopped before there was anything to detect.
 fn movements(record: &RunRecord) -> Vec<(&'static str, Movement)> {
     match &record.detector {
-        Some(d) => d.movements.by_key().iter().map(|(k, m)| (*k, **m)).collect(),
+        Some(d) => d
+            .movements
+            .by_key()
+            .iter()
+            .map(|(k, m)| (*k, **m))
+            .collect(),
         None => [
             ("engagement", Unit::Mm),
             ("descent", Unit::Mm),
@@ -169,7 +205,18 @@ fn movements(record: &RunRecord) -> Vec<(&'static str, Movement)> {
             ("expulsion", Unit::Mm),
         ]
         .into_iter()
-        .map(|(k, unit)| (k, Movement { observed: false, start_s: None, end_s: None, size: None, unit }))
+        .map(|(k, unit)| {
+            (
+                k,
+                Movement {
+                    observed: false,
+                    start_s: None,
+                    end_s: None,
+                    size: None,
+                    unit,
+                },
+            )
+        })
         .collect(),
     }
 }
@@ -180,18 +227,32 @@ fn print_summary(record: &RunRecord, out_dir: &Path) {
         "delivered".to_string()
     } else {
         match &s.outcome.arrest {
-            Some(a) => format!("arrested at the {:?} stage, station {:+.0} mm, against {}", a.stage, a.station_mm, a.against),
+            Some(a) => format!(
+                "arrested at the {:?} stage, station {:+.0} mm, against {}",
+                a.stage, a.station_mm, a.against
+            ),
             None => "neither delivered nor arrested (the run ended too soon to tell)".to_string(),
         }
     };
     println!("scenario {}: {outcome}", s.scenario);
-    println!("simulated {:.1} s in {:.1} s wall time ({} rigid steps)", s.simulated_s, s.wall_s, s.rigid_steps);
+    println!(
+        "simulated {:.1} s in {:.1} s wall time ({} rigid steps)",
+        s.simulated_s, s.wall_s, s.rigid_steps
+    );
     for (key, m) in movements(record) {
-        let unit = serde_json::to_value(m.unit).ok().and_then(|v| v.as_str().map(str::to_string)).unwrap_or_default();
+        let unit = serde_json::to_value(m.unit)
+            .ok()
+            .and_then(|v| v.as_str().map(str::to_string))
+            .unwrap_or_default();
         match (m.observed, m.start_s, m.end_s, m.size) {
-            (true, Some(a), Some(b), Some(size)) => println!("  {key:18} observed  {a:6.1}-{b:6.1} s  {size:6.1} {unit}"),
+            (true, Some(a), Some(b), Some(size)) => {
+                println!("  {key:18} observed  {a:6.1}-{b:6.1} s  {size:6.1} {unit}")
+            }
             _ => println!("  {key:18} not observed"),
         }
     }
-    println!("results in {} (run.json, movements.json, pose_history.csv, *.pvd)", out_dir.display());
+    println!(
+        "results in {} (run.json, movements.json, pose_history.csv, *.pvd)",
+        out_dir.display()
+    );
 }

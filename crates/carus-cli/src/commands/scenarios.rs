@@ -34,7 +34,10 @@ pub fn run(args: &ScenariosArgs) -> anyhow::Result<Status> {
                 list.push((name, s.description));
             }
             if args.json {
-                let items: Vec<_> = list.iter().map(|(n, d)| json!({ "name": n, "description": d })).collect();
+                let items: Vec<_> = list
+                    .iter()
+                    .map(|(n, d)| json!({ "name": n, "description": d }))
+                    .collect();
                 print_json(&json!({ "scenarios": items }))?;
             } else {
                 let width = list.iter().map(|(n, _)| n.len()).max().unwrap_or(0);
