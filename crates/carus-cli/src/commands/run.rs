@@ -276,8 +276,10 @@ fn print_summary(record: &RunRecord, out_dir: &Path) {
     } else {
         match &s.outcome.arrest {
             Some(a) => format!(
-                "arrested at the {:?} stage, station {:+.0} mm, against {}",
-                a.stage, a.station_mm, a.against
+                "arrested at the {} stage, station {:+.0} mm, against {}",
+                serde_name(&a.stage),
+                a.station_mm,
+                a.against
             ),
             None => "neither delivered nor arrested (the run ended too soon to tell)".to_string(),
         }
@@ -288,10 +290,7 @@ fn print_summary(record: &RunRecord, out_dir: &Path) {
         s.simulated_s, s.wall_s, s.rigid_steps
     );
     for (key, m) in movements(record) {
-        let unit = serde_json::to_value(m.unit)
-            .ok()
-            .and_then(|v| v.as_str().map(str::to_string))
-            .unwrap_or_default();
+        let unit = serde_name(&m.unit);
         match (m.observed, m.start_s, m.end_s, m.size) {
             (true, Some(a), Some(b), Some(size)) => {
                 println!("  {key:18} observed  {a:6.1}-{b:6.1} s  {size:6.1} {unit}")
@@ -300,7 +299,16 @@ fn print_summary(record: &RunRecord, out_dir: &Path) {
         }
     }
     println!(
-        "results in {} (run.json, movements.json, pose_history.csv, *.pvd)",
+        "results in {} (report.html, run.json, movements.json, pose_history.csv, *.pvd)",
         out_dir.display()
     );
+}
+
+/// The name an enum value has in the JSON output (e.g. `mid-pelvis`), so
+/// the text summary and `--json` speak the same words.
+fn serde_name<T: serde::Serialize>(value: &T) -> String {
+    serde_json::to_value(value)
+        .ok()
+        .and_then(|v| v.as_str().map(str::to_string))
+        .unwrap_or_default()
 }
