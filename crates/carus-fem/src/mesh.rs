@@ -7,7 +7,7 @@
 //!
 //! Coordinates are metres (SI, see CONVENTIONS.md).
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 
 use serde::{Deserialize, Serialize};
 
@@ -39,6 +39,19 @@ impl ElementKind {
         }
     }
 }
+
+/// H8 faces in VTK node order, wound counter-clockwise seen from outside.
+pub const H8_FACES: [[usize; 4]; 6] = [
+    [0, 3, 2, 1],
+    [4, 5, 6, 7],
+    [0, 1, 5, 4],
+    [1, 2, 6, 5],
+    [2, 3, 7, 6],
+    [3, 0, 4, 7],
+];
+
+/// T4 faces, wound counter-clockwise seen from outside a positive tetrahedron.
+pub const T4_FACES: [[usize; 3]; 4] = [[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]];
 
 /// A volume mesh: node coordinates, element connectivity and named sets.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -89,6 +102,113 @@ impl Mesh {
 
     /// Iterator over the elements' node index slices.
     pub fn elements(&self) -> std::slice::ChunksExact<'_, u32> {
-        self.connectivity.chunks_exact(self.kind.nodes_per_element())
+        self.connectivity
+            .chunks_exact(self.kind.nodes_per_element())
+    }
+
+    /// The outside of the part of the mesh made of `elements`: the faces only
+    /// one of them has, as triangles wound outwards (H8 quads split in two).
+    pub fn boundary_triangles(&self, elements: &[u32]) -> Vec<[u32; 3]> {
+        let faces: Vec<Vec<u32>> = elements
+            .iter()
+            .flat_map(|&e| {
+                let nodes = self.element(e as usize);
+                let local: Vec<&[usize]> = match self.kind {
+                    ElementKind::H8 => H8_FACES.iter().map(|f| &f[..]).collect(),
+                    ElementKind::T4 => T4_FACES.iter().map(|f| &f[..]).collect(),
+                };
+                local
+                    .into_iter()
+                    .map(|f| f.iter().map(|&k| nodes[k]).collect::<Vec<u32>>())
+                    .collect::<Vec<_>>()
+            })
+            .collect();
+        let key = |f: &[u32]| {
+            let mut k = f.to_vec();
+            k.sort_unstable();
+            k
+        };
+        let mut count: HashMap<Vec<u32>, u32> = HashMap::new();
+        for f in &faces {
+            *count.entry(key(f)).or_default() += 1;
+        }
+        faces
+            .iter()
+            .filter(|f| count[&key(f)] == 1)
+            .flat_map(|f| match f.as_slice() {
+                [a, b, c, d] => vec![[*a, *b, *c], [*a, *c, *d]],
+                [a, b, c] => vec![[*a, *b, *c]],
+                _ => Vec::new(),
+            })
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Signed volume enclosed by triangles (divergence theorem).
+    fn enclosed_volume(mesh: &Mesh, triangles: &[[u32; 3]]) -> f64 {
+        triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| mesh.nodes[i as usize]);
+                let cross = [
+                    b[1] * c[2] - b[2] * c[1],
+                    b[2] * c[0] - b[0] * c[2],
+                    b[0] * c[1] - b[1] * c[0],
+                ];
+                (a[0] * cross[0] + a[1] * cross[1] + a[2] * cross[2]) / 6.0
+            })
+            .sum()
+    }
+
+    fn two_hexes() -> Mesh {
+        let mut nodes = Vec::new();
+        for z in 0..2 {
+            for y in 0..2 {
+                for x in 0..3 {
+                    nodes.push([x as f64, y as f64, z as f64]);
+                }
+            }
+        }
+        let id = |x: u32, y: u32, z: u32| x + 3 * y + 6 * z;
+        let hex = |x: u32| {
+            [
+                id(x, 0, 0),
+                id(x + 1, 0, 0),
+                id(x + 1, 1, 0),
+                id(x, 1, 0),
+                id(x, 0, 1),
+                id(x + 1, 0, 1),
+                id(x + 1, 1, 1),
+                id(x, 1, 1),
+            ]
+        };
+        Mesh::new(ElementKind::H8, nodes, [hex(0), hex(1)].concat())
+    }
+
+    #[test]
+    fn boundary_of_two_hexes_drops_the_shared_face_and_faces_outwards() {
+        let mesh = two_hexes();
+        let outside = mesh.boundary_triangles(&[0, 1]);
+        assert_eq!(outside.len(), 2 * 10, "10 outer quads");
+        assert!((enclosed_volume(&mesh, &outside) - 2.0).abs() < 1e-12);
+        let one = mesh.boundary_triangles(&[1]);
+        assert_eq!(one.len(), 12);
+        assert!((enclosed_volume(&mesh, &one) - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn boundary_of_a_tetrahedron_faces_outwards() {
+        let mesh = Mesh::new(
+            ElementKind::T4,
+            vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            vec![0, 1, 2, 3],
+        );
+        let outside = mesh.boundary_triangles(&[0]);
+        assert_eq!(outside.len(), 4);
+        assert!((enclosed_volume(&mesh, &outside) - 1.0 / 6.0).abs() < 1e-12);
     }
 }

@@ -10,7 +10,7 @@ use crate::kernel::blocks::{ElementBlocks, ElementInput, KernelData, NodeTable};
 use crate::kernel::lanes::Real;
 use crate::kernel::stability::max_angular_frequency;
 use crate::material::{Material, MaterialLaw};
-use crate::mesh::{ElementKind, Mesh};
+use crate::mesh::{ElementKind, Mesh, H8_FACES, T4_FACES};
 
 /// Tetrahedron formulation (ignored for H8 meshes).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -122,17 +122,6 @@ const H8_GAMMA: [[f64; 4]; 8] = [
     [1.0, 1.0, 1.0, 1.0],
     [-1.0, 1.0, -1.0, -1.0],
 ];
-
-/// Quadrilateral faces of the H8 (VTK order).
-pub(crate) const H8_FACES: [[usize; 4]; 6] = [
-    [0, 1, 2, 3],
-    [4, 5, 6, 7],
-    [0, 1, 5, 4],
-    [1, 2, 6, 5],
-    [2, 3, 7, 6],
-    [3, 0, 4, 7],
-];
-pub(crate) const T4_FACES: [[usize; 3]; 4] = [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]];
 
 fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]

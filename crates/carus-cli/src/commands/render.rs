@@ -5,7 +5,6 @@
 //! The turning of anatomy (f64, metres) into render meshes (f32) lives here
 //! for now; the report crate draws its key moments with its own few lines.
 
-use std::collections::HashMap;
 use std::path::PathBuf;
 
 use anyhow::Context;
@@ -13,7 +12,7 @@ use carus_anatomy::fetus::{CapsuleChain, FetalHead, Fetus};
 use carus_anatomy::floor::{pelvic_floor, ATTACHED, LEVATOR_ANI, PERINEAL_BODY};
 use carus_anatomy::pelvis::measure;
 use carus_anatomy::{Pelvis, TriSurface};
-use carus_fem::mesh::{ElementKind, Mesh};
+use carus_fem::mesh::Mesh;
 use carus_labour::scene::{HEAD, TRUNK};
 use carus_labour::{Scenario, Scene as LabourScene};
 use carus_render::{ContactSheet, RenderMesh, Renderer, Scene, View};
@@ -438,7 +437,7 @@ fn floor_parts(floor: &Mesh, place: impl Fn(DVec3) -> DVec3) -> Vec<RenderMesh> 
         let Some(elements) = floor.element_sets.get(set) else {
             continue;
         };
-        let triangles = boundary_triangles(floor, elements);
+        let triangles: Vec<u32> = floor.boundary_triangles(elements).concat();
         if !triangles.is_empty() {
             meshes.push(RenderMesh::new(
                 set.replace('_', " "),
@@ -449,55 +448,6 @@ fn floor_parts(floor: &Mesh, place: impl Fn(DVec3) -> DVec3) -> Vec<RenderMesh> 
         }
     }
     meshes
-}
-
-/// Element faces in VTK node order, wound counter-clockwise seen from outside.
-const H8_FACES: [[usize; 4]; 6] = [
-    [0, 3, 2, 1],
-    [4, 5, 6, 7],
-    [0, 1, 5, 4],
-    [1, 2, 6, 5],
-    [2, 3, 7, 6],
-    [3, 0, 4, 7],
-];
-const T4_FACES: [[usize; 3]; 4] = [[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]];
-
-/// Triangles of the faces that only one of `elements` has: the outside of
-/// that part of the mesh, wound outwards.
-fn boundary_triangles(mesh: &Mesh, elements: &[u32]) -> Vec<u32> {
-    let mut faces: Vec<Vec<u32>> = Vec::new();
-    for &e in elements {
-        let nodes = mesh.element(e as usize);
-        match mesh.kind {
-            ElementKind::H8 => faces.extend(
-                H8_FACES
-                    .iter()
-                    .map(|f| f.iter().map(|&k| nodes[k]).collect()),
-            ),
-            ElementKind::T4 => faces.extend(
-                T4_FACES
-                    .iter()
-                    .map(|f| f.iter().map(|&k| nodes[k]).collect()),
-            ),
-        }
-    }
-    let key = |f: &[u32]| {
-        let mut k = f.to_vec();
-        k.sort_unstable();
-        k
-    };
-    let mut count: HashMap<Vec<u32>, u32> = HashMap::new();
-    for f in &faces {
-        *count.entry(key(f)).or_default() += 1;
-    }
-    faces
-        .iter()
-        .filter(|f| count[&key(f)] == 1)
-        .flat_map(|f| match f.as_slice() {
-            [a, b, c, d] => vec![*a, *b, *c, *a, *c, *d],
-            tri => tri.to_vec(),
-        })
-        .collect()
 }
 
 /// The scenario's starting scene: faint pelvis with its axis, the floor at
@@ -537,7 +487,7 @@ mod tests {
     #[test]
     fn the_boundary_of_a_box_is_its_outside_wound_outwards() {
         let mesh = box_h8([2.0, 1.0, 1.0], [2, 1, 1]);
-        let triangles = boundary_triangles(&mesh, &[0, 1]);
+        let triangles: Vec<u32> = mesh.boundary_triangles(&[0, 1]).concat();
         // 10 outer quads of two cubes, the shared face left out.
         assert_eq!(triangles.len(), 10 * 2 * 3);
         let nodes: Vec<DVec3> = mesh.nodes.iter().map(|&p| p.into()).collect();

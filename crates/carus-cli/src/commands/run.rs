@@ -136,7 +136,9 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
 /// lavapipe; without one the page is still written, with a note instead.
 fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result<Vec<String>> {
     let Some(detector) = &record.detector else {
-        return Ok(vec!["no report: the run stopped before its second pose sample".into()]);
+        return Ok(vec![
+            "no report: the run stopped before its second pose sample".into(),
+        ]);
     };
     // Rebuilt from the scenario (deterministic) for the surfaces in the
     // body frames the history's poses refer to.
@@ -144,23 +146,35 @@ fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result<Vec<String
     let summary = &record.summary;
     let input = carus_report::ReportInput {
         title: format!("Carus: {}", summary.scenario),
-        notice: summary
-            .failure
-            .as_ref()
-            .map(|f| format!("The run ended early at t = {:.2} s: {f}", summary.simulated_s)),
+        notice: summary.failure.as_ref().map(|f| {
+            format!(
+                "The run ended early at t = {:.2} s: {f}",
+                summary.simulated_s
+            )
+        }),
         scenario_toml: Some(record.scenario.to_toml()?),
         run: carus_report::RunFigures {
             simulated_s: summary.simulated_s,
             wall_s: Some(summary.wall_s),
             steps: Some(summary.rigid_steps),
             extra: vec![
-                ("rigid step".into(), format!("{:.3} ms", summary.rigid_dt_s * 1e3)),
-                ("floor sub-steps per rigid step".into(), summary.floor_substeps_per_step.to_string()),
+                (
+                    "rigid step".into(),
+                    format!("{:.3} ms", summary.rigid_dt_s * 1e3),
+                ),
+                (
+                    "floor sub-steps per rigid step".into(),
+                    summary.floor_substeps_per_step.to_string(),
+                ),
             ],
         },
         history: &record.history,
         detector,
-        floor_peak_stretch: record.floor.iter().map(|f| (f.time_s, f.peak_stretch)).collect(),
+        floor_peak_stretch: record
+            .floor
+            .iter()
+            .map(|f| (f.time_s, f.peak_stretch))
+            .collect(),
         scene: Some(carus_report::ReportScene {
             pelvis: Some(scene.pelvis.surface.clone()),
             head: scene.head.surface.clone(),
@@ -168,7 +182,10 @@ fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result<Vec<String
             floor: None,
         }),
     };
-    Ok(carus_report::write_report_file(&input, &out_dir.join("report.html"))?)
+    Ok(carus_report::write_report_file(
+        &input,
+        &out_dir.join("report.html"),
+    )?)
 }
 
 fn load(name: Option<&str>) -> anyhow::Result<Scenario> {
