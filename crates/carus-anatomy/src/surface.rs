@@ -21,7 +21,11 @@ pub enum SurfaceDefect {
     #[error("vertex {vertex} has a non-finite coordinate")]
     NonFiniteVertex { vertex: usize },
     #[error("triangle {triangle} refers to vertex {vertex}, but there are only {count} vertices")]
-    VertexOutOfRange { triangle: usize, vertex: u32, count: usize },
+    VertexOutOfRange {
+        triangle: usize,
+        vertex: u32,
+        count: usize,
+    },
     #[error("triangle {triangle} is degenerate (repeated vertex)")]
     DegenerateTriangle { triangle: usize },
     #[error("edge {a}-{b} borders only one triangle ({triangle}): the surface is open there")]
@@ -36,13 +40,20 @@ pub enum SurfaceDefect {
 
 impl TriSurface {
     pub fn new(vertices: Vec<DVec3>, triangles: Vec<[u32; 3]>) -> Self {
-        TriSurface { vertices, triangles }
+        TriSurface {
+            vertices,
+            triangles,
+        }
     }
 
     /// Corner positions of triangle `t`.
     pub fn corners(&self, t: usize) -> [DVec3; 3] {
         let [a, b, c] = self.triangles[t];
-        [self.vertices[a as usize], self.vertices[b as usize], self.vertices[c as usize]]
+        [
+            self.vertices[a as usize],
+            self.vertices[b as usize],
+            self.vertices[c as usize],
+        ]
     }
 
     /// Total area, m^2.
@@ -69,7 +80,11 @@ impl TriSurface {
     /// Axis-aligned bounds `(min, max)`; `None` when there are no vertices.
     pub fn bounds(&self) -> Option<(DVec3, DVec3)> {
         let first = *self.vertices.first()?;
-        Some(self.vertices.iter().fold((first, first), |(lo, hi), &v| (lo.min(v), hi.max(v))))
+        Some(
+            self.vertices
+                .iter()
+                .fold((first, first), |(lo, hi), &v| (lo.min(v), hi.max(v))),
+        )
     }
 
     /// Applies a rigid or affine map to every vertex. A map with negative
@@ -91,14 +106,19 @@ impl TriSurface {
     pub fn check_closed(&self) -> Result<(), SurfaceDefect> {
         self.check_finite_and_indexed()?;
         // Directed edge -> triangle that traverses it.
-        let mut directed: HashMap<(u32, u32), usize> = HashMap::with_capacity(self.triangles.len() * 3);
+        let mut directed: HashMap<(u32, u32), usize> =
+            HashMap::with_capacity(self.triangles.len() * 3);
         for (t, tri) in self.triangles.iter().enumerate() {
             for k in 0..3 {
                 let (a, b) = (tri[k], tri[(k + 1) % 3]);
                 if directed.insert((a, b), t).is_some() {
                     let undirected = self.edge_use_count(a, b);
                     return Err(if undirected > 2 {
-                        SurfaceDefect::NonManifoldEdge { a, b, count: undirected }
+                        SurfaceDefect::NonManifoldEdge {
+                            a,
+                            b,
+                            count: undirected,
+                        }
                     } else {
                         SurfaceDefect::InconsistentOrientation { a, b }
                     });
@@ -127,7 +147,11 @@ impl TriSurface {
         let count = self.vertices.len();
         for (triangle, tri) in self.triangles.iter().enumerate() {
             if let Some(&vertex) = tri.iter().find(|&&v| v as usize >= count) {
-                return Err(SurfaceDefect::VertexOutOfRange { triangle, vertex, count });
+                return Err(SurfaceDefect::VertexOutOfRange {
+                    triangle,
+                    vertex,
+                    count,
+                });
             }
             if tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] {
                 return Err(SurfaceDefect::DegenerateTriangle { triangle });
@@ -139,10 +163,12 @@ impl TriSurface {
     fn edge_use_count(&self, a: u32, b: u32) -> usize {
         self.triangles
             .iter()
-            .filter(|tri| (0..3).any(|k| {
-                let (p, q) = (tri[k], tri[(k + 1) % 3]);
-                (p, q) == (a, b) || (p, q) == (b, a)
-            }))
+            .filter(|tri| {
+                (0..3).any(|k| {
+                    let (p, q) = (tri[k], tri[(k + 1) % 3]);
+                    (p, q) == (a, b) || (p, q) == (b, a)
+                })
+            })
             .count()
     }
 
@@ -150,9 +176,46 @@ impl TriSurface {
     pub fn append(&mut self, other: &TriSurface) {
         let offset = self.vertices.len() as u32;
         self.vertices.extend_from_slice(&other.vertices);
-        self.triangles
-            .extend(other.triangles.iter().map(|t| [t[0] + offset, t[1] + offset, t[2] + offset]));
+        self.triangles.extend(
+            other
+                .triangles
+                .iter()
+                .map(|t| [t[0] + offset, t[1] + offset, t[2] + offset]),
+        );
     }
+}
+
+/// Closest point of triangle `abc` to `p` (Ericson, Real-Time Collision Detection, 5.1.5).
+pub fn closest_point_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a;
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return a + ab * (d1 / (d1 - d3));
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return a + ac * (d2 / (d2 - d6));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    }
+    let denom = 1.0 / (va + vb + vc);
+    a + ab * (vb * denom) + ac * (vc * denom)
 }
 
 #[cfg(test)]
@@ -177,7 +240,10 @@ mod tests {
     fn defects_are_named() {
         let mut open = tetrahedron();
         open.triangles.pop();
-        assert!(matches!(open.check_closed(), Err(SurfaceDefect::OpenEdge { .. })));
+        assert!(matches!(
+            open.check_closed(),
+            Err(SurfaceDefect::OpenEdge { .. })
+        ));
 
         let mut inward = tetrahedron();
         for t in &mut inward.triangles {
@@ -187,11 +253,17 @@ mod tests {
 
         let mut flipped = tetrahedron();
         flipped.triangles[3].swap(1, 2);
-        assert!(matches!(flipped.check_closed(), Err(SurfaceDefect::InconsistentOrientation { .. })));
+        assert!(matches!(
+            flipped.check_closed(),
+            Err(SurfaceDefect::InconsistentOrientation { .. })
+        ));
 
         let mut nan = tetrahedron();
         nan.vertices[2].x = f64::NAN;
-        assert_eq!(nan.check_closed(), Err(SurfaceDefect::NonFiniteVertex { vertex: 2 }));
+        assert_eq!(
+            nan.check_closed(),
+            Err(SurfaceDefect::NonFiniteVertex { vertex: 2 })
+        );
     }
 
     #[test]

@@ -63,7 +63,11 @@ impl TriangleCollider {
 
         let face_normals: Vec<DVec3> = triangles
             .iter()
-            .map(|t| (corner(t, 1) - corner(t, 0)).cross(corner(t, 2) - corner(t, 0)).normalize())
+            .map(|t| {
+                (corner(t, 1) - corner(t, 0))
+                    .cross(corner(t, 2) - corner(t, 0))
+                    .normalize()
+            })
             .collect();
 
         let mut vertex_normals = vec![DVec3::ZERO; vertices.len()];
@@ -94,7 +98,12 @@ impl TriangleCollider {
 
         let mesh = TriMesh::new(vertices.to_vec(), triangles.to_vec())
             .map_err(|_| ContactError::EmptySurface { what })?;
-        Ok(TriangleCollider { mesh, face_normals, edge_normals, vertex_normals })
+        Ok(TriangleCollider {
+            mesh,
+            face_normals,
+            edge_normals,
+            vertex_normals,
+        })
     }
 
     pub fn triangle_count(&self) -> usize {
@@ -119,15 +128,18 @@ impl TriangleCollider {
     /// The nearest surface point within `max_distance` of `point`, signed;
     /// `None` when the surface is farther than that (which prunes the BVH).
     pub fn closest_point(&self, point: DVec3, max_distance: f64) -> Option<SurfacePoint> {
-        let (projection, (triangle, location)) =
-            self.mesh.project_local_point_and_get_location_with_max_dist(point, false, max_distance)?;
+        let (projection, (triangle, location)) = self
+            .mesh
+            .project_local_point_and_get_location_with_max_dist(point, false, max_distance)?;
         let t = triangle as usize;
         let pseudo_normal = match location {
             TrianglePointLocation::OnVertex(i) => {
                 self.vertex_normals[self.mesh.indices()[t][i as usize] as usize]
             }
             TrianglePointLocation::OnEdge(i, _) => self.edge_normals[t][i as usize],
-            TrianglePointLocation::OnFace(..) | TrianglePointLocation::OnSolid => self.face_normals[t],
+            TrianglePointLocation::OnFace(..) | TrianglePointLocation::OnSolid => {
+                self.face_normals[t]
+            }
         };
         let offset = point - projection.point;
         let distance = offset.length();
@@ -136,7 +148,11 @@ impl TriangleCollider {
         // itself (distance ~ 0) the pseudo-normal is the only direction left.
         let scale = 1e-12 * (1.0 + projection.point.abs().max_element());
         let normal = if distance > scale {
-            if inside { -offset / distance } else { offset / distance }
+            if inside {
+                -offset / distance
+            } else {
+                offset / distance
+            }
         } else {
             pseudo_normal.normalize()
         };
@@ -163,7 +179,12 @@ pub(crate) fn validate_surface(
     }
     for (triangle, t) in triangles.iter().enumerate() {
         if let Some(&vertex) = t.iter().find(|&&i| i as usize >= vertices.len()) {
-            return Err(ContactError::VertexOutOfRange { what, triangle, vertex, count: vertices.len() });
+            return Err(ContactError::VertexOutOfRange {
+                what,
+                triangle,
+                vertex,
+                count: vertices.len(),
+            });
         }
         let [a, b, c] = t.map(|i| vertices[i as usize]);
         let twice_area = (b - a).cross(c - a).length();
@@ -188,7 +209,9 @@ pub(crate) mod tests {
             let polar = std::f64::consts::PI * i as f64 / rings as f64;
             for j in 0..segments {
                 let az = 2.0 * std::f64::consts::PI * j as f64 / segments as f64;
-                v.push(r * DVec3::new(polar.sin() * az.cos(), polar.sin() * az.sin(), -polar.cos()));
+                v.push(
+                    r * DVec3::new(polar.sin() * az.cos(), polar.sin() * az.sin(), -polar.cos()),
+                );
             }
         }
         v.push(DVec3::new(0.0, 0.0, r));
@@ -208,38 +231,9 @@ pub(crate) mod tests {
         (v, t)
     }
 
-    /// Closest point on a triangle (Ericson, Real-Time Collision Detection 5.1.5):
-    /// the brute-force reference, independent of parry.
+    /// Closest point on a triangle: the brute-force reference, independent of parry.
     pub(crate) fn closest_on_triangle(p: DVec3, [a, b, c]: [DVec3; 3]) -> DVec3 {
-        let (ab, ac, ap) = (b - a, c - a, p - a);
-        let (d1, d2) = (ab.dot(ap), ac.dot(ap));
-        if d1 <= 0.0 && d2 <= 0.0 {
-            return a;
-        }
-        let bp = p - b;
-        let (d3, d4) = (ab.dot(bp), ac.dot(bp));
-        if d3 >= 0.0 && d4 <= d3 {
-            return b;
-        }
-        let vc = d1 * d4 - d3 * d2;
-        if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-            return a + ab * (d1 / (d1 - d3));
-        }
-        let cp = p - c;
-        let (d5, d6) = (ab.dot(cp), ac.dot(cp));
-        if d6 >= 0.0 && d5 <= d6 {
-            return c;
-        }
-        let vb = d5 * d2 - d1 * d6;
-        if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-            return a + ac * (d2 / (d2 - d6));
-        }
-        let va = d3 * d6 - d5 * d4;
-        if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-            return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
-        }
-        let denom = 1.0 / (va + vb + vc);
-        a + ab * (vb * denom) + ac * (vc * denom)
+        carus_anatomy::surface::closest_point_on_triangle(p, a, b, c)
     }
 
     /// Random triangle soup in the unit cube (non-degenerate triangles).
@@ -402,16 +396,27 @@ pub(crate) mod tests {
         );
         assert_eq!(
             TriangleCollider::new("pelvis", &v, &[[0, 1, 5]]).unwrap_err(),
-            ContactError::VertexOutOfRange { what: "pelvis", triangle: 0, vertex: 5, count: 3 }
+            ContactError::VertexOutOfRange {
+                what: "pelvis",
+                triangle: 0,
+                vertex: 5,
+                count: 3
+            }
         );
         assert_eq!(
             TriangleCollider::new("pelvis", &v, &[[0, 1, 1]]).unwrap_err(),
-            ContactError::DegenerateTriangle { what: "pelvis", triangle: 0 }
+            ContactError::DegenerateTriangle {
+                what: "pelvis",
+                triangle: 0
+            }
         );
         let nan = vec![DVec3::ZERO, DVec3::X, DVec3::new(f64::NAN, 0.0, 0.0)];
         assert_eq!(
             TriangleCollider::new("pelvis", &nan, &[[0, 1, 2]]).unwrap_err(),
-            ContactError::NonFiniteVertex { what: "pelvis", vertex: 2 }
+            ContactError::NonFiniteVertex {
+                what: "pelvis",
+                vertex: 2
+            }
         );
     }
 }

@@ -21,7 +21,7 @@ use serde::Serialize;
 
 use super::{Pelvis, PelvisDiameters, PelvisLandmarks};
 use crate::axis::Plane;
-use crate::surface::TriSurface;
+use crate::surface::{closest_point_on_triangle, TriSurface};
 
 const MM: f64 = 1e3;
 
@@ -76,7 +76,10 @@ pub fn diameters_from_landmarks(l: &PelvisLandmarks) -> PelvisDiameters {
     let chord = l.sacral_apex - l.sacral_promontory;
     let off_chord = l.sacrum_s2_s3 - l.sacral_promontory;
     let depth = (off_chord - off_chord.dot(chord) / chord.length_squared() * chord).length();
-    let (left, right) = (l.ischial_tuberosity_left - l.symphysis_lower, l.ischial_tuberosity_right - l.symphysis_lower);
+    let (left, right) = (
+        l.ischial_tuberosity_left - l.symphysis_lower,
+        l.ischial_tuberosity_right - l.symphysis_lower,
+    );
     PelvisDiameters {
         inlet_ap_mm: d(l.sacral_promontory, l.symphysis_upper),
         inlet_transverse_mm: d(l.iliopectineal_left, l.iliopectineal_right),
@@ -127,13 +130,35 @@ pub fn measure(pelvis: &Pelvis) -> PelvisMeasurement {
     let d = |a: DVec3, b: DVec3| (a - b).length() * MM;
     let greatest = pelvis.planes.greatest;
     let in_plane_right = (right - right.dot(greatest.normal) * greatest.normal).normalize();
-    let greatest_transverse = canal_width(&pelvis.surface, greatest.centre, in_plane_right).map(|w| w * MM);
+    let greatest_transverse =
+        canal_width(&pelvis.surface, greatest.centre, in_plane_right).map(|w| w * MM);
     let planes = BTreeMap::from([
-        ("inlet", plane(inlet, d(l.sacral_promontory, l.symphysis_upper), Some(d(l.iliopectineal_left, l.iliopectineal_right)), sigmas[0])),
-        ("greatest_dimensions", plane(greatest, d(l.sacrum_s2_s3, l.symphysis_middle()), greatest_transverse, sigmas[1])),
+        (
+            "inlet",
+            plane(
+                inlet,
+                d(l.sacral_promontory, l.symphysis_upper),
+                Some(d(l.iliopectineal_left, l.iliopectineal_right)),
+                sigmas[0],
+            ),
+        ),
+        (
+            "greatest_dimensions",
+            plane(
+                greatest,
+                d(l.sacrum_s2_s3, l.symphysis_middle()),
+                greatest_transverse,
+                sigmas[1],
+            ),
+        ),
         (
             "mid",
-            plane(pelvis.planes.mid, d(l.sacrum_s4_s5, l.symphysis_lower), Some(d(l.ischial_spine_left, l.ischial_spine_right)), sigmas[2]),
+            plane(
+                pelvis.planes.mid,
+                d(l.sacrum_s4_s5, l.symphysis_lower),
+                Some(d(l.ischial_spine_left, l.ischial_spine_right)),
+                sigmas[2],
+            ),
         ),
         (
             "outlet",
@@ -157,7 +182,11 @@ pub fn measure(pelvis: &Pelvis) -> PelvisMeasurement {
         outlet_posterior_sagittal_mm: d(tuberosity_midpoint, l.coccyx_tip),
         planes,
         axis_length_mm: pelvis.axis.length() * MM,
-        landmarks_mm: l.named().into_iter().map(|(name, p)| (name, mm3(p))).collect(),
+        landmarks_mm: l
+            .named()
+            .into_iter()
+            .map(|(name, p)| (name, mm3(p)))
+            .collect(),
         landmark_surface_gap_mm: l
             .named()
             .iter()
@@ -178,39 +207,6 @@ pub fn distance_to_surface(surface: &TriSurface, p: DVec3) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
-/// Closest point of triangle `abc` to `p` (Ericson, Real-Time Collision Detection, 5.1.5).
-fn closest_point_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
-    let (ab, ac, ap) = (b - a, c - a, p - a);
-    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return a;
-    }
-    let bp = p - b;
-    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
-    if d3 >= 0.0 && d4 <= d3 {
-        return b;
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        return a + ab * (d1 / (d1 - d3));
-    }
-    let cp = p - c;
-    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
-    if d6 >= 0.0 && d5 <= d6 {
-        return c;
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        return a + ac * (d2 / (d2 - d6));
-    }
-    let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
-    }
-    let denom = 1.0 / (va + vb + vc);
-    a + ab * (vb * denom) + ac * (vc * denom)
-}
-
 /// Width of the canal through `centre` along `direction`: the distance
 /// between the nearest surface hits on either side, m; `None` if a side is open.
 fn canal_width(surface: &TriSurface, centre: DVec3, direction: DVec3) -> Option<f64> {
@@ -220,7 +216,9 @@ fn canal_width(surface: &TriSurface, centre: DVec3, direction: DVec3) -> Option<
                 let [a, b, c] = surface.corners(t);
                 ray_triangle(centre, d, a, b, c)
             })
-            .fold(None, |best: Option<f64>, s| Some(best.map_or(s, |b| b.min(s))))
+            .fold(None, |best: Option<f64>, s| {
+                Some(best.map_or(s, |b| b.min(s)))
+            })
     };
     Some(hit(direction)? + hit(-direction)?)
 }
@@ -255,12 +253,29 @@ mod tests {
     #[test]
     fn closest_points_on_a_triangle() {
         let (a, b, c) = (DVec3::ZERO, DVec3::X, DVec3::Y);
-        assert!((closest_point_on_triangle(DVec3::new(0.2, 0.2, 1.0), a, b, c) - DVec3::new(0.2, 0.2, 0.0)).length() < 1e-15);
-        assert_eq!(closest_point_on_triangle(DVec3::new(-1.0, -1.0, 0.0), a, b, c), a);
-        assert_eq!(closest_point_on_triangle(DVec3::new(0.5, -2.0, 0.0), a, b, c), DVec3::new(0.5, 0.0, 0.0));
+        assert!(
+            (closest_point_on_triangle(DVec3::new(0.2, 0.2, 1.0), a, b, c)
+                - DVec3::new(0.2, 0.2, 0.0))
+            .length()
+                < 1e-15
+        );
+        assert_eq!(
+            closest_point_on_triangle(DVec3::new(-1.0, -1.0, 0.0), a, b, c),
+            a
+        );
+        assert_eq!(
+            closest_point_on_triangle(DVec3::new(0.5, -2.0, 0.0), a, b, c),
+            DVec3::new(0.5, 0.0, 0.0)
+        );
         let on_hypotenuse = closest_point_on_triangle(DVec3::new(1.0, 1.0, 0.0), a, b, c);
         assert!((on_hypotenuse - DVec3::new(0.5, 0.5, 0.0)).length() < 1e-15);
-        assert!((ray_triangle(DVec3::new(0.2, 0.2, 1.0), DVec3::NEG_Z, a, b, c).unwrap() - 1.0).abs() < 1e-15);
-        assert_eq!(ray_triangle(DVec3::new(0.2, 0.2, 1.0), DVec3::Z, a, b, c), None);
+        assert!(
+            (ray_triangle(DVec3::new(0.2, 0.2, 1.0), DVec3::NEG_Z, a, b, c).unwrap() - 1.0).abs()
+                < 1e-15
+        );
+        assert_eq!(
+            ray_triangle(DVec3::new(0.2, 0.2, 1.0), DVec3::Z, a, b, c),
+            None
+        );
     }
 }
