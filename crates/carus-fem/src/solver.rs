@@ -59,7 +59,8 @@ struct CompiledLoads {
     gravity: [f64; 3],
 }
 
-fn check_node(what: &'static str, n: u32, nn: usize) -> Result<(), FemError> {
+/// A boundary condition's node must exist (shared with the GPU backend).
+pub(crate) fn check_node(what: &'static str, n: u32, nn: usize) -> Result<(), FemError> {
     if (n as usize) < nn {
         Ok(())
     } else {

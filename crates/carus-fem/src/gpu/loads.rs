@@ -17,6 +17,7 @@
 
 use crate::error::FemError;
 use crate::loads::{BoundaryConditions, LoadShape};
+use crate::solver::check_node;
 
 use super::error::GpuError;
 
@@ -47,18 +48,6 @@ struct NodeRecord {
     values: [f32; 3],
     forces: Vec<[u32; 4]>,
     pressure_slots: Vec<u32>,
-}
-
-fn check_node(what: &'static str, n: u32, nn: usize) -> Result<(), FemError> {
-    if (n as usize) < nn {
-        Ok(())
-    } else {
-        Err(FemError::BoundaryNodeOutOfRange {
-            what,
-            node: n,
-            node_count: nn,
-        })
-    }
 }
 
 fn invalid(reason: String) -> FemError {
