@@ -59,6 +59,42 @@ struct CompiledLoads {
     gravity: [f64; 3],
 }
 
+/// Sub-steps per step: 1 at or below the critical step, else the fewest
+/// equal sub-steps at or below it (shared with the GPU backend).
+pub(crate) fn substeps_for(
+    dt_s: f64,
+    critical: f64,
+    control: StepControl,
+) -> Result<u32, FemError> {
+    if !(dt_s.is_finite() && dt_s > 0.0) {
+        return Err(FemError::InvalidTimeStep { dt_s });
+    }
+    if dt_s <= critical {
+        return Ok(1);
+    }
+    match control {
+        StepControl::Refuse => Err(FemError::TimeStepAboveCritical {
+            dt_s,
+            critical_s: critical,
+        }),
+        StepControl::SubStep => {
+            let n = (dt_s / critical).ceil();
+            if n > u32::MAX as f64 {
+                return Err(FemError::TimeStepAboveCritical {
+                    dt_s,
+                    critical_s: critical,
+                });
+            }
+            // Guard against rounding leaving dt / n a hair above critical.
+            let mut n = n as u32;
+            while dt_s / n as f64 > critical {
+                n += 1;
+            }
+            Ok(n)
+        }
+    }
+}
+
 /// A boundary condition's node must exist (shared with the GPU backend).
 pub(crate) fn check_node(what: &'static str, n: u32, nn: usize) -> Result<(), FemError> {
     if (n as usize) < nn {
@@ -405,37 +441,7 @@ impl TledSolver {
         dt_s: f64,
         control: StepControl,
     ) -> Result<Self, FemError> {
-        if !(dt_s.is_finite() && dt_s > 0.0) {
-            return Err(FemError::InvalidTimeStep { dt_s });
-        }
-        let critical = model.critical_time_step();
-        let substeps_per_step = if dt_s <= critical {
-            1
-        } else {
-            match control {
-                StepControl::Refuse => {
-                    return Err(FemError::TimeStepAboveCritical {
-                        dt_s,
-                        critical_s: critical,
-                    })
-                }
-                StepControl::SubStep => {
-                    let n = (dt_s / critical).ceil();
-                    if n > u32::MAX as f64 {
-                        return Err(FemError::TimeStepAboveCritical {
-                            dt_s,
-                            critical_s: critical,
-                        });
-                    }
-                    // Guard against rounding leaving dt / n a hair above critical.
-                    let mut n = n as u32;
-                    while dt_s / n as f64 > critical {
-                        n += 1;
-                    }
-                    n
-                }
-            }
-        };
+        let substeps_per_step = substeps_for(dt_s, model.critical_time_step(), control)?;
         let h = dt_s / substeps_per_step as f64;
         let loads = CompiledLoads::new(bcs, model.node_count())?;
         let damping = model.options().damping_per_s;

@@ -26,7 +26,7 @@ use crate::kernel::blocks::KernelData;
 use crate::kernel::lanes::Real;
 use crate::loads::BoundaryConditions;
 use crate::model::{KernelModel, TledModel};
-use crate::solver::{SolverSnapshot, StepControl};
+use crate::solver::{substeps_for, SolverSnapshot, StepControl};
 
 use super::buffers::{check_limits, storage, ModelArrays, ModelBuffers, Planned};
 use super::device::GpuDevice;
@@ -134,37 +134,6 @@ pub struct GpuSolver {
     probe_nodes: Vec<u32>,
     /// Measured wall time of one sub-step (submit to finish), s.
     substep_wall_s: Option<f64>,
-}
-
-/// Sub-steps per step: 1 at or below the critical step, else the fewest
-/// equal sub-steps at or below it (the CPU solver's rule).
-fn substeps_for(dt_s: f64, critical: f64, control: StepControl) -> Result<u32, FemError> {
-    if !(dt_s.is_finite() && dt_s > 0.0) {
-        return Err(FemError::InvalidTimeStep { dt_s });
-    }
-    if dt_s <= critical {
-        return Ok(1);
-    }
-    match control {
-        StepControl::Refuse => Err(FemError::TimeStepAboveCritical {
-            dt_s,
-            critical_s: critical,
-        }),
-        StepControl::SubStep => {
-            let n = (dt_s / critical).ceil();
-            if n > u32::MAX as f64 {
-                return Err(FemError::TimeStepAboveCritical {
-                    dt_s,
-                    critical_s: critical,
-                });
-            }
-            let mut n = n as u32;
-            while dt_s / n as f64 > critical {
-                n += 1;
-            }
-            Ok(n)
-        }
-    }
 }
 
 fn words(bytes: &[u8]) -> Vec<f32> {
