@@ -446,3 +446,43 @@ fn the_bench_reports_the_cpu_bench_figures_and_bandwidth() {
         assert!(json.get(key).is_some(), "{key}");
     }
 }
+
+#[test]
+fn a_lost_device_is_an_error_not_a_hang_and_the_state_read_before_survives() {
+    let gpu = device();
+    let mesh = box_h8([EDGE_M; 3], [3, 3, 3]);
+    let m = model(&mesh, TetFormulation::T4, Precision::F32);
+    let bcs = all_loads(&mesh);
+    let dt = 0.5 * m.critical_time_step();
+    let mut g = GpuSolver::new(
+        &gpu,
+        m,
+        &bcs,
+        dt,
+        StepControl::Refuse,
+        GpuOptions::default(),
+    )
+    .unwrap();
+    g.advance_steps(20).unwrap();
+    let before = g.displacements().unwrap();
+    assert!(largest(&before) > 0.0);
+    // What a driver reset or an unplugged eGPU does to the device.
+    gpu.device().destroy();
+    let started = std::time::Instant::now();
+    let err = g
+        .advance_steps(20)
+        .and_then(|()| g.displacements().map(|_| ()))
+        .unwrap_err();
+    assert!(
+        started.elapsed() < GpuOptions::default().wait_timeout,
+        "the lost device was waited on"
+    );
+    let text = err.to_string();
+    assert!(
+        matches!(err, GpuError::DeviceLost { .. } | GpuError::Device { .. }),
+        "{text}"
+    );
+    eprintln!("after device loss: {text}");
+    // What was read before the loss is the caller's, untouched.
+    assert!(largest(&before) > 0.0);
+}

@@ -131,7 +131,8 @@ impl GpuDevice {
             }));
         let sink = Arc::clone(&gpu.faults);
         gpu.device.set_device_lost_callback(move |reason, message| {
-            record(&sink, Fault::Lost(format!("{reason:?}: {message}")))
+            let detail = if message.is_empty() { format!("{reason:?}") } else { format!("{reason:?}: {message}") };
+            record(&sink, Fault::Lost(detail))
         });
         Ok(gpu)
     }
