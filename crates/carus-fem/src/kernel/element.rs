@@ -100,7 +100,7 @@ pub fn deformation_gradient<S: Num, const N: usize>(
         for j in 0..3 {
             let mut acc = S::splat(if i == j { 1.0 } else { 0.0 });
             for a in 0..N {
-                acc = acc + u[a][i] * dh[a][j];
+                acc = u[a][i].mul_add(dh[a][j], acc);
             }
             f[i][j] = acc;
         }
@@ -118,7 +118,7 @@ pub fn det3<S: Num>(f: &[[S; 3]; 3]) -> S {
 /// C = F^T F.
 #[inline(always)]
 pub fn right_cauchy_green<S: Num>(f: &[[S; 3]; 3]) -> Sym<S> {
-    let col = |i: usize, j: usize| f[0][i] * f[0][j] + f[1][i] * f[1][j] + f[2][i] * f[2][j];
+    let col = |i: usize, j: usize| f[0][i].mul_add(f[0][j], f[1][i].mul_add(f[1][j], f[2][i] * f[2][j]));
     Sym {
         xx: col(0, 0),
         yy: col(1, 1),
@@ -198,13 +198,13 @@ pub fn stress_forces<S: Num, const N: usize>(
     let mut p = [[S::splat(0.0); 3]; 3];
     for i in 0..3 {
         for j in 0..3 {
-            p[i][j] = w * (f[i][0] * sr[0][j] + f[i][1] * sr[1][j] + f[i][2] * sr[2][j]);
+            p[i][j] = w * f[i][0].mul_add(sr[0][j], f[i][1].mul_add(sr[1][j], f[i][2] * sr[2][j]));
         }
     }
     let mut out = [[S::splat(0.0); 3]; N];
     for a in 0..N {
         for i in 0..3 {
-            out[a][i] = p[i][0] * dh[a][0] + p[i][1] * dh[a][1] + p[i][2] * dh[a][2];
+            out[a][i] = p[i][0].mul_add(dh[a][0], p[i][1].mul_add(dh[a][1], p[i][2] * dh[a][2]));
         }
     }
     out
@@ -221,7 +221,7 @@ pub fn hourglass_amplitudes<S: Num, const N: usize>(
         for c in 0..3 {
             let mut acc = S::splat(0.0);
             for a in 0..N {
-                acc = acc + hg[g][a] * u[a][c];
+                acc = hg[g][a].mul_add(u[a][c], acc);
             }
             q[g][c] = acc;
         }
@@ -241,7 +241,7 @@ pub fn add_hourglass_forces<S: Num, const N: usize>(
         for c in 0..3 {
             let mut acc = forces[a][c];
             for g in 0..4 {
-                acc = acc + hg[g][a] * q[g][c];
+                acc = hg[g][a].mul_add(q[g][c], acc);
             }
             forces[a][c] = acc;
         }

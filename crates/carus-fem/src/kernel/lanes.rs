@@ -33,6 +33,9 @@ pub trait Real:
     fn from_f64(x: f64) -> Self;
     fn to_f64(self) -> f64;
     fn sqrt(self) -> Self;
+    /// self * a + b rounded once (one FMA instruction where the target has
+    /// it; the inner products of the kernels are chains of these).
+    fn mul_add(self, a: Self, b: Self) -> Self;
     fn is_finite(self) -> bool;
     /// A first guess of x^(-1/3) within a few per cent, from the bit pattern
     /// (branch-free integer arithmetic, so it vectorises; no libm call).
@@ -52,6 +55,10 @@ impl Real for f32 {
     #[inline(always)]
     fn sqrt(self) -> Self {
         f32::sqrt(self)
+    }
+    #[inline(always)]
+    fn mul_add(self, a: Self, b: Self) -> Self {
+        f32::mul_add(self, a, b)
     }
     #[inline(always)]
     fn is_finite(self) -> bool {
@@ -79,6 +86,10 @@ impl Real for f64 {
         f64::sqrt(self)
     }
     #[inline(always)]
+    fn mul_add(self, a: Self, b: Self) -> Self {
+        f64::mul_add(self, a, b)
+    }
+    #[inline(always)]
     fn is_finite(self) -> bool {
         f64::is_finite(self)
     }
@@ -100,6 +111,8 @@ pub trait Num:
 {
     fn splat(x: f64) -> Self;
     fn sqrt(self) -> Self;
+    /// self * a + b rounded once.
+    fn mul_add(self, a: Self, b: Self) -> Self;
     /// x^(-1/3) for x > 0 (the isochoric factor J^(-1/3)); garbage, never a
     /// trap, for x <= 0, which the callers detect through J.
     fn inv_cbrt(self) -> Self;
@@ -125,6 +138,10 @@ macro_rules! num_for_real {
             #[inline(always)]
             fn sqrt(self) -> Self {
                 <$t as Real>::sqrt(self)
+            }
+            #[inline(always)]
+            fn mul_add(self, a: Self, b: Self) -> Self {
+                <$t as Real>::mul_add(self, a, b)
             }
             #[inline(always)]
             fn inv_cbrt(self) -> Self {
@@ -217,6 +234,14 @@ impl<T: Real> Num for Lanes<T> {
         let mut r = self.0;
         for v in r.iter_mut() {
             *v = v.sqrt();
+        }
+        Lanes(r)
+    }
+    #[inline(always)]
+    fn mul_add(self, a: Self, b: Self) -> Self {
+        let mut r = self.0;
+        for l in 0..LANES {
+            r[l] = self.0[l].mul_add(a.0[l], b.0[l]);
         }
         Lanes(r)
     }

@@ -15,8 +15,9 @@ use super::lanes::{block_view, block_view_mut, Lanes, Real, LANES};
 
 /// Blocks per parallel task (512 elements).
 const BLOCKS_PER_TASK: usize = 64;
-/// Nodes per parallel task.
-const NODES_PER_TASK: usize = 2048;
+/// Nodes per parallel task: small enough that the tasks of a 10^4-node
+/// mesh split evenly over the threads.
+const NODES_PER_TASK: usize = 512;
 
 /// Whether the AVX2 versions can run on this CPU (cached by std).
 #[inline]
@@ -57,8 +58,8 @@ fn first_bad(a: BadElement, b: BadElement) -> BadElement {
 /// lane and re-read as a vector, which would stall store forwarding.
 #[inline(always)]
 fn gather_displacements<T: Real, const N: usize>(conn: &[u32], u: &[T]) -> [[Lanes<T>; 3]; N] {
-    let mut ue = [[Lanes([T::default(); LANES]); 3]; N];
-    for a in 0..N {
+    // Built node by node, so the block is never zero-filled first.
+    std::array::from_fn(|a| {
         let mut x = [T::default(); LANES];
         let mut y = [T::default(); LANES];
         let mut z = [T::default(); LANES];
@@ -69,9 +70,8 @@ fn gather_displacements<T: Real, const N: usize>(conn: &[u32], u: &[T]) -> [[Lan
             y[l] = p[1];
             z[l] = p[2];
         }
-        ue[a] = [Lanes(x), Lanes(y), Lanes(z)];
-    }
-    ue
+        [Lanes(x), Lanes(y), Lanes(z)]
+    })
 }
 
 #[inline(always)]
