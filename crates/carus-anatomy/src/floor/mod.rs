@@ -9,13 +9,18 @@
 //!   on the other side (the arch follows the mid-pelvis ring through the
 //!   lower symphysis and the spines, which lies on the bony wall);
 //! - the rim of the urogenital hiatus, an opening in front that starts at
-//!   the pubis and ends at the perineal body behind it, sinking from the
-//!   pubis to `sag_mm` below the outlet plane at the back.
+//!   the pubis beside the symphysis and closes behind on the midline (the
+//!   perineal body), `hiatus_length_mm` long (from the lower symphysis
+//!   border) and `hiatus_width_mm` wide at its widest, sinking from the
+//!   pubis to `sag_mm` below the outlet plane at the back. These three
+//!   measure back on the mesh exactly ([`measure_hiatus`]).
 //!
-//! The sheet between them sags further towards the hiatus, so it forms the
-//! gutter that slopes forwards, downwards and medially (CARDINAL_MOVEMENTS.md,
-//! internal rotation). Everything is built from landmarks and planes only,
-//! so the floor fits generated and imported pelvises alike.
+//! The sheet between them hangs below the straight line from attachment to
+//! rim (a bowl, deepest half-way, by half of `sag_mm`), so the floor sags
+//! from its attachments towards the hiatus and forms the gutter that slopes
+//! forwards, downwards and medially (CARDINAL_MOVEMENTS.md, internal
+//! rotation). Everything is built from landmarks and planes only, so the
+//! floor fits generated and imported pelvises alike.
 //!
 //! Node ordering is VTK's (carus_fem::mesh): bottom face on the perineal
 //! side, top face on the fetal side.
@@ -31,19 +36,31 @@ use crate::pelvis::Pelvis;
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct FloorParameters {
-    /// Thickness of the levator ani sheet, mm. About 7 mm: pubovisceral
-    /// muscle thickness at rest on 3D ultrasound (Dietz, Shek & Clarke 2005,
-    /// Ultrasound Obstet Gynecol 25:580).
+    /// Thickness of the levator ani sheet, mm: 7 mm, the puborectalis at
+    /// rest on 3D ultrasound in 45 nulliparous women (left 7.1 +- 1.0 mm,
+    /// right 6.8 +- 0.8 mm; Zhang, Wang & Wang, "Evaluation of the pelvic
+    /// diaphragm hiatus in nulliparous women by three-dimensional
+    /// ultrasound", J China Clin Med Imaging).
     pub thickness_mm: f64,
-    /// How far the back of the hiatus rim lies below the outlet plane, mm: 20 mm, the
-    /// upper limit of normal muscular descent (M line) of the HMO MRI
-    /// grading (Comiter et al. 1999, Urology 54:454).
+    /// How far the back of the hiatus (the levator plate behind it) lies
+    /// below the outlet plane, whose antero-posterior line runs from the
+    /// lower symphysis to the coccyx like the pubococcygeal line, mm; the
+    /// sheet between attachment and rim hangs a further half of it (the
+    /// bowl). 20 mm: the M line (descent of the levator plate below the
+    /// pubococcygeal line) averaged 1.9 +- 1.2 cm in the women without
+    /// prolapse (pelvic pain group, n = 39) of Comiter et al. 1999,
+    /// Urology 54:454 (4.1 cm with prolapse).
     pub sag_mm: f64,
-    /// Antero-posterior length of the urogenital (levator) hiatus, mm:
-    /// 50 mm, H line of the HMO grading (Comiter et al. 1999) and the
-    /// hiatal AP diameter at rest (about 50 mm, Dietz et al. 2005).
+    /// Length of the urogenital (levator) hiatus, from the lower border of
+    /// the symphysis to the back of the hiatus on the midline, mm: 50 mm, the
+    /// H line (pubis to the posterior anal canal) averaged 5.2 +- 1.1 cm in
+    /// the same group (Comiter et al. 1999; 7.5 cm with prolapse).
     pub hiatus_length_mm: f64,
-    /// Transverse width of the hiatus, mm: about 38 mm at rest (Dietz et al. 2005).
+    /// Greatest transverse width of the hiatus, mm: 38 mm. The transverse
+    /// hiatal diameter on Valsalva measured 32.3 +- 4.9 mm on coronal MRI
+    /// and 41.3-43.6 mm in the axial plane of minimal dimensions (Kruger,
+    /// Heap, Murphy & Dietz 2010, Ultrasound Obstet Gynecol 36:755); 38 mm
+    /// lies between them.
     pub hiatus_width_mm: f64,
     /// Extra thickness of the perineal body behind the hiatus, mm.
     /// Engineering choice (the perineal body is a fibromuscular node about
@@ -78,19 +95,30 @@ pub enum FloorError {
     #[error("{key} = {value} must be a positive, finite size")]
     NotPositive { key: &'static str, value: f64 },
     #[error("{key} = {value} is too coarse: at least {min} elements are needed")]
-    TooFewElements { key: &'static str, value: usize, min: usize },
-    #[error("elements_around = {0} must be even, so the posterior midline (coccyx) is a row of nodes")]
+    TooFewElements {
+        key: &'static str,
+        value: usize,
+        min: usize,
+    },
+    #[error(
+        "elements_around = {0} must be even, so the posterior midline (coccyx) is a row of nodes"
+    )]
     OddAround(usize),
     #[error("hiatus_width_mm = {width} does not fit between the ischial spines ({interspinous:.1} mm apart); make it narrower than 0.6 x the interspinous diameter")]
     HiatusTooWide { width: f64, interspinous: f64 },
     #[error("hiatus_length_mm = {length} reaches the coccyx ({outlet_ap:.1} mm behind the symphysis); make it shorter than 0.75 x the outlet AP diameter")]
     HiatusTooLong { length: f64, outlet_ap: f64 },
+    #[error("sag_mm = {sag} is too deep for hiatus_length_mm = {length}: the back of the hiatus cannot lie deeper below the outlet plane than 0.8 x its distance from the symphysis")]
+    SagTooDeep { sag: f64, length: f64 },
     #[error("the floor would have an inverted element ({element}) for this pelvis: reduce thickness_mm or sag_mm")]
     Inverted { element: usize },
 }
 
 /// Name of the node set fixed to bone.
 pub const ATTACHED: &str = "attached";
+/// Name of the node set on the hiatus rim (round the U, all layers of one
+/// position in a row), where [`measure_hiatus`] reads the hiatus.
+pub const HIATUS_RIM: &str = "hiatus_rim";
 /// Name of the fetal-side (upper) surface.
 pub const UPPER_SURFACE: &str = "upper";
 /// Name of the perineal-side (lower) surface.
@@ -101,12 +129,27 @@ pub const PERINEAL_BODY: &str = "perineal_body";
 
 /// Where the levator rises from the pubis, as a turn position (1/64 turns
 /// from the front midline) on the mid-pelvis ring: about 25 mm lateral to
-/// the symphysis in a gynecoid pelvis, where the levator's origin runs
-/// along the superior ramus (engineering choice).
-const PUBIC_ORIGIN_TURN: f64 = 6.0;
-/// The hiatus rim starts at the pubis this share of the hiatus half-width
-/// from the midline (the puborectalis inserts beside the symphysis).
+/// the symphysis in the default pelvis, where the levator's origin runs
+/// along the back of the pubic body (engineering choice; further out, the
+/// corner elements between the insertion and the wider hiatus shear).
+const PUBIC_ORIGIN_TURN: f64 = 5.0;
+/// The hiatus rim leaves the pubis this share of the hiatus half-width from
+/// the midline (the puborectalis inserts on the pubis beside the symphysis;
+/// engineering choice).
 const HIATUS_FRONT_SHARE: f64 = 0.5;
+/// ... and this far (m) behind the lower border of the symphysis, along the
+/// back of the pubis (engineering choice: the insertion's thickness).
+const HIATUS_FRONT_GAP: f64 = 0.005;
+/// Share of the hiatus length (from the symphysis) where it is widest: the
+/// levator hiatus is an oval widest about its middle (engineering choice).
+const HIATUS_WIDEST_SHARE: f64 = 0.5;
+/// The back of the hiatus may lie at most this share of the hiatus length
+/// below the outlet plane (beyond it the rim would turn almost vertical).
+const HIATUS_SAG_MAX_SHARE: f64 = 0.8;
+/// Depth of the bowl: each line from the attachment to the rim hangs below
+/// its chord by this share of `sag_mm` at its middle (engineering choice:
+/// the iliococcygeus sags between the tendinous arch and the hiatus).
+const BOWL_SHARE: f64 = 0.5;
 /// How far out (share of the spine's lateral offset) the tail's Bezier
 /// control point lies beside the coccyx tip.
 const COCCYX_APPROACH: f64 = 0.6;
@@ -144,23 +187,149 @@ impl FloorParameters {
     }
 }
 
+/// The rim of the urogenital hiatus in its own (tilted) plane: `back`, m,
+/// from the lower border of the symphysis along the hiatus' sagittal line,
+/// and `lateral`, the share of the half-width. Two pieces meet at the widest
+/// point, which is a node, so the width measured on the mesh is the one set:
+/// - from the pubis (`HIATUS_FRONT_SHARE` of the half-width beside the
+///   midline, heading backwards and outwards) to the widest point (heading
+///   straight back), at `HIATUS_WIDEST_SHARE` of the length;
+/// - from there round a quarter ellipse to the perineal body on the midline
+///   behind, arriving square to it (no cusp), `hiatus_length_mm` from the
+///   lower border of the symphysis.
+struct Rim {
+    length: f64,
+    half_width: f64,
+    /// Segments per half rim, and how many of them the front piece takes.
+    segments: usize,
+    front_segments: usize,
+    /// Arc-length tables of the two pieces (cumulative, `RIM_TABLE` + 1 entries).
+    tables: [Vec<f64>; 2],
+}
+
+impl Rim {
+    fn new(parameters: &FloorParameters) -> Rim {
+        let mut rim = Rim {
+            length: 1e-3 * parameters.hiatus_length_mm,
+            half_width: 0.5e-3 * parameters.hiatus_width_mm,
+            segments: parameters.elements_around / 2,
+            front_segments: 0,
+            tables: [Vec::new(), Vec::new()],
+        };
+        for piece in 0..2 {
+            let mut cumulative = vec![0.0; RIM_TABLE + 1];
+            for k in 0..RIM_TABLE {
+                let (a, b) = (
+                    rim.local(piece, k as f64 / RIM_TABLE as f64),
+                    rim.local(piece, (k + 1) as f64 / RIM_TABLE as f64),
+                );
+                cumulative[k + 1] = cumulative[k] + (b - a).length();
+            }
+            rim.tables[piece] = cumulative;
+        }
+        let (front, back) = (rim.tables[0][RIM_TABLE], rim.tables[1][RIM_TABLE]);
+        rim.front_segments = ((rim.segments as f64 * front / (front + back)).round() as usize)
+            .clamp(1, rim.segments - 1);
+        rim
+    }
+
+    /// Point of `piece` (0 front, 1 back) at curve parameter `s` in [0, 1], as
+    /// (back, lateral) in metres.
+    fn local(&self, piece: usize, s: f64) -> glam::DVec2 {
+        let quarter = std::f64::consts::FRAC_PI_2 * s;
+        let widest = HIATUS_WIDEST_SHARE * self.length;
+        let (back, lateral) = if piece == 0 {
+            (
+                HIATUS_FRONT_GAP + (widest - HIATUS_FRONT_GAP) * s,
+                HIATUS_FRONT_SHARE + (1.0 - HIATUS_FRONT_SHARE) * quarter.sin(),
+            )
+        } else {
+            (
+                widest + (self.length - widest) * quarter.sin(),
+                quarter.cos(),
+            )
+        };
+        glam::DVec2::new(back, lateral * self.half_width)
+    }
+
+    /// Curve parameter of `piece` at arc-length share `f`.
+    fn even(&self, piece: usize, f: f64) -> f64 {
+        let cumulative = &self.tables[piece];
+        let target = f.clamp(0.0, 1.0) * cumulative[RIM_TABLE];
+        let k = cumulative
+            .partition_point(|&c| c <= target)
+            .clamp(1, RIM_TABLE)
+            - 1;
+        let span = cumulative[k + 1] - cumulative[k];
+        let t = if span > 0.0 {
+            (target - cumulative[k]) / span
+        } else {
+            0.0
+        };
+        (k as f64 + t) / RIM_TABLE as f64
+    }
+
+    /// (back, half-width) at position `h` along a half rim, in segments from
+    /// the pubis (0) to the midline behind (`segments`).
+    fn at(&self, h: f64) -> glam::DVec2 {
+        let split = self.front_segments as f64;
+        if h <= split {
+            self.local(0, self.even(0, h / split))
+        } else {
+            self.local(
+                1,
+                self.even(1, (h - split) / (self.segments as f64 - split)),
+            )
+        }
+    }
+}
+
 /// The two curves the sheet spans, as functions of the position round the U
 /// (`u` in [0, 1] from the left pubic insertion through the coccyx to the right).
 struct Outline<'a> {
     pelvis: &'a Pelvis,
     ring: crate::pelvis::MidRing,
-    hiatus_front: DVec3,
+    rim: Rim,
+    frame: HiatusFrame,
+}
+
+/// Directions the hiatus is laid out (and measured) in.
+struct HiatusFrame {
+    /// Lower border of the symphysis, where the hiatus' length starts.
+    front: DVec3,
+    /// Along the symphysis-coccyx line (the outlet's AP line, which is the
+    /// pubococcygeal line of the MRI gradings), backwards.
     backwards: DVec3,
+    /// The tuberosity line made square to `backwards`: the transverse.
     right: DVec3,
+    /// Caudal normal of the outlet plane.
     down: DVec3,
-    parameters: &'a FloorParameters,
+}
+
+impl HiatusFrame {
+    fn new(pelvis: &Pelvis) -> HiatusFrame {
+        let l = &pelvis.landmarks;
+        let backwards = (l.coccyx_tip - l.symphysis_lower).normalize();
+        let transverse = l.ischial_tuberosity_right - l.ischial_tuberosity_left;
+        let right = (transverse - transverse.dot(backwards) * backwards).normalize();
+        HiatusFrame {
+            front: l.symphysis_lower,
+            backwards,
+            right,
+            down: pelvis.planes.outlet.normal,
+        }
+    }
 }
 
 impl Outline<'_> {
     /// Attachment on one side (`left`), `f` in [0, 1] from the pubis to the coccyx tip.
     fn attachment_half(&self, left: bool, f: f64) -> DVec3 {
         let l = &self.pelvis.landmarks;
-        let spine = if left { l.ischial_spine_left } else { l.ischial_spine_right };
+        let spine = if left {
+            l.ischial_spine_left
+        } else {
+            l.ischial_spine_right
+        };
         let sign = if left { 1.0 } else { -1.0 };
         let arch_length = self.arch_length(sign);
         // Chord length: a fair share of nodes for the curved tail.
@@ -173,7 +342,7 @@ impl Outline<'_> {
             // Spine to coccyx tip, arriving square to the midline so the two
             // sides meet smoothly (a quadratic Bezier).
             let t = (f - split) / (1.0 - split);
-            let across = (spine - l.coccyx_tip).dot(self.right) * self.right;
+            let across = (spine - l.coccyx_tip).dot(self.frame.right) * self.frame.right;
             let control = l.coccyx_tip + COCCYX_APPROACH * across;
             (1.0 - t) * (1.0 - t) * spine + 2.0 * t * (1.0 - t) * control + t * t * l.coccyx_tip
         }
@@ -183,7 +352,8 @@ impl Outline<'_> {
         let n = 32;
         (0..n)
             .map(|k| {
-                let t = |k: usize| PUBIC_ORIGIN_TURN + (16.0 - PUBIC_ORIGIN_TURN) * k as f64 / n as f64;
+                let t =
+                    |k: usize| PUBIC_ORIGIN_TURN + (16.0 - PUBIC_ORIGIN_TURN) * k as f64 / n as f64;
                 (self.ring.at(sign * t(k + 1)) - self.ring.at(sign * t(k))).length()
             })
             .sum()
@@ -197,46 +367,77 @@ impl Outline<'_> {
         }
     }
 
-    /// Angle along the hiatus rim at arc-length fraction `f` of a half rim.
-    fn rim_angle(&self, f: f64) -> f64 {
-        let p = self.parameters;
-        let (half_width, length) = (0.5 * p.hiatus_width_mm, p.hiatus_length_mm);
-        let point = |phi: f64| {
-            let back = 0.5 * (1.0 - phi.cos()) + 0.25 * phi.sin() * (1.0 + phi.cos());
-            let lateral = (1.0 - HIATUS_FRONT_SHARE) * phi.sin() + HIATUS_FRONT_SHARE * 0.5 * (1.0 + phi.cos());
-            glam::DVec2::new(back * length, lateral * half_width)
+    /// Hiatus rim at node `i` round the U: the rim (see [`Rim`]) in a plane
+    /// through the lower symphysis border that sinks backwards, so the back
+    /// of the hiatus lies `sag_mm` below the outlet plane (the M line of
+    /// Comiter et al. 1999: levator plate below the pubococcygeal line) and
+    /// exactly `hiatus_length_mm` from the lower symphysis border (their H line).
+    fn hiatus(&self, i: usize, sag: f64) -> DVec3 {
+        let segments = self.rim.segments;
+        let (h, side) = if i <= segments {
+            (i, -1.0)
+        } else {
+            (2 * segments - i, 1.0)
         };
-        let n = RIM_TABLE;
-        let angle = |k: usize| std::f64::consts::PI * k as f64 / n as f64;
-        let mut cumulative = vec![0.0; n + 1];
-        for k in 0..n {
-            cumulative[k + 1] = cumulative[k] + (point(angle(k + 1)) - point(angle(k))).length();
-        }
-        let target = f * cumulative[n];
-        let k = cumulative.partition_point(|&c| c <= target).clamp(1, n) - 1;
-        let span = cumulative[k + 1] - cumulative[k];
-        let t = if span > 0.0 { (target - cumulative[k]) / span } else { 0.0 };
-        angle(k) + t * (angle(k + 1) - angle(k))
+        let p = self.rim.at(h as f64);
+        let sink = sag / self.rim.length;
+        let sagittal = (1.0 - sink * sink).sqrt() * self.frame.backwards + sink * self.frame.down;
+        self.frame.front + p.x * sagittal + side * p.y * self.frame.right
     }
+}
 
-    /// Hiatus rim: half an ellipse on each side, from beside the symphysis
-    /// round to the perineal body on the midline behind, sinking from the
-    /// pubis (where the puborectalis inserts) to `sag_mm` below the outlet
-    /// plane at the back.
-    fn hiatus(&self, u: f64) -> DVec3 {
-        let p = self.parameters;
-        let (half_width, length) = (0.5e-3 * p.hiatus_width_mm, 1e-3 * p.hiatus_length_mm);
-        let (f, side) = if u <= 0.5 { (2.0 * u, -1.0) } else { (2.0 * (1.0 - u), 1.0) };
-        // A U: leaving the pubis already heading back, widest near the
-        // middle, closing square to the midline behind (no cusp there);
-        // nodes spaced evenly along it.
-        let phi = self.rim_angle(f);
-        let back = 0.5 * (1.0 - phi.cos()) + 0.25 * phi.sin() * (1.0 + phi.cos());
-        let lateral = (1.0 - HIATUS_FRONT_SHARE) * phi.sin() + HIATUS_FRONT_SHARE * 0.5 * (1.0 + phi.cos());
-        self.hiatus_front
-            + back * length * self.backwards
-            + side * half_width * lateral * self.right
-            + back * 1e-3 * p.sag_mm * self.down
+/// The urogenital hiatus as measured on a floor mesh (mid-thickness of the
+/// rim nodes, node set `hiatus_rim`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct HiatusMeasurement {
+    /// From the lower border of the symphysis to the back of the hiatus (the
+    /// rim's point on the midline), mm: the H line of the MRI gradings.
+    pub length_mm: f64,
+    /// The rim's extent along the transverse (the tuberosity line made square
+    /// to the symphysis-coccyx line), mm.
+    pub width_mm: f64,
+    /// How far the back of the hiatus lies below the outlet plane, mm: the M line.
+    pub sag_mm: f64,
+}
+
+/// Measures the hiatus of `mesh`, a floor that [`pelvic_floor`] built for
+/// `pelvis` with `parameters` (the node set `hiatus_rim` lists the rim's
+/// nodes round the U, all layers of one position in a row).
+pub fn measure_hiatus(
+    mesh: &Mesh,
+    pelvis: &Pelvis,
+    parameters: &FloorParameters,
+) -> HiatusMeasurement {
+    let frame = HiatusFrame::new(pelvis);
+    let layers = parameters.elements_through + 1;
+    let rim: Vec<DVec3> = mesh.node_sets[HIATUS_RIM]
+        .chunks(layers)
+        .map(|nodes| {
+            nodes
+                .iter()
+                .map(|&n| DVec3::from_array(mesh.nodes[n as usize]))
+                .sum::<DVec3>()
+                / nodes.len() as f64
+        })
+        .collect();
+    let across = |p: &DVec3| (*p - frame.front).dot(frame.right);
+    // The back of the hiatus: the rim's point on the midline (the front ends
+    // stand beside the symphysis, off the midline).
+    let back = *rim
+        .iter()
+        .min_by(|a, b| across(a).abs().total_cmp(&across(b).abs()))
+        .expect("a floor has a rim");
+    let (lo, hi) = rim
+        .iter()
+        .map(across)
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
+            (lo.min(x), hi.max(x))
+        });
+    let outlet = pelvis.planes.outlet;
+    HiatusMeasurement {
+        length_mm: 1e3 * (back - frame.front).length(),
+        width_mm: 1e3 * (hi - lo),
+        sag_mm: 1e3 * (back - outlet.centre).dot(outlet.normal),
     }
 }
 
@@ -246,39 +447,52 @@ pub fn pelvic_floor(pelvis: &Pelvis, parameters: &FloorParameters) -> Result<Mes
     let l = &pelvis.landmarks;
     let interspinous = (l.ischial_spine_right - l.ischial_spine_left).length() * 1e3;
     if parameters.hiatus_width_mm >= 0.6 * interspinous {
-        return Err(FloorError::HiatusTooWide { width: parameters.hiatus_width_mm, interspinous });
+        return Err(FloorError::HiatusTooWide {
+            width: parameters.hiatus_width_mm,
+            interspinous,
+        });
     }
     let outlet_ap = (l.coccyx_tip - l.symphysis_lower).length() * 1e3;
     if parameters.hiatus_length_mm >= 0.75 * outlet_ap {
-        return Err(FloorError::HiatusTooLong { length: parameters.hiatus_length_mm, outlet_ap });
+        return Err(FloorError::HiatusTooLong {
+            length: parameters.hiatus_length_mm,
+            outlet_ap,
+        });
     }
-    let backwards = (l.coccyx_tip - l.symphysis_lower).normalize();
-    let transverse = l.ischial_tuberosity_right - l.ischial_tuberosity_left;
-    let right = (transverse - transverse.dot(backwards) * backwards).normalize();
+    if parameters.sag_mm >= HIATUS_SAG_MAX_SHARE * parameters.hiatus_length_mm {
+        return Err(FloorError::SagTooDeep {
+            sag: parameters.sag_mm,
+            length: parameters.hiatus_length_mm,
+        });
+    }
     let outline = Outline {
         pelvis,
         ring: crate::pelvis::mid_ring(l),
-        // The hiatus opens just behind the lower border of the symphysis.
-        hiatus_front: l.symphysis_lower + 0.005 * backwards,
-        backwards,
-        right,
-        down: pelvis.planes.outlet.normal,
-        parameters,
+        rim: Rim::new(parameters),
+        frame: HiatusFrame::new(pelvis),
     };
 
-    let (na, nc, nt) = (parameters.elements_around, parameters.elements_across, parameters.elements_through);
+    let (na, nc, nt) = (
+        parameters.elements_around,
+        parameters.elements_across,
+        parameters.elements_through,
+    );
     let (rows_a, rows_c, rows_t) = (na + 1, nc + 1, nt + 1);
-    // Mid-surface, sagging further between attachment and rim.
-    let sag = 0.25e-3 * parameters.sag_mm;
+    // Mid-surface: the levator bowl. Each line from the attachment to the
+    // rim hangs below its chord (along the outlet normal) by a parabola
+    // whose depth is BOWL_SHARE of sag_mm, so the sheet sags from its
+    // attachments towards the hiatus.
+    let sag = 1e-3 * parameters.sag_mm;
     let mut middle = vec![DVec3::ZERO; rows_a * rows_c];
     for i in 0..rows_a {
         let u = i as f64 / na as f64;
-        let (outer, inner) = (outline.attachment(u), outline.hiatus(u));
+        let (outer, inner) = (outline.attachment(u), outline.hiatus(i, sag));
         // The pubic insertions are straight lines on the bone: no sag there.
-        let taper = smoothstep(0.0, 0.2, u.min(1.0 - u));
+        let taper = smoothstep(0.0, 0.35, u.min(1.0 - u));
         for j in 0..rows_c {
             let r = j as f64 / nc as f64;
-            middle[i * rows_c + j] = outer.lerp(inner, r) + 4.0 * r * (1.0 - r) * taper * sag * outline.down;
+            middle[i * rows_c + j] = outer.lerp(inner, r)
+                + 4.0 * r * (1.0 - r) * taper * BOWL_SHARE * sag * outline.frame.down;
         }
     }
     // Thickness along the mid-surface normal (around x across, which points
@@ -299,7 +513,11 @@ pub fn pelvic_floor(pelvis: &Pelvis, parameters: &FloorParameters) -> Result<Mes
         for i in 0..rows_a {
             for j in 0..rows_c {
                 let n = |i: usize, j: usize| previous[i * rows_c + j];
-                let sum = n(i, j) * 2.0 + n((i + 1).min(na), j) + n(i.saturating_sub(1), j) + n(i, (j + 1).min(nc)) + n(i, j.saturating_sub(1));
+                let sum = n(i, j) * 2.0
+                    + n((i + 1).min(na), j)
+                    + n(i.saturating_sub(1), j)
+                    + n(i, (j + 1).min(nc))
+                    + n(i, j.saturating_sub(1));
                 normals[i * rows_c + j] = sum.normalize();
             }
         }
@@ -334,7 +552,12 @@ pub fn pelvic_floor(pelvis: &Pelvis, parameters: &FloorParameters) -> Result<Mes
                     + perineal[(i + 1) * rows_c + j + 1]);
             for k in 0..nt {
                 let e = (connectivity.len() / 8) as u32;
-                let bottom = [node(i, j, k), node(i + 1, j, k), node(i + 1, j + 1, k), node(i, j + 1, k)];
+                let bottom = [
+                    node(i, j, k),
+                    node(i + 1, j, k),
+                    node(i + 1, j + 1, k),
+                    node(i, j + 1, k),
+                ];
                 let top = bottom.map(|n| n + 1);
                 connectivity.extend_from_slice(&bottom);
                 connectivity.extend_from_slice(&top);
@@ -364,12 +587,21 @@ pub fn pelvic_floor(pelvis: &Pelvis, parameters: &FloorParameters) -> Result<Mes
         }
     }
     mesh.node_sets.insert(ATTACHED.to_string(), attached);
+    let rim = (0..rows_a)
+        .flat_map(|i| (0..rows_t).map(move |k| node(i, nc, k)))
+        .collect();
+    mesh.node_sets.insert(HIATUS_RIM.to_string(), rim);
     mesh.element_sets.insert(LEVATOR_ANI.to_string(), levator);
-    mesh.element_sets.insert(PERINEAL_BODY.to_string(), perineal_body);
+    mesh.element_sets
+        .insert(PERINEAL_BODY.to_string(), perineal_body);
     mesh.surfaces.insert(UPPER_SURFACE.to_string(), upper);
     mesh.surfaces.insert(LOWER_SURFACE.to_string(), lower);
     if let Some(element) = (0..mesh.element_count()).find(|&e| {
-        let x: Vec<[f64; 3]> = mesh.element(e).iter().map(|&n| mesh.nodes[n as usize]).collect();
+        let x: Vec<[f64; 3]> = mesh
+            .element(e)
+            .iter()
+            .map(|&n| mesh.nodes[n as usize])
+            .collect();
         carus_fem::quality::scaled_jacobian(ElementKind::H8, &x) <= 0.0
     }) {
         return Err(FloorError::Inverted { element });
@@ -398,8 +630,14 @@ mod tests {
     fn check(pelvis: &Pelvis, parameters: &FloorParameters, threshold: f64) -> Mesh {
         let mesh = pelvic_floor(pelvis, parameters).unwrap();
         let report = carus_fem::quality::check_quality(&mesh, threshold).unwrap();
-        assert!(report.passes(), "worst element {} at {}", report.worst_element, report.worst_scaled_jacobian);
-        let n = parameters.elements_around * parameters.elements_across * parameters.elements_through;
+        assert!(
+            report.passes(),
+            "worst element {} at {}",
+            report.worst_element,
+            report.worst_scaled_jacobian
+        );
+        let n =
+            parameters.elements_around * parameters.elements_across * parameters.elements_through;
         assert_eq!(mesh.element_count(), n);
         mesh
     }
@@ -407,7 +645,11 @@ mod tests {
     #[test]
     fn the_default_floor_is_valid_attached_and_shaped_as_a_gutter() {
         let pelvis = Pelvis::generate(&PelvisDiameters::default()).unwrap();
-        let mesh = check(&pelvis, &FloorParameters::default(), DEFAULT_MIN_SCALED_JACOBIAN);
+        let mesh = check(
+            &pelvis,
+            &FloorParameters::default(),
+            DEFAULT_MIN_SCALED_JACOBIAN,
+        );
         let x = |n: u32| DVec3::from_array(mesh.nodes[n as usize]);
         // Attached nodes lie near the bony landmarks' ring, not in the canal's middle.
         let attached = &mesh.node_sets[ATTACHED];
@@ -419,23 +661,138 @@ mod tests {
         // The upper surface faces the fetus: cranially, against the outlet normal.
         let down = pelvis.planes.outlet.normal;
         let upper = &mesh.surfaces[UPPER_SURFACE];
-        let facing: f64 = upper.iter().map(|t| (x(t[1]) - x(t[0])).cross(x(t[2]) - x(t[0])).dot(-down)).sum();
+        let facing: f64 = upper
+            .iter()
+            .map(|t| (x(t[1]) - x(t[0])).cross(x(t[2]) - x(t[0])).dot(-down))
+            .sum();
         assert!(facing > 0.0);
         // The gutter: the hiatus rim lies deeper (along the outlet normal)
         // than the lateral attachment at the spines.
         let spine = pelvis.landmarks.ischial_spine_left;
-        let rim_depth = mesh.nodes.iter().map(|p| DVec3::from_array(*p).dot(down)).fold(f64::NEG_INFINITY, f64::max);
+        let rim_depth = mesh
+            .nodes
+            .iter()
+            .map(|p| DVec3::from_array(*p).dot(down))
+            .fold(f64::NEG_INFINITY, f64::max);
         assert!(rim_depth > spine.dot(down) + 0.02);
         assert!(!mesh.element_sets[PERINEAL_BODY].is_empty());
+    }
+
+    /// Mid-thickness point of the sheet at (i, j).
+    fn middle(mesh: &Mesh, parameters: &FloorParameters, i: usize, j: usize) -> DVec3 {
+        let (rows_c, rows_t) = (
+            parameters.elements_across + 1,
+            parameters.elements_through + 1,
+        );
+        let nodes =
+            (0..rows_t).map(|k| DVec3::from_array(mesh.nodes[(i * rows_c + j) * rows_t + k]));
+        nodes.sum::<DVec3>() / rows_t as f64
+    }
+
+    #[test]
+    fn the_hiatus_measures_on_the_mesh_as_set() {
+        let generated = Pelvis::generate(&PelvisDiameters::default()).unwrap();
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../assets/anatomy/visible-human-female-pelvis.landmarks.toml");
+        let imported = crate::import::import_pelvis(&path).unwrap().pelvis;
+        // The labour simulation's resolution (carus-labour FloorSection) and the default one.
+        let coarse = FloorParameters {
+            elements_around: 32,
+            elements_across: 6,
+            elements_through: 1,
+            ..Default::default()
+        };
+        for pelvis in [&generated, &imported] {
+            for base in [FloorParameters::default(), coarse] {
+                for (length, width, sag) in
+                    [(50.0, 38.0, 20.0), (45.0, 32.5, 12.0), (58.3, 44.1, 30.0)]
+                {
+                    let parameters = FloorParameters {
+                        hiatus_length_mm: length,
+                        hiatus_width_mm: width,
+                        sag_mm: sag,
+                        ..base
+                    };
+                    let mesh = check(pelvis, &parameters, ANY_MIN_SCALED_JACOBIAN);
+                    let m = measure_hiatus(&mesh, pelvis, &parameters);
+                    assert!(
+                        (m.length_mm - length).abs() < 0.1,
+                        "length {} for {length}",
+                        m.length_mm
+                    );
+                    assert!(
+                        (m.width_mm - width).abs() < 0.1,
+                        "width {} for {width}",
+                        m.width_mm
+                    );
+                    assert!((m.sag_mm - sag).abs() < 0.1, "sag {} for {sag}", m.sag_mm);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_floor_is_a_bowl_sagging_towards_the_hiatus() {
+        let pelvis = Pelvis::generate(&PelvisDiameters::default()).unwrap();
+        let down = pelvis.planes.outlet.normal;
+        let depth = |p: DVec3| (p - pelvis.planes.outlet.centre).dot(down);
+        for sag in [10.0, 20.0, 30.0] {
+            let parameters = FloorParameters {
+                sag_mm: sag,
+                ..Default::default()
+            };
+            let mesh = pelvic_floor(&pelvis, &parameters).unwrap();
+            let (na, nc) = (parameters.elements_around, parameters.elements_across);
+            // Away from the straight pubic insertions every line from the
+            // attachment to the rim hangs below its chord, most at its middle.
+            for i in na / 6..=na - na / 6 {
+                let (outer, inner) = (
+                    middle(&mesh, &parameters, i, 0),
+                    middle(&mesh, &parameters, i, nc),
+                );
+                for j in 1..nc {
+                    let r = j as f64 / nc as f64;
+                    let below =
+                        depth(middle(&mesh, &parameters, i, j)) - depth(outer.lerp(inner, r));
+                    assert!(
+                        below > 0.0,
+                        "row {i}, point {j} lies {below} m above its chord"
+                    );
+                }
+                let hang =
+                    depth(middle(&mesh, &parameters, i, nc / 2)) - depth(outer.lerp(inner, 0.5));
+                assert!(hang < BOWL_SHARE * sag * 1e-3 + 1e-9);
+            }
+            // The rim sinks from the pubis to sag_mm below the outlet plane
+            // behind; the attachment at the coccyx lies in that plane.
+            let back = middle(&mesh, &parameters, na / 2, nc);
+            assert!((depth(back) * 1e3 - sag).abs() < 1e-6);
+            assert!(depth(middle(&mesh, &parameters, na / 2, 0)).abs() < 1e-9);
+            assert!(depth(middle(&mesh, &parameters, 0, nc)) < depth(back));
+        }
+        let shallow = FloorParameters {
+            sag_mm: 45.0,
+            ..Default::default()
+        };
+        assert!(matches!(
+            pelvic_floor(&pelvis, &shallow),
+            Err(FloorError::SagTooDeep { .. })
+        ));
     }
 
     #[test]
     fn a_pelvis_from_landmarks_alone_gets_a_floor() {
         let generated = Pelvis::generate(&PelvisDiameters::default()).unwrap();
         // Perturb the landmarks asymmetrically, as a hand-picked set would be.
-        let landmarks: PelvisLandmarks = generated.landmarks.map(|p| p + DVec3::new(0.003 * p.y.sin(), 0.002 * p.x.cos(), 0.0));
+        let landmarks: PelvisLandmarks = generated
+            .landmarks
+            .map(|p| p + DVec3::new(0.003 * p.y.sin(), 0.002 * p.x.cos(), 0.0));
         let pelvis = Pelvis::from_landmarks(landmarks, TriSurface::default()).unwrap();
-        check(&pelvis, &FloorParameters::default(), ANY_MIN_SCALED_JACOBIAN);
+        check(
+            &pelvis,
+            &FloorParameters::default(),
+            ANY_MIN_SCALED_JACOBIAN,
+        );
     }
 
     #[test]
@@ -443,18 +800,40 @@ mod tests {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../../assets/anatomy/visible-human-female-pelvis.landmarks.toml");
         let imported = crate::import::import_pelvis(&path).unwrap();
-        check(&imported.pelvis, &FloorParameters::default(), ANY_MIN_SCALED_JACOBIAN);
+        check(
+            &imported.pelvis,
+            &FloorParameters::default(),
+            ANY_MIN_SCALED_JACOBIAN,
+        );
     }
 
     #[test]
     fn bad_parameters_are_named() {
         let pelvis = Pelvis::generate(&PelvisDiameters::default()).unwrap();
-        let thin = FloorParameters { thickness_mm: 0.0, ..Default::default() };
-        assert!(pelvic_floor(&pelvis, &thin).unwrap_err().to_string().contains("thickness_mm"));
-        let wide = FloorParameters { hiatus_width_mm: 90.0, ..Default::default() };
-        assert!(matches!(pelvic_floor(&pelvis, &wide), Err(FloorError::HiatusTooWide { .. })));
-        let odd = FloorParameters { elements_around: 47, ..Default::default() };
-        assert!(matches!(pelvic_floor(&pelvis, &odd), Err(FloorError::OddAround(47))));
+        let thin = FloorParameters {
+            thickness_mm: 0.0,
+            ..Default::default()
+        };
+        assert!(pelvic_floor(&pelvis, &thin)
+            .unwrap_err()
+            .to_string()
+            .contains("thickness_mm"));
+        let wide = FloorParameters {
+            hiatus_width_mm: 90.0,
+            ..Default::default()
+        };
+        assert!(matches!(
+            pelvic_floor(&pelvis, &wide),
+            Err(FloorError::HiatusTooWide { .. })
+        ));
+        let odd = FloorParameters {
+            elements_around: 47,
+            ..Default::default()
+        };
+        assert!(matches!(
+            pelvic_floor(&pelvis, &odd),
+            Err(FloorError::OddAround(47))
+        ));
     }
 
     proptest! {
@@ -463,7 +842,8 @@ mod tests {
         fn every_generated_pelvis_gets_a_valid_floor(
             ap in 90.0..125.0f64, t in 120.0..145.0f64, spines in 90.0..110.0f64,
             outlet_t in 95.0..120.0f64, angle in 90.0..120.0f64,
-            thickness in 4.0..12.0f64, sag in 5.0..35.0f64,
+            thickness in 4.0..12.0f64, sag in 5.0..33.0f64,
+            length in 42.0..60.0f64, width in 30.0..45.0f64,
         ) {
             let d = PelvisDiameters {
                 inlet_ap_mm: ap,
@@ -478,8 +858,16 @@ mod tests {
             let Ok(pelvis) = Pelvis::generate(&d) else {
                 return Err(TestCaseError::reject("diameters out of reach"));
             };
-            let parameters = FloorParameters { thickness_mm: thickness, sag_mm: sag, ..Default::default() };
-            check(&pelvis, &parameters, ANY_MIN_SCALED_JACOBIAN);
+            let parameters = FloorParameters {
+                thickness_mm: thickness,
+                sag_mm: sag,
+                hiatus_length_mm: length,
+                hiatus_width_mm: width,
+                ..Default::default()
+            };
+            let mesh = check(&pelvis, &parameters, ANY_MIN_SCALED_JACOBIAN);
+            let m = measure_hiatus(&mesh, &pelvis, &parameters);
+            prop_assert!((m.length_mm - length).abs() < 0.1 && (m.width_mm - width).abs() < 0.1 && (m.sag_mm - sag).abs() < 0.1, "{m:?}");
         }
     }
 }
