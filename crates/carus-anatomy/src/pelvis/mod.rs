@@ -187,6 +187,29 @@ mod tests {
         assert!(pelvis.axis.point(pelvis.axis.length()).y > 0.01);
     }
 
+    /// Where the coccyx tip stands against the ischial tuberosities. In the
+    /// pelvis frame (inlet horizontal) the default tip lies about 49 mm
+    /// below them along z, but that frame is tilted 55-60 degrees from the
+    /// standing posture (REFERENCE_DATA.md). Standing, and against the outlet
+    /// plane, the tip is above the tuberosities, as in a real pelvis.
+    #[test]
+    fn the_coccyx_tip_stands_above_the_tuberosities_when_standing() {
+        let pelvis = Pelvis::generate(&PelvisDiameters::default()).unwrap();
+        let l = &pelvis.landmarks;
+        let tuberosities = 0.5 * (l.ischial_tuberosity_left + l.ischial_tuberosity_right);
+        for inlet_inclination in [55.0f64, 60.0] {
+            // Standing "up" in the pelvis frame: z turned towards -y (the
+            // frame's y axis points forwards and down when standing).
+            let (s, c) = inlet_inclination.to_radians().sin_cos();
+            let up = DVec3::new(0.0, -s, c);
+            let above = (l.coccyx_tip - tuberosities).dot(up);
+            assert!(above > 0.015, "tip {above} m above the tuberosities at {inlet_inclination} degrees");
+        }
+        // The tip lies in the outlet plane; the tuberosities below it.
+        let outlet = pelvis.planes.outlet;
+        assert!((tuberosities - outlet.centre).dot(outlet.normal) > 0.01);
+    }
+
     #[test]
     fn conflicts_found_by_the_geometry_are_named() {
         let far = PelvisDiameters { mid_ap_mm: 190.0, ..Default::default() };
