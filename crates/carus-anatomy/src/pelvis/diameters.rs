@@ -29,10 +29,12 @@ pub struct PelvisDiameters {
     pub outlet_ap_mm: f64,
     /// Intertuberous diameter. REFERENCE_DATA.md: 105-110 mm.
     pub outlet_transverse_mm: f64,
-    /// Midpoint of one sacrotuberous ligament to the opposite junction of the
-    /// ischial and pubic rami. REFERENCE_DATA.md gives no figure: the default
-    /// is an engineering value that fits the other gynecoid defaults (see
-    /// docs/ANATOMY.md for the range the generator reaches).
+    /// Midpoint of one sacrotuberous ligament (its sacral end to the
+    /// tuberosity) to the opposite junction of the ischial and pubic rami.
+    /// REFERENCE_DATA.md gives no figure: 115 mm is an engineering value that
+    /// puts the ligament's sacral end at the S3 level of the sacrum's lateral
+    /// border, within the 110-120 mm often quoted for it (no source checked;
+    /// docs/ANATOMY.md gives the range the generator reaches).
     pub outlet_oblique_mm: f64,
     /// Length of the inner surface of the symphysis, upper to lower border.
     /// REFERENCE_DATA.md: 40-50 mm.
@@ -59,7 +61,7 @@ impl Default for PelvisDiameters {
             interspinous_mm: 102.0,
             outlet_ap_mm: 115.0,
             outlet_transverse_mm: 108.0,
-            outlet_oblique_mm: 95.0,
+            outlet_oblique_mm: 115.0,
             symphysis_length_mm: 45.0,
             sacral_length_mm: 105.0,
             subpubic_angle_deg: 105.0,

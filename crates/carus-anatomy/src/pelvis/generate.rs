@@ -14,6 +14,7 @@
 
 use glam::{DVec2, DVec3};
 
+use super::diameters::DiameterError;
 use super::interpolate::{catmull_rom, SuperRing, HALF_TURN};
 use super::layout::{point, Layout};
 use super::PelvisLandmarks;
@@ -137,7 +138,7 @@ fn key_rings(layout: &Layout) -> [Ring; 7] {
     );
     let mid = mid_ring(l);
     let junction = yz(l.ischiopubic_left);
-    let border = l.sacral_border_left;
+    let border = DVec3::new(-layout.lower_lateral_angle.x, layout.lower_lateral_angle.y, layout.lower_lateral_angle.z);
     let ischium = 0.5 * (layout.spine + tuberosity);
     let ischium_half_width = 0.25 * (i + ot) + 0.004;
     let apex = ControlRing::new(&[
@@ -168,8 +169,10 @@ fn key_rings(layout: &Layout) -> [Ring; 7] {
     ]
 }
 
-/// Where each landmark sits on the grid: (signed turn position, key ring).
-fn landmark_sites(l: &PelvisLandmarks) -> [(f64, usize, DVec3); 21] {
+/// Where each landmark of the canal wall sits on the grid: (signed turn
+/// position, key ring). The sacral borders lie on the outer surface
+/// ([`slide_sacral_borders`]).
+fn landmark_sites(l: &PelvisLandmarks) -> [(f64, usize, DVec3); 19] {
     [
         (0.0, INLET, l.symphysis_upper),
         (32.0, INLET, l.sacral_promontory),
@@ -186,8 +189,6 @@ fn landmark_sites(l: &PelvisLandmarks) -> [(f64, usize, DVec3); 21] {
         (-16.0, MID, l.ischial_spine_right),
         (8.0, APEX, l.ischiopubic_left),
         (-8.0, APEX, l.ischiopubic_right),
-        (28.0, APEX, l.sacral_border_left),
-        (-28.0, APEX, l.sacral_border_right),
         (32.0, APEX, l.sacral_apex),
         (32.0, OUTLET, l.coccyx_tip),
         (16.0, OUTLET, l.ischial_tuberosity_left),
@@ -234,21 +235,25 @@ fn is_bone(da: f64, kappa: f64) -> bool {
     !(u * u + v * v < 1.0 && da - arch > 2.0)
 }
 
+/// Smoothstep from 0 at `lo` to 1 at `hi`.
+fn smooth(lo: f64, hi: f64, x: f64) -> f64 {
+    let s = ((x - lo) / (hi - lo)).clamp(0.0, 1.0);
+    s * s * (3.0 - 2.0 * s)
+}
+
 /// Bone thickness (inner to outer surface), m: engineering values, thicker
 /// at the sacrum's base and the tuberosities, thin in the iliac blades.
 fn thickness(da: f64, kappa: f64) -> f64 {
-    let smooth = |lo: f64, hi: f64, x: f64| {
-        let s = ((x - lo) / (hi - lo)).clamp(0.0, 1.0);
-        s * s * (3.0 - 2.0 * s)
-    };
     let blade = 0.006 + 0.004 * smooth(1.0, 2.0, kappa);
-    let sacrum = 0.02 * smooth(22.0, 28.0, da) * smooth(1.5, 2.2, kappa) * (1.0 - smooth(2.0, 6.0, kappa));
+    let sacrum = 0.03 * smooth(20.0, 24.0, da) * smooth(1.5, 2.2, kappa) * (1.0 - smooth(2.5, 6.0, kappa));
     let tuberosity = 0.008 * smooth(4.5, 5.5, kappa) * (1.0 - smooth(20.0, 24.0, da)) * smooth(10.0, 14.0, da);
     blade + sacrum + tuberosity
 }
 
-/// Builds the closed, outward-facing bone surface of a laid-out pelvis.
-pub(crate) fn canal_surface(layout: &Layout) -> TriSurface {
+/// Builds the closed, outward-facing bone surface of a laid-out pelvis and
+/// places the sacral borders on it so the outlet oblique is
+/// `outlet_oblique_mm`; returns the surface and the final landmarks.
+pub(crate) fn canal_surface(layout: &Layout, outlet_oblique_mm: f64) -> Result<(TriSurface, PelvisLandmarks), DiameterError> {
     let rings = key_rings(layout);
     let columns = 2 * HALF_TURN as usize * RESOLUTION;
     let mut kappa = Vec::new();
@@ -296,6 +301,7 @@ pub(crate) fn canal_surface(layout: &Layout) -> TriSurface {
     fill_pinches(&mut bone, rows - 1, columns);
 
     // Outer surface: the wall pushed away from the canal by the bone thickness.
+    let behind = point(0.0, layout.sacrum_behind);
     let at = |i: isize, r: usize| inner[r * columns + i.rem_euclid(columns as isize) as usize];
     let mut outer = vec![DVec3::ZERO; rows * columns];
     for r in 0..rows {
@@ -303,14 +309,115 @@ pub(crate) fn canal_surface(layout: &Layout) -> TriSurface {
             let ii = i as isize;
             let around = at(ii + 1, r) - at(ii - 1, r);
             let down = at(ii, (r + 1).min(rows - 1)) - at(ii, r.saturating_sub(1));
-            let away = down.cross(around).normalize_or_zero();
+            let normal = down.cross(around).normalize_or_zero();
+            // The sacrum and coccyx are a plate: their dorsal surface stands
+            // straight behind the ventral one (square to the sacral chord).
+            let plate = smooth(20.0, 24.0, da(i as f64)) * smooth(2.0, 2.6, kappa[r]);
+            let away = normal.lerp(behind, plate).normalize_or_zero();
             outer[r * columns + i] = inner[r * columns + i] + thickness(da(i as f64), kappa[r]) * away;
         }
     }
     let landmark_vertices: Vec<usize> =
         landmark_sites(&layout.landmarks).iter().map(|&(s, ring, _)| key_row(ring) * columns + column(s)).collect();
-    let (inner, outer) = cut_corners(&inner, &outer, &bone, rows, columns, &landmark_vertices);
-    assemble(&inner, &outer, &bone, rows, columns)
+    let (inner, mut outer) = cut_corners(&inner, &outer, &bone, rows, columns, &landmark_vertices);
+    let grid = Grid { rows, columns, bone: &bone };
+    let rows_along = key_row(INLET) + SACRAL_BORDER_TOP * RESOLUTION..=rows - 2;
+    let landmarks = slide_sacral_borders(&layout.landmarks, &mut outer, &grid, rows_along, outlet_oblique_mm)?;
+    Ok((assemble(&inner, &outer, &bone, rows, columns), landmarks))
+}
+
+/// First grid row below the inlet where the sacrum stands free of the ilium
+/// (the top of the greater sciatic notch, kappa 2.6 in [`is_bone`]), per RESOLUTION.
+const SACRAL_BORDER_TOP: usize = 3;
+
+/// The cell mask with its size.
+struct Grid<'a> {
+    rows: usize,
+    columns: usize,
+    bone: &'a [bool],
+}
+
+/// The sacral end of the sacrotuberous ligament. The ligament's attachment
+/// is broad: from the posterior superior iliac spine and the posterior
+/// sacroiliac ligaments down the lateral border of the sacrum to the upper
+/// coccyx (Gray's Anatomy, the sacrotuberous ligament). The generated
+/// sacrum's lateral border is the outer (dorsal) corner of its side wall,
+/// facing the sciatic notch; the `sacral_border` landmarks slide along it,
+/// from the upper coccyx (rows `rows_along`, bottom first) up to the level of
+/// S2-S3, to where the outlet oblique (ligament midpoint to the opposite
+/// ischiopubic junction) is exact. The nearest vertex of that border is moved
+/// onto the point (less than half a cell), so the landmark is a vertex of the
+/// outer surface.
+fn slide_sacral_borders(
+    l: &PelvisLandmarks,
+    outer: &mut [DVec3],
+    grid: &Grid,
+    rows_along: std::ops::RangeInclusive<usize>,
+    outlet_oblique_mm: f64,
+) -> Result<PelvisLandmarks, DiameterError> {
+    let columns = grid.columns;
+    let back = columns / 2;
+    // Left side (s > 0): the lateral vertex of the run of bone cells from the
+    // back midline, in the cell row below each vertex row, bottom first.
+    let mut border: Vec<usize> = rows_along
+        .filter(|&r| r < grid.rows - 1)
+        .map(|r| {
+            let mut i = back;
+            while i > 1 && grid.bone[r * columns + i - 1] {
+                i -= 1;
+            }
+            r * columns + i
+        })
+        .collect();
+    border.reverse();
+    // Oblique for a left border point p: ligament midpoint to the right junction.
+    let tuberosity = l.ischial_tuberosity_left;
+    let junction = l.ischiopubic_right;
+    let target = outlet_oblique_mm * 1e-3;
+    let offset = |p: DVec3| 0.5 * (p + tuberosity) - junction;
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    let mut found = None;
+    for k in 0..border.len().saturating_sub(1) {
+        let (a, b) = (outer[border[k]], outer[border[k + 1]]);
+        // |A + s B| along the segment, s in [0, 1].
+        let (big_a, big_b) = (offset(a), 0.5 * (b - a));
+        let s_min = if big_b.length_squared() > 0.0 {
+            (-big_a.dot(big_b) / big_b.length_squared()).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let seg_lo = (big_a + s_min * big_b).length();
+        let seg_hi = big_a.length().max((big_a + big_b).length());
+        lo = lo.min(seg_lo);
+        hi = hi.max(seg_hi);
+        if found.is_none() && (seg_lo..=seg_hi).contains(&target) {
+            // Roots of |B|^2 s^2 + 2 A.B s + |A|^2 - target^2 = 0 in [0, 1], lower first.
+            let (qa, qb, qc) = (big_b.length_squared(), 2.0 * big_a.dot(big_b), big_a.length_squared() - target * target);
+            let s = if qa > 0.0 {
+                let root = (qb * qb - 4.0 * qa * qc).max(0.0).sqrt();
+                let (r1, r2) = ((-qb - root) / (2.0 * qa), (-qb + root) / (2.0 * qa));
+                if (0.0..=1.0).contains(&r1) { r1 } else { r2.clamp(0.0, 1.0) }
+            } else {
+                0.0
+            };
+            let vertex = if s < 0.5 { border[k] } else { border[k + 1] };
+            found = Some((vertex, a + s * (b - a)));
+        }
+    }
+    let Some((vertex, left)) = found else {
+        return Err(DiameterError::OutOfReach {
+            key: "outlet_oblique_mm",
+            value: outlet_oblique_mm,
+            reason: "the sacrotuberous ligament's sacral end would have to leave the sacral border (upper coccyx to the top of the greater sciatic notch)",
+            min: lo * 1e3,
+            max: hi * 1e3,
+        });
+    };
+    let right = DVec3::new(-left.x, left.y, left.z);
+    let (r, i) = (vertex / columns, vertex % columns);
+    outer[vertex] = left;
+    outer[r * columns + (columns - i) % columns] = right;
+    Ok(PelvisLandmarks { sacral_border_left: left, sacral_border_right: right, ..*l })
 }
 
 /// How far (in grid cells) a staircase corner of the mask moves along the

@@ -13,7 +13,7 @@ use super::PelvisError;
 /// inlet obliques), the S2-S3 and S4-S5 junctions on the sacrum's anterior
 /// surface (back ends of the greatest-dimensions and mid-pelvis
 /// antero-posterior diameters), the sacral apex (sacrococcygeal joint, the end
-/// of the sacral length), the lower lateral borders of the sacrum where the
+/// of the sacral length), the lateral borders of the sacrum where the
 /// sacrotuberous ligaments attach, and the junctions of the ischial and pubic
 /// rami (ends of the outlet obliques). Every landmark lies on the bone.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -51,9 +51,11 @@ pub struct PelvisLandmarks {
     pub ischial_tuberosity_left: DVec3,
     /// Ischial tuberosity, inner (medial) surface, right.
     pub ischial_tuberosity_right: DVec3,
-    /// Lower lateral border of the sacrum (sacrotuberous ligament attachment), left.
+    /// Sacral end of the sacrotuberous ligament on the lateral border of the
+    /// sacrum (its dorsal edge on a generated pelvis), left.
     pub sacral_border_left: DVec3,
-    /// Lower lateral border of the sacrum (sacrotuberous ligament attachment), right.
+    /// Sacral end of the sacrotuberous ligament on the lateral border of the
+    /// sacrum (its dorsal edge on a generated pelvis), right.
     pub sacral_border_right: DVec3,
     /// Junction of the ischial and pubic rami (inner edge of the pubic arch), left.
     pub ischiopubic_left: DVec3,

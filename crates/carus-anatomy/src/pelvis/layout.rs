@@ -3,6 +3,9 @@
 //! landmarks is exact. The mid-sagittal profile (symphysis, sacrum, coccyx)
 //! is solved in closed form; the anatomical proportions the diameters do not
 //! fix are the named constants below (engineering choices, docs/ANATOMY.md).
+//! The sacral ends of the sacrotuberous ligaments (the outlet oblique's back
+//! ends) lie on the outer bone surface, so the surface generator places them
+//! (generate.rs).
 
 use glam::{DVec2, DVec3};
 
@@ -36,16 +39,29 @@ const SPINE_POSTERIOR_SHARE: f64 = 0.4;
 /// side, as an angle at the symphysis, rad (the outlet's anterior triangle
 /// is tilted down from its posterior one).
 const OUTLET_ANTERIOR_TILT: f64 = 0.35;
-/// Junction of the ischial and pubic rami, as a fraction of the arch from
-/// the symphysis to the tuberosity.
-const ISCHIOPUBIC_FRACTION: f64 = 0.5;
-/// The sacrotuberous attachment on the lateral sacral border lies this far
-/// behind the sacral apex's anterior surface, square to the sacral chord
-/// (the lateral mass stands behind the vertebral bodies), m.
-const SACRAL_BORDER_DEPTH: f64 = 0.015;
-/// Half-width of the lower sacrum at the sacrotuberous attachment, as
-/// fractions of the outlet transverse: the range the outlet oblique is fitted in.
-const SACRAL_BORDER_HALF_WIDTH: (f64, f64) = (0.05, 0.45);
+/// Junction of the ischial and pubic rami (inner edge of the pubic arch).
+/// The inferior rami do not run straight from the symphysis to the
+/// tuberosities: the arch is round, so the junction lies well out to the side
+/// and bowed forward. On the Visible Human female pelvis (docs/ANATOMY.md)
+/// it lies at 0.52 and 0.57 of the tuberosities' half-width, 1 and 12 mm in
+/// front of the lower symphysis border and 16-22 mm below it (pelvis frame,
+/// a third of the tuberosities' depth below it). The generated junction: at
+/// `ISCHIOPUBIC_WIDTH_SHARE` of the tuberosity's half-width, at
+/// `ISCHIOPUBIC_FRACTION` of the sagittal chord from the lower symphysis
+/// border to the tuberosity, pushed forward, square to that chord, by
+/// `PUBIC_ARCH_BOW` times its length (about 6 mm in front of the lower
+/// symphysis border and 20 mm below it for the defaults).
+const ISCHIOPUBIC_WIDTH_SHARE: f64 = 0.6;
+const ISCHIOPUBIC_FRACTION: f64 = 0.4;
+const PUBIC_ARCH_BOW: f64 = 0.3;
+/// The lower lateral angle of the sacrum (beside the apex, where the sacral
+/// border turns in to the coccyx): this far behind the apex's anterior
+/// surface, square to the sacral chord (the lateral mass stands behind the
+/// vertebral bodies), m, and at this share of the outlet transverse from the
+/// midline. It shapes the canal wall beside the apex; the sacrotuberous
+/// attachment itself lies on the outer surface (generate.rs).
+pub(crate) const LOWER_LATERAL_ANGLE_DEPTH: f64 = 0.015;
+pub(crate) const LOWER_LATERAL_ANGLE_SHARE: f64 = 0.2;
 /// Inlet shape exponent range: s = 2^(-1/n) is the share of the bounding
 /// diagonal the oblique takes; 0.6-0.9 spans a near-diamond to a near-box.
 const INLET_OBLIQUE_SHARE: (f64, f64) = (0.6, 0.9);
@@ -53,7 +69,14 @@ const INLET_OBLIQUE_SHARE: (f64, f64) = (0.6, 0.9);
 /// The generated pelvis' landmarks plus the shape data the surface needs.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Layout {
+    /// The landmarks; the sacral borders stand at the lower lateral angles of
+    /// the sacrum until the surface generator moves them up the sacrum's
+    /// outer border to make the outlet oblique exact.
     pub landmarks: PelvisLandmarks,
+    /// The sacrum's lower lateral angle, mother's right.
+    pub lower_lateral_angle: DVec3,
+    /// Unit sagittal (y, z) direction square to the sacral chord, backwards.
+    pub sacrum_behind: DVec2,
     /// Superellipse exponent of the inlet outline.
     pub inlet_exponent: f64,
     /// y of the widest inlet transverse.
@@ -247,36 +270,28 @@ pub(crate) fn layout(d: &PelvisDiameters) -> Result<Layout, DiameterError> {
         });
     }
     let tuberosity = symphysis_lower + anterior_sagittal * rotate_caudally(to_coccyx.normalize(), OUTLET_ANTERIOR_TILT);
-    let ischiopubic = symphysis_lower + ISCHIOPUBIC_FRACTION * (tuberosity - symphysis_lower);
-    let ischiopubic_x = ISCHIOPUBIC_FRACTION * 0.5 * ot;
-
-    // Sacral border: its half-width w makes the outlet oblique exact:
-    // oblique^2 = (w/2 + ot/4 + ischiopubic_x)^2 + sagittal_gap^2, the gap
-    // being the sagittal distance from the ligament's midpoint to the junction.
-    let behind_sacrum = rotate(chord, -std::f64::consts::FRAC_PI_2);
-    let border = apex + SACRAL_BORDER_DEPTH * behind_sacrum;
-    let sagittal_gap = (0.5 * (border + tuberosity) - ischiopubic).length();
-    let oblique_at = |w: f64| (0.5 * (w + 0.5 * ot) + ischiopubic_x).hypot(sagittal_gap);
-    let (w_min, w_max) = (SACRAL_BORDER_HALF_WIDTH.0 * ot, SACRAL_BORDER_HALF_WIDTH.1 * ot);
-    let oblique = d.outlet_oblique_mm * mm;
-    let across = oblique * oblique - sagittal_gap * sagittal_gap;
-    let border_half_width = if across > 0.0 { 2.0 * (across.sqrt() - ischiopubic_x) - 0.5 * ot } else { f64::NAN };
-    if !(w_min..=w_max).contains(&border_half_width) {
-        return Err(DiameterError::OutOfReach {
-            key: "outlet_oblique_mm",
-            value: d.outlet_oblique_mm,
-            reason: "the sacrotuberous ligament would leave the sacrum too near the midline or beyond its border",
-            min: oblique_at(w_min) / mm,
-            max: oblique_at(w_max) / mm,
-        });
+    let arch = tuberosity - symphysis_lower;
+    let mut bow = arch.perp();
+    if bow.x < 0.0 {
+        bow = -bow;
     }
+    let ischiopubic = symphysis_lower + ISCHIOPUBIC_FRACTION * arch + PUBIC_ARCH_BOW * bow;
+    let ischiopubic_x = ISCHIOPUBIC_WIDTH_SHARE * 0.5 * ot;
+
+    // Lower lateral angle of the sacrum. The sacrotuberous attachment (the
+    // sacral_border landmarks) starts here and is moved up the sacrum's
+    // outer border by the surface generator until the outlet oblique is
+    // exact (generate.rs); outlet_oblique_mm is checked there.
+    let behind_sacrum = rotate(chord, -std::f64::consts::FRAC_PI_2);
+    let lower_lateral_angle = apex + LOWER_LATERAL_ANGLE_DEPTH * behind_sacrum;
+    let border_half_width = LOWER_LATERAL_ANGLE_SHARE * ot;
 
     let mirror = |p: DVec3| DVec3::new(-p.x, p.y, p.z);
     let sacroiliac_right = point(share * 0.5 * t, sacroiliac);
     let eminence_right = point(share * 0.5 * t, eminence);
     let spine_right = point(0.5 * i, spine);
     let tuberosity_right = point(0.5 * ot, tuberosity);
-    let border_right = point(border_half_width, border);
+    let border_right = point(border_half_width, lower_lateral_angle);
     let ischiopubic_right = point(ischiopubic_x, ischiopubic);
     let landmarks = PelvisLandmarks {
         sacral_promontory: point(0.0, promontory),
@@ -303,6 +318,8 @@ pub(crate) fn layout(d: &PelvisDiameters) -> Result<Layout, DiameterError> {
     };
     Ok(Layout {
         landmarks,
+        lower_lateral_angle: border_right,
+        sacrum_behind: behind_sacrum,
         inlet_exponent,
         inlet_transverse_y,
         greatest_half_width,
