@@ -115,11 +115,11 @@ fn key_rings(layout: &Layout) -> [Ring; 7] {
         exponent,
     };
     let crest = symmetric(
-        DVec2::new(0.75 * a, 0.6 * crest_height),
-        DVec2::new(-0.8 * a, 0.85 * crest_height),
+        DVec2::new(0.75 * a, 0.75 * crest_height),
+        DVec2::new(-0.8 * a, 0.95 * crest_height),
         DVec2::new(y_t + 0.1 * a, crest_height),
-        0.95 * t,
-        2.5,
+        0.9 * t,
+        2.2,
     );
     let fossa = symmetric(
         DVec2::new(0.65 * a, 0.25 * a),
@@ -230,8 +230,11 @@ fn is_bone(da: f64, kappa: f64) -> bool {
             return false;
         }
     }
-    // Obturator foramen, kept two units clear of the arch.
-    let (u, v) = ((da - 9.5) / 3.5, (kappa - 3.6) / 0.45);
+    // Obturator foramen, kept two units clear of the arch: from just below
+    // the superior pubic ramus to just above the ischiopubic ramus (about
+    // 45 mm tall and 30 mm wide in the default pelvis; female foramina are
+    // taller than wide).
+    let (u, v) = ((da - 9.5) / 3.5, (kappa - 3.5) / 0.65);
     !(u * u + v * v < 1.0 && da - arch > 2.0)
 }
 
