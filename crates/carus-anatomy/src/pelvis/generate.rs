@@ -230,10 +230,9 @@ fn is_bone(da: f64, kappa: f64) -> bool {
             return false;
         }
     }
-    // Obturator foramen, kept two units clear of the arch: from just below
-    // the superior pubic ramus to just above the ischiopubic ramus (about
-    // 45 mm tall and 30 mm wide in the default pelvis; female foramina are
-    // taller than wide).
+    // Obturator foramen, kept two units clear of the arch: an oval from just
+    // below the superior pubic ramus to just above the ischiopubic ramus
+    // (kappa 2.85-4.15, da 6-13), taller than wide as in female pelves.
     let (u, v) = ((da - 9.5) / 3.5, (kappa - 3.5) / 0.65);
     !(u * u + v * v < 1.0 && da - arch > 2.0)
 }
