@@ -28,6 +28,6 @@ pub use fields::{ElementFields, Energies};
 pub use loads::{BoundaryConditions, FixedDofs, ImposedDisplacement, LoadShape, NodalForce, SurfacePressure};
 pub use material::{Material, MaterialLaw, MooneyRivlin, NeoHookean};
 pub use mesh::{ElementKind, Mesh};
-pub use model::{MaterialRegion, ModelOptions, Precision, TetFormulation, TledModel};
+pub use model::{HourglassModulus, MaterialRegion, ModelOptions, Precision, TetFormulation, TledModel};
 pub use quality::{check_quality, QualityReport};
 pub use solver::{SolverSnapshot, StepControl, TledSolver};

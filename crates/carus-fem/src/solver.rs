@@ -1102,7 +1102,7 @@ mod run_tests {
                 StepControl::Refuse,
             )
             .unwrap();
-            s.advance_to(1.0).unwrap();
+            s.advance_to(2.0).unwrap();
             s.update_internal_forces().unwrap();
             let r = s.reaction_force(&base).unwrap();
             // The internal forces of the base balance the loads on the other nodes.

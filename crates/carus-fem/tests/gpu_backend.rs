@@ -50,6 +50,7 @@ fn model_of(
         hourglass_coefficient: 0.075,
         damping_per_s: 5.0,
         precision,
+        ..ModelOptions::default()
     };
     Arc::new(TledModel::new(mesh, &[region], &options).unwrap())
 }

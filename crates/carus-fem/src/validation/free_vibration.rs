@@ -89,6 +89,7 @@ pub fn vibrate(
         hourglass_coefficient: super::cube::HOURGLASS_COEFFICIENT,
         damping_per_s,
         precision: Precision::F64,
+        ..ModelOptions::default()
     };
     let model = tissue_model(&mesh, &options)?;
     let masses = model.node_masses_kg();

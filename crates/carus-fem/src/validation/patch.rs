@@ -100,6 +100,7 @@ pub fn patch_error(mesh: &Mesh, element: CubeElement, precision: Precision) -> R
         hourglass_coefficient: super::cube::HOURGLASS_COEFFICIENT,
         damping_per_s: DAMPING_PER_S,
         precision,
+        ..ModelOptions::default()
     };
     let model = tissue_model(mesh, &options)?;
     let dt = 0.9 * model.critical_time_step();

@@ -68,6 +68,7 @@ pub fn stretch_reaction(element: CubeElement, n: usize, stretch: f64) -> Result<
         hourglass_coefficient: super::cube::HOURGLASS_COEFFICIENT,
         damping_per_s: DAMPING_PER_S,
         precision: Precision::F64,
+        ..ModelOptions::default()
     };
     let model = tissue_model(&mesh, &options)?;
     let dt = STEP_FRACTION * model.critical_time_step();

@@ -378,6 +378,7 @@ fn build_solver(
             TetSpec::T4anp => TetFormulation::T4Anp,
         },
         hourglass_coefficient: solver_spec.hourglass_coefficient,
+        hourglass_modulus: solver_spec.hourglass_modulus,
         damping_per_s: solver_spec.damping_per_s,
         precision: match solver_spec.precision {
             PrecisionSpec::F64 => Precision::F64,

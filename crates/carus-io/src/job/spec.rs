@@ -6,6 +6,7 @@ use std::fmt;
 
 use serde::de::{self, Deserializer, Visitor};
 use serde::Deserialize;
+use carus_fem::{HourglassModulus, ModelOptions};
 
 use crate::units::LengthUnit;
 
@@ -204,6 +205,10 @@ fn default_hourglass() -> f64 {
     0.075
 }
 
+fn default_hourglass_modulus() -> HourglassModulus {
+    ModelOptions::default().hourglass_modulus
+}
+
 /// `[solver]`: time integration and element options.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -220,6 +225,9 @@ pub struct SolverSpec {
     pub damping_per_s: f64,
     #[serde(default = "default_hourglass")]
     pub hourglass_coefficient: f64,
+    /// "shear" (default, 2 mu) or "dilatational" (lambda + 2 mu, NiftySim's).
+    #[serde(default = "default_hourglass_modulus")]
+    pub hourglass_modulus: HourglassModulus,
     /// T4ANP by default: linear tetrahedra lock volumetrically in nearly
     /// incompressible tissue (Joldes, Wittek & Miller 2009).
     #[serde(default = "default_tet")]
