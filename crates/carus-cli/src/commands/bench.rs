@@ -38,8 +38,10 @@ pub struct TledBenchArgs {
     /// Worker threads of the CPU solver (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
-    /// Precision of the CPU kernels.
-    #[arg(long, value_enum, default_value = "f64")]
+    /// Precision of the CPU kernels: f32 by default, the precision of the
+    /// hot loops that V3 validates (`carus validate v3`: f32 within 3e-5 of
+    /// the edge of f64, tolerance 1e-2) and the GPU backend runs.
+    #[arg(long, value_enum, default_value = "f32")]
     pub precision: PrecisionArg,
     /// Where the step loop runs: cpu, gpu, or auto (a real GPU if present).
     #[arg(long, value_enum, default_value = "cpu")]

@@ -274,12 +274,17 @@ fn run_case(id: CaseArg) -> CaseOutcome {
                 failing.extend(
                     r.hourglass_control.iter().filter(|h| !h.pass).map(|h| format!("hourglass_{}_n{}", h.variant.name(), h.n)),
                 );
+                failing.extend(r.single_precision.iter().filter(|p| !p.pass).map(|p| {
+                    format!("f32_{}_{}_n{}", p.element.name(), p.variant.name(), p.n)
+                }));
+                let worst_f32 = r.single_precision.iter().map(|p| p.max_node_difference_of_edge).fold(0.0, f64::max);
                 let summary = format!(
-                    "{} runs; baseline TLED agreement within {:.1e}; H8 hourglass/strain energy up to {:.2} % with the default shear scaling (limit 1 %), {:.2} % with NiftySim's; hourglass off: {}{}",
+                    "{} runs; baseline TLED agreement within {:.1e}; H8 hourglass/strain energy up to {:.2} % with the default shear scaling (limit 1 %), {:.2} % with NiftySim's; f32 kernels within {:.1e} L of f64; hourglass off: {}{}",
                     r.cases.len(),
                     worst_baseline,
                     100.0 * worst(|h| h.shear_to_strain_energy),
                     100.0 * worst(|h| h.dilatational_to_strain_energy),
+                    worst_f32,
                     r.hourglass_off.outcome,
                     if failing.is_empty() { String::new() } else { format!("; failing: {}", failing.join(", ")) }
                 );

@@ -389,11 +389,26 @@ pub struct HourglassOff {
     pub max_node_difference_of_edge: Option<f64>,
 }
 
+/// The cube in single precision against the same run in double: whether
+/// f32 kernels are good enough for V3 (within its tolerances).
+#[derive(Debug, Clone, Serialize)]
+pub struct SinglePrecision {
+    pub element: CubeElement,
+    pub variant: CubeVariant,
+    pub n: usize,
+    /// Largest node displacement difference f32 - f64, over the edge length.
+    pub max_node_difference_of_edge: f64,
+    /// |R_f32 - R_f64| / |R_f64| of the fixed face.
+    pub reaction_difference: f64,
+    pub pass: bool,
+}
+
 /// The V3 report.
 #[derive(Debug, Clone, Serialize)]
 pub struct CubeReport {
     pub cases: Vec<CubeCase>,
     pub hourglass_control: Vec<HourglassControl>,
+    pub single_precision: Vec<SinglePrecision>,
     pub hourglass_off: HourglassOff,
     pub pass: bool,
 }
@@ -424,6 +439,7 @@ pub fn run(size: CaseSize) -> Result<CubeReport, ValidationError> {
     let (sizes, baseline_n) = report_sizes(size);
     let mut cases = Vec::new();
     let mut hourglass_control = Vec::new();
+    let mut single_precision = Vec::new();
     let mut controlled_h8 = None;
     for &n in &sizes {
         for element in CubeElement::ALL {
@@ -439,6 +455,9 @@ pub fn run(size: CaseSize) -> Result<CubeReport, ValidationError> {
                     None
                 };
                 let pass = kinetic_to_strain_energy <= AT_REST_KINETIC_FRACTION && baseline.is_none_or(|b| b.pass);
+                if n == baseline_n && element != CubeElement::T4anp {
+                    single_precision.push(compare_single_precision(&setup, &run)?);
+                }
                 if element == CubeElement::H8 {
                     hourglass_control.push(compare_hourglass_scalings(&setup, &run)?);
                 }
@@ -461,8 +480,27 @@ pub fn run(size: CaseSize) -> Result<CubeReport, ValidationError> {
         }
     }
     let hourglass_off = hourglass_off(baseline_n, controlled_h8.as_deref());
-    let pass = cases.iter().all(|c| c.pass) && hourglass_control.iter().all(|h| h.pass);
-    Ok(CubeReport { cases, hourglass_control, hourglass_off, pass })
+    let pass = cases.iter().all(|c| c.pass)
+        && hourglass_control.iter().all(|h| h.pass)
+        && single_precision.iter().all(|p| p.pass);
+    Ok(CubeReport { cases, hourglass_control, single_precision, hourglass_off, pass })
+}
+
+/// Runs `double` again with the f32 kernels.
+fn compare_single_precision(setup: &CubeSetup, double: &CubeRun) -> Result<SinglePrecision, ValidationError> {
+    let single = run_cube(&CubeSetup { precision: Precision::F32, ..*setup })?;
+    let max_node_difference_of_edge =
+        max_distance(&single.solution.displacements_m, &double.solution.displacements_m) / CUBE_EDGE_M;
+    let r = double.result.reaction_fixed_face_n;
+    let reaction_difference = super::distance(single.result.reaction_fixed_face_n, r) / super::distance(r, [0.0; 3]);
+    Ok(SinglePrecision {
+        element: setup.element,
+        variant: setup.variant,
+        n: setup.n,
+        max_node_difference_of_edge,
+        reaction_difference,
+        pass: max_node_difference_of_edge <= DISPLACEMENT_TOLERANCE_OF_EDGE && reaction_difference <= REACTION_TOLERANCE,
+    })
 }
 
 /// Runs the H8 cube of `dilatational` again with the shear scaling.
@@ -541,6 +579,10 @@ mod tests {
         assert!(reaction(CubeVariant::Clamped) < reaction(CubeVariant::FreeLateral));
         assert!(report.hourglass_off.n == 4);
         assert_eq!(report.hourglass_control.len(), 2);
+        assert_eq!(report.single_precision.len(), 4);
+        for p in &report.single_precision {
+            assert!(p.pass && p.max_node_difference_of_edge > 0.0 && p.max_node_difference_of_edge < 1e-3, "{p:?}");
+        }
         for h in &report.hourglass_control {
             assert!(h.shear_to_strain_energy > 0.0, "{h:?}");
             assert!(h.shear_to_strain_energy < h.dilatational_to_strain_energy, "{h:?}");
