@@ -3,14 +3,16 @@
 //!
 //! The inner (canal) wall is a grid: columns go once round the canal
 //! (counter-clockwise seen from above, column 0 at the front midline) and
-//! rows go down it through seven key rings: iliac crest, iliac fossa, inlet,
-//! plane of greatest dimensions, mid-pelvis, sacral apex, outlet. Each key
-//! ring passes through its landmarks; rows between them are Catmull-Rom
-//! blends down each column. A cell mask cuts out what is not bone (the front
-//! of the false pelvis, the pubic arch, the obturator foramina, the sciatic
-//! notches between sacrum and ischium, the gap between the posterior iliac
-//! spines), the outer bone surface is the wall pushed outwards by a smooth
-//! bone thickness, and walls along the mask's edges close the shell.
+//! rows go down it from the iliac crest through the key rings of the true
+//! pelvis: inlet, plane of greatest dimensions, mid-pelvis, sacral apex,
+//! outlet. Each key ring passes through its landmarks; rows between them are
+//! Catmull-Rom blends down each column. Above the inlet each column is the
+//! iliac blade: a concave profile from the brim out and up to the crest
+//! ring. A cell mask cuts out what is not bone (the front of the false
+//! pelvis, the pubic arch, the obturator foramina, the sciatic notches
+//! between sacrum and ischium, the gap between the posterior iliac spines),
+//! the outer bone surface is the wall pushed outwards by a smooth bone
+//! thickness, and walls along the mask's edges close the shell.
 
 use glam::{DVec2, DVec3};
 
@@ -22,13 +24,14 @@ use crate::surface::TriSurface;
 
 /// Grid columns per 1/64 of a turn round the canal.
 const RESOLUTION: usize = 2;
-/// Key rings, top to bottom; rows are measured in these units (`kappa`).
+/// Depths down the wall, in key-ring units (`kappa`): the crest at 0, the
+/// brim (inlet) at 2, then the key rings of the true pelvis.
 const INLET: usize = 2;
 const GREATEST: usize = 3;
 const MID: usize = 4;
 const APEX: usize = 5;
 const OUTLET: usize = 6;
-/// Grid rows between consecutive key rings (times RESOLUTION).
+/// Grid rows between consecutive depths 0, 1, ..., 6 (times RESOLUTION).
 const ROWS_BETWEEN: [usize; 6] = [3, 3, 5, 5, 5, 5];
 
 /// A ring through control points given on the mother's left side at
@@ -94,8 +97,67 @@ fn yz(p: DVec3) -> DVec2 {
     DVec2::new(p.y, p.z)
 }
 
-/// The seven key rings of a pelvis laid out by [`super::layout::layout`].
-fn key_rings(layout: &Layout) -> [Ring; 7] {
+/// Half-widths of the iliac crest (widest) and of the anterior superior
+/// iliac spines, inner surface, as shares of the inlet transverse T.
+/// Engineering values, chosen so that the default pelvis (T = 130 mm)
+/// measures about 275 mm between the outer lips of the crests and about
+/// 230 mm between the anterior superior iliac spines: within the adult
+/// female bony ranges quoted for this work (inter-crest 250-290 mm,
+/// inter-ASIS 220-250 mm), below the classical external pelvimetry over the
+/// skin (distantia cristarum about 280 mm, distantia spinarum about 250 mm),
+/// and close to the Visible Human Female pelvis shipped with Carus, whose
+/// crests are about 2.1 T apart (docs/ANATOMY.md, "Iliac wings").
+const CREST_HALF_WIDTH: f64 = 0.98;
+const ASIS_HALF_WIDTH: f64 = 0.84;
+
+/// The iliac crest, inner surface, from the anterior superior iliac spine
+/// (ASIS, 1/64 turn 12) round the side, where it is highest, to the posterior
+/// superior iliac spine (PSIS, 27) beside the sacrum; the points in front of
+/// the ASIS and behind the PSIS only steer the ring (no bone there).
+/// Heights and depths in inlet AP `a`, widths in inlet transverse `t`: the
+/// engineering shape of the Visible Human Female crest in this frame (ASIS
+/// about 0.2 a in front of the inlet centre and 0.3 a above it, crest highest
+/// 0.6 a above the inlet a quarter of `a` behind its centre, PSIS 0.85 a
+/// behind the centre and 0.3 a up; docs/ANATOMY.md, "Iliac wings").
+fn crest_ring(a: f64, t: f64) -> ControlRing {
+    ControlRing::new(&[
+        (0.0, 0.0, DVec2::new(0.5 * a, 0.2 * a)),
+        (12.0, ASIS_HALF_WIDTH * t, DVec2::new(0.2 * a, 0.3 * a)),
+        (14.0, 0.9 * t, DVec2::new(0.03 * a, 0.5 * a)),
+        (17.0, 0.95 * t, DVec2::new(-0.25 * a, 0.62 * a)),
+        (20.0, CREST_HALF_WIDTH * t, DVec2::new(-0.45 * a, 0.58 * a)),
+        (23.0, 0.8 * t, DVec2::new(-0.68 * a, 0.52 * a)),
+        (27.0, 0.42 * t, DVec2::new(-0.85 * a, 0.38 * a)),
+        (32.0, 0.0, DVec2::new(-0.85 * a, 0.25 * a)),
+    ])
+}
+
+/// How the blade of the iliac fossa leaves the brim (share of the brim-to-
+/// crest step taken outwards, and upwards, by the middle control point of
+/// the profile): it runs out nearly flat from the arcuate line and turns up
+/// to meet the crest steeply, so the fossa is concave inside and the blade
+/// convex outside. Engineering values: at 60 % of its height the Visible
+/// Human Female fossa has gone 85 % of the way out to the crest; these
+/// shares give 88 %.
+const FOSSA_FLARE: f64 = 0.75;
+const FOSSA_LIFT: f64 = 0.25;
+
+/// A point of the iliac blade's inner surface: a quadratic Bezier from the
+/// brim `brim` (u = 0) to the crest `crest` (u = 1).
+fn fossa(brim: DVec3, crest: DVec3, u: f64) -> DVec3 {
+    let step = crest - brim;
+    let middle = brim + FOSSA_FLARE * DVec3::new(step.x, step.y, 0.0) + FOSSA_LIFT * DVec3::new(0.0, 0.0, step.z);
+    (1.0 - u) * (1.0 - u) * brim + 2.0 * u * (1.0 - u) * middle + u * u * crest
+}
+
+/// The key rings of a pelvis laid out by [`super::layout::layout`]: the iliac
+/// crest, then the rings the canal wall is blended through from the brim
+/// down (their index is their key-ring depth `kappa`). The first of those,
+/// at kappa 1, is no surface of its own: it sets the slope of the canal wall
+/// just below the brim (the Catmull-Rom tangent at the inlet is half the
+/// step from it to the plane of greatest dimensions). Above the brim the
+/// wall is the iliac blade of [`fossa`].
+fn key_rings(layout: &Layout) -> (ControlRing, [Ring; 6]) {
     let l = &layout.landmarks;
     let a = (l.symphysis_upper - l.sacral_promontory).length();
     let t = (l.iliopectineal_right - l.iliopectineal_left).length();
@@ -104,9 +166,6 @@ fn key_rings(layout: &Layout) -> [Ring; 7] {
     let i = (l.ischial_spine_right - l.ischial_spine_left).length();
     let tuberosity = layout.tuberosity;
     let forward = DVec2::new(1.0, 0.0);
-    // False pelvis: the iliac fossae flare out to the crests (intercristal
-    // width about twice the inlet transverse; engineering proportions).
-    let crest_height = 0.55 * a;
     let symmetric = |front: DVec2, back: DVec2, lateral: DVec2, half_width: f64, exponent: f64| SuperRing {
         front: point(0.0, front),
         back: point(0.0, back),
@@ -114,14 +173,9 @@ fn key_rings(layout: &Layout) -> [Ring; 7] {
         right: point(half_width, lateral),
         exponent,
     };
-    let crest = symmetric(
-        DVec2::new(0.75 * a, 0.75 * crest_height),
-        DVec2::new(-0.8 * a, 0.95 * crest_height),
-        DVec2::new(y_t + 0.1 * a, crest_height),
-        0.9 * t,
-        2.2,
-    );
-    let fossa = symmetric(
+    // The canal wall leaves the brim upwards and outwards towards this ring
+    // (engineering proportions).
+    let brim_slope = symmetric(
         DVec2::new(0.65 * a, 0.25 * a),
         DVec2::new(-0.62 * a, 0.2 * a),
         DVec2::new(y_t + 0.05 * a, 0.22 * a),
@@ -158,15 +212,15 @@ fn key_rings(layout: &Layout) -> [Ring; 7] {
         (29.0, 0.008, coccyx + 0.004 * (yz(l.sacral_apex) - coccyx).normalize()),
         (32.0, 0.0, coccyx),
     ]);
-    [
-        Ring::Super(crest),
-        Ring::Super(fossa),
+    let canal = [
+        Ring::Super(brim_slope),
         Ring::Super(inlet),
         Ring::Super(greatest),
         Ring::Super(mid),
         Ring::Control(apex),
         Ring::Control(outlet),
-    ]
+    ];
+    (crest_ring(a, t), canal)
 }
 
 /// Where each landmark of the canal wall sits on the grid: (signed turn
@@ -201,9 +255,16 @@ fn landmark_sites(l: &PelvisLandmarks) -> [(f64, usize, DVec3); 19] {
 fn is_bone(da: f64, kappa: f64) -> bool {
     let inlet = INLET as f64;
     if kappa < inlet {
-        // Iliac wings: from the anterior superior iliac spine (moving forward
-        // as the wing descends to the pubis) back to the posterior iliac spine.
-        let front = 4.0 + 1.5 * (inlet - kappa);
+        // Iliac wings, back to the posterior superior iliac spine (da 27).
+        // Their anterior border runs from the crest down to the pubis: the
+        // anterior superior iliac spine (da 11.5) juts forward over a notch,
+        // the anterior inferior spine bulges below it, and the border reaches
+        // the superior pubic ramus beside the iliopubic eminence (da 5).
+        let u = (inlet - kappa) / inlet;
+        let border = [(0.0, 5.0), (0.35, 8.5), (0.6, 11.0), (0.85, 13.0), (1.0, 11.5)];
+        let k = border.iter().rposition(|&(at, _)| at <= u).unwrap_or(0).min(border.len() - 2);
+        let ((u0, f0), (u1, f1)) = (border[k], border[k + 1]);
+        let front = f0 + (f1 - f0) * ((u - u0) / (u1 - u0)).clamp(0.0, 1.0);
         return da > front && da < 27.0;
     }
     let mid = MID as f64;
@@ -237,6 +298,15 @@ fn is_bone(da: f64, kappa: f64) -> bool {
     !(u * u + v * v < 1.0 && da - arch > 2.0)
 }
 
+/// Extra thickness of the iliac crest over the blade, m (engineering value:
+/// the crest is a rim with inner and outer lips, thicker than the fossa).
+const CREST_RIM: f64 = 0.004;
+
+/// Extra thickness of the body of the ilium, where the blade meets the brim
+/// at the side (the bone above and behind the acetabulum), m (engineering
+/// value).
+const ILIAC_BODY: f64 = 0.012;
+
 /// Smoothstep from 0 at `lo` to 1 at `hi`.
 fn smooth(lo: f64, hi: f64, x: f64) -> f64 {
     let s = ((x - lo) / (hi - lo)).clamp(0.0, 1.0);
@@ -244,19 +314,21 @@ fn smooth(lo: f64, hi: f64, x: f64) -> f64 {
 }
 
 /// Bone thickness (inner to outer surface), m: engineering values, thicker
-/// at the sacrum's base and the tuberosities, thin in the iliac blades.
+/// at the sacrum's base and the tuberosities, thin in the iliac blades with
+/// a thicker rim along the crest.
 fn thickness(da: f64, kappa: f64) -> f64 {
-    let blade = 0.006 + 0.004 * smooth(1.0, 2.0, kappa);
+    let blade = 0.006 + 0.004 * smooth(1.0, 2.0, kappa) + CREST_RIM * (1.0 - smooth(0.0, 0.4, kappa));
+    let body = ILIAC_BODY * smooth(0.8, 1.9, kappa) * (1.0 - smooth(2.1, 2.8, kappa)) * smooth(8.0, 11.0, da) * (1.0 - smooth(18.0, 21.0, da));
     let sacrum = 0.03 * smooth(20.0, 24.0, da) * smooth(1.5, 2.2, kappa) * (1.0 - smooth(2.5, 6.0, kappa));
     let tuberosity = 0.008 * smooth(4.5, 5.5, kappa) * (1.0 - smooth(20.0, 24.0, da)) * smooth(10.0, 14.0, da);
-    blade + sacrum + tuberosity
+    blade + body + sacrum + tuberosity
 }
 
 /// Builds the closed, outward-facing bone surface of a laid-out pelvis and
 /// places the sacral borders on it so the outlet oblique is
 /// `outlet_oblique_mm`; returns the surface and the final landmarks.
 pub(crate) fn canal_surface(layout: &Layout, outlet_oblique_mm: f64) -> Result<(TriSurface, PelvisLandmarks), DiameterError> {
-    let rings = key_rings(layout);
+    let (crest, canal) = key_rings(layout);
     let columns = 2 * HALF_TURN as usize * RESOLUTION;
     let mut kappa = Vec::new();
     for (k, &between) in ROWS_BETWEEN.iter().enumerate() {
@@ -276,13 +348,17 @@ pub(crate) fn canal_surface(layout: &Layout, outlet_oblique_mm: f64) -> Result<(
     };
     let column = |s: f64| ((s * RESOLUTION as f64).round() as isize).rem_euclid(columns as isize) as usize;
 
-    // Inner wall: key rings round each column, blended down it.
-    let key_knots: Vec<f64> = (0..rings.len()).map(|k| k as f64).collect();
+    // Inner wall: below the brim the canal's key rings round each column,
+    // blended down it; above it the iliac blade from the brim to the crest.
+    let key_knots: Vec<f64> = (0..canal.len()).map(|k| (k + 1) as f64).collect();
+    let brim = INLET as f64;
     let mut inner = vec![DVec3::ZERO; rows * columns];
     for i in 0..columns {
-        let keys: Vec<DVec3> = rings.iter().map(|r| r.at(signed(i))).collect();
+        let keys: Vec<DVec3> = canal.iter().map(|r| r.at(signed(i))).collect();
+        let top = crest.at(signed(i));
         for (r, &k) in kappa.iter().enumerate() {
-            inner[r * columns + i] = catmull_rom(&key_knots, &keys, None, k);
+            inner[r * columns + i] =
+                if k < brim { fossa(keys[INLET - 1], top, (brim - k) / brim) } else { catmull_rom(&key_knots, &keys, None, k) };
         }
     }
     for (s, ring, p) in landmark_sites(&layout.landmarks) {
@@ -547,4 +623,27 @@ fn assemble(inner: &[DVec3], outer: &[DVec3], bone: &[bool], rows: usize, column
         }
     }
     TriSurface::new(vertices, triangles)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pelvis::layout::layout;
+    use crate::pelvis::PelvisDiameters;
+
+    /// Every column of the iliac blade, from the anterior to the posterior
+    /// superior iliac spine, bows out and down from the brim-to-crest chord:
+    /// the fossa is concave inside, the blade convex outside.
+    #[test]
+    fn the_iliac_fossa_is_concave_inside() {
+        let layout = layout(&PelvisDiameters::default()).unwrap();
+        let (crest, canal) = key_rings(&layout);
+        for da in 12..=27 {
+            let s = da as f64;
+            let (brim, top) = (canal[INLET - 1].at(s), crest.at(s));
+            let (middle, chord) = (fossa(brim, top, 0.5), 0.5 * (brim + top));
+            assert!(middle.z < chord.z - 0.002, "{da}: {middle} against {chord}");
+            assert!(middle.truncate().length() > chord.truncate().length() + 0.002, "{da}: {middle} against {chord}");
+        }
+    }
 }

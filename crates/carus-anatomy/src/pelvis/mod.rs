@@ -260,6 +260,26 @@ mod tests {
         }
     }
 
+    /// The iliac wings of the default pelvis have adult female proportions
+    /// (docs/ANATOMY.md, "Iliac wings"): about 270 mm between the outer lips
+    /// of the crests and 235 mm between the anterior superior iliac spines
+    /// (the most anterior bone a quarter of the inlet AP above the inlet),
+    /// with the crest highest at the side, above the spines.
+    #[test]
+    fn the_iliac_wings_have_adult_female_proportions() {
+        let d = PelvisDiameters::default();
+        let pelvis = Pelvis::generate(&d).unwrap();
+        let v = &pelvis.surface.vertices;
+        let intercristal = 2e3 * v.iter().map(|p| p.x.abs()).fold(0.0, f64::max);
+        assert!((250.0..290.0).contains(&intercristal), "intercristal {intercristal} mm");
+        let a = d.inlet_ap_mm * 1e-3;
+        let asis = v.iter().filter(|p| p.z > 0.25 * a).max_by(|p, q| p.y.total_cmp(&q.y)).unwrap();
+        let inter_asis = 2e3 * asis.x.abs();
+        assert!((220.0..250.0).contains(&inter_asis), "inter-ASIS {inter_asis} mm");
+        let top = v.iter().max_by(|p, q| p.z.total_cmp(&q.z)).unwrap();
+        assert!(top.z > asis.z + 0.02 && top.x.abs() > 0.5 * d.inlet_transverse_mm * 1e-3, "crest top {top}");
+    }
+
     /// Random clinical diameter sets, from contracted to generous pelvises.
     fn diameter_sets() -> impl Strategy<Value = PelvisDiameters> {
         (
