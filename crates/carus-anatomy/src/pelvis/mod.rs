@@ -237,7 +237,7 @@ mod tests {
             assert_measures_back(&d, &pelvis);
             let l = &pelvis.landmarks;
             for border in [l.sacral_border_left, l.sacral_border_right] {
-                assert!(pelvis.surface.vertices.iter().any(|v| *v == border));
+                assert!(pelvis.surface.vertices.contains(&border));
             }
             assert_eq!(l.sacral_border_left, DVec3::new(-l.sacral_border_right.x, l.sacral_border_right.y, l.sacral_border_right.z));
             // Behind the sacrum's anterior surface (the promontory-apex chord).
