@@ -105,6 +105,21 @@ impl TissueContact {
     /// reach outside it. `body` is the body's surface in its own frame, `pose` its
     /// current pose, `nodes` the tissue's current node positions (world).
     pub fn update(&mut self, body: &TriangleCollider, pose: &RigidPose, nodes: &[DVec3]) -> &[HeldNode] {
+        self.update_except(body, pose, nodes, &[])
+    }
+
+    /// [`Self::update`], never holding a node `i` with `except[i]` true
+    /// (nodes past the end of `except` may be held). For nodes something
+    /// else already prescribes: tissue fixed to bone (an imposed
+    /// displacement would override the support), or a node another body
+    /// holds this step (the later imposition would override the first).
+    pub fn update_except(
+        &mut self,
+        body: &TriangleCollider,
+        pose: &RigidPose,
+        nodes: &[DVec3],
+        except: &[bool],
+    ) -> &[HeldNode] {
         self.kept.clear();
         self.kept.resize(nodes.len(), false);
         for (h, &pull) in self.held.iter().zip(&self.pulling) {
@@ -120,6 +135,9 @@ impl TissueContact {
 
         self.held.clear();
         for (i, &x) in nodes.iter().enumerate() {
+            if except.get(i).copied().unwrap_or(false) {
+                continue;
+            }
             let local = pose.inverse_transform_point(x);
             let kept = self.kept[i];
             if !kept && self.clearance.is_clear(i, local) {
@@ -227,6 +245,28 @@ mod tests {
             assert!(h.normal.dot(h.target - pose.position) > 0.0);
             assert!((nodes[h.node as usize] - pose.position).length() < 0.0501);
         }
+    }
+
+    #[test]
+    fn excepted_nodes_are_never_held() {
+        let body = ball();
+        let pose = RigidPose::new(DVec3::new(0.0, 0.0, 0.03), DQuat::IDENTITY);
+        let nodes = sheet(0.0);
+        let mut all = TissueContact::new(0.03).unwrap();
+        let held: Vec<u32> = all.update(&body, &pose, &nodes).iter().map(|h| h.node).collect();
+        assert!(held.len() > 10);
+        // Except every other held node (as if fixed to bone or held by another body).
+        let mut except = vec![false; nodes.len()];
+        for &n in held.iter().step_by(2) {
+            except[n as usize] = true;
+        }
+        let mut some = TissueContact::new(0.03).unwrap();
+        let got: Vec<u32> = some.update_except(&body, &pose, &nodes, &except).iter().map(|h| h.node).collect();
+        let expected: Vec<u32> = held.iter().copied().filter(|&n| !except[n as usize]).collect();
+        assert_eq!(got, expected);
+        // A node kept from the last step is dropped too once it is excepted.
+        let got: Vec<u32> = all.update_except(&body, &pose, &nodes, &except).iter().map(|h| h.node).collect();
+        assert_eq!(got, expected);
     }
 
     #[test]

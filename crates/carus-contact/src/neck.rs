@@ -35,6 +35,40 @@ pub struct NeckStiffness {
     /// Linear dashpot at the pivot, N s/m. Numerical: about critical for
     /// the head (0.6 kg) on the compression spring, 2 sqrt(k m) ~ 50.
     pub linear_damping_n_s_per_m: f64,
+    /// End of the flexion range, degrees of flexion from the anatomical
+    /// neutral attitude (head in line with the trunk). Lynch-Caris et al.
+    /// 2008 (J. Biomech. 41, active cervical range of motion of 106
+    /// children aged 8-10, from the Frankfort plane): flexion 66 +- 13
+    /// deg. No fetal or neonatal measurement was found; the children's
+    /// mean is taken. Beyond it the neck stiffens (see
+    /// `end_range_stiffness_nm_per_deg`): a physical limit, not a guide.
+    #[serde(default = "default_flexion_limit")]
+    pub flexion_limit_deg: f64,
+    /// End of the extension range, degrees from neutral. Lynch-Caris et
+    /// al. 2008: extension 85 +- 14 deg (same cohort and caveat).
+    #[serde(default = "default_extension_limit")]
+    pub extension_limit_deg: f64,
+    /// Stiffness added beyond either limit, N m per degree. Numerical (the
+    /// limit is what is cited; this only enforces it, like a contact
+    /// penalty): the largest moment about the pivot the head meets, about
+    /// 7 N m (140 N, REFERENCE_DATA.md, at a 50 mm lever, the head's
+    /// radius), carries the neck at most 7 degrees past the limit, and the
+    /// head on that spring (I ~ 1.5e-3 kg m^2 about the pivot) turns at
+    /// omega ~ 200 rad/s, omega dt = 0.2 at the 1 ms rigid step.
+    #[serde(default = "default_end_range_stiffness")]
+    pub end_range_stiffness_nm_per_deg: f64,
+}
+
+fn default_flexion_limit() -> f64 {
+    66.0
+}
+
+fn default_extension_limit() -> f64 {
+    85.0
+}
+
+fn default_end_range_stiffness() -> f64 {
+    1.0
 }
 
 impl Default for NeckStiffness {
@@ -49,6 +83,9 @@ impl Default for NeckStiffness {
             shear_n_per_m: 3361.8,
             rotational_damping_nm_s_per_rad: 0.034,
             linear_damping_n_s_per_m: 50.0,
+            flexion_limit_deg: default_flexion_limit(),
+            extension_limit_deg: default_extension_limit(),
+            end_range_stiffness_nm_per_deg: default_end_range_stiffness(),
         }
     }
 }
@@ -80,6 +117,11 @@ pub struct NeckGeometry {
     pub pivot: DVec3,
     pub axes: HeadAxes,
     pub neck_axis: DVec3,
+    /// Flexion (positive) or extension of the head relative to the trunk
+    /// in the joining pose, degrees from the anatomical neutral attitude:
+    /// the range limits are measured from neutral, the springs from the
+    /// joining pose.
+    pub joined_flexion_deg: f64,
 }
 
 /// A neck joining body `head` and body `trunk` at the atlanto-occipital
@@ -98,6 +140,9 @@ pub struct Neck {
     neck_axis_in_trunk: DVec3,
     /// Rest orientation of the head relative to the trunk.
     rest: DQuat,
+    /// Flexion of the rest pose from the anatomical neutral attitude, rad.
+    #[serde(default)]
+    rest_flexion_rad: f64,
 }
 
 /// The neck's state and what it does to the two bodies.
@@ -125,7 +170,7 @@ impl Neck {
         geometry: NeckGeometry,
         stiffness: NeckStiffness,
     ) -> Result<Self, ContactError> {
-        let NeckGeometry { head, trunk, pivot, axes, neck_axis } = geometry;
+        let NeckGeometry { head, trunk, pivot, axes, neck_axis, joined_flexion_deg } = geometry;
         for b in [head, trunk] {
             if b >= model.len() {
                 return Err(ContactError::NoSuchBody { body: b, count: model.len() });
@@ -141,6 +186,9 @@ impl Neck {
             ("shear_n_per_m", stiffness.shear_n_per_m),
             ("rotational_damping_nm_s_per_rad", stiffness.rotational_damping_nm_s_per_rad),
             ("linear_damping_n_s_per_m", stiffness.linear_damping_n_s_per_m),
+            ("flexion_limit_deg", stiffness.flexion_limit_deg),
+            ("extension_limit_deg", stiffness.extension_limit_deg),
+            ("end_range_stiffness_nm_per_deg", stiffness.end_range_stiffness_nm_per_deg),
         ] {
             check_non_negative(name, value, true)?;
         }
@@ -167,6 +215,7 @@ impl Neck {
             axes: HeadAxes { occipitofrontal: o, vertex: v },
             neck_axis_in_trunk: qt.inverse() * axis,
             rest: (qt.inverse() * qh).normalize(),
+            rest_flexion_rad: joined_flexion_deg.to_radians(),
         })
     }
 
@@ -187,7 +236,12 @@ impl Neck {
             (rotation.dot(b), rotation.dot(self.axes.occipitofrontal), rotation.dot(self.axes.vertex));
         let per_rad = 180.0 / std::f64::consts::PI;
         let k_flex = if flexion >= 0.0 { s.flexion_nm_per_deg } else { s.extension_nm_per_deg };
-        let elastic_local = -per_rad
+        // End of range, measured from the anatomical neutral attitude.
+        let from_neutral = (flexion + self.rest_flexion_rad) * per_rad;
+        let beyond = (from_neutral - s.flexion_limit_deg).max(0.0) + (from_neutral + s.extension_limit_deg).min(0.0);
+        let end_range = -s.end_range_stiffness_nm_per_deg * beyond;
+        let elastic_local = end_range * b
+            - per_rad
             * (k_flex * flexion * b
                 + s.lateral_bending_nm_per_deg * lateral * self.axes.occipitofrontal
                 + s.axial_rotation_nm_per_deg * axial * self.axes.vertex);
@@ -240,7 +294,7 @@ mod tests {
         )
         .unwrap();
         let axes = HeadAxes { occipitofrontal: DVec3::Y, vertex: DVec3::Z };
-        let geometry = NeckGeometry { head, trunk, pivot: DVec3::ZERO, axes, neck_axis: DVec3::Z };
+        let geometry = NeckGeometry { head, trunk, pivot: DVec3::ZERO, axes, neck_axis: DVec3::Z, joined_flexion_deg: 0.0 };
         let neck = Neck::new(&model, &state, geometry, NeckStiffness::default()).unwrap();
         (model, state, neck)
     }
@@ -286,6 +340,38 @@ mod tests {
         let ext = neck2.load(&model2, &state2);
         let ratio = ext.elastic_moment_on_head.length() / flex.elastic_moment_on_head.length();
         assert!((ratio - 4.0).abs() < 1e-9, "ratio {ratio}");
+    }
+
+    #[test]
+    fn the_neck_stiffens_beyond_its_range_of_motion() {
+        let s = NeckStiffness::default();
+        // b = -x: flexion is a positive turn about -x.
+        let moment = |deg: f64| {
+            let (model, mut state, neck) = setup();
+            turn_head(&mut state, -DVec3::X, deg);
+            neck.load(&model, &state).elastic_moment_on_head.dot(-DVec3::X)
+        };
+        // Inside the range: the linear spring alone.
+        assert!((moment(60.0) + 60.0 * s.flexion_nm_per_deg).abs() < 1e-9);
+        assert!((moment(-80.0) - 80.0 * s.extension_nm_per_deg).abs() < 1e-9);
+        // Beyond it: the end-range stiffness adds, from the limit on.
+        let over = s.flexion_limit_deg + 4.0;
+        let expected = -over * s.flexion_nm_per_deg - 4.0 * s.end_range_stiffness_nm_per_deg;
+        assert!((moment(over) - expected).abs() < 1e-9, "{} vs {expected}", moment(over));
+        let under = -(s.extension_limit_deg + 3.0);
+        let expected = -under * s.extension_nm_per_deg + 3.0 * s.end_range_stiffness_nm_per_deg;
+        assert!((moment(under) - expected).abs() < 1e-9);
+        // The limits count from neutral, not from the joining pose: a neck
+        // joined 80 degrees extended (a face presentation) meets its
+        // extension limit after 5 more degrees.
+        let (model, mut state, _) = setup();
+        let axes = HeadAxes { occipitofrontal: DVec3::Y, vertex: DVec3::Z };
+        let geometry = NeckGeometry { head: 0, trunk: 1, pivot: DVec3::ZERO, axes, neck_axis: DVec3::Z, joined_flexion_deg: -80.0 };
+        let neck = Neck::new(&model, &state, geometry, s).unwrap();
+        turn_head(&mut state, -DVec3::X, -7.0);
+        let m = neck.load(&model, &state).elastic_moment_on_head.dot(-DVec3::X);
+        let expected = 7.0 * s.extension_nm_per_deg + 2.0 * s.end_range_stiffness_nm_per_deg;
+        assert!((m - expected).abs() < 1e-9, "{m} vs {expected}");
     }
 
     #[test]

@@ -48,6 +48,10 @@ pub struct FloorScene {
     pub reference: Vec<DVec3>,
     /// The floor's critical TLED step, s.
     pub critical_step_s: f64,
+    /// Per node: fixed to bone (the mesh's attached set). The fetus never
+    /// holds these: carus-fem's imposed displacements override fixed dofs,
+    /// so a held attachment node would be torn off the bone.
+    pub attached: Vec<bool>,
 }
 
 /// Everything constant in a run.
@@ -344,6 +348,12 @@ fn build_floor(s: &Scenario, pelvis: &Pelvis) -> Result<FloorScene, LabourError>
         .get(ATTACHED)
         .ok_or_else(|| LabourError::Anatomy("pelvic floor has no attached node set".into()))?;
     bcs.fix_nodes(attached);
+    let mut is_attached = vec![false; mesh.nodes.len()];
+    for &n in attached {
+        if let Some(a) = is_attached.get_mut(n as usize) {
+            *a = true;
+        }
+    }
     let reference = mesh.nodes.iter().map(|p| DVec3::from_array(*p)).collect();
     let critical_step_s = model.critical_time_step();
     Ok(FloorScene {
@@ -352,6 +362,7 @@ fn build_floor(s: &Scenario, pelvis: &Pelvis) -> Result<FloorScene, LabourError>
         bcs,
         reference,
         critical_step_s,
+        attached: is_attached,
     })
 }
 

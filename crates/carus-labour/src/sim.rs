@@ -92,6 +92,9 @@ impl<'a> Simulation<'a> {
                     pivot: scene.start_pivot(),
                     axes: scene.head_axes,
                     neck_axis: -(q_trunk * scene.spine_in_trunk),
+                    // The start pose puts the trunk at neutral and the head
+                    // at the scenario's attitude (Scene::start_poses).
+                    joined_flexion_deg: scene.scenario.start.attitude_deg,
                 };
                 Some(Neck::new(
                     &scene.bodies,
@@ -112,16 +115,19 @@ impl<'a> Simulation<'a> {
             .as_ref()
             .map(|f| new_solver(scene, f, dt))
             .transpose()?;
-        let floor = solver.as_ref().map(|(s, _)| {
-            let reach = 0.01;
-            let n = if scene.trunk.is_some() { 2 } else { 1 };
-            FloorState {
-                solver: s.snapshot(),
-                contacts: (0..n)
-                    .map(|_| TissueContact::new(reach).expect("positive reach"))
-                    .collect(),
+        let floor = match solver.as_ref() {
+            Some((s, _)) => {
+                let reach = scene.scenario.floor.coupling_reach_mm * 1e-3;
+                let n = if scene.trunk.is_some() { 2 } else { 1 };
+                Some(FloorState {
+                    solver: s.snapshot(),
+                    contacts: (0..n)
+                        .map(|_| TissueContact::new(reach))
+                        .collect::<Result<_, _>>()?,
+                })
             }
-        });
+            None => None,
+        };
         let body_count = scene.bodies.len();
         let state = SimState {
             step: 0,
@@ -353,6 +359,10 @@ impl<'a> Simulation<'a> {
             .collect();
         solver.release_imposed();
         let mut held_by: Vec<Vec<u32>> = Vec::with_capacity(floor_state.contacts.len());
+        // Nodes already prescribed: the attachment to bone, then those an
+        // earlier body (the head) holds. carus-fem's imposed displacements
+        // override fixed dofs, and a second imposition overrides the first.
+        let mut prescribed = floor.attached.clone();
         for (b, contact) in floor_state.contacts.iter_mut().enumerate() {
             let collider = if b == HEAD {
                 &scene.head.collider
@@ -360,13 +370,15 @@ impl<'a> Simulation<'a> {
                 &scene.trunk.as_ref().expect("trunk").collider
             };
             let pose = self.state.bodies.pose(b);
-            let held = contact.update(collider, &pose, &nodes);
+            let held = contact.update_except(collider, &pose, &nodes, &prescribed);
             let ids: Vec<u32> = held.iter().map(|h| h.node).collect();
+            for &i in &ids {
+                prescribed[i as usize] = true;
+            }
             let targets: Vec<[f64; 3]> = held
                 .iter()
                 .map(|h| (h.target - floor.reference[h.node as usize]).to_array())
                 .collect();
-            // Fixed attachment nodes stay fixed: the solver's fixed dofs win.
             solver.impose_displacements(&ids, &targets)?;
             held_by.push(ids);
         }
