@@ -7,13 +7,15 @@ use std::path::PathBuf;
 pub enum RenderError {
     /// No GPU and no software rasteriser could be found.
     #[error(
-        "no graphics adapter found (backends tried: {backends}); \
+        "no graphics adapter found (backends tried: {backends}; found {found}); \
          on Debian/Ubuntu install Mesa's CPU Vulkan driver lavapipe with \
          `apt-get install -y mesa-vulkan-drivers libvulkan1`"
     )]
     NoAdapter {
         /// The wgpu backends that were searched.
         backends: String,
+        /// What was there instead.
+        found: String,
     },
     /// An adapter exists but refused to open a device.
     #[error("adapter `{adapter}` refused to open a device: {reason}")]

@@ -1,12 +1,11 @@
 //! Pictures without a window: the painter draws into a multisampled
 //! texture, which is resolved and read back row by row.
 
-use std::sync::mpsc;
 
 use crate::camera::Camera;
 use crate::colour::srgb_to_linear;
 use crate::error::RenderError;
-use crate::gpu::GpuContext;
+use crate::gpu::{AdapterChoice, GpuContext, GPU_TIMEOUT};
 use crate::mesh::RenderMesh;
 use crate::painter::{GpuMesh, MeshPainter, TargetFormat};
 use crate::picture::Image;
@@ -35,7 +34,7 @@ impl Renderer {
     /// lavapipe) and builds the pipelines. Fails, never panics, when no
     /// adapter exists, with the packages that provide one in the message.
     pub fn new_headless() -> Result<Self, RenderError> {
-        Self::with_context(GpuContext::new_headless()?)
+        Self::with_context(GpuContext::headless(AdapterChoice::BestAvailable)?)
     }
 
     /// Draws with a device opened elsewhere.
@@ -47,7 +46,7 @@ impl Renderer {
     fn with_format(gpu: GpuContext, format: TargetFormat) -> Result<Self, RenderError> {
         // A device that cannot multisample these formats fails in the scope.
         let painter = gpu.scoped("building the mesh pipelines", || {
-            MeshPainter::new(&gpu.device, &gpu.queue, format)
+            MeshPainter::new(gpu.device(), gpu.queue(), format)
         })?;
         Ok(Self {
             gpu,
@@ -79,7 +78,7 @@ impl Renderer {
     pub fn upload(&self, scene: &Scene) -> Result<GpuScene, RenderError> {
         scene.validate()?;
         let meshes = self.gpu.scoped("uploading the meshes", || {
-            self.painter.upload_scene(&self.gpu.device, scene)
+            self.painter.upload_scene(self.gpu.device(), scene)
         })??;
         Ok(GpuScene {
             meshes,
@@ -106,7 +105,7 @@ impl Renderer {
                 problem: format!("the uploaded scene has only {count} meshes"),
             })?;
         self.gpu.scoped("updating a mesh", || {
-            self.painter.update(&self.gpu.queue, uploaded, mesh, index)
+            self.painter.update(self.gpu.queue(), uploaded, mesh, index)
         })?
     }
 
@@ -118,7 +117,7 @@ impl Renderer {
         width: u32,
         height: u32,
     ) -> Result<Image, RenderError> {
-        let max = self.gpu.device.limits().max_texture_dimension_2d;
+        let max = self.gpu.device().limits().max_texture_dimension_2d;
         if width == 0 || height == 0 || width > max || height > max {
             return Err(RenderError::InvalidSize { width, height, max });
         }
@@ -130,7 +129,7 @@ impl Renderer {
         {
             Some(target) => target,
             None => self.gpu.scoped("creating the picture target", || {
-                OffscreenTarget::new(&self.gpu.device, width, height, self.format)
+                OffscreenTarget::new(self.gpu.device(), width, height, self.format)
             })?,
         };
         let picture = self.draw(scene, camera, &target);
@@ -164,14 +163,14 @@ impl Renderer {
         };
         let submission = self.gpu.scoped("drawing the picture", || {
             self.painter.prepare(
-                &self.gpu.queue,
+                self.gpu.queue(),
                 camera,
                 &scene.lights,
                 width as f32 / height as f32,
             );
             let mut encoder =
                 self.gpu
-                    .device
+                    .device()
                     .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                         label: Some("carus-render picture"),
                     });
@@ -206,9 +205,9 @@ impl Renderer {
                 self.painter.paint(&mut pass, &scene.meshes, camera);
             }
             target.copy_to_readback(&mut encoder);
-            self.gpu.queue.submit([encoder.finish()])
+            self.gpu.queue().submit([encoder.finish()])
         })?;
-        self.gpu.wait(submission, "drawing the picture")?;
+        self.gpu.wait(Some(submission), "drawing the picture", GPU_TIMEOUT)?;
         target.read_back(&self.gpu)
     }
 }
@@ -307,43 +306,12 @@ impl OffscreenTarget {
 
     /// Maps the readback buffer and strips the row padding.
     fn read_back(&self, gpu: &GpuContext) -> Result<Image, RenderError> {
-        let (sender, receiver) = mpsc::channel();
-        let slice = self.readback.slice(..);
-        slice.map_async(wgpu::MapMode::Read, move |result| {
-            // The receiver waits below; if it is gone there is no one to tell.
-            let _ = sender.send(result);
-        });
-        gpu.device
-            .poll(wgpu::PollType::Wait {
-                submission_index: None,
-                timeout: Some(crate::gpu::GPU_TIMEOUT),
-            })
-            .map_err(|e| RenderError::Gpu {
-                during: "reading the picture back",
-                message: e.to_string(),
-            })?;
-        receiver
-            .try_recv()
-            .map_err(|_| RenderError::Timeout {
-                during: "reading the picture back",
-                seconds: crate::gpu::GPU_TIMEOUT.as_secs(),
-            })?
-            .map_err(|e| RenderError::Gpu {
-                during: "reading the picture back",
-                message: e.to_string(),
-            })?;
+        let mapped = gpu.map_read(&self.readback, "reading the picture back", GPU_TIMEOUT)?;
         let row = self.width as usize * 4;
         let mut pixels = Vec::with_capacity(row * self.height as usize);
-        {
-            let mapped = slice.get_mapped_range().map_err(|e| RenderError::Gpu {
-                during: "reading the picture back",
-                message: e.to_string(),
-            })?;
-            for padded in mapped.chunks_exact(self.padded_row as usize) {
-                pixels.extend_from_slice(&padded[..row]);
-            }
+        for padded in mapped.chunks_exact(self.padded_row as usize) {
+            pixels.extend_from_slice(&padded[..row]);
         }
-        self.readback.unmap();
         Image::from_rgba(self.width, self.height, pixels)
     }
 }
@@ -387,7 +355,7 @@ mod tests {
             ..TargetFormat::PICTURE
         };
         let pictures = [TargetFormat::PICTURE, plain, single_sample].map(|format| {
-            let gpu = GpuContext::new_headless().unwrap_or_else(|e| panic!("{e}"));
+            let gpu = GpuContext::headless(AdapterChoice::BestAvailable).unwrap_or_else(|e| panic!("{e}"));
             let mut renderer = Renderer::with_format(gpu, format).unwrap();
             renderer.render(&scene, &camera, 32, 32).unwrap()
         });

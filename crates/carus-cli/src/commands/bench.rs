@@ -10,7 +10,7 @@ use std::time::Instant;
 
 use anyhow::{bail, Context};
 use carus_fem::baseline::{BaselineParameters, BaselineSolver, NodeConstraint};
-use carus_fem::gpu::{bench_tled, AdapterChoice, GpuDevice, GpuError};
+use carus_fem::gpu::{bench_tled, AdapterChoice, DeviceError, GpuDevice, GpuError};
 use carus_fem::validation::cube::{CubeElement, CubeSetup, CubeVariant, DAMPING_PER_S, HOURGLASS_COEFFICIENT, RAMP_S};
 use carus_fem::validation::{CUBE_BULK_MODULUS_PA, CUBE_DENSITY_KG_M3, CUBE_SHEAR_MODULUS_PA};
 use carus_fem::{ElementKind, LoadShape, Material, MaterialRegion, Precision, StepControl, TledModel, TledSolver};
@@ -167,8 +167,8 @@ fn gpu_bench(args: &TledBenchArgs, kind: ElementKind, steps: u64) -> anyhow::Res
     let choice = if args.backend == BackendArg::Gpu { AdapterChoice::BestAvailable } else { AdapterChoice::RealGpuOnly };
     let device = match GpuDevice::headless(choice) {
         Ok(device) => device,
-        Err(GpuError::NoAdapter { .. }) if args.backend == BackendArg::Auto => return Ok(None),
-        Err(error) => return Err(error.into()),
+        Err(DeviceError::NoAdapter { .. }) if args.backend == BackendArg::Auto => return Ok(None),
+        Err(error) => return Err(GpuError::from(error).into()),
     };
     let report = bench_tled(&device, kind, args.n, steps, args.peak_gbs)?;
     if args.json {

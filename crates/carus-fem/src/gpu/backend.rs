@@ -115,7 +115,7 @@ pub fn open_solver(
                     ),
                 }
             }
-            Err(e) => cpu(model, Some(format!("{e}; running on the CPU"))),
+            Err(e) => cpu(model, Some(format!("{}; running on the CPU", GpuError::from(e)))),
         },
     }
 }

@@ -195,7 +195,7 @@ pub struct ModelBuffers {
 impl ModelBuffers {
     pub fn upload(gpu: &GpuDevice, a: &ModelArrays) -> Result<ModelBuffers, GpuError> {
         let none = wgpu::BufferUsages::empty();
-        gpu.scoped("uploading the model", || ModelBuffers {
+        Ok(gpu.scoped("uploading the model", || ModelBuffers {
             connectivity: storage(gpu, "element connectivity", &a.connectivity, none),
             shape_derivatives: storage(gpu, "shape derivatives", &a.shape_derivatives, none),
             weight: storage(gpu, "integration weights", &a.weight, none),
@@ -211,6 +211,6 @@ impl ModelBuffers {
                 &a.reference,
                 wgpu::BufferUsages::VERTEX,
             ),
-        })
+        })?)
     }
 }

@@ -127,7 +127,7 @@ impl Kernels {
         anp: bool,
     ) -> Result<Kernels, GpuError> {
         use Access::{Read, ReadWrite};
-        gpu.scoped("compiling the TLED kernels", || {
+        Ok(gpu.scoped("compiling the TLED kernels", || {
             let module = |label: &str, body: &str| {
                 gpu.device()
                     .create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -213,7 +213,7 @@ impl Kernels {
                     &[(2, Read), (5, ReadWrite), (6, Read), (8, ReadWrite)],
                 ),
             }
-        })
+        })?)
     }
 }
 

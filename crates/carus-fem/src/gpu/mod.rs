@@ -33,7 +33,7 @@ mod traffic;
 
 pub use backend::{open_solver, Backend, BackendSolver, OpenedSolver};
 pub use bench::{bench_tled, GpuBenchReport};
-pub use device::{AdapterChoice, GpuDevice};
+pub use device::{AdapterChoice, DeviceError, GpuDevice};
 pub use error::{GpuError, LAVAPIPE_HINT};
 pub use loads::MAX_LOAD_SHAPES;
 pub use solver::{GpuOptions, GpuSolver};

@@ -278,7 +278,7 @@ impl GpuSolver {
         m: &ModelBuffers,
         s: &StateBuffers,
     ) -> Result<BindGroups, GpuError> {
-        gpu.scoped("binding the solver buffers", || {
+        Ok(gpu.scoped("binding the solver buffers", || {
             let bind = |kernel: &super::kernels::Kernel, storage: &[(u32, &wgpu::Buffer)]| {
                 let mut entries = vec![
                     wgpu::BindGroupEntry {
@@ -401,7 +401,7 @@ impl GpuSolver {
                     ],
                 ),
             }
-        })
+        })?)
     }
 
     /// Writes the run parameters (after a change of the coupled or probed node lists).
@@ -635,7 +635,7 @@ impl GpuSolver {
             self.gpu.queue().submit([encoder.finish()]);
         })?;
         self.gpu
-            .wait("running the TLED steps", self.options.wait_timeout)?;
+            .wait(None, "running the TLED steps", self.options.wait_timeout)?;
         let status = self.read_status()?;
         self.substep_wall_s = Some(started.elapsed().as_secs_f64() / n as f64);
         Ok(status)
@@ -656,8 +656,9 @@ impl GpuSolver {
             encoder.copy_buffer_to_buffer(&self.state.backup[1], 0, &self.state.u[prev], 0, bytes);
             self.gpu.queue().submit([encoder.finish()]);
         })?;
-        self.gpu
-            .wait("restoring the last good state", self.options.wait_timeout)
+        Ok(self
+            .gpu
+            .wait(None, "restoring the last good state", self.options.wait_timeout)?)
     }
 
     fn commit(&mut self, n: u32) {
@@ -903,7 +904,7 @@ impl GpuSolver {
             self.gpu.queue().submit([encoder.finish()]);
         })?;
         self.gpu
-            .wait("evaluating the internal forces", self.options.wait_timeout)?;
+            .wait(None, "evaluating the internal forces", self.options.wait_timeout)?;
         let status = self.read_status()?;
         if status.element != u32::MAX {
             let element = status.element as usize;
@@ -1085,7 +1086,7 @@ impl GpuSolver {
             bytemuck::cast_slice(&flat(&snap.previous_displacements_m)),
         );
         self.gpu
-            .wait("uploading a snapshot", self.options.wait_timeout)?;
+            .wait(None, "uploading a snapshot", self.options.wait_timeout)?;
         self.time_s = snap.time_s;
         self.steps = snap.steps;
         self.substeps = snap.substeps;

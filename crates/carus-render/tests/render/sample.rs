@@ -119,7 +119,7 @@ fn sample_scene_from_the_standard_views() {
             256,
         )
         .unwrap();
-    let adapter = &renderer.gpu().adapter_info;
+    let adapter = renderer.gpu().adapter_info();
     eprintln!(
         "sample drawn on {} ({:?}, {:?})",
         adapter.name, adapter.backend, adapter.device_type
