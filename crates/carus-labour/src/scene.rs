@@ -339,6 +339,9 @@ fn build_floor(s: &Scenario, pelvis: &Pelvis) -> Result<FloorScene, LabourError>
     };
     let options = ModelOptions {
         damping_per_s: s.floor.damping_per_s,
+        // NiftySim's scaling, which every labour run so far was measured
+        // with; the solver's default (shear, docs/VALIDATION.md V3) is softer.
+        hourglass_modulus: carus_fem::HourglassModulus::Dilatational,
         ..ModelOptions::default()
     };
     let model = Arc::new(TledModel::new(&mesh, &[region], &options)?);
