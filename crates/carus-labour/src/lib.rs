@@ -44,4 +44,6 @@ pub enum LabourError {
     },
     #[error("checkpoint: {0}")]
     Checkpoint(String),
+    #[error("{0}")]
+    LeftCanal(String),
 }

@@ -234,6 +234,27 @@ impl Scene {
         poses
     }
 
+    /// How far `head_centre` lies from the pelvic axis (m), when it is
+    /// farther than half the inlet's transverse diameter and its nearest
+    /// axis point is above the outlet; `None` while it is in the canal. Inside the bony
+    /// ring a head centre cannot get that far from the axis without
+    /// entering bone (the ring's half-widths are at most that, the head's
+    /// radius is over 40 mm); above the inlet it means the fetus has left
+    /// the line of the uterus, which the model has no wall to hold (the
+    /// fetus can then slide out over the symphysis, outside the pelvis).
+    /// A check on the run, not a force.
+    pub fn outside_canal(&self, head_centre: DVec3) -> Option<f64> {
+        let axis = self.canal.axis();
+        let sigma = axis.project(head_centre);
+        if sigma >= self.canal.outlet_sigma() {
+            return None;
+        }
+        let l = &self.pelvis.landmarks;
+        let half_inlet = 0.5 * (l.iliopectineal_right - l.iliopectineal_left).length();
+        let off = (head_centre - axis.point(sigma)).length();
+        (off > half_inlet).then_some(off)
+    }
+
     /// The pivot of the neck in the pelvis frame at the start.
     pub fn start_pivot(&self) -> DVec3 {
         self.start[HEAD].transform_point(self.pivot_in_head)
@@ -420,6 +441,41 @@ fn regions(pelvis: &Pelvis) -> (Vec<u16>, Vec<ContactSite>) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_head_over_the_symphysis_is_outside_the_canal() {
+        let mut s = Scenario::builtin("normal").unwrap();
+        s.numerics.head_subdivisions = 3;
+        s.contact.sample_spacing_mm = 8.0;
+        s.floor.enabled = false;
+        let scene = Scene::build(&s).unwrap();
+        // The start: on the axis above the inlet.
+        assert_eq!(scene.outside_canal(scene.start[HEAD].position), None);
+        // Along the axis at the spines and just above the outlet: inside.
+        let axis = scene.canal.axis();
+        for sigma in [
+            0.0,
+            scene.canal.spines_sigma(),
+            scene.canal.outlet_sigma() - 0.01,
+        ] {
+            assert_eq!(
+                scene.outside_canal(axis.point(sigma)),
+                None,
+                "sigma {sigma}"
+            );
+        }
+        // 135 mm in front of the inlet's centre and 30 mm above it (where
+        // the face run's head went when it rode over the symphysis): outside.
+        let over = DVec3::new(0.0, 0.135, 0.03);
+        let off = scene.outside_canal(over).expect("outside");
+        assert!(off > 0.1, "{off}");
+        // Past the outlet the head may swing forward as it extends: no check.
+        let frame = axis.frame(scene.canal.outlet_sigma() + 0.03);
+        assert_eq!(
+            scene.outside_canal(frame.point + 0.08 * frame.anterior),
+            None
+        );
+    }
 
     #[test]
     fn a_solid_box_has_the_textbook_mass_properties() {

@@ -288,6 +288,14 @@ impl<'a> Simulation<'a> {
         }
 
         self.state.bodies.step(&scene.bodies, &wrenches, self.dt)?;
+        if let Some(off) = scene.outside_canal(self.state.bodies.position[HEAD]) {
+            return Err(LabourError::LeftCanal(format!(
+                "the fetal head left the birth canal before the outlet (its centre {:.0} mm \
+                 from the pelvic axis, more than half the inlet's transverse diameter): the \
+                 model has no uterus or abdominal wall to hold it there, so this is not a delivery",
+                off * 1e3
+            )));
+        }
         self.couple_floor()?;
         self.state.step += 1;
         if self.state.step % self.sample_every == 0 {
