@@ -242,25 +242,23 @@ fn coupling_hooks_agree_with_the_cpu_backend() {
     assert!(max_distance(&ua, &ub) < 1e-4 * EDGE_M);
 }
 
-#[test]
-fn snapshots_resume_bit_for_bit() {
-    let gpu = device();
+/// A loaded 3^3 H8 cube in f32 on `gpu` at half the critical step.
+fn loaded_cube(gpu: &GpuDevice, options: GpuOptions) -> GpuSolver {
     let mesh = box_h8([EDGE_M; 3], [3, 3, 3]);
     let m = model(&mesh, TetFormulation::T4, Precision::F32);
-    let bcs = all_loads(&mesh);
     let dt = 0.5 * m.critical_time_step();
-    let mut g = GpuSolver::new(
-        &gpu,
-        m,
-        &bcs,
-        dt,
-        StepControl::Refuse,
+    GpuSolver::new(gpu, m, &all_loads(&mesh), dt, StepControl::Refuse, options).unwrap()
+}
+
+#[test]
+fn snapshots_resume_bit_for_bit() {
+    let mut g = loaded_cube(
+        &device(),
         GpuOptions {
             max_steps_per_submission: 7,
             ..GpuOptions::default()
         },
-    )
-    .unwrap();
+    );
     g.advance_steps(30).unwrap();
     let snap = g.snapshot().unwrap();
     g.advance_steps(40).unwrap();
@@ -451,19 +449,7 @@ fn the_bench_reports_the_cpu_bench_figures_and_bandwidth() {
 #[test]
 fn a_lost_device_is_an_error_not_a_hang_and_the_state_read_before_survives() {
     let gpu = device();
-    let mesh = box_h8([EDGE_M; 3], [3, 3, 3]);
-    let m = model(&mesh, TetFormulation::T4, Precision::F32);
-    let bcs = all_loads(&mesh);
-    let dt = 0.5 * m.critical_time_step();
-    let mut g = GpuSolver::new(
-        &gpu,
-        m,
-        &bcs,
-        dt,
-        StepControl::Refuse,
-        GpuOptions::default(),
-    )
-    .unwrap();
+    let mut g = loaded_cube(&gpu, GpuOptions::default());
     g.advance_steps(20).unwrap();
     let before = g.displacements().unwrap();
     assert!(largest(&before) > 0.0);
