@@ -95,6 +95,39 @@ pub(crate) fn substeps_for(
     }
 }
 
+/// Merges displacements held through the coupling API into `coupled`
+/// (sorted by node; a node given again takes its new value), after checking
+/// every node and value (shared with the GPU backend).
+pub(crate) fn merge_imposed(
+    coupled: &mut Vec<(u32, [f64; 3])>,
+    nodes: &[u32],
+    displacements_m: &[[f64; 3]],
+    node_count: usize,
+) -> Result<(), FemError> {
+    if nodes.len() != displacements_m.len() {
+        return Err(FemError::InvalidBoundaryCondition {
+            reason: format!(
+                "{} nodes but {} displacements given to impose_displacements",
+                nodes.len(),
+                displacements_m.len()
+            ),
+        });
+    }
+    for (&n, d) in nodes.iter().zip(displacements_m) {
+        check_node("impose_displacements", n, node_count)?;
+        if !d.iter().all(|v| v.is_finite()) {
+            return Err(FemError::InvalidBoundaryCondition {
+                reason: format!("imposed displacement of node {n} is not finite"),
+            });
+        }
+        match coupled.binary_search_by_key(&n, |&(m, _)| m) {
+            Ok(i) => coupled[i].1 = *d,
+            Err(i) => coupled.insert(i, (n, *d)),
+        }
+    }
+    Ok(())
+}
+
 /// A boundary condition's node must exist (shared with the GPU backend).
 pub(crate) fn check_node(what: &'static str, n: u32, nn: usize) -> Result<(), FemError> {
     if (n as usize) < nn {
@@ -597,28 +630,7 @@ impl TledSolver {
         nodes: &[u32],
         displacements_m: &[[f64; 3]],
     ) -> Result<(), FemError> {
-        if nodes.len() != displacements_m.len() {
-            return Err(FemError::InvalidBoundaryCondition {
-                reason: format!(
-                    "{} nodes but {} displacements given to impose_displacements",
-                    nodes.len(),
-                    displacements_m.len()
-                ),
-            });
-        }
-        for (&n, d) in nodes.iter().zip(displacements_m) {
-            check_node("impose_displacements", n, self.model.node_count())?;
-            if !d.iter().all(|v| v.is_finite()) {
-                return Err(FemError::InvalidBoundaryCondition {
-                    reason: format!("imposed displacement of node {n} is not finite"),
-                });
-            }
-            match self.coupled.binary_search_by_key(&n, |&(m, _)| m) {
-                Ok(i) => self.coupled[i].1 = *d,
-                Err(i) => self.coupled.insert(i, (n, *d)),
-            }
-        }
-        Ok(())
+        merge_imposed(&mut self.coupled, nodes, displacements_m, self.model.node_count())
     }
 
     /// Frees every node held by [`Self::impose_displacements`].

@@ -26,7 +26,7 @@ use crate::kernel::blocks::KernelData;
 use crate::kernel::lanes::Real;
 use crate::loads::BoundaryConditions;
 use crate::model::{KernelModel, TledModel};
-use crate::solver::{substeps_for, SolverSnapshot, StepControl};
+use crate::solver::{merge_imposed, substeps_for, SolverSnapshot, StepControl};
 
 use super::buffers::{check_limits, storage, ModelArrays, ModelBuffers, Planned};
 use super::device::GpuDevice;
@@ -834,36 +834,7 @@ impl GpuSolver {
         nodes: &[u32],
         displacements_m: &[[f64; 3]],
     ) -> Result<(), GpuError> {
-        if nodes.len() != displacements_m.len() {
-            return Err(FemError::InvalidBoundaryCondition {
-                reason: format!(
-                    "{} nodes but {} displacements given to impose_displacements",
-                    nodes.len(),
-                    displacements_m.len()
-                ),
-            }
-            .into());
-        }
-        for (&n, d) in nodes.iter().zip(displacements_m) {
-            if n >= self.node_count {
-                return Err(FemError::BoundaryNodeOutOfRange {
-                    what: "impose_displacements",
-                    node: n,
-                    node_count: self.node_count as usize,
-                }
-                .into());
-            }
-            if !d.iter().all(|v| v.is_finite()) {
-                return Err(FemError::InvalidBoundaryCondition {
-                    reason: format!("imposed displacement of node {n} is not finite"),
-                }
-                .into());
-            }
-            match self.coupled.binary_search_by_key(&n, |&(m, _)| m) {
-                Ok(i) => self.coupled[i].1 = *d,
-                Err(i) => self.coupled.insert(i, (n, *d)),
-            }
-        }
+        merge_imposed(&mut self.coupled, nodes, displacements_m, self.node_count as usize)?;
         self.coupled_uploaded = false;
         Ok(())
     }
