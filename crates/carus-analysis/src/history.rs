@@ -8,30 +8,10 @@
 
 use crate::canal::BirthCanal;
 use carus_anatomy::fetus::{FetalHead, Trunk};
-use glam::{DQuat, DVec3};
+use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
-/// Position and orientation of a rigid body in the pelvis frame: a point `p`
-/// of the body frame lies at `position_m + orientation * p`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct RigidPose {
-    /// Where the body frame's origin is, m.
-    pub position_m: DVec3,
-    /// Unit quaternion from the body frame to the pelvis frame (x, y, z, w in JSON).
-    pub orientation: DQuat,
-}
-
-impl RigidPose {
-    /// A body-frame point in the pelvis frame.
-    pub fn point(&self, body_point: DVec3) -> DVec3 {
-        self.position_m + self.orientation * body_point
-    }
-
-    /// A body-frame direction in the pelvis frame.
-    pub fn direction(&self, body_direction: DVec3) -> DVec3 {
-        self.orientation * body_direction
-    }
-}
+pub use carus_anatomy::pose::RigidPose;
 
 /// The fetal head in its own body frame (constant over a run).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

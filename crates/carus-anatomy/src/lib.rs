@@ -6,6 +6,7 @@ pub mod fetus;
 pub mod floor;
 pub mod import;
 pub mod pelvis;
+pub mod pose;
 pub mod surface;
 
 pub use axis::{AxisFrame, PelvicAxis, Plane};

@@ -38,7 +38,7 @@ fn sweep(c: &mut Criterion) {
     let start = std::time::Instant::now();
     while sigma <= outlet {
         let motion = BodyMotion { pose: pose_at(sigma), linear_velocity: DVec3::ZERO, angular_velocity: DVec3::ZERO };
-        let report = pelvis_contacts(&collider, &law, &samples, &motion, motion.pose.position, &mut memory).unwrap();
+        let report = pelvis_contacts(&collider, &law, &samples, &motion, motion.pose.position_m, &mut memory).unwrap();
         passes += 1;
         if first_contact.is_none() && !report.contacts.is_empty() {
             first_contact = Some(sigma);
@@ -70,7 +70,7 @@ fn sweep(c: &mut Criterion) {
         b.iter(|| {
             let mut fresh = BodyContactState::new(&samples);
             let motion = BodyMotion { pose: mid, linear_velocity: DVec3::ZERO, angular_velocity: DVec3::ZERO };
-            pelvis_contacts(&collider, &law, &samples, &motion, mid.position, &mut fresh).unwrap()
+            pelvis_contacts(&collider, &law, &samples, &motion, mid.position_m, &mut fresh).unwrap()
         })
     });
 }

@@ -56,7 +56,7 @@ fn contact_pass(c: &mut Criterion) {
             step += 1;
             let phase = step as f64 * 5e-6 / 1e-3;
             let moved = BodyMotion {
-                pose: RigidPose::new(motion.pose.position + DVec3::new(0.0, 1e-3 * phase.sin(), 1e-3 * phase.cos()), DQuat::IDENTITY),
+                pose: RigidPose::new(motion.pose.position_m + DVec3::new(0.0, 1e-3 * phase.sin(), 1e-3 * phase.cos()), DQuat::IDENTITY),
                 ..motion
             };
             pelvis_contacts(&pelvis, &law, &samples, &moved, DVec3::ZERO, &mut anchors).unwrap()

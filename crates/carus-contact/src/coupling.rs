@@ -138,7 +138,7 @@ impl TissueContact {
             if except.get(i).copied().unwrap_or(false) {
                 continue;
             }
-            let local = pose.inverse_transform_point(x);
+            let local = pose.inverse_point(x);
             let kept = self.kept[i];
             if !kept && self.clearance.is_clear(i, local) {
                 continue;
@@ -149,7 +149,7 @@ impl TissueContact {
             if hit.signed_distance < 0.0 || kept {
                 self.held.push(HeldNode {
                     node: i as u32,
-                    target: pose.transform_point(hit.point),
+                    target: pose.point(hit.point),
                     normal: rotation * hit.normal,
                 });
             }
@@ -232,7 +232,7 @@ mod tests {
         // The sheet cuts the ball 3 cm below its centre: a disc of radius
         // sqrt(5^2 - 3^2) = 4 cm holds the nodes strictly inside.
         let inside: Vec<u32> = (0..nodes.len() as u32)
-            .filter(|&i| (nodes[i as usize] - pose.position).length() < 0.0495)
+            .filter(|&i| (nodes[i as usize] - pose.position_m).length() < 0.0495)
             .collect();
         let got: Vec<u32> = held.iter().map(|h| h.node).collect();
         for i in &inside {
@@ -240,10 +240,10 @@ mod tests {
         }
         for h in &held {
             // On the (faceted) sphere and along its outward normal.
-            let r = (h.target - pose.position).length();
+            let r = (h.target - pose.position_m).length();
             assert!((0.0485..=0.0501).contains(&r), "target radius {r}");
-            assert!(h.normal.dot(h.target - pose.position) > 0.0);
-            assert!((nodes[h.node as usize] - pose.position).length() < 0.0501);
+            assert!(h.normal.dot(h.target - pose.position_m) > 0.0);
+            assert!((nodes[h.node as usize] - pose.position_m).length() < 0.0501);
         }
     }
 
@@ -283,19 +283,19 @@ mod tests {
         let mut forces: Vec<DVec3> = held.iter().map(|h| -0.1 * h.normal).collect();
         forces[0] = 0.1 * held[0].normal;
         let pivot = DVec3::new(0.0, 0.02, 0.08);
-        let r = contact.reaction(&forces, pose.position, pivot).unwrap();
+        let r = contact.reaction(&forces, pose.position_m, pivot).unwrap();
         assert_eq!(r.released, 1);
         let expected: DVec3 = forces[1..].iter().sum();
         assert!((r.force - expected).length() < 1e-12);
         let moment: DVec3 = held[1..].iter().zip(&forces[1..]).map(|(h, f)| (h.target - pivot).cross(*f)).sum();
         assert!((r.moment_about_pivot - moment).length() < 1e-12);
         // The two moments differ by the transfer term (com - pivot) x F.
-        let transferred = r.torque_about_com + (pose.position - pivot).cross(r.force);
+        let transferred = r.torque_about_com + (pose.position_m - pivot).cross(r.force);
         assert!((r.moment_about_pivot - transferred).length() < 1e-12);
 
         // The body rises 2 mm: the nodes (left where they were put) now lie
         // just outside; the pushing ones are kept, the pulling one released.
-        let moved = RigidPose::new(pose.position + DVec3::new(0.0, 0.0, 0.002), DQuat::IDENTITY);
+        let moved = RigidPose::new(pose.position_m + DVec3::new(0.0, 0.0, 0.002), DQuat::IDENTITY);
         let positions: Vec<DVec3> = {
             let mut p = nodes.clone();
             for h in &held {
@@ -427,7 +427,7 @@ mod c2 {
                 // TLED holds a node with R = F(u): the node pushes the body with -F(u).
                 let on_body: Vec<DVec3> =
                     solver.internal_forces(&nodes).unwrap().into_iter().map(|f| -DVec3::from_array(f)).collect();
-                last = contact.reaction(&on_body, pose.position, pose.position).unwrap().force.z;
+                last = contact.reaction(&on_body, pose.position_m, pose.position_m).unwrap().force.z;
             }
             // The block pushes the sphere up; four quarters.
             forces.push(4.0 * last);

@@ -9,9 +9,10 @@ use serde::{Deserialize, Serialize};
 use crate::error::{check_non_negative, ContactError};
 use crate::rigid::{RigidBodyModel, RigidBodyState, Wrench};
 
-/// Stiffness and damping of the neck. Angles in degrees as the source gives them.
+/// Stiffness and damping of the neck. Angles in degrees as the source gives
+/// them. Also a scenario's `[neck]` table: a key left out keeps its default.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, default)]
 pub struct NeckStiffness {
     /// REFERENCE_DATA.md: flexion 0.01 N m per degree (Lapeer et al. 2019 / Sadulaev 2019).
     pub flexion_nm_per_deg: f64,
@@ -42,11 +43,9 @@ pub struct NeckStiffness {
     /// deg. No fetal or neonatal measurement was found; the children's
     /// mean is taken. Beyond it the neck stiffens (see
     /// `end_range_stiffness_nm_per_deg`): a physical limit, not a guide.
-    #[serde(default = "default_flexion_limit")]
     pub flexion_limit_deg: f64,
     /// End of the extension range, degrees from neutral. Lynch-Caris et
     /// al. 2008: extension 85 +- 14 deg (same cohort and caveat).
-    #[serde(default = "default_extension_limit")]
     pub extension_limit_deg: f64,
     /// Stiffness added beyond either limit, N m per degree. Numerical (the
     /// limit is what is cited; this only enforces it, like a contact
@@ -55,21 +54,9 @@ pub struct NeckStiffness {
     /// radius), carries the neck at most 7 degrees past the limit, and the
     /// head on that spring (I ~ 1.5e-3 kg m^2 about the pivot) turns at
     /// omega ~ 200 rad/s, omega dt = 0.2 at the 1 ms rigid step.
-    #[serde(default = "default_end_range_stiffness")]
     pub end_range_stiffness_nm_per_deg: f64,
 }
 
-fn default_flexion_limit() -> f64 {
-    66.0
-}
-
-fn default_extension_limit() -> f64 {
-    85.0
-}
-
-fn default_end_range_stiffness() -> f64 {
-    1.0
-}
 
 impl Default for NeckStiffness {
     fn default() -> Self {
@@ -83,9 +70,9 @@ impl Default for NeckStiffness {
             shear_n_per_m: 3361.8,
             rotational_damping_nm_s_per_rad: 0.034,
             linear_damping_n_s_per_m: 50.0,
-            flexion_limit_deg: default_flexion_limit(),
-            extension_limit_deg: default_extension_limit(),
-            end_range_stiffness_nm_per_deg: default_end_range_stiffness(),
+            flexion_limit_deg: 66.0,
+            extension_limit_deg: 85.0,
+            end_range_stiffness_nm_per_deg: 1.0,
         }
     }
 }
@@ -210,8 +197,8 @@ impl Neck {
             head,
             trunk,
             stiffness,
-            pivot_in_head: state.pose(head).inverse_transform_point(pivot),
-            pivot_in_trunk: state.pose(trunk).inverse_transform_point(pivot),
+            pivot_in_head: state.pose(head).inverse_point(pivot),
+            pivot_in_trunk: state.pose(trunk).inverse_point(pivot),
             axes: HeadAxes { occipitofrontal: o, vertex: v },
             neck_axis_in_trunk: qt.inverse() * axis,
             rest: (qt.inverse() * qh).normalize(),
@@ -250,8 +237,8 @@ impl Neck {
         let moment_on_head = elastic - s.rotational_damping_nm_s_per_rad * relative_spin;
 
         // Linear spring between the two bodies' copies of the pivot.
-        let on_head_point = state.pose(h).transform_point(self.pivot_in_head);
-        let on_trunk_point = state.pose(t).transform_point(self.pivot_in_trunk);
+        let on_head_point = state.pose(h).point(self.pivot_in_head);
+        let on_trunk_point = state.pose(t).point(self.pivot_in_trunk);
         let axis = qt * self.neck_axis_in_trunk;
         let gap = on_trunk_point - on_head_point;
         let compression = gap.dot(axis);

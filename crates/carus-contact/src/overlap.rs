@@ -18,7 +18,7 @@ pub fn overlapping_triangles(
     b: &TriangleCollider,
     b_pose: &RigidPose,
 ) -> Vec<[u32; 2]> {
-    let to_a = |p: DVec3| a_pose.inverse_transform_point(b_pose.transform_point(p));
+    let to_a = |p: DVec3| a_pose.inverse_point(b_pose.point(p));
     let mut pairs = Vec::new();
     for tb in 0..b.triangle_count() as u32 {
         let corners = b.corners(tb).map(to_a);
@@ -57,8 +57,8 @@ mod tests {
             for i in 0..ta.len() as u32 {
                 for j in 0..tb.len() as u32 {
                     // Both in world coordinates, independently of the BVH path.
-                    let wa = a.corners(i).map(|p| a_pose.transform_point(p));
-                    let wb = b.corners(j).map(|p| b_pose.transform_point(p));
+                    let wa = a.corners(i).map(|p| a_pose.point(p));
+                    let wb = b.corners(j).map(|p| b_pose.point(p));
                     if triangles_intersect(wa, wb) {
                         brute.push([i, j]);
                     }

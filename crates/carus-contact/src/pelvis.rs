@@ -250,7 +250,7 @@ pub fn pelvis_contacts(
             got: memory.anchors.len(),
         });
     }
-    let com = motion.pose.position;
+    let com = motion.pose.position_m;
     let band = pelvis.search_depth_m;
     let searched = band + pelvis.skin_m;
 
@@ -263,7 +263,7 @@ pub fn pelvis_contacts(
         // Queries are ~1 us: hand rayon chunks big enough to pay for a split.
         .with_min_len(128)
         .map(|i| {
-            let p = motion.pose.transform_point(samples.points[i]);
+            let p = motion.pose.point(samples.points[i]);
             if memory_in.clearance.is_clear(i, p) {
                 return (None, None, None);
             }
@@ -303,7 +303,7 @@ pub fn pelvis_contacts(
     for (i, (contact, anchor, query)) in results.into_iter().enumerate() {
         memory.anchors[i] = anchor;
         if let Some(found) = query {
-            let p = motion.pose.transform_point(samples.points[i]);
+            let p = motion.pose.point(samples.points[i]);
             memory.clearance.record(i, p, found.as_ref(), band, searched);
             // A skipped sample keeps its flag: having moved less than its
             // depth beyond the band, it is still that deep.
@@ -394,7 +394,7 @@ mod tests {
                     linear_velocity: self.state.linear_velocity[0],
                     angular_velocity: self.state.angular_velocity(&self.model, 0),
                 };
-                let report = pelvis_contacts(&self.pelvis, &self.law, &self.samples, &motion, motion.pose.position, &mut self.anchors).unwrap();
+                let report = pelvis_contacts(&self.pelvis, &self.law, &self.samples, &motion, motion.pose.position_m, &mut self.anchors).unwrap();
                 let ease = ((self.time + k as f64 * dt) / 0.1).min(1.0);
                 let weight = G * self.model.mass_kg[0] * ease * ease * (3.0 - 2.0 * ease);
                 let gravity = Wrench { force: DVec3::new(0.0, 0.0, -weight), torque: DVec3::ZERO };

@@ -17,37 +17,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{check_non_negative, ContactError};
 
-/// Position of the body's reference point and orientation (body to world).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct RigidPose {
-    pub position: DVec3,
-    pub orientation: DQuat,
-}
-
-impl RigidPose {
-    pub const IDENTITY: RigidPose = RigidPose { position: DVec3::ZERO, orientation: DQuat::IDENTITY };
-
-    pub fn new(position: DVec3, orientation: DQuat) -> Self {
-        RigidPose { position, orientation }
-    }
-
-    /// Body-frame point to world.
-    pub fn transform_point(&self, p: DVec3) -> DVec3 {
-        self.position + self.orientation * p
-    }
-
-    /// World point to body frame.
-    pub fn inverse_transform_point(&self, p: DVec3) -> DVec3 {
-        self.orientation.inverse() * (p - self.position)
-    }
-}
-
-impl Default for RigidPose {
-    /// The identity: body frame on the world frame.
-    fn default() -> Self {
-        RigidPose::IDENTITY
-    }
-}
+pub use carus_anatomy::pose::RigidPose;
 
 /// A force through the centre of mass and a torque, world frame.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
@@ -181,7 +151,7 @@ impl RigidBodyState {
             return Err(ContactError::LengthMismatch { what: "rigid body poses", expected: model.len(), got: poses.len() });
         }
         Ok(RigidBodyState {
-            position: poses.iter().map(|p| p.position).collect(),
+            position: poses.iter().map(|p| p.position_m).collect(),
             orientation: poses.iter().map(|p| p.orientation.normalize()).collect(),
             linear_velocity: vec![DVec3::ZERO; poses.len()],
             angular_momentum: vec![DVec3::ZERO; poses.len()],
@@ -189,7 +159,7 @@ impl RigidBodyState {
     }
 
     pub fn pose(&self, b: usize) -> RigidPose {
-        RigidPose { position: self.position[b], orientation: self.orientation[b] }
+        RigidPose { position_m: self.position[b], orientation: self.orientation[b] }
     }
 
     /// World angular velocity of body `b`, rad/s.

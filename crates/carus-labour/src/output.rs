@@ -86,7 +86,7 @@ pub fn write_surface_vtu(
     );
     s.push_str("<Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n");
     for v in vertices {
-        let p = pose.transform_point(*v);
+        let p = pose.point(*v);
         let _ = writeln!(s, "{} {} {}", p.x, p.y, p.z);
     }
     s.push_str("</DataArray></Points>\n<Cells><DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n");

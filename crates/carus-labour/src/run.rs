@@ -151,12 +151,12 @@ fn delivered(sim: &Simulation<'_>) -> bool {
     let outlet = scene.canal.outlet();
     let bodies = &sim.state.bodies;
     match &scene.trunk_geometry {
-        Some(g) => outlet.signed_distance(bodies.pose(TRUNK).transform_point(g.centre_m)) > 0.03,
+        Some(g) => outlet.signed_distance(bodies.pose(TRUNK).point(g.centre_m)) > 0.03,
         None => {
             outlet.signed_distance(
                 bodies
                     .pose(HEAD)
-                    .transform_point(scene.head_geometry.centre_m),
+                    .point(scene.head_geometry.centre_m),
             ) > 0.08
         }
     }

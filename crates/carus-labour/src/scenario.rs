@@ -227,71 +227,6 @@ impl Default for ContactSection {
     }
 }
 
-/// `[neck]`: the six-degree-of-freedom spring at the atlanto-occipital
-/// pivot. REFERENCE_DATA.md (Lapeer et al. 2019 / Sadulaev 2019).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct NeckSection {
-    pub flexion_nm_per_deg: f64,
-    pub extension_nm_per_deg: f64,
-    pub lateral_bending_nm_per_deg: f64,
-    pub axial_rotation_nm_per_deg: f64,
-    pub compression_n_per_m: f64,
-    pub tension_n_per_m: f64,
-    /// No source gives it; the stiffer axial value (docs/CONTACT.md).
-    pub shear_n_per_m: f64,
-    /// Numerical, about critical for the flexion mode (docs/CONTACT.md).
-    pub rotational_damping_nm_s_per_rad: f64,
-    /// Numerical, about critical for the head on the compression spring.
-    pub linear_damping_n_s_per_m: f64,
-    /// End of the flexion range from neutral: Lynch-Caris et al. 2008
-    /// (children 8-10; no neonatal figure found), docs/CONTACT.md.
-    pub flexion_limit_deg: f64,
-    /// End of the extension range from neutral: Lynch-Caris et al. 2008.
-    pub extension_limit_deg: f64,
-    /// Numerical stiffness beyond either limit (docs/CONTACT.md).
-    pub end_range_stiffness_nm_per_deg: f64,
-}
-
-impl Default for NeckSection {
-    fn default() -> Self {
-        let s = carus_contact::NeckStiffness::default();
-        NeckSection {
-            flexion_nm_per_deg: s.flexion_nm_per_deg,
-            extension_nm_per_deg: s.extension_nm_per_deg,
-            lateral_bending_nm_per_deg: s.lateral_bending_nm_per_deg,
-            axial_rotation_nm_per_deg: s.axial_rotation_nm_per_deg,
-            compression_n_per_m: s.compression_n_per_m,
-            tension_n_per_m: s.tension_n_per_m,
-            shear_n_per_m: s.shear_n_per_m,
-            rotational_damping_nm_s_per_rad: s.rotational_damping_nm_s_per_rad,
-            linear_damping_n_s_per_m: s.linear_damping_n_s_per_m,
-            flexion_limit_deg: s.flexion_limit_deg,
-            extension_limit_deg: s.extension_limit_deg,
-            end_range_stiffness_nm_per_deg: s.end_range_stiffness_nm_per_deg,
-        }
-    }
-}
-
-impl NeckSection {
-    pub fn stiffness(&self) -> carus_contact::NeckStiffness {
-        carus_contact::NeckStiffness {
-            flexion_nm_per_deg: self.flexion_nm_per_deg,
-            extension_nm_per_deg: self.extension_nm_per_deg,
-            lateral_bending_nm_per_deg: self.lateral_bending_nm_per_deg,
-            axial_rotation_nm_per_deg: self.axial_rotation_nm_per_deg,
-            compression_n_per_m: self.compression_n_per_m,
-            tension_n_per_m: self.tension_n_per_m,
-            shear_n_per_m: self.shear_n_per_m,
-            rotational_damping_nm_s_per_rad: self.rotational_damping_nm_s_per_rad,
-            linear_damping_n_s_per_m: self.linear_damping_n_s_per_m,
-            flexion_limit_deg: self.flexion_limit_deg,
-            extension_limit_deg: self.extension_limit_deg,
-            end_range_stiffness_nm_per_deg: self.end_range_stiffness_nm_per_deg,
-        }
-    }
-}
-
 /// `[fetus]`: mass and the resistance of the surroundings.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -446,7 +381,10 @@ pub struct Scenario {
     #[serde(default)]
     pub contact: ContactSection,
     #[serde(default)]
-    pub neck: NeckSection,
+    /// `[neck]`: the six-degree-of-freedom spring at the atlanto-occipital
+    /// pivot, REFERENCE_DATA.md (Lapeer et al. 2019 / Sadulaev 2019), with
+    /// its range of motion (Lynch-Caris et al. 2008); docs/CONTACT.md.
+    pub neck: carus_contact::NeckStiffness,
     #[serde(default)]
     pub fetus: FetusSection,
     #[serde(default)]

@@ -210,10 +210,7 @@ impl Scene {
         let mut position = DVec3::ZERO;
         for _ in 0..8 {
             position = axis.point(centre_sigma) - q_head * centre;
-            let pose = carus_analysis::RigidPose {
-                position_m: position,
-                orientation: q_head,
-            };
+            let pose = RigidPose::new(position, q_head);
             if let Some((_, sigma)) =
                 self.canal
                     .leading_point(&self.head_geometry.skull_points_m, &pose, centre_sigma)
@@ -224,7 +221,7 @@ impl Scene {
         let head = RigidPose::new(position, q_head);
         let mut poses = vec![head];
         if let Some(trunk) = &self.trunk {
-            let pivot = head.transform_point(self.pivot_in_head);
+            let pivot = head.point(self.pivot_in_head);
             // The trunk frame's origin is the pivot; its centre of mass sits at -frame_origin from it.
             poses.push(RigidPose::new(
                 pivot - q_trunk * trunk.frame_origin,
@@ -257,7 +254,7 @@ impl Scene {
 
     /// The pivot of the neck in the pelvis frame at the start.
     pub fn start_pivot(&self) -> DVec3 {
-        self.start[HEAD].transform_point(self.pivot_in_head)
+        self.start[HEAD].point(self.pivot_in_head)
     }
 }
 
@@ -450,7 +447,7 @@ mod tests {
         s.floor.enabled = false;
         let scene = Scene::build(&s).unwrap();
         // The start: on the axis above the inlet.
-        assert_eq!(scene.outside_canal(scene.start[HEAD].position), None);
+        assert_eq!(scene.outside_canal(scene.start[HEAD].position_m), None);
         // Along the axis at the spines and just above the outlet: inside.
         let axis = scene.canal.axis();
         for sigma in [

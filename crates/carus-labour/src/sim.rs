@@ -12,7 +12,7 @@
 use carus_analysis::{ContactSite, PoseSample};
 use carus_contact::{
     pelvis_contacts, BodyContactState, BodyMotion, ContactReport, Neck, NeckGeometry,
-    RigidBodyState, RigidPose, TissueContact, Wrench,
+    RigidBodyState, TissueContact, Wrench,
 };
 use carus_fem::{SolverSnapshot, StepControl, TledSolver};
 use glam::{DMat3, DVec3};
@@ -100,7 +100,7 @@ impl<'a> Simulation<'a> {
                     &scene.bodies,
                     &bodies,
                     geometry,
-                    scene.scenario.neck.stiffness(),
+                    scene.scenario.neck,
                 )?)
             }
             None => None,
@@ -309,7 +309,7 @@ impl<'a> Simulation<'a> {
         self.state
             .bodies
             .pose(HEAD)
-            .transform_point(self.scene.pivot_in_head)
+            .point(self.scene.pivot_in_head)
     }
 
     /// Drag force and torque that, added to `w`, give the backward-Euler
@@ -398,7 +398,7 @@ impl<'a> Simulation<'a> {
             .state
             .bodies
             .pose(HEAD)
-            .transform_point(scene.pivot_in_head);
+            .point(scene.pivot_in_head);
         for (b, (contact, ids)) in floor_state.contacts.iter_mut().zip(&held_by).enumerate() {
             let f = solver.internal_forces(ids)?;
             let on_body: Vec<DVec3> = f.iter().map(|v| -DVec3::from_array(*v)).collect();
@@ -441,13 +441,7 @@ impl<'a> Simulation<'a> {
 
     fn record(&mut self, forces: &StepForces) {
         let s = &self.state.bodies;
-        let pose = |b: usize| {
-            let p: RigidPose = s.pose(b);
-            carus_analysis::RigidPose {
-                position_m: p.position,
-                orientation: p.orientation,
-            }
-        };
+        let pose = |b: usize| s.pose(b);
         self.state.samples.push(PoseSample {
             time_s: self.time_s(),
             head: pose(HEAD),

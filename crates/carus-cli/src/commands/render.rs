@@ -457,14 +457,14 @@ fn scene_meshes(scene: &LabourScene) -> Vec<RenderMesh> {
     let mut meshes = vec![surface_mesh(
         "fetal head",
         &scene.head.surface,
-        |v| head_pose.transform_point(v),
+        |v| head_pose.point(v),
         HEAD_RGB,
     )];
     if let (Some(trunk), Some(pose)) = (&scene.trunk, scene.start.get(TRUNK)) {
         meshes.push(surface_mesh(
             "fetal trunk",
             &trunk.surface,
-            |v| pose.transform_point(v),
+            |v| pose.point(v),
             TRUNK_RGB,
         ));
     }
