@@ -855,25 +855,30 @@ mod tests {
         }
     }
 
+    /// Internal forces of every node of `mesh` held at displacement `u`.
+    fn internal_forces_at(mesh: &Mesh, options: ModelOptions, u: &[[f64; 3]]) -> Vec<[f64; 3]> {
+        let all: Vec<u32> = (0..mesh.node_count() as u32).collect();
+        let m = model(mesh, options);
+        let mut s =
+            TledSolver::new(m, &BoundaryConditions::default(), 1e-4, StepControl::Refuse).unwrap();
+        set_displacement(&mut s, u);
+        s.update_internal_forces().unwrap();
+        s.internal_forces(&all).unwrap()
+    }
+
     #[test]
     fn f32_forces_match_f64() {
         let mesh = box_h8([0.1, 0.1, 0.1], [3, 3, 3]);
         let u = wavy(&mesh, 0.01);
-        let all: Vec<u32> = (0..mesh.node_count() as u32).collect();
         let forces = |precision| {
-            let m = model(
+            internal_forces_at(
                 &mesh,
                 ModelOptions {
                     precision,
                     ..ModelOptions::default()
                 },
-            );
-            let mut s =
-                TledSolver::new(m, &BoundaryConditions::default(), 1e-4, StepControl::Refuse)
-                    .unwrap();
-            set_displacement(&mut s, &u);
-            s.update_internal_forces().unwrap();
-            s.internal_forces(&all).unwrap()
+                &u,
+            )
         };
         let (a, b) = (forces(Precision::F64), forces(Precision::F32));
         let scale = a.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
@@ -892,21 +897,15 @@ mod tests {
             .iter()
             .map(|p| [0.05 * p[0] + 0.02 * p[1], -0.03 * p[1], 0.04 * p[2]])
             .collect();
-        let all: Vec<u32> = (0..mesh.node_count() as u32).collect();
         let forces = |tet_formulation| {
-            let m = model(
+            internal_forces_at(
                 &mesh,
                 ModelOptions {
                     tet_formulation,
                     ..ModelOptions::default()
                 },
-            );
-            let mut s =
-                TledSolver::new(m, &BoundaryConditions::default(), 1e-4, StepControl::Refuse)
-                    .unwrap();
-            set_displacement(&mut s, &u);
-            s.update_internal_forces().unwrap();
-            s.internal_forces(&all).unwrap()
+                &u,
+            )
         };
         let (a, b) = (forces(TetFormulation::T4), forces(TetFormulation::T4Anp));
         for (x, y) in a.iter().flatten().zip(b.iter().flatten()) {

@@ -9,11 +9,10 @@
 use std::time::Instant;
 
 use anyhow::{bail, Context};
-use carus_fem::baseline::{BaselineParameters, BaselineSolver, NodeConstraint};
 use carus_fem::gpu::{bench_tled, AdapterChoice, DeviceError, GpuDevice, GpuError};
-use carus_fem::validation::cube::{CubeElement, CubeSetup, CubeVariant, DAMPING_PER_S, HOURGLASS_COEFFICIENT, RAMP_S};
-use carus_fem::validation::{CUBE_BULK_MODULUS_PA, CUBE_DENSITY_KG_M3, CUBE_SHEAR_MODULUS_PA};
-use carus_fem::{ElementKind, LoadShape, Material, MaterialRegion, Precision, StepControl, TledModel, TledSolver};
+use carus_fem::validation::cube::{baseline_solver, CubeElement, CubeSetup, CubeVariant, RAMP_S};
+use carus_fem::validation::tissue_model;
+use carus_fem::{ElementKind, LoadShape, Precision, StepControl, TledSolver};
 use serde::Serialize;
 
 use super::{print_json, Status};
@@ -199,12 +198,7 @@ fn cpu_bench(args: &TledBenchArgs, kind: ElementKind, steps: u64) -> anyhow::Res
     };
     let setup = CubeSetup { precision, ..CubeSetup::miller(args.n, element, CubeVariant::FreeLateral) };
     let mesh = setup.mesh();
-    let region = MaterialRegion {
-        element_set: None,
-        material: Material::neo_hookean(CUBE_SHEAR_MODULUS_PA, CUBE_BULK_MODULUS_PA),
-        density_kg_m3: CUBE_DENSITY_KG_M3,
-    };
-    let model = std::sync::Arc::new(TledModel::new(&mesh, &[region], &setup.options())?);
+    let model = tissue_model(&mesh, &setup.options())?;
     let dt = model.critical_time_step();
     let model_bytes_per_element = model.memory_bytes() as f64 / model.element_count() as f64;
     let bcs = setup.boundary_conditions(&mesh);
@@ -222,24 +216,7 @@ fn cpu_bench(args: &TledBenchArgs, kind: ElementKind, steps: u64) -> anyhow::Res
     drop(solver);
 
     eprintln!("timing the single-threaded baseline: {steps} steps ...");
-    let mut constraints = Vec::new();
-    for node in &mesh.node_sets["x0"] {
-        constraints.push(NodeConstraint { node: *node, displacement_m: [Some(0.0); 3] });
-    }
-    for imposed in &bcs.displacements {
-        for node in &imposed.nodes {
-            constraints.push(NodeConstraint { node: *node, displacement_m: imposed.components });
-        }
-    }
-    let params = BaselineParameters {
-        shear_modulus_pa: CUBE_SHEAR_MODULUS_PA,
-        bulk_modulus_pa: CUBE_BULK_MODULUS_PA,
-        density_kg_m3: CUBE_DENSITY_KG_M3,
-        hourglass_coefficient: HOURGLASS_COEFFICIENT,
-        damping_per_s: DAMPING_PER_S,
-        dt_s: dt,
-    };
-    let mut baseline = BaselineSolver::new(&mesh, params, constraints)?;
+    let mut baseline = baseline_solver(&setup, &mesh, dt)?;
     let shape = LoadShape::RampHold { ramp_s: RAMP_S };
     baseline.step(shape.value(dt))?;
     let start = Instant::now();

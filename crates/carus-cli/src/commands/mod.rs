@@ -17,6 +17,16 @@ pub enum Status {
     Failed,
 }
 
+/// The progress bar of long commands: permille done, elapsed, time left.
+pub fn progress_bar() -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(1000);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {msg}, about {eta} left")
+            .expect("valid template"),
+    );
+    bar
+}
+
 /// Prints `value` as one JSON object on standard output (CONVENTIONS.md:
 /// with `--json`, nothing else goes to standard output).
 pub fn print_json<T: serde::Serialize>(value: &T) -> anyhow::Result<()> {

@@ -62,16 +62,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
         stop_at_s: None,
     };
     let show = !args.quiet && std::io::stderr().is_terminal();
-    let bar = show.then(|| {
-        let bar = indicatif::ProgressBar::new(1000);
-        bar.set_style(
-            indicatif::ProgressStyle::with_template(
-                "{spinner} [{elapsed_precise}] {wide_bar} {msg}, about {eta} left",
-            )
-            .expect("valid template"),
-        );
-        bar
-    });
+    let bar = show.then(super::progress_bar);
     let mut observer = Bar(bar);
 
     let (out_dir, record) = match &args.resume {

@@ -34,16 +34,7 @@ pub fn run(args: &SolveArgs) -> anyhow::Result<Status> {
     if !args.quiet {
         eprintln!("solving {} into {}", args.job.display(), args.out.display());
     }
-    let bar = show.then(|| {
-        let bar = indicatif::ProgressBar::new(1000);
-        bar.set_style(
-            indicatif::ProgressStyle::with_template(
-                "{spinner} [{elapsed_precise}] {wide_bar} {msg}, about {eta} left",
-            )
-            .expect("valid template"),
-        );
-        bar
-    });
+    let bar = show.then(super::progress_bar);
     let mut progress = |p: &Progress| {
         if let Some(bar) = &bar {
             bar.set_length((p.end_time_s * 1e6) as u64);

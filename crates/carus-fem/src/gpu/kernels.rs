@@ -137,6 +137,17 @@ impl Kernels {
                         ),
                     })
             };
+            // The element and node kernels bind the same arrays 2-9 and write the last two.
+            let step_bindings = [
+                (2, Read),
+                (3, Read),
+                (4, Read),
+                (5, Read),
+                (6, Read),
+                (7, Read),
+                (8, ReadWrite),
+                (9, ReadWrite),
+            ];
             let element = module("element.wgsl", ELEMENT);
             let node = module("node.wgsl", NODE);
             let boundary = module("boundary.wgsl", BOUNDARY);
@@ -171,16 +182,7 @@ impl Kernels {
                     gpu,
                     &element,
                     "element_forces",
-                    &[
-                        (2, Read),
-                        (3, Read),
-                        (4, Read),
-                        (5, Read),
-                        (6, Read),
-                        (7, Read),
-                        (8, ReadWrite),
-                        (9, ReadWrite),
-                    ],
+                    &step_bindings,
                 ),
                 volume_shares,
                 nodal_dilatation,
@@ -188,16 +190,7 @@ impl Kernels {
                     gpu,
                     &node,
                     "advance_nodes",
-                    &[
-                        (2, Read),
-                        (3, Read),
-                        (4, Read),
-                        (5, Read),
-                        (6, Read),
-                        (7, Read),
-                        (8, ReadWrite),
-                        (9, ReadWrite),
-                    ],
+                    &step_bindings,
                 ),
                 pressure: kernel(
                     gpu,

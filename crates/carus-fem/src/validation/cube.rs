@@ -294,6 +294,21 @@ pub fn run_cube(setup: &CubeSetup) -> Result<CubeRun, ValidationError> {
 /// displacements at t = 10 s and the fixed-face reaction.
 pub fn run_baseline_cube(setup: &CubeSetup, substeps_per_step: u32) -> Result<(Vec<[f64; 3]>, [f64; 3]), ValidationError> {
     setup.check()?;
+    let mesh = setup.mesh();
+    let dt_s = setup.dt_s() / substeps_per_step.max(1) as f64;
+    let mut solver = baseline_solver(setup, &mesh, dt_s)?;
+    let shape = LoadShape::RampHold { ramp_s: RAMP_S };
+    for step in 1..=setup.steps() * substeps_per_step.max(1) as u64 {
+        solver.step(shape.value(step as f64 * dt_s))?;
+    }
+    let reaction = solver.reaction_force(&mesh.node_sets["x0"])?;
+    Ok((solver.displacements().to_vec(), reaction))
+}
+
+/// The baseline TLED on the cube of `setup` (its supports, its loaded face,
+/// the V3 tissue) with time step `dt_s`: the yardstick of V3 and of
+/// `carus bench tled`.
+pub fn baseline_solver(setup: &CubeSetup, mesh: &Mesh, dt_s: f64) -> Result<BaselineSolver, ValidationError> {
     if setup.element == CubeElement::T4anp {
         return Err(ValidationError::InvalidSetting("the baseline solver has no T4ANP element".into()));
     }
@@ -302,8 +317,7 @@ pub fn run_baseline_cube(setup: &CubeSetup, substeps_per_step: u32) -> Result<(V
             "the baseline solver implements NiftySim's hourglass scaling (dilatational) only".into(),
         ));
     }
-    let mesh = setup.mesh();
-    let bcs = setup.boundary_conditions(&mesh);
+    let bcs = setup.boundary_conditions(mesh);
     let mut constraints = Vec::new();
     for fixed in &bcs.fixed {
         for node in &fixed.nodes {
@@ -321,15 +335,9 @@ pub fn run_baseline_cube(setup: &CubeSetup, substeps_per_step: u32) -> Result<(V
         density_kg_m3: CUBE_DENSITY_KG_M3,
         hourglass_coefficient: setup.hourglass_coefficient,
         damping_per_s: DAMPING_PER_S,
-        dt_s: setup.dt_s() / substeps_per_step.max(1) as f64,
+        dt_s,
     };
-    let mut solver = BaselineSolver::new(&mesh, params, constraints)?;
-    let shape = LoadShape::RampHold { ramp_s: RAMP_S };
-    for step in 1..=setup.steps() * substeps_per_step.max(1) as u64 {
-        solver.step(shape.value(step as f64 * params.dt_s))?;
-    }
-    let reaction = solver.reaction_force(&mesh.node_sets["x0"])?;
-    Ok((solver.displacements().to_vec(), reaction))
+    Ok(BaselineSolver::new(mesh, params, constraints)?)
 }
 
 /// Agreement of a run with the baseline TLED.

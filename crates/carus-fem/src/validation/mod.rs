@@ -61,7 +61,7 @@ pub const CUBE_DENSITY_KG_M3: f64 = 1000.0;
 pub const CUBE_EDGE_M: f64 = 0.1;
 
 /// A model of one neo-Hookean material with the V3 tissue parameters.
-pub(crate) fn tissue_model(mesh: &Mesh, options: &ModelOptions) -> Result<Arc<TledModel>, FemError> {
+pub fn tissue_model(mesh: &Mesh, options: &ModelOptions) -> Result<Arc<TledModel>, FemError> {
     let region = MaterialRegion {
         element_set: None,
         material: Material::neo_hookean(CUBE_SHEAR_MODULUS_PA, CUBE_BULK_MODULUS_PA),
