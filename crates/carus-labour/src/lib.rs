@@ -6,11 +6,13 @@
 //! - [`scene`]: the constant scene built from a scenario (anatomy, bodies, floor, start);
 //! - [`expulsion`]: the expulsion force generator;
 //! - [`sim`]: the mutable state and the step pipeline;
+//! - [`loads`]: the contact loads per site and the moments they cause;
 //! - [`record`]: the run record (everything a report needs);
 //! - [`output`]: the files of a run (the only module that writes);
 //! - [`run`]: the driver: progress, stop flag, checkpoints, resume.
 
 pub mod expulsion;
+pub mod loads;
 pub mod output;
 pub mod record;
 pub mod run;

@@ -12,6 +12,7 @@ use carus_io::{CsvWriter, FrameFields, PvdCollection};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
+use crate::loads::LoadSample;
 use crate::sim::{FloorSample, SimState};
 use crate::LabourError;
 
@@ -19,6 +20,7 @@ pub const SCENARIO_FILE: &str = "scenario.toml";
 pub const CHECKPOINT_FILE: &str = "checkpoint.json";
 pub const HISTORY_JSON: &str = "pose_history.json";
 pub const HISTORY_CSV: &str = "pose_history.csv";
+pub const CONTACTS_CSV: &str = "contacts.csv";
 pub const MOVEMENTS_FILE: &str = "movements.json";
 pub const RUN_FILE: &str = "run.json";
 pub const PELVIS_VTU: &str = "pelvis.vtu";
@@ -137,12 +139,14 @@ pub fn frame_name(stem: &str, k: usize) -> String {
 }
 
 /// The pose history as CSV: the detector's series (station, theta, phi,
-/// forces...) beside the head and trunk poses in the pelvis frame.
+/// forces...) beside the head and trunk poses in the pelvis frame, and the
+/// moments that spin the head about the pelvic axis.
 pub fn write_history_csv(
     path: &Path,
     history: &PoseHistory,
     report: Option<&DetectorReport>,
     floor: &[FloorSample],
+    loads: &[LoadSample],
 ) -> Result<(), LabourError> {
     let (series_columns, rows) = match report {
         Some(r) => r.series.table(),
@@ -181,6 +185,9 @@ pub fn write_history_csv(
         "floor_fy_n",
         "floor_fz_n",
         "floor_peak_stretch",
+        "head_axial_moment_bone_nm",
+        "head_axial_moment_floor_nm",
+        "head_axial_moment_neck_nm",
     ];
     header.extend_from_slice(&poses);
     let mut csv = CsvWriter::create(path, &header).map_err(|e| output_error(path, e))?;
@@ -216,7 +223,42 @@ pub fn write_history_csv(
             values.extend(f.to_array());
         }
         values.push(floor.get(k).map_or(f64::NAN, |f| f.peak_stretch));
+        match loads.get(k) {
+            Some(l) => values.extend([
+                l.head_axial.bone_nm,
+                l.head_axial.floor_nm,
+                l.head_axial.neck_nm,
+            ]),
+            None => values.extend([f64::NAN; 3]),
+        }
         csv.row(&values).map_err(|e| output_error(path, e))?;
     }
     csv.flush().map_err(|e| output_error(path, e))
+}
+
+/// The contact loads as CSV, one row per recorded instant, body and site
+/// that carried load: force, its friction part, and its moment about the
+/// atlanto-occipital pivot, in the pelvis frame.
+pub fn write_contacts_csv(path: &Path, loads: &[LoadSample]) -> Result<(), LabourError> {
+    let mut text = String::from(
+        "time_s,body,site,points,fx_n,fy_n,fz_n,friction_fx_n,friction_fy_n,friction_fz_n,\
+         moment_x_nm,moment_y_nm,moment_z_nm\n",
+    );
+    for sample in loads {
+        for l in &sample.sites {
+            let _ = write!(
+                text,
+                "{},{},{},{}",
+                sample.time_s,
+                l.body.name(),
+                l.site.name(),
+                l.points
+            );
+            for v in [l.force_n, l.friction_force_n, l.moment_about_pivot_nm] {
+                let _ = write!(text, ",{},{},{}", v.x, v.y, v.z);
+            }
+            text.push('\n');
+        }
+    }
+    write_text(path, &text)
 }

@@ -3,6 +3,7 @@
 use carus_analysis::{DetectorReport, Outcome, PoseHistory, RigidPose};
 use serde::{Deserialize, Serialize};
 
+use crate::loads::LoadSample;
 use crate::scenario::Scenario;
 use crate::sim::FloorSample;
 
@@ -52,6 +53,10 @@ pub struct RunRecord {
     pub detector: Option<DetectorReport>,
     /// Peak stretch and stress of the pelvic floor over time.
     pub floor: Vec<FloorSample>,
+    /// Contact loads per body and site, and the moments spinning the head
+    /// about the pelvic axis, at the pose samples' instants.
+    #[serde(default)]
+    pub loads: Vec<LoadSample>,
     pub key_moments: Vec<KeyMoment>,
     /// Files of the run, relative to the out dir: surfaces and series.
     pub files: Files,
@@ -63,6 +68,9 @@ pub struct Files {
     pub scenario: String,
     pub pose_history_json: String,
     pub pose_history_csv: String,
+    /// Contact loads per body and site (crate::output::write_contacts_csv).
+    #[serde(default)]
+    pub contacts_csv: String,
     pub movements: String,
     pub pelvis_vtu: String,
     /// Head and trunk surfaces in their body frames (place with the poses).

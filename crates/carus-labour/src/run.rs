@@ -277,7 +277,9 @@ fn finish(
         &history,
         report.as_ref(),
         &sim.state.floor_samples,
+        &sim.state.loads,
     )?;
+    output::write_contacts_csv(&out_dir.join(output::CONTACTS_CSV), &sim.state.loads)?;
     let vtu = scene.scenario.output.vtu && !frame_times.is_empty();
     let pvd = |stem: &str| {
         if vtu {
@@ -328,10 +330,12 @@ fn finish(
         history,
         detector: report,
         floor: sim.state.floor_samples.clone(),
+        loads: sim.state.loads.clone(),
         files: Files {
             scenario: output::SCENARIO_FILE.into(),
             pose_history_json: output::HISTORY_JSON.into(),
             pose_history_csv: output::HISTORY_CSV.into(),
+            contacts_csv: output::CONTACTS_CSV.into(),
             movements: output::MOVEMENTS_FILE.into(),
             pelvis_vtu: output::PELVIS_VTU.into(),
             head_body_vtu: output::HEAD_BODY_VTU.into(),
@@ -349,7 +353,9 @@ fn finish(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::loads::Body;
     use crate::scenario::Scenario;
+    use glam::{DQuat, DVec3};
 
     /// The normal scenario made coarse for tests: a coarser head, sparser
     /// contact samples, a small floor mesh, a 1 ms step, 2.4 s simulated
@@ -381,6 +387,7 @@ mod tests {
         assert!(a.summary.completed && a.summary.failure.is_none());
         assert_eq!(a.history, b.history, "two runs of one scenario differ");
         assert_eq!(a.floor, b.floor);
+        assert_eq!(a.loads, b.loads);
         // It moved: the head descended under the expulsion force.
         let series = &a.detector.as_ref().unwrap().series;
         assert!(
@@ -393,10 +400,62 @@ mod tests {
             output::MOVEMENTS_FILE,
             output::HISTORY_CSV,
             output::HISTORY_JSON,
+            output::CONTACTS_CSV,
             output::CHECKPOINT_FILE,
         ] {
             assert!(dir.path().join(file).exists(), "{file} missing");
         }
+    }
+
+    /// The head started low in the canal under a steady push: the loads
+    /// per site add up to the recorded totals, and contacts.csv lists them.
+    #[test]
+    fn the_loads_per_site_add_up_to_the_recorded_contact_forces() {
+        let mut s = coarse(1.0);
+        s.start.station_mm = 45.0;
+        s.expulsion.force_min_n = 120.0;
+        let (dir, record) = run_in(&s, &RunOptions::default());
+        assert_eq!(record.loads.len(), record.history.samples.len());
+        let mut touched = 0;
+        for (l, p) in record.loads.iter().zip(&record.history.samples) {
+            assert_eq!(l.time_s, p.time_s);
+            let total: DVec3 = l.sites.iter().map(|x| x.force_n).sum();
+            let recorded = p.bone_contact_force_n + p.floor_contact_force_n;
+            assert!(
+                (total - recorded).length() <= 1e-9 * (1.0 + recorded.length()),
+                "t = {}: sites {total} against recorded {recorded}",
+                l.time_s
+            );
+            touched += usize::from(l.sites.iter().any(|x| x.body == Body::Head && x.points > 0));
+        }
+        assert!(touched > 0, "the head never touched the pelvis or the floor");
+        let csv = std::fs::read_to_string(dir.path().join(output::CONTACTS_CSV)).unwrap();
+        let rows = record.loads.iter().map(|l| l.sites.len()).sum::<usize>();
+        assert_eq!(csv.lines().count(), rows + 1);
+        assert!(csv.starts_with("time_s,body,site,points,fx_n"));
+        assert!(csv.lines().skip(1).all(|r| r.split(',').count() == 13));
+    }
+
+    /// A positive axial moment turns the head the way theta grows: a small
+    /// rotation of the start pose about `down_the_canal` raises theta.
+    #[test]
+    fn a_positive_axial_moment_turns_theta_up() {
+        let scene = Scene::build(&coarse(1.0)).unwrap();
+        let mut history = PoseHistory {
+            head: scene.head_geometry.clone(),
+            trunk: scene.trunk_geometry.clone(),
+            canal: scene.canal.clone(),
+            samples: Vec::new(),
+        };
+        let sim = crate::sim::Simulation::new(&scene).unwrap();
+        let first = sim.state.samples[0];
+        let down = crate::loads::down_the_canal(scene.canal.axis(), first.head.position_m);
+        let mut turned = first;
+        turned.time_s = 0.1;
+        turned.head.orientation = DQuat::from_axis_angle(down, 5f64.to_radians()) * first.head.orientation;
+        history.samples = vec![first, turned];
+        let theta = carus_analysis::Series::from_history(&history).theta_deg;
+        assert!((theta[1] - theta[0] - 5.0).abs() < 0.5, "theta {theta:?}");
     }
 
     #[test]
@@ -446,6 +505,7 @@ mod tests {
         let resumed = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).unwrap();
         assert!(resumed.summary.completed);
         assert_eq!(resumed.history, whole.history);
+        assert_eq!(resumed.loads, whole.loads);
         assert_eq!(resumed.floor, whole.floor);
         assert_eq!(resumed.detector, whole.detector);
         assert!(resumed.detector.is_some());

@@ -1,7 +1,8 @@
 //! The forward simulation: the mutable state of a run and the step
 //! pipeline, a short sequence of named stages:
 //! expulsion -> pelvis contacts (head, trunk) -> neck -> floor reaction ->
-//! passive resistance -> rigid integration -> floor coupling -> record.
+//! passive resistance -> rigid integration -> floor coupling -> record
+//! (poses, and at the same instants the loads per site, crate::loads).
 //!
 //! Nothing here reads a way-point, a target rotation or any term that knows
 //! the expected outcome (CARDINAL_MOVEMENTS.md, "What the forward mode may
@@ -19,6 +20,7 @@ use glam::{DMat3, DVec3};
 use serde::{Deserialize, Serialize};
 
 use crate::expulsion::Expulsion;
+use crate::loads::{self, AxialMoments, Body, LoadSample, SiteLoad};
 use crate::scene::{Scene, HEAD, TRUNK};
 use crate::LabourError;
 
@@ -55,6 +57,9 @@ pub struct SimState {
     /// Pose history samples so far.
     pub samples: Vec<PoseSample>,
     pub floor_samples: Vec<FloorSample>,
+    /// The contact loads at the same instants as `samples`.
+    #[serde(default)]
+    pub loads: Vec<LoadSample>,
 }
 
 /// The running simulation: the scene, the state, and the live TLED solver
@@ -77,6 +82,9 @@ struct StepForces {
     bone: DVec3,
     floor: DVec3,
     dominant: Option<ContactSite>,
+    /// Per site, on recorded steps only.
+    sites: Vec<SiteLoad>,
+    head_axial: AxialMoments,
 }
 
 impl<'a> Simulation<'a> {
@@ -138,6 +146,7 @@ impl<'a> Simulation<'a> {
             floor_wrench: vec![Wrench::default(); body_count],
             samples: Vec::new(),
             floor_samples: Vec::new(),
+            loads: Vec::new(),
         };
         let mut sim = Simulation::from_state(scene, state)?;
         sim.record(&StepForces {
@@ -145,6 +154,8 @@ impl<'a> Simulation<'a> {
             bone: DVec3::ZERO,
             floor: DVec3::ZERO,
             dominant: None,
+            sites: Vec::new(),
+            head_axial: AxialMoments::default(),
         });
         Ok(sim)
     }
@@ -268,18 +279,22 @@ impl<'a> Simulation<'a> {
         }
 
         // The neck.
-        if let Some(neck) = &self.state.neck {
+        let neck_on_head = self.state.neck.as_ref().map(|neck| {
             let load = neck.load(&scene.bodies, &self.state.bodies);
             wrenches[neck.head] += load.on_head;
             wrenches[neck.trunk] += load.on_trunk;
-        }
+            load.on_head
+        });
 
         // The floor's reaction from the last coupling.
         for (w, f) in wrenches.iter_mut().zip(&self.state.floor_wrench) {
             *w += *f;
         }
 
-        let forces = self.classify(expulsion, &reports);
+        let mut forces = self.classify(expulsion, &reports);
+        if (self.state.step + 1) % self.sample_every == 0 {
+            self.site_loads(&mut forces, &reports, neck_on_head.unwrap_or_default(), pivot);
+        }
 
         // Passive resistance of the surroundings, implicit so that it is
         // stable at any step (it only damps).
@@ -436,7 +451,42 @@ impl<'a> Simulation<'a> {
             bone,
             floor,
             dominant,
+            sites: Vec::new(),
+            head_axial: AxialMoments::default(),
         }
+    }
+
+    /// The loads per body and site, and the moments that spin the head
+    /// about the pelvic axis (what turns theta).
+    fn site_loads(
+        &self,
+        forces: &mut StepForces,
+        reports: &[ContactReport],
+        neck_on_head: Wrench,
+        pivot: DVec3,
+    ) {
+        let scene = self.scene;
+        let s = &self.state;
+        for (b, report) in reports.iter().enumerate() {
+            let body = if b == HEAD { Body::Head } else { Body::Trunk };
+            forces
+                .sites
+                .extend(loads::bone_loads(body, report, &scene.sites, pivot));
+            let held = s.floor.as_ref().map_or(0, |f| f.contacts[b].held().len());
+            forces.sites.extend(loads::floor_load(
+                body,
+                &s.floor_wrench[b],
+                held,
+                s.bodies.position[b],
+                pivot,
+            ));
+        }
+        let down = loads::down_the_canal(scene.canal.axis(), s.bodies.position[HEAD]);
+        forces.head_axial = AxialMoments {
+            bone_nm: reports[HEAD].torque_about_com.dot(down),
+            floor_nm: s.floor_wrench[HEAD].torque.dot(down),
+            neck_nm: neck_on_head.torque.dot(down),
+        };
     }
 
     fn record(&mut self, forces: &StepForces) {
@@ -450,6 +500,11 @@ impl<'a> Simulation<'a> {
             bone_contact_force_n: forces.bone,
             floor_contact_force_n: forces.floor,
             dominant_contact: forces.dominant,
+        });
+        self.state.loads.push(LoadSample {
+            time_s: self.time_s(),
+            sites: forces.sites.clone(),
+            head_axial: forces.head_axial,
         });
         if let (Some(solver), Some(floor)) = (&self.solver, &self.state.floor) {
             let fields = solver.element_fields();

@@ -104,6 +104,7 @@ impl Demo {
             history: &self.history,
             detector: &self.detector,
             floor_peak_stretch: Vec::new(),
+            head_axial_moments: Vec::new(),
             scene: Some(ReportScene {
                 pelvis: Some(self.pelvis.surface.clone()),
                 head: self.fetus.head.surface.clone(),

@@ -26,8 +26,24 @@ pub struct ReportInput<'a> {
     /// Peak principal stretch of the pelvic floor over time, `(time_s, stretch)`;
     /// empty when the run had no floor.
     pub floor_peak_stretch: Vec<(f64, f64)>,
+    /// What spun the head about the pelvic axis over time; empty when the
+    /// history does not know (an imposed trajectory has no forces).
+    pub head_axial_moments: Vec<AxialMomentSample>,
     /// The meshes for the pictures of the key moments; `None`: no pictures.
     pub scene: Option<ReportScene>,
+}
+
+/// Moments on the head about the pelvic axis at one instant, N m: the
+/// component along the axis (pointing down the canal at the head) of each
+/// source's moment about the head's centre of mass. Positive turns theta up
+/// (from LOT at -90 towards OA at 0).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct AxialMomentSample {
+    pub time_s: f64,
+    /// Contact with the bony pelvis, friction included.
+    pub bone_nm: f64,
+    pub floor_nm: f64,
+    pub neck_nm: f64,
 }
 
 /// Figures of the run (not of the labour).

@@ -8,7 +8,7 @@ use carus_analysis::{ArrestStage, DetectorReport, Outcome};
 use plotters::style::RGBColor;
 
 use crate::error::ReportError;
-use crate::input::ReportInput;
+use crate::input::{AxialMomentSample, ReportInput};
 use crate::moments::{KeyMoment, MissedMoment};
 use crate::movements::{css, shown, size_text, Shown};
 use crate::pictures::{MomentPictures, PICTURE_SIZE};
@@ -390,6 +390,7 @@ fn plots_section(
         );
     }
     floor_plot(w, input, &bands, &marks, time_range)?;
+    axial_moment_plot(w, input, &bands, &marks, time_range)?;
     let _ = writeln!(w, "</div></section>");
     Ok(())
 }
@@ -444,6 +445,77 @@ fn floor_plot(
         let _ = write!(w, "<p class=\"legend\">Greatest: {s:.3} at {t:.1} s.</p>");
     }
     let _ = write!(w, "</figure>");
+    Ok(())
+}
+
+/// What spun the head about the pelvic axis: bone, floor and neck, the
+/// causes a reader checks when internal rotation does or does not happen.
+fn axial_moment_plot(
+    w: &mut String,
+    input: &ReportInput,
+    bands: &[Band],
+    marks: &[Mark],
+    time_range: (f64, f64),
+) -> Result<(), ReportError> {
+    let m = &input.head_axial_moments;
+    if m.is_empty() {
+        return Ok(());
+    }
+    let column = |f: fn(&AxialMomentSample) -> f64| m.iter().map(f).collect::<Vec<f64>>();
+    let (time_s, bone, floor, neck) = (
+        column(|s| s.time_s),
+        column(|s| s.bone_nm),
+        column(|s| s.floor_nm),
+        column(|s| s.neck_nm),
+    );
+    if let Some(&bad) = [&time_s, &bone, &floor, &neck]
+        .iter()
+        .flat_map(|c| c.iter())
+        .find(|v| !v.is_finite())
+    {
+        return Err(ReportError::NotFinite {
+            what: "head_axial_moments",
+            value: bad,
+        });
+    }
+    let (bone_colour, floor_colour, neck_colour) = (
+        RGBColor(200, 82, 0),
+        RGBColor(68, 1, 84),
+        RGBColor(31, 87, 153),
+    );
+    let spec = PlotSpec {
+        id: "axial-moments",
+        y_label: "moment (N m)",
+        time_s: &time_s,
+        curves: vec![
+            Curve {
+                values: &bone,
+                colour: bone_colour,
+            },
+            Curve {
+                values: &floor,
+                colour: floor_colour,
+            },
+            Curve {
+                values: &neck,
+                colour: neck_colour,
+            },
+        ],
+        references: vec![0.0],
+        bands,
+        marks,
+        time_range,
+    };
+    let svg = plots::svg(&spec)?;
+    let _ = write!(
+        w,
+        "<figure class=\"plot\" id=\"plot-axial-moments\"><figcaption><b>What turns the head \
+         about the pelvic axis</b> <small>moments about the head's centre along the axis; \
+         positive turns theta up (LOT towards OA): \
+         <span style=\"color:#c85200\">&#9632; bone (friction included)</span> \
+         <span style=\"color:#440154\">&#9632; pelvic floor</span> \
+         <span style=\"color:#1f5799\">&#9632; neck</span></small></figcaption>{svg}</figure>"
+    );
     Ok(())
 }
 

@@ -3,7 +3,7 @@
 //! pictures inline, nothing fetched from elsewhere.
 
 use crate::demo::Demo;
-use crate::{write_report, write_report_with, FloorFrame, ReportError};
+use crate::{write_report, write_report_with, AxialMomentSample, FloorFrame, ReportError};
 
 fn movement_row(html: &str, key: &str) -> String {
     let start = html
@@ -131,11 +131,34 @@ fn floor_stretch_and_the_scenario_appear_when_given() {
         "four plots and the floor's"
     );
     assert!(html.contains("Greatest: 1.400 at 10.0 s."));
+    assert!(!html.contains("plot-axial-moments"), "no moments given, no plot");
     assert!(html.contains("max_n = 120 # &lt;max&gt;"));
     input.floor_peak_stretch[1].1 = f64::NAN;
     assert!(matches!(
         write_report_with(&input, None),
         Err(ReportError::NotFinite { .. })
+    ));
+}
+
+#[test]
+fn the_moments_that_turn_the_head_are_plotted_when_known() {
+    let demo = Demo::straight_push().unwrap();
+    let mut input = demo.input("with moments");
+    input.head_axial_moments = (0..3)
+        .map(|k| AxialMomentSample {
+            time_s: 10.0 * k as f64,
+            bone_nm: 0.1 * k as f64,
+            floor_nm: -0.2,
+            neck_nm: 0.05,
+        })
+        .collect();
+    let html = write_report_with(&input, None).unwrap().html;
+    assert_eq!(html.matches("<svg").count(), 5, "four plots and the moments' (no floor)");
+    assert!(html.contains("id=\"plot-axial-moments\""));
+    input.head_axial_moments[2].neck_nm = f64::INFINITY;
+    assert!(matches!(
+        write_report_with(&input, None),
+        Err(ReportError::NotFinite { what: "head_axial_moments", .. })
     ));
 }
 

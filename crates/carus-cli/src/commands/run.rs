@@ -166,6 +166,16 @@ fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result<Vec<String
             .iter()
             .map(|f| (f.time_s, f.peak_stretch))
             .collect(),
+        head_axial_moments: record
+            .loads
+            .iter()
+            .map(|l| carus_report::AxialMomentSample {
+                time_s: l.time_s,
+                bone_nm: l.head_axial.bone_nm,
+                floor_nm: l.head_axial.floor_nm,
+                neck_nm: l.head_axial.neck_nm,
+            })
+            .collect(),
         scene: Some(carus_report::ReportScene {
             pelvis: Some(scene.pelvis.surface.clone()),
             head: scene.head.surface.clone(),

@@ -1,0 +1,168 @@
+//! What the mother's tissues do to the fetus at a recorded instant: the
+//! force each part of the canal (and the pelvic floor) puts on the head and
+//! on the trunk, the moment it causes about the atlanto-occipital pivot, and
+//! the moments that spin the head about the pelvic axis, which is what
+//! turns theta (internal rotation, restitution).
+
+use carus_analysis::ContactSite;
+use carus_anatomy::axis::PelvicAxis;
+use carus_contact::{ContactReport, Wrench};
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+/// Which fetal body a load acts on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Body {
+    Head,
+    Trunk,
+}
+
+impl Body {
+    pub fn name(self) -> &'static str {
+        match self {
+            Body::Head => "head",
+            Body::Trunk => "trunk",
+        }
+    }
+}
+
+/// The sum of the contacts of one part of the mother on one fetal body.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SiteLoad {
+    pub body: Body,
+    pub site: ContactSite,
+    /// Contact points that carried load: bone samples in contact, or floor
+    /// nodes held on the fetal surface.
+    pub points: usize,
+    /// Total force on the body, N.
+    pub force_n: DVec3,
+    /// The part of it that is Coulomb friction (zero for the floor, whose
+    /// held nodes do not slip on the fetus), N.
+    pub friction_force_n: DVec3,
+    /// Moment of the force about the atlanto-occipital pivot, N m.
+    pub moment_about_pivot_nm: DVec3,
+}
+
+/// Moments on the head about the pelvic axis: the component along the
+/// axis's tangent at the head (pointing down the canal) of each source's
+/// moment about the head's centre of mass, N m. Positive turns theta up
+/// (CARDINAL_MOVEMENTS.md: from LOT at -90 towards OA at 0).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct AxialMoments {
+    pub bone_nm: f64,
+    pub floor_nm: f64,
+    pub neck_nm: f64,
+}
+
+/// The loads at one recorded instant.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LoadSample {
+    pub time_s: f64,
+    /// One entry per body and site that carried load, head first.
+    pub sites: Vec<SiteLoad>,
+    pub head_axial: AxialMoments,
+}
+
+/// One body's bone contacts summed by site; `sites[label]` is the site of
+/// the pelvis region `label`.
+pub fn bone_loads(
+    body: Body,
+    report: &ContactReport,
+    sites: &[ContactSite],
+    pivot: DVec3,
+) -> Vec<SiteLoad> {
+    let mut out: Vec<SiteLoad> = Vec::new();
+    for c in &report.contacts {
+        let Some(site) = c.region.and_then(|r| sites.get(r as usize)).copied() else {
+            continue;
+        };
+        let k = match out.iter().position(|l| l.site == site) {
+            Some(k) => k,
+            None => {
+                out.push(SiteLoad {
+                    body,
+                    site,
+                    points: 0,
+                    force_n: DVec3::ZERO,
+                    friction_force_n: DVec3::ZERO,
+                    moment_about_pivot_nm: DVec3::ZERO,
+                });
+                out.len() - 1
+            }
+        };
+        let l = &mut out[k];
+        l.points += 1;
+        l.force_n += c.force();
+        l.friction_force_n += c.friction_force;
+        l.moment_about_pivot_nm += c.moment_about(pivot);
+    }
+    out
+}
+
+/// The floor's reaction on one body (a wrench about its centre of mass
+/// `com`) as a site load; `None` when the floor holds no node of it.
+pub fn floor_load(
+    body: Body,
+    wrench: &Wrench,
+    held_nodes: usize,
+    com: DVec3,
+    pivot: DVec3,
+) -> Option<SiteLoad> {
+    (held_nodes > 0).then(|| SiteLoad {
+        body,
+        site: ContactSite::PelvicFloor,
+        points: held_nodes,
+        force_n: wrench.force,
+        friction_force_n: DVec3::ZERO,
+        moment_about_pivot_nm: moment_about(wrench, com, pivot),
+    })
+}
+
+/// The direction down the canal at the point of the pelvic axis nearest
+/// `at`: the axis about which [`AxialMoments`] are taken.
+pub fn down_the_canal(axis: &PelvicAxis, at: DVec3) -> DVec3 {
+    axis.tangent(axis.project(at))
+}
+
+/// The moment about `point` of a wrench given about `com`.
+pub fn moment_about(wrench: &Wrench, com: DVec3, point: DVec3) -> DVec3 {
+    wrench.torque + (com - point).cross(wrench.force)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn vec3() -> impl Strategy<Value = DVec3> {
+        prop::array::uniform3(-1.0f64..1.0).prop_map(DVec3::from_array)
+    }
+
+    proptest! {
+        /// Moving the reference point of a wrench agrees with taking the
+        /// moment of its force applied at a point directly.
+        #[test]
+        fn the_moment_about_a_point_follows_the_force(
+            f in vec3(), at in vec3(), com in vec3(), pivot in vec3()
+        ) {
+            let w = Wrench::at_point(f, at, com);
+            let direct = (at - pivot).cross(f);
+            prop_assert!((moment_about(&w, com, pivot) - direct).length() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn no_held_node_is_no_floor_load() {
+        let w = Wrench {
+            force: DVec3::X,
+            torque: DVec3::ZERO,
+        };
+        assert!(floor_load(Body::Head, &w, 0, DVec3::ZERO, DVec3::ZERO).is_none());
+        let l = floor_load(Body::Head, &w, 3, DVec3::ZERO, DVec3::Y).expect("held");
+        assert_eq!(l.site, ContactSite::PelvicFloor);
+        assert_eq!(l.points, 3);
+        // A force along x applied 1 m below the pivot (in -y): moment along +z.
+        assert!((l.moment_about_pivot_nm - DVec3::Z).length() < 1e-12);
+    }
+}
