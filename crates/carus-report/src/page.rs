@@ -311,17 +311,14 @@ fn plots_section(
             label: m.kind.mark(),
         })
         .collect();
-    let blue = RGBColor(31, 87, 153);
-    let spec = |id, y_label, curves, references| PlotSpec {
-        id,
-        y_label,
-        time_s: &s.time_s,
-        curves,
-        references,
+    let axis = TimeAxis {
         bands: &bands,
         marks: &marks,
-        time_range,
+        range: time_range,
     };
+    let blue = RGBColor(31, 87, 153);
+    let spec =
+        |id, y_label, curves, references| axis.spec(id, y_label, &s.time_s, curves, references);
     let station = vec![Curve {
         values: &s.station_mm,
         colour: blue,
@@ -389,19 +386,43 @@ fn plots_section(
              <small>{caption}</small></figcaption>{svg}</figure>"
         );
     }
-    floor_plot(w, input, &bands, &marks, time_range)?;
-    axial_moment_plot(w, input, &bands, &marks, time_range)?;
+    floor_plot(w, input, &axis)?;
+    axial_moment_plot(w, input, &axis)?;
     let _ = writeln!(w, "</div></section>");
     Ok(())
 }
 
-fn floor_plot(
-    w: &mut String,
-    input: &ReportInput,
-    bands: &[Band],
-    marks: &[Mark],
-    time_range: (f64, f64),
-) -> Result<(), ReportError> {
+/// The time axis every plot of the page shares: its range, with the
+/// movements shaded and the key moments marked.
+struct TimeAxis<'a> {
+    bands: &'a [Band],
+    marks: &'a [Mark<'a>],
+    range: (f64, f64),
+}
+
+impl<'a> TimeAxis<'a> {
+    fn spec(
+        &self,
+        id: &'static str,
+        y_label: &'a str,
+        time_s: &'a [f64],
+        curves: Vec<Curve<'a>>,
+        references: Vec<f64>,
+    ) -> PlotSpec<'a> {
+        PlotSpec {
+            id,
+            y_label,
+            time_s,
+            curves,
+            references,
+            bands: self.bands,
+            marks: self.marks,
+            time_range: self.range,
+        }
+    }
+}
+
+fn floor_plot(w: &mut String, input: &ReportInput, axis: &TimeAxis) -> Result<(), ReportError> {
     let _ = write!(
         w,
         "<figure class=\"plot\" id=\"plot-floor\"><figcaption><b>Pelvic floor: peak stretch</b> \
@@ -421,19 +442,16 @@ fn floor_plot(
             value: bad,
         });
     }
-    let spec = PlotSpec {
-        id: "floor",
-        y_label: "peak stretch",
-        time_s: &time_s,
-        curves: vec![Curve {
+    let spec = axis.spec(
+        "floor",
+        "peak stretch",
+        &time_s,
+        vec![Curve {
             values: &stretch,
             colour: RGBColor(68, 1, 84),
         }],
-        references: vec![1.0],
-        bands,
-        marks,
-        time_range,
-    };
+        vec![1.0],
+    );
     let peak = input
         .floor_peak_stretch
         .iter()
@@ -453,9 +471,7 @@ fn floor_plot(
 fn axial_moment_plot(
     w: &mut String,
     input: &ReportInput,
-    bands: &[Band],
-    marks: &[Mark],
-    time_range: (f64, f64),
+    axis: &TimeAxis,
 ) -> Result<(), ReportError> {
     let m = &input.head_axial_moments;
     if m.is_empty() {
@@ -483,11 +499,11 @@ fn axial_moment_plot(
         RGBColor(68, 1, 84),
         RGBColor(31, 87, 153),
     );
-    let spec = PlotSpec {
-        id: "axial-moments",
-        y_label: "moment (N m)",
-        time_s: &time_s,
-        curves: vec![
+    let spec = axis.spec(
+        "axial-moments",
+        "moment (N m)",
+        &time_s,
+        vec![
             Curve {
                 values: &bone,
                 colour: bone_colour,
@@ -501,11 +517,8 @@ fn axial_moment_plot(
                 colour: neck_colour,
             },
         ],
-        references: vec![0.0],
-        bands,
-        marks,
-        time_range,
-    };
+        vec![0.0],
+    );
     let svg = plots::svg(&spec)?;
     let _ = write!(
         w,
