@@ -149,7 +149,7 @@ impl<'a> Simulation<'a> {
             loads: Vec::new(),
         };
         let mut sim = Simulation::from_state(scene, state)?;
-        sim.record(&StepForces {
+        sim.record(StepForces {
             expulsion: sim.expulsion.force(0.0, sim.spine()),
             bone: DVec3::ZERO,
             floor: DVec3::ZERO,
@@ -314,7 +314,7 @@ impl<'a> Simulation<'a> {
         self.couple_floor()?;
         self.state.step += 1;
         if self.state.step % self.sample_every == 0 {
-            self.record(&forces);
+            self.record(forces);
         }
         Ok(())
     }
@@ -489,7 +489,7 @@ impl<'a> Simulation<'a> {
         };
     }
 
-    fn record(&mut self, forces: &StepForces) {
+    fn record(&mut self, forces: StepForces) {
         let s = &self.state.bodies;
         let pose = |b: usize| s.pose(b);
         self.state.samples.push(PoseSample {
@@ -503,7 +503,7 @@ impl<'a> Simulation<'a> {
         });
         self.state.loads.push(LoadSample {
             time_s: self.time_s(),
-            sites: forces.sites.clone(),
+            sites: forces.sites,
             head_axial: forces.head_axial,
         });
         if let (Some(solver), Some(floor)) = (&self.solver, &self.state.floor) {
