@@ -79,8 +79,8 @@ impl Default for NeckStiffness {
 
 /// The head's anatomical axes in the head's body frame (CONVENTIONS.md):
 /// o occipitofrontal, v vertex, b = v x o. Flexion (chin to chest) is a
-/// positive rotation about b, lateral bending a rotation about o, axial
-/// rotation a rotation about v.
+/// positive rotation about b; lateral bending and axial rotation are taken
+/// about the floating axis and the neck axis (see `JointAxes`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct HeadAxes {
     pub occipitofrontal: DVec3,
@@ -132,6 +132,62 @@ pub struct Neck {
     rest_flexion_rad: f64,
 }
 
+/// The neck's joint coordinate system, in the trunk frame at rest (Grood &
+/// Suntay 1983, J. Biomech. Eng. 105:136, the convention of joint angles in
+/// biomechanics): axial rotation about the neck axis, fixed in the trunk,
+/// because the atlas turns on the axis (C1-C2) below the joint where the
+/// head nods; flexion about the head's biparietal axis, fixed in the head
+/// (the atlanto-occipital joint); lateral bending about the floating axis
+/// perpendicular to both. So a flexed head turned on the spine, as in
+/// internal rotation and restitution, meets the axial stiffness alone; a
+/// rotation vector in the head's own axes would read that turn partly as
+/// lateral bending once the head is flexed.
+#[derive(Debug, Clone, Copy)]
+struct JointAxes {
+    lateral: DVec3,
+    flexion: DVec3,
+    axial: DVec3,
+}
+
+/// A turn of the head from rest as its three joint angles (rad), with the
+/// axes they turn about in the present pose (trunk frame).
+#[derive(Debug, Clone, Copy)]
+struct JointAngles {
+    lateral: f64,
+    flexion: f64,
+    axial: f64,
+    axial_axis: DVec3,
+    floating_axis: DVec3,
+    biparietal_axis: DVec3,
+}
+
+impl JointAngles {
+    /// Splits `turn` (trunk frame) as axial, then lateral, then flexion:
+    /// `turn = R(axial) R(floating) R(biparietal)`.
+    fn of(turn: DQuat, axes: JointAxes) -> Self {
+        let JointAxes { lateral: x, flexion: y, axial: z } = axes;
+        let (tx, ty, tz) = (turn * x, turn * y, turn * z);
+        let lateral = z.dot(ty).clamp(-1.0, 1.0).asin();
+        let flexion = (-z.dot(tx)).atan2(z.dot(tz));
+        let axial = (-x.dot(ty)).atan2(y.dot(ty));
+        let floating_axis = axial.cos() * x + axial.sin() * y;
+        JointAngles { lateral, flexion, axial, axial_axis: z, floating_axis, biparietal_axis: ty }
+    }
+
+    /// The moment on the head (trunk frame) whose power against the three
+    /// angle rates is minus `torques` (lateral, flexion, axial) times those
+    /// rates: the conservative moment of springs on the joint angles. The
+    /// three axes are not orthogonal once the neck bends sideways, so it is
+    /// built on their dual basis; that basis degenerates only at 90 degrees
+    /// of lateral bending, far outside the neck's range.
+    fn restoring_moment(&self, torques: DVec3) -> DVec3 {
+        let (z, a, b) = (self.axial_axis, self.floating_axis, self.biparietal_axis);
+        let det = z.dot(a.cross(b));
+        let det = if det.abs() < 1e-9 { 1e-9_f64.copysign(det) } else { det };
+        -(torques.z * a.cross(b) + torques.x * b.cross(z) + torques.y * z.cross(a)) / det
+    }
+}
+
 /// The neck's state and what it does to the two bodies.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct NeckLoad {
@@ -139,9 +195,11 @@ pub struct NeckLoad {
     pub on_trunk: Wrench,
     /// Flexion (positive) or extension (negative) from rest, degrees.
     pub flexion_deg: f64,
-    /// Lateral bending about o from rest, degrees.
+    /// Lateral bending from rest, degrees: about the floating axis of the
+    /// joint coordinate system (o when the head is not turned).
     pub lateral_bending_deg: f64,
-    /// Axial rotation about v from rest, degrees (the twist that restitution undoes).
+    /// Axial rotation about the neck axis from rest, degrees (the twist that
+    /// restitution undoes).
     pub axial_rotation_deg: f64,
     /// Compression (positive) or stretch (negative) along the neck axis, m.
     pub compression_m: f64,
@@ -193,6 +251,17 @@ impl Neck {
             return Err(ContactError::InvalidParameter { name: "neck_axis", value: 0.0, hint: "must be a non-zero direction" });
         }
         let (qh, qt) = (state.orientation[head], state.orientation[trunk]);
+        // The joint coordinate system needs the head's biparietal axis
+        // across the neck: a head joined tipped more than 60 degrees onto
+        // its side is not an anatomical pose.
+        let along_neck = (qh * v.cross(o)).dot(axis);
+        if along_neck.abs() > 60f64.to_radians().sin() {
+            return Err(ContactError::InvalidParameter {
+                name: "head pose at the neck",
+                value: along_neck,
+                hint: "the biparietal axis lies along the neck; tilt the head less than 60 degrees sideways from the trunk",
+            });
+        }
         Ok(Neck {
             head,
             trunk,
@@ -206,33 +275,36 @@ impl Neck {
         })
     }
 
+    /// The joint coordinate system at rest, in the trunk frame.
+    fn joint_axes(&self) -> JointAxes {
+        let axial = self.neck_axis_in_trunk;
+        let biparietal = self.rest * self.axes.biparietal();
+        let flexion = (biparietal - biparietal.dot(axial) * axial).normalize_or_zero();
+        JointAxes { lateral: flexion.cross(axial), flexion, axial }
+    }
+
     /// Spring and dashpot loads on both bodies at the current state.
     pub fn load(&self, model: &RigidBodyModel, state: &RigidBodyState) -> NeckLoad {
         let s = &self.stiffness;
         let (h, t) = (self.head, self.trunk);
         let (qh, qt) = (state.orientation[h], state.orientation[t]);
 
-        // Rotation of the head away from rest, in the head frame.
-        let mut deviation = (self.rest.inverse() * qt.inverse() * qh).normalize();
-        if deviation.w < 0.0 {
-            deviation = -deviation;
-        }
-        let rotation = deviation.to_scaled_axis();
-        let b = self.axes.biparietal();
-        let (flexion, lateral, axial) =
-            (rotation.dot(b), rotation.dot(self.axes.occipitofrontal), rotation.dot(self.axes.vertex));
+        // Rotation of the head away from rest, in the joint coordinate
+        // system (see `JointAngles`), and the generalised torques of the
+        // springs on its three angles.
+        let turn = (qt.inverse() * qh * self.rest.inverse()).normalize();
+        let angles = JointAngles::of(turn, self.joint_axes());
         let per_rad = 180.0 / std::f64::consts::PI;
-        let k_flex = if flexion >= 0.0 { s.flexion_nm_per_deg } else { s.extension_nm_per_deg };
+        let k_flex = if angles.flexion >= 0.0 { s.flexion_nm_per_deg } else { s.extension_nm_per_deg };
         // End of range, measured from the anatomical neutral attitude.
-        let from_neutral = (flexion + self.rest_flexion_rad) * per_rad;
+        let from_neutral = (angles.flexion + self.rest_flexion_rad) * per_rad;
         let beyond = (from_neutral - s.flexion_limit_deg).max(0.0) + (from_neutral + s.extension_limit_deg).min(0.0);
-        let end_range = -s.end_range_stiffness_nm_per_deg * beyond;
-        let elastic_local = end_range * b
-            - per_rad
-            * (k_flex * flexion * b
-                + s.lateral_bending_nm_per_deg * lateral * self.axes.occipitofrontal
-                + s.axial_rotation_nm_per_deg * axial * self.axes.vertex);
-        let elastic = qh * elastic_local;
+        let torques = DVec3::new(
+            per_rad * s.lateral_bending_nm_per_deg * angles.lateral,
+            per_rad * k_flex * angles.flexion + s.end_range_stiffness_nm_per_deg * beyond,
+            per_rad * s.axial_rotation_nm_per_deg * angles.axial,
+        );
+        let elastic = qt * angles.restoring_moment(torques);
         let relative_spin = state.angular_velocity(model, h) - state.angular_velocity(model, t);
         let moment_on_head = elastic - s.rotational_damping_nm_s_per_rad * relative_spin;
 
@@ -254,9 +326,9 @@ impl Neck {
         NeckLoad {
             on_head: head_wrench,
             on_trunk: trunk_wrench,
-            flexion_deg: flexion * per_rad,
-            lateral_bending_deg: lateral * per_rad,
-            axial_rotation_deg: axial * per_rad,
+            flexion_deg: angles.flexion * per_rad,
+            lateral_bending_deg: angles.lateral * per_rad,
+            axial_rotation_deg: angles.axial * per_rad,
             compression_m: compression,
             elastic_moment_on_head: elastic,
         }
@@ -359,6 +431,68 @@ mod tests {
         let m = neck.load(&model, &state).elastic_moment_on_head.dot(-DVec3::X);
         let expected = 7.0 * s.extension_nm_per_deg + 2.0 * s.end_range_stiffness_nm_per_deg;
         assert!((m - expected).abs() < 1e-9, "{m} vs {expected}");
+    }
+
+    #[test]
+    fn a_flexed_head_turned_on_the_spine_meets_the_axial_stiffness_alone() {
+        let s = NeckStiffness::default();
+        let (model, mut state, neck) = setup();
+        // Chin towards the chest by 60 degrees, then a 20 degree turn about
+        // the trunk's neck axis (z), as in internal rotation.
+        turn_head(&mut state, -DVec3::X, 60.0);
+        turn_head(&mut state, DVec3::Z, 20.0);
+        let load = neck.load(&model, &state);
+        assert!((load.flexion_deg - 60.0).abs() < 1e-9, "{}", load.flexion_deg);
+        assert!(load.lateral_bending_deg.abs() < 1e-9, "{}", load.lateral_bending_deg);
+        assert!((load.axial_rotation_deg - 20.0).abs() < 1e-9, "{}", load.axial_rotation_deg);
+        let about_neck = load.elastic_moment_on_head.dot(DVec3::Z);
+        assert!((about_neck + 20.0 * s.axial_rotation_nm_per_deg).abs() < 1e-9, "{about_neck}");
+        // The flexion spring acts about the head's turned biparietal axis.
+        let biparietal = DQuat::from_axis_angle(DVec3::Z, 20f64.to_radians()) * -DVec3::X;
+        let about_biparietal = load.elastic_moment_on_head.dot(biparietal);
+        assert!((about_biparietal + 60.0 * s.flexion_nm_per_deg).abs() < 1e-9, "{about_biparietal}");
+    }
+
+    /// Elastic energy of the neck's rotation springs inside their range.
+    fn rotational_energy(load: &NeckLoad, s: &NeckStiffness) -> f64 {
+        let k_flex = if load.flexion_deg >= 0.0 { s.flexion_nm_per_deg } else { s.extension_nm_per_deg };
+        let per_rad = 180.0 / std::f64::consts::PI;
+        0.5 * per_rad
+            * (k_flex * load.flexion_deg.to_radians().powi(2)
+                + s.lateral_bending_nm_per_deg * load.lateral_bending_deg.to_radians().powi(2)
+                + s.axial_rotation_nm_per_deg * load.axial_rotation_deg.to_radians().powi(2))
+    }
+
+    proptest::proptest! {
+        /// The moment is conservative: turning the head a little about any
+        /// axis changes the springs' energy by minus the moment's work.
+        #[test]
+        fn the_moment_is_minus_the_gradient_of_the_spring_energy(
+            flexion in 1.0f64..60.0,
+            lateral in -40.0f64..40.0,
+            axial in -80.0f64..80.0,
+            ux in -1.0f64..1.0, uy in -1.0f64..1.0, uz in -1.0f64..1.0,
+        ) {
+            let u = DVec3::new(ux, uy, uz);
+            proptest::prop_assume!(u.length() > 0.1);
+            let u = u.normalize();
+            let s = NeckStiffness::default();
+            let (model, mut state, neck) = setup();
+            turn_head(&mut state, -DVec3::X, flexion);
+            turn_head(&mut state, DVec3::Y, lateral);
+            turn_head(&mut state, DVec3::Z, axial);
+            let load = neck.load(&model, &state);
+            let h = 1e-4;
+            let mut ahead = state.clone();
+            turn_head(&mut ahead, u, h);
+            let mut behind = state.clone();
+            turn_head(&mut behind, u, -h);
+            let slope = (rotational_energy(&neck.load(&model, &ahead), &s)
+                - rotational_energy(&neck.load(&model, &behind), &s))
+                / (2.0 * h.to_radians());
+            let work_rate = load.elastic_moment_on_head.dot(u);
+            proptest::prop_assert!((slope + work_rate).abs() < 1e-6, "slope {slope} moment {work_rate}");
+        }
     }
 
     #[test]

@@ -188,6 +188,9 @@ pub fn write_history_csv(
         "head_axial_moment_bone_nm",
         "head_axial_moment_floor_nm",
         "head_axial_moment_neck_nm",
+        "neck_flexion_deg",
+        "neck_lateral_bending_deg",
+        "neck_axial_rotation_deg",
     ];
     header.extend_from_slice(&poses);
     let mut csv = CsvWriter::create(path, &header).map_err(|e| output_error(path, e))?;
@@ -229,6 +232,10 @@ pub fn write_history_csv(
                 l.head_axial.floor_nm,
                 l.head_axial.neck_nm,
             ]),
+            None => values.extend([f64::NAN; 3]),
+        }
+        match loads.get(k).and_then(|l| l.neck) {
+            Some(n) => values.extend([n.flexion_deg, n.lateral_bending_deg, n.axial_rotation_deg]),
             None => values.extend([f64::NAN; 3]),
         }
         csv.row(&values).map_err(|e| output_error(path, e))?;

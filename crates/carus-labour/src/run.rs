@@ -436,6 +436,36 @@ mod tests {
         assert!(csv.lines().skip(1).all(|r| r.split(',').count() == 13));
     }
 
+    /// The neck's joint angles are recorded from rest and written to the
+    /// pose history; with the head neither bent sideways nor twisted much,
+    /// its flexion is the rise of the detector's phi (the same angle about
+    /// the biparietal axis, CARDINAL_MOVEMENTS.md).
+    #[test]
+    fn the_neck_angles_are_recorded_and_follow_phi() {
+        let (dir, record) = run_in(&coarse(2.4), &RunOptions::default());
+        let series = &record.detector.as_ref().unwrap().series;
+        let first = record.loads[0].neck.expect("neck angles at the start");
+        for angle in [first.flexion_deg, first.lateral_bending_deg, first.axial_rotation_deg] {
+            assert!(angle.abs() < 1e-9, "{first:?}");
+        }
+        let mut compared = 0;
+        for (k, l) in record.loads.iter().enumerate() {
+            let n = l.neck.expect("neck angles");
+            if n.lateral_bending_deg.abs() < 2.0 && n.axial_rotation_deg.abs() < 2.0 {
+                let rise = series.phi_deg[k] - series.phi_deg[0];
+                assert!((n.flexion_deg - rise).abs() < 1.0, "t = {}: neck {n:?}, phi rose {rise}", l.time_s);
+                compared += 1;
+            }
+        }
+        let peak = record.loads.iter().map(|l| l.neck.unwrap().flexion_deg).fold(0.0, f64::max);
+        assert!(compared > 10 && peak > 10.0, "compared {compared}, peak flexion {peak}");
+        let csv = std::fs::read_to_string(dir.path().join(output::HISTORY_CSV)).unwrap();
+        let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+        for column in ["neck_flexion_deg", "neck_lateral_bending_deg", "neck_axial_rotation_deg"] {
+            assert!(header.contains(&column), "{column} missing from {header:?}");
+        }
+    }
+
     /// A positive axial moment turns the head the way theta grows: a small
     /// rotation of the start pose about `down_the_canal` raises theta.
     #[test]

@@ -12,7 +12,7 @@
 
 use carus_analysis::{ContactSite, PoseSample};
 use carus_contact::{
-    pelvis_contacts, BodyContactState, BodyMotion, ContactReport, Neck, NeckGeometry,
+    pelvis_contacts, BodyContactState, BodyMotion, ContactReport, Neck, NeckGeometry, NeckLoad,
     RigidBodyState, TissueContact, Wrench,
 };
 use carus_fem::{SolverSnapshot, StepControl, TledSolver};
@@ -20,7 +20,7 @@ use glam::{DMat3, DVec3};
 use serde::{Deserialize, Serialize};
 
 use crate::expulsion::Expulsion;
-use crate::loads::{self, AxialMoments, Body, LoadSample, SiteLoad};
+use crate::loads::{self, AxialMoments, Body, LoadSample, NeckAngles, SiteLoad};
 use crate::scene::{Scene, HEAD, TRUNK};
 use crate::LabourError;
 
@@ -85,6 +85,7 @@ struct StepForces {
     /// Per site, on recorded steps only.
     sites: Vec<SiteLoad>,
     head_axial: AxialMoments,
+    neck: Option<NeckAngles>,
 }
 
 impl<'a> Simulation<'a> {
@@ -149,6 +150,7 @@ impl<'a> Simulation<'a> {
             loads: Vec::new(),
         };
         let mut sim = Simulation::from_state(scene, state)?;
+        let neck = sim.state.neck.as_ref().map(|n| n.load(&scene.bodies, &sim.state.bodies));
         sim.record(StepForces {
             expulsion: sim.expulsion.force(0.0, sim.spine()),
             bone: DVec3::ZERO,
@@ -156,6 +158,7 @@ impl<'a> Simulation<'a> {
             dominant: None,
             sites: Vec::new(),
             head_axial: AxialMoments::default(),
+            neck: neck.as_ref().map(NeckAngles::of),
         });
         Ok(sim)
     }
@@ -279,11 +282,11 @@ impl<'a> Simulation<'a> {
         }
 
         // The neck.
-        let neck_on_head = self.state.neck.as_ref().map(|neck| {
+        let neck_load = self.state.neck.as_ref().map(|neck| {
             let load = neck.load(&scene.bodies, &self.state.bodies);
             wrenches[neck.head] += load.on_head;
             wrenches[neck.trunk] += load.on_trunk;
-            load.on_head
+            load
         });
 
         // The floor's reaction from the last coupling.
@@ -293,7 +296,7 @@ impl<'a> Simulation<'a> {
 
         let mut forces = self.classify(expulsion, &reports);
         if (self.state.step + 1) % self.sample_every == 0 {
-            self.site_loads(&mut forces, &reports, neck_on_head.unwrap_or_default(), pivot);
+            self.site_loads(&mut forces, &reports, neck_load.as_ref(), pivot);
         }
 
         // Passive resistance of the surroundings, implicit so that it is
@@ -453,6 +456,7 @@ impl<'a> Simulation<'a> {
             dominant,
             sites: Vec::new(),
             head_axial: AxialMoments::default(),
+            neck: None,
         }
     }
 
@@ -462,7 +466,7 @@ impl<'a> Simulation<'a> {
         &self,
         forces: &mut StepForces,
         reports: &[ContactReport],
-        neck_on_head: Wrench,
+        neck: Option<&NeckLoad>,
         pivot: DVec3,
     ) {
         let scene = self.scene;
@@ -485,8 +489,9 @@ impl<'a> Simulation<'a> {
         forces.head_axial = AxialMoments {
             bone_nm: reports[HEAD].torque_about_com.dot(down),
             floor_nm: s.floor_wrench[HEAD].torque.dot(down),
-            neck_nm: neck_on_head.torque.dot(down),
+            neck_nm: neck.map_or(0.0, |l| l.on_head.torque.dot(down)),
         };
+        forces.neck = neck.map(NeckAngles::of);
     }
 
     fn record(&mut self, forces: StepForces) {
@@ -505,6 +510,7 @@ impl<'a> Simulation<'a> {
             time_s: self.time_s(),
             sites: forces.sites,
             head_axial: forces.head_axial,
+            neck: forces.neck,
         });
         if let (Some(solver), Some(floor)) = (&self.solver, &self.state.floor) {
             let fields = solver.element_fields();
