@@ -453,6 +453,17 @@ mod tests {
         assert!((about_biparietal + 60.0 * s.flexion_nm_per_deg).abs() < 1e-9, "{about_biparietal}");
     }
 
+    #[test]
+    fn a_head_joined_lying_on_its_side_is_refused() {
+        let (model, mut state, _) = setup();
+        // Tipped 70 degrees about o (lateral): b = -x swings towards the neck axis z.
+        turn_head(&mut state, DVec3::Y, 70.0);
+        let axes = HeadAxes { occipitofrontal: DVec3::Y, vertex: DVec3::Z };
+        let geometry = NeckGeometry { head: 0, trunk: 1, pivot: DVec3::ZERO, axes, neck_axis: DVec3::Z, joined_flexion_deg: 0.0 };
+        let err = Neck::new(&model, &state, geometry, NeckStiffness::default()).unwrap_err();
+        assert!(err.to_string().contains("sideways"), "{err}");
+    }
+
     /// Elastic energy of the neck's rotation springs inside their range.
     fn rotational_energy(load: &NeckLoad, s: &NeckStiffness) -> f64 {
         let k_flex = if load.flexion_deg >= 0.0 { s.flexion_nm_per_deg } else { s.extension_nm_per_deg };
