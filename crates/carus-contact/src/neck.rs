@@ -188,19 +188,27 @@ impl JointAngles {
     }
 }
 
+/// The neck's angles from the pose it was joined in, degrees, in its joint
+/// coordinate system (see `JointAxes`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct NeckAngles {
+    /// Flexion (positive) or extension (negative) about the head's
+    /// biparietal axis.
+    pub flexion_deg: f64,
+    /// Lateral bending about the floating axis (o when the head is not
+    /// turned).
+    pub lateral_bending_deg: f64,
+    /// Axial rotation (twist) about the neck axis: what internal rotation
+    /// winds up and restitution undoes.
+    pub axial_rotation_deg: f64,
+}
+
 /// The neck's state and what it does to the two bodies.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct NeckLoad {
     pub on_head: Wrench,
     pub on_trunk: Wrench,
-    /// Flexion (positive) or extension (negative) from rest, degrees.
-    pub flexion_deg: f64,
-    /// Lateral bending from rest, degrees: about the floating axis of the
-    /// joint coordinate system (o when the head is not turned).
-    pub lateral_bending_deg: f64,
-    /// Axial rotation about the neck axis from rest, degrees (the twist that
-    /// restitution undoes).
-    pub axial_rotation_deg: f64,
+    pub angles: NeckAngles,
     /// Compression (positive) or stretch (negative) along the neck axis, m.
     pub compression_m: f64,
     /// Elastic moment the neck exerts on the head, world, N m.
@@ -250,11 +258,12 @@ impl Neck {
         if axis == DVec3::ZERO {
             return Err(ContactError::InvalidParameter { name: "neck_axis", value: 0.0, hint: "must be a non-zero direction" });
         }
+        let axes = HeadAxes { occipitofrontal: o, vertex: v };
         let (qh, qt) = (state.orientation[head], state.orientation[trunk]);
         // The joint coordinate system needs the head's biparietal axis
         // across the neck: a head joined tipped more than 60 degrees onto
         // its side is not an anatomical pose.
-        let along_neck = (qh * v.cross(o)).dot(axis);
+        let along_neck = (qh * axes.biparietal()).dot(axis);
         if along_neck.abs() > 60f64.to_radians().sin() {
             return Err(ContactError::InvalidParameter {
                 name: "head pose at the neck",
@@ -268,7 +277,7 @@ impl Neck {
             stiffness,
             pivot_in_head: state.pose(head).inverse_point(pivot),
             pivot_in_trunk: state.pose(trunk).inverse_point(pivot),
-            axes: HeadAxes { occipitofrontal: o, vertex: v },
+            axes,
             neck_axis_in_trunk: qt.inverse() * axis,
             rest: (qt.inverse() * qh).normalize(),
             rest_flexion_rad: joined_flexion_deg.to_radians(),
@@ -326,9 +335,11 @@ impl Neck {
         NeckLoad {
             on_head: head_wrench,
             on_trunk: trunk_wrench,
-            flexion_deg: angles.flexion * per_rad,
-            lateral_bending_deg: angles.lateral * per_rad,
-            axial_rotation_deg: angles.axial * per_rad,
+            angles: NeckAngles {
+                flexion_deg: angles.flexion * per_rad,
+                lateral_bending_deg: angles.lateral * per_rad,
+                axial_rotation_deg: angles.axial * per_rad,
+            },
             compression_m: compression,
             elastic_moment_on_head: elastic,
         }
@@ -393,7 +404,7 @@ mod tests {
         let (model, mut state, neck) = setup();
         turn_head(&mut state, -DVec3::X, 5.0);
         let flex = neck.load(&model, &state);
-        assert!((flex.flexion_deg - 5.0).abs() < 1e-9);
+        assert!((flex.angles.flexion_deg - 5.0).abs() < 1e-9);
         let (model2, mut state2, neck2) = setup();
         turn_head(&mut state2, -DVec3::X, -5.0);
         let ext = neck2.load(&model2, &state2);
@@ -442,9 +453,10 @@ mod tests {
         turn_head(&mut state, -DVec3::X, 60.0);
         turn_head(&mut state, DVec3::Z, 20.0);
         let load = neck.load(&model, &state);
-        assert!((load.flexion_deg - 60.0).abs() < 1e-9, "{}", load.flexion_deg);
-        assert!(load.lateral_bending_deg.abs() < 1e-9, "{}", load.lateral_bending_deg);
-        assert!((load.axial_rotation_deg - 20.0).abs() < 1e-9, "{}", load.axial_rotation_deg);
+        let a = load.angles;
+        assert!((a.flexion_deg - 60.0).abs() < 1e-9, "{a:?}");
+        assert!(a.lateral_bending_deg.abs() < 1e-9, "{a:?}");
+        assert!((a.axial_rotation_deg - 20.0).abs() < 1e-9, "{a:?}");
         let about_neck = load.elastic_moment_on_head.dot(DVec3::Z);
         assert!((about_neck + 20.0 * s.axial_rotation_nm_per_deg).abs() < 1e-9, "{about_neck}");
         // The flexion spring acts about the head's turned biparietal axis.
@@ -466,6 +478,7 @@ mod tests {
 
     /// Elastic energy of the neck's rotation springs inside their range.
     fn rotational_energy(load: &NeckLoad, s: &NeckStiffness) -> f64 {
+        let load = load.angles;
         let k_flex = if load.flexion_deg >= 0.0 { s.flexion_nm_per_deg } else { s.extension_nm_per_deg };
         let per_rad = 180.0 / std::f64::consts::PI;
         0.5 * per_rad

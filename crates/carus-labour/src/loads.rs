@@ -6,7 +6,7 @@
 
 use carus_analysis::ContactSite;
 use carus_anatomy::axis::PelvicAxis;
-use carus_contact::{ContactReport, NeckLoad, Wrench};
+use carus_contact::{ContactReport, NeckAngles, Wrench};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
@@ -65,27 +65,6 @@ pub struct LoadSample {
     /// The neck's joint angles from its rest pose (none without a trunk).
     #[serde(default)]
     pub neck: Option<NeckAngles>,
-}
-
-/// The neck's flexion, lateral bending and axial rotation (twist) from the
-/// pose it was joined in, degrees, in its joint coordinate system
-/// (docs/CONTACT.md): the twist is what internal rotation winds up and
-/// restitution undoes.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct NeckAngles {
-    pub flexion_deg: f64,
-    pub lateral_bending_deg: f64,
-    pub axial_rotation_deg: f64,
-}
-
-impl NeckAngles {
-    pub fn of(load: &NeckLoad) -> Self {
-        NeckAngles {
-            flexion_deg: load.flexion_deg,
-            lateral_bending_deg: load.lateral_bending_deg,
-            axial_rotation_deg: load.axial_rotation_deg,
-        }
-    }
 }
 
 /// One body's bone contacts summed by site; `sites[label]` is the site of

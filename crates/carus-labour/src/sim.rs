@@ -12,15 +12,15 @@
 
 use carus_analysis::{ContactSite, PoseSample};
 use carus_contact::{
-    pelvis_contacts, BodyContactState, BodyMotion, ContactReport, Neck, NeckGeometry, NeckLoad,
-    RigidBodyState, TissueContact, Wrench,
+    pelvis_contacts, BodyContactState, BodyMotion, ContactReport, Neck, NeckAngles, NeckGeometry,
+    NeckLoad, RigidBodyState, TissueContact, Wrench,
 };
 use carus_fem::{SolverSnapshot, StepControl, TledSolver};
 use glam::{DMat3, DVec3};
 use serde::{Deserialize, Serialize};
 
 use crate::expulsion::Expulsion;
-use crate::loads::{self, AxialMoments, Body, LoadSample, NeckAngles, SiteLoad};
+use crate::loads::{self, AxialMoments, Body, LoadSample, SiteLoad};
 use crate::scene::{Scene, HEAD, TRUNK};
 use crate::LabourError;
 
@@ -150,7 +150,7 @@ impl<'a> Simulation<'a> {
             loads: Vec::new(),
         };
         let mut sim = Simulation::from_state(scene, state)?;
-        let neck = sim.state.neck.as_ref().map(|n| n.load(&scene.bodies, &sim.state.bodies));
+        let neck = sim.state.neck.as_ref().map(|n| n.load(&scene.bodies, &sim.state.bodies).angles);
         sim.record(StepForces {
             expulsion: sim.expulsion.force(0.0, sim.spine()),
             bone: DVec3::ZERO,
@@ -158,7 +158,7 @@ impl<'a> Simulation<'a> {
             dominant: None,
             sites: Vec::new(),
             head_axial: AxialMoments::default(),
-            neck: neck.as_ref().map(NeckAngles::of),
+            neck,
         });
         Ok(sim)
     }
@@ -491,7 +491,7 @@ impl<'a> Simulation<'a> {
             floor_nm: s.floor_wrench[HEAD].torque.dot(down),
             neck_nm: neck.map_or(0.0, |l| l.on_head.torque.dot(down)),
         };
-        forces.neck = neck.map(NeckAngles::of);
+        forces.neck = neck.map(|l| l.angles);
     }
 
     fn record(&mut self, forces: StepForces) {
