@@ -194,8 +194,9 @@ pub struct ContactSection {
     /// chest meet the canal through their soft-tissue cover over a mobile
     /// shoulder girdle, not bone on bone, so the penalty is that cover's
     /// stiffness as an elastic (Winkler) layer, k = E / h: E = 60 kPa
-    /// (3 x the 20 kPa shear modulus the project takes for passive muscle,
-    /// nearly incompressible; the floor's engineering value) over h = 6 mm
+    /// (3 x a round 20 kPa shear modulus for passive muscle, nearly
+    /// incompressible; resting adult levator ani measures 16-17 kPa,
+    /// Gachon et al. 2019, see `FloorSection`) over h = 6 mm
     /// of skin, fat and muscle, 1.0e7 Pa/m, so the chest pressed with the
     /// full 120 N sinks about 9 mm (F = k pi R d^2, R = 50 mm). An
     /// engineering estimate, no measured neonatal value is cited
@@ -205,9 +206,9 @@ pub struct ContactSection {
     pub sample_spacing_mm: f64,
 }
 
-/// Young's modulus of the trunk's soft-tissue cover, Pa: 3 x 20 kPa, the
-/// passive-muscle shear modulus of the floor, nearly incompressible
-/// (engineering value, see `trunk_penalty_stiffness_pa_per_m`).
+/// Young's modulus of the trunk's soft-tissue cover, Pa: 3 x 20 kPa, a
+/// round passive-muscle shear modulus, nearly incompressible (engineering
+/// value, see `trunk_penalty_stiffness_pa_per_m`).
 pub const TRUNK_SOFT_TISSUE_MODULUS_PA: f64 = 60e3;
 /// Depth of the soft tissue (skin, fat, muscle) over the fetal shoulder
 /// girdle and chest, m (engineering estimate).
@@ -265,9 +266,13 @@ impl Default for FetusSection {
 #[serde(deny_unknown_fields, default)]
 pub struct FloorSection {
     pub enabled: bool,
-    /// Neo-Hookean shear modulus, Pa. Engineering value for passive
-    /// skeletal muscle in the kPa range; REFERENCE_DATA.md asks for the
-    /// cited paper's constants before a default is final (docs/LABOUR.md).
+    /// Neo-Hookean shear modulus, Pa: 16.5 kPa, the levator ani's shear
+    /// modulus at rest measured in vivo by shear-wave elastography (mean of
+    /// the right, 16.0 kPa, and left, 17.1 kPa, sides in 12 parous women;
+    /// Gachon et al. 2019, Int Urogynecol J 30(7), "In vivo assessment of
+    /// the levator ani muscles using shear wave elastography"). The same
+    /// study measured 35.4 / 37.6 kPa during a Valsalva manoeuvre (the
+    /// pushing of the second stage); docs/LABOUR.md gives the outcome there.
     pub shear_modulus_pa: f64,
     /// Bulk modulus, Pa: 20 x shear (nearly incompressible, nu about 0.475; numerical).
     pub bulk_modulus_pa: f64,
@@ -293,8 +298,8 @@ impl Default for FloorSection {
     fn default() -> Self {
         FloorSection {
             enabled: true,
-            shear_modulus_pa: 20e3,
-            bulk_modulus_pa: 400e3,
+            shear_modulus_pa: 16.5e3,
+            bulk_modulus_pa: 330e3,
             density_kg_per_m3: 1060.0,
             damping_per_s: 400.0,
             coupling_reach_mm: 1.0,
@@ -514,7 +519,7 @@ impl Scenario {
             (
                 "floor.shear_modulus_pa",
                 self.floor.shear_modulus_pa,
-                "Pa (not kPa), e.g. 20000.0",
+                "Pa (not kPa), e.g. 16500.0",
             ),
             (
                 "floor.coupling_reach_mm",
