@@ -422,6 +422,17 @@ impl<'a> TimeAxis<'a> {
     }
 }
 
+/// The largest levator stretch that models of an uncomplicated birth
+/// predict at crowning, with their sources: 3.26 in the medial
+/// pubococcygeus (Lien et al. 2004, Obstet. Gynecol. 103:31) and 4.64 at
+/// the pubovisceral enthesis (Jing et al. 2012, J. Biomech. 45:455). A floor
+/// stretched beyond them is past what those models let tissue reach in a
+/// birth, so the plot draws each level the run passes and the legend says so.
+const LEVATOR_STRETCH_AT_CROWNING: [(f64, &str); 2] = [
+    (3.26, "Lien et al. 2004"),
+    (4.64, "Jing et al. 2012"),
+];
+
 fn floor_plot(w: &mut String, input: &ReportInput, axis: &TimeAxis) -> Result<(), ReportError> {
     let _ = write!(
         w,
@@ -442,6 +453,21 @@ fn floor_plot(w: &mut String, input: &ReportInput, axis: &TimeAxis) -> Result<()
             value: bad,
         });
     }
+    let peak = input
+        .floor_peak_stretch
+        .iter()
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .copied();
+    let greatest = peak.map_or(1.0, |(_, s)| s);
+    // Only the levels the run passes: a level above the data would squash
+    // the curve of a floor that stays near rest.
+    let passed: Vec<(f64, &str)> = LEVATOR_STRETCH_AT_CROWNING
+        .into_iter()
+        .filter(|&(level, _)| greatest > level)
+        .collect();
+    let references = std::iter::once(1.0)
+        .chain(passed.iter().map(|&(level, _)| level))
+        .collect();
     let spec = axis.spec(
         "floor",
         "peak stretch",
@@ -450,17 +476,27 @@ fn floor_plot(w: &mut String, input: &ReportInput, axis: &TimeAxis) -> Result<()
             values: &stretch,
             colour: RGBColor(68, 1, 84),
         }],
-        vec![1.0],
+        references,
     );
-    let peak = input
-        .floor_peak_stretch
-        .iter()
-        .max_by(|a, b| a.1.total_cmp(&b.1))
-        .copied();
     let svg = plots::svg(&spec)?;
     let _ = write!(w, "{svg}");
     if let Some((t, s)) = peak {
-        let _ = write!(w, "<p class=\"legend\">Greatest: {s:.3} at {t:.1} s.</p>");
+        let _ = write!(w, "<p class=\"legend\">Greatest: {s:.3} at {t:.1} s.");
+        if !passed.is_empty() {
+            let levels: Vec<String> = passed
+                .iter()
+                .map(|(level, source)| format!("{level} ({source})"))
+                .collect();
+            let _ = write!(
+                w,
+                " Lines at the largest levator stretch that models of an uncomplicated birth \
+                 predict at crowning, which this floor passes: {}. Beyond them the floor is \
+                 stretched further than those models predict for an uncomplicated birth \
+                 (this floor is elastic and cannot tear).",
+                levels.join(" and ")
+            );
+        }
+        let _ = write!(w, "</p>");
     }
     let _ = write!(w, "</figure>");
     Ok(())

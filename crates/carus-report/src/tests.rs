@@ -131,6 +131,7 @@ fn floor_stretch_and_the_scenario_appear_when_given() {
         "four plots and the floor's"
     );
     assert!(html.contains("Greatest: 1.400 at 10.0 s."));
+    assert!(!html.contains("Lien et al."), "a floor near rest passes no cited level");
     assert!(!html.contains("plot-axial-moments"), "no moments given, no plot");
     assert!(html.contains("max_n = 120 # &lt;max&gt;"));
     input.floor_peak_stretch[1].1 = f64::NAN;
@@ -138,6 +139,26 @@ fn floor_stretch_and_the_scenario_appear_when_given() {
         write_report_with(&input, None),
         Err(ReportError::NotFinite { .. })
     ));
+}
+
+#[test]
+fn a_floor_stretched_past_the_cited_crowning_levels_is_marked() {
+    let demo = Demo::straight_push().unwrap();
+    let mut input = demo.input("overstretched floor");
+    let count_lines = |html: &str| {
+        let floor = &html[html.find("id=\"plot-floor\"").unwrap()..];
+        floor[..floor.find("</figure>").unwrap()].matches("opacity=\"0.45\"").count()
+    };
+    input.floor_peak_stretch = vec![(0.0, 1.0), (10.0, 2.0), (20.0, 1.5)];
+    let rest_only = count_lines(&write_report_with(&input, None).unwrap().html);
+    input.floor_peak_stretch = vec![(0.0, 1.0), (10.0, 4.0), (20.0, 1.5)];
+    let html = write_report_with(&input, None).unwrap().html;
+    assert!(html.contains("which this floor passes: 3.26 (Lien et al. 2004)."));
+    assert_eq!(count_lines(&html), rest_only + 1, "one more reference line");
+    input.floor_peak_stretch[1].1 = 7.9;
+    let html = write_report_with(&input, None).unwrap().html;
+    assert!(html.contains("3.26 (Lien et al. 2004) and 4.64 (Jing et al. 2012)"));
+    assert_eq!(count_lines(&html), rest_only + 2);
 }
 
 #[test]
