@@ -47,7 +47,17 @@ pub struct NeckStiffness {
     /// End of the extension range, degrees from neutral. Lynch-Caris et
     /// al. 2008: extension 85 +- 14 deg (same cohort and caveat).
     pub extension_limit_deg: f64,
-    /// Stiffness added beyond either limit, N m per degree. Numerical (the
+    /// End of the lateral bending range, degrees to either side of the
+    /// joining pose (the fetus is joined unbent). Öhman & Beckung 2008
+    /// (Pediatr. Phys. Ther. 20:53, passive range of motion of 38 infants
+    /// aged 2-10 months): lateral flexion 70 deg, the youngest measured
+    /// figure found.
+    pub lateral_bending_limit_deg: f64,
+    /// End of the axial rotation range, degrees to either side of the
+    /// joining pose (the fetus is joined untwisted). Öhman & Beckung 2008:
+    /// rotation 110 deg.
+    pub axial_rotation_limit_deg: f64,
+    /// Stiffness added beyond any limit, N m per degree. Numerical (the
     /// limit is what is cited; this only enforces it, like a contact
     /// penalty): the largest moment about the pivot the head meets, about
     /// 7 N m (140 N, REFERENCE_DATA.md, at a 50 mm lever, the head's
@@ -72,6 +82,8 @@ impl Default for NeckStiffness {
             linear_damping_n_s_per_m: 50.0,
             flexion_limit_deg: 66.0,
             extension_limit_deg: 85.0,
+            lateral_bending_limit_deg: 70.0,
+            axial_rotation_limit_deg: 110.0,
             end_range_stiffness_nm_per_deg: 1.0,
         }
     }
@@ -241,6 +253,8 @@ impl Neck {
             ("linear_damping_n_s_per_m", stiffness.linear_damping_n_s_per_m),
             ("flexion_limit_deg", stiffness.flexion_limit_deg),
             ("extension_limit_deg", stiffness.extension_limit_deg),
+            ("lateral_bending_limit_deg", stiffness.lateral_bending_limit_deg),
+            ("axial_rotation_limit_deg", stiffness.axial_rotation_limit_deg),
             ("end_range_stiffness_nm_per_deg", stiffness.end_range_stiffness_nm_per_deg),
         ] {
             check_non_negative(name, value, true)?;
@@ -308,10 +322,14 @@ impl Neck {
         // End of range, measured from the anatomical neutral attitude.
         let from_neutral = (angles.flexion + self.rest_flexion_rad) * per_rad;
         let beyond = (from_neutral - s.flexion_limit_deg).max(0.0) + (from_neutral + s.extension_limit_deg).min(0.0);
+        // Sideways and twist, symmetric about the joining pose.
+        let past = |angle_rad: f64, limit_deg: f64| (angle_rad.abs() * per_rad - limit_deg).max(0.0).copysign(angle_rad);
+        let k_end = s.end_range_stiffness_nm_per_deg;
         let torques = DVec3::new(
-            per_rad * s.lateral_bending_nm_per_deg * angles.lateral,
-            per_rad * k_flex * angles.flexion + s.end_range_stiffness_nm_per_deg * beyond,
-            per_rad * s.axial_rotation_nm_per_deg * angles.axial,
+            per_rad * s.lateral_bending_nm_per_deg * angles.lateral
+                + k_end * past(angles.lateral, s.lateral_bending_limit_deg),
+            per_rad * k_flex * angles.flexion + k_end * beyond,
+            per_rad * s.axial_rotation_nm_per_deg * angles.axial + k_end * past(angles.axial, s.axial_rotation_limit_deg),
         );
         let elastic = qt * angles.restoring_moment(torques);
         let relative_spin = state.angular_velocity(model, h) - state.angular_velocity(model, t);
@@ -442,6 +460,30 @@ mod tests {
         let m = neck.load(&model, &state).elastic_moment_on_head.dot(-DVec3::X);
         let expected = 7.0 * s.extension_nm_per_deg + 2.0 * s.end_range_stiffness_nm_per_deg;
         assert!((m - expected).abs() < 1e-9, "{m} vs {expected}");
+    }
+
+    #[test]
+    fn the_neck_stiffens_beyond_its_sideways_and_twist_ranges() {
+        let s = NeckStiffness::default();
+        // About the floating axis (y at rest) and the neck axis (z), either way.
+        let cases = [
+            (DVec3::Y, s.lateral_bending_limit_deg, s.lateral_bending_nm_per_deg),
+            (DVec3::Z, s.axial_rotation_limit_deg, s.axial_rotation_nm_per_deg),
+        ];
+        for (axis, limit, k) in cases {
+            for side in [1.0, -1.0] {
+                let moment = |deg: f64| {
+                    let (model, mut state, neck) = setup();
+                    turn_head(&mut state, axis, side * deg);
+                    neck.load(&model, &state).elastic_moment_on_head.dot(axis)
+                };
+                let inside = limit - 5.0;
+                assert!((moment(inside) + side * inside * k).abs() < 1e-9, "{axis} {side}: inside");
+                let over = limit + 3.0;
+                let expected = -side * (over * k + 3.0 * s.end_range_stiffness_nm_per_deg);
+                assert!((moment(over) - expected).abs() < 1e-9, "{axis} {side}: {} vs {expected}", moment(over));
+            }
+        }
     }
 
     #[test]
