@@ -106,6 +106,20 @@ pub struct Movements {
 }
 
 impl Movements {
+    /// All seven unobserved, each with its unit: what a run that stopped
+    /// before there was anything to detect reports.
+    pub fn none() -> Self {
+        Movements {
+            engagement: Movement::absent(Unit::Mm),
+            descent: Movement::absent(Unit::Mm),
+            flexion: Movement::absent(Unit::Deg),
+            internal_rotation: Movement::absent(Unit::Deg),
+            extension: Movement::absent(Unit::Deg),
+            external_rotation: Movement::absent(Unit::Deg),
+            expulsion: Movement::absent(Unit::Mm),
+        }
+    }
+
     /// Keys and movements in the textbook order.
     pub fn by_key(&self) -> [(&'static str, &Movement); 7] {
         [
@@ -415,6 +429,21 @@ fn largest_rise(q: &[f64], window: &[usize], tolerance: f64) -> Option<(Span, f6
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn none_is_the_seven_unobserved_in_order_with_their_units() {
+        let none = Movements::none();
+        let keys: Vec<&str> = none.by_key().iter().map(|(k, _)| *k).collect();
+        assert_eq!(
+            keys,
+            ["engagement", "descent", "flexion", "internal_rotation", "extension", "external_rotation", "expulsion"]
+        );
+        for (key, m) in none.by_key() {
+            assert!(!m.observed && m.start_s.is_none() && m.end_s.is_none() && m.size.is_none(), "{key}");
+            let linear = matches!(key, "engagement" | "descent" | "expulsion");
+            assert_eq!(m.unit, if linear { Unit::Mm } else { Unit::Deg }, "{key}");
+        }
+    }
 
     #[test]
     fn a_fall_reports_its_onset_and_its_settling() {

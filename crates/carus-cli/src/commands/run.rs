@@ -10,7 +10,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 use anyhow::{bail, Context};
-use carus_analysis::{Movement, Unit};
+use carus_analysis::{Movement, Movements};
 use carus_labour::{Observer, RunOptions, RunRecord, Scenario, BUILTINS};
 use serde_json::json;
 
@@ -254,37 +254,11 @@ fn json_summary(record: &RunRecord, out_dir: &Path) -> serde_json::Value {
 /// The seven movements under their canonical keys; all unobserved when the
 /// run stopped before there was anything to detect.
 fn movements(record: &RunRecord) -> Vec<(&'static str, Movement)> {
-    match &record.detector {
-        Some(d) => d
-            .movements
-            .by_key()
-            .iter()
-            .map(|(k, m)| (*k, **m))
-            .collect(),
-        None => [
-            ("engagement", Unit::Mm),
-            ("descent", Unit::Mm),
-            ("flexion", Unit::Deg),
-            ("internal_rotation", Unit::Deg),
-            ("extension", Unit::Deg),
-            ("external_rotation", Unit::Deg),
-            ("expulsion", Unit::Mm),
-        ]
-        .into_iter()
-        .map(|(k, unit)| {
-            (
-                k,
-                Movement {
-                    observed: false,
-                    start_s: None,
-                    end_s: None,
-                    size: None,
-                    unit,
-                },
-            )
-        })
-        .collect(),
-    }
+    let all = record
+        .detector
+        .as_ref()
+        .map_or_else(Movements::none, |d| d.movements);
+    all.by_key().iter().map(|(k, m)| (*k, **m)).collect()
 }
 
 fn print_summary(record: &RunRecord, out_dir: &Path) {

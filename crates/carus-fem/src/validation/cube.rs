@@ -68,6 +68,25 @@ impl CubeElement {
             CubeElement::T4anp => "t4anp",
         }
     }
+
+    /// The validation cube meshed with `n` elements per edge: H8, or each
+    /// hexahedron split into 6 T4.
+    pub fn cube_mesh(self, n: usize) -> Mesh {
+        let lengths = [CUBE_EDGE_M; 3];
+        match self {
+            CubeElement::H8 => box_h8(lengths, [n; 3]),
+            CubeElement::T4 | CubeElement::T4anp => box_t4(lengths, [n; 3]),
+        }
+    }
+
+    /// The tetrahedron formulation this element names (H8 meshes have none).
+    pub fn tet_formulation(self) -> TetFormulation {
+        if self == CubeElement::T4anp {
+            TetFormulation::T4Anp
+        } else {
+            TetFormulation::T4
+        }
+    }
 }
 
 /// Lateral condition on the loaded face.
@@ -131,17 +150,13 @@ impl CubeSetup {
 
     /// The cube mesh (H8, or each hexahedron split into 6 T4).
     pub fn mesh(&self) -> Mesh {
-        let lengths = [CUBE_EDGE_M; 3];
-        match self.element {
-            CubeElement::H8 => box_h8(lengths, [self.n; 3]),
-            CubeElement::T4 | CubeElement::T4anp => box_t4(lengths, [self.n; 3]),
-        }
+        self.element.cube_mesh(self.n)
     }
 
     /// Model options of the run.
     pub fn options(&self) -> ModelOptions {
         ModelOptions {
-            tet_formulation: if self.element == CubeElement::T4anp { TetFormulation::T4Anp } else { TetFormulation::T4 },
+            tet_formulation: self.element.tet_formulation(),
             hourglass_coefficient: self.hourglass_coefficient,
             hourglass_modulus: self.hourglass_modulus,
             damping_per_s: DAMPING_PER_S,

@@ -19,9 +19,8 @@ use serde::Serialize;
 
 use super::cube::CubeElement;
 use super::{tissue_model, CaseSize, ValidationError, CUBE_EDGE_M};
-use crate::generate::{box_h8, box_t4};
 use crate::loads::BoundaryConditions;
-use crate::model::{ModelOptions, Precision, TetFormulation};
+use crate::model::{ModelOptions, Precision};
 use crate::solver::{StepControl, TledSolver};
 
 /// VALIDATION.md V4: 10 000 steps.
@@ -79,13 +78,9 @@ pub fn vibrate(
     step_fraction: f64,
     damping_per_s: f64,
 ) -> Result<VibrationResult, ValidationError> {
-    let lengths = [CUBE_EDGE_M; 3];
-    let mesh = match element {
-        CubeElement::H8 => box_h8(lengths, [n; 3]),
-        CubeElement::T4 | CubeElement::T4anp => box_t4(lengths, [n; 3]),
-    };
+    let mesh = element.cube_mesh(n);
     let options = ModelOptions {
-        tet_formulation: if element == CubeElement::T4anp { TetFormulation::T4Anp } else { TetFormulation::T4 },
+        tet_formulation: element.tet_formulation(),
         hourglass_coefficient: super::cube::HOURGLASS_COEFFICIENT,
         damping_per_s,
         precision: Precision::F64,

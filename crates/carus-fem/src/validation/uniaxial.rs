@@ -14,9 +14,8 @@ use super::closed_form::uniaxial_nominal_stress_pa;
 use super::cube::CubeElement;
 use super::{tissue_model, CaseSize, ValidationError};
 use super::{CUBE_BULK_MODULUS_PA, CUBE_EDGE_M, CUBE_SHEAR_MODULUS_PA};
-use crate::generate::{box_h8, box_t4};
 use crate::loads::{BoundaryConditions, FixedDofs, ImposedDisplacement, LoadShape};
-use crate::model::{ModelOptions, Precision, TetFormulation};
+use crate::model::{ModelOptions, Precision};
 use crate::solver::{StepControl, TledSolver};
 
 /// VALIDATION.md V1: reaction force within 0.5 %.
@@ -58,13 +57,9 @@ pub struct UniaxialReport {
 
 /// Runs one stretch; returns the reaction along x on the face x = L.
 pub fn stretch_reaction(element: CubeElement, n: usize, stretch: f64) -> Result<f64, ValidationError> {
-    let lengths = [CUBE_EDGE_M; 3];
-    let mesh = match element {
-        CubeElement::H8 => box_h8(lengths, [n; 3]),
-        CubeElement::T4 | CubeElement::T4anp => box_t4(lengths, [n; 3]),
-    };
+    let mesh = element.cube_mesh(n);
     let options = ModelOptions {
-        tet_formulation: if element == CubeElement::T4anp { TetFormulation::T4Anp } else { TetFormulation::T4 },
+        tet_formulation: element.tet_formulation(),
         hourglass_coefficient: super::cube::HOURGLASS_COEFFICIENT,
         damping_per_s: DAMPING_PER_S,
         precision: Precision::F64,
