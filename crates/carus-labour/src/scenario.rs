@@ -273,6 +273,9 @@ pub struct FloorSection {
     /// the levator ani muscles using shear wave elastography"). The same
     /// study measured 35.4 / 37.6 kPa during a Valsalva manoeuvre (the
     /// pushing of the second stage); docs/LABOUR.md gives the outcome there.
+    /// Taken from non-pregnant women: the levator's stiffness did not change
+    /// significantly through pregnancy in 59 nulliparous women (Davidson,
+    /// Nielsen, Taberner & Kruger 2020, Int Urogynecol J 31(11), elastometry).
     pub shear_modulus_pa: f64,
     /// Bulk modulus, Pa: 20 x shear (nearly incompressible, nu about 0.475; numerical).
     pub bulk_modulus_pa: f64,
