@@ -11,9 +11,6 @@ use carus_anatomy::floor::FloorParameters;
 use carus_anatomy::pelvis::PelvisSpec;
 use serde::{Deserialize, Serialize};
 
-/// Name an imported pelvis takes to mean the shipped Visible Human Female pelvis.
-pub const VISIBLE_HUMAN: &str = "visible-human-female";
-
 /// Why a scenario cannot be used.
 #[derive(Debug, thiserror::Error)]
 pub enum ScenarioError {

@@ -9,7 +9,6 @@ use std::sync::Arc;
 use carus_analysis::{BirthCanal, ContactSite, HeadGeometry, TrunkGeometry};
 use carus_anatomy::fetus::{FetalHead, Trunk, TrunkDiameters};
 use carus_anatomy::floor::{pelvic_floor, ATTACHED};
-use carus_anatomy::pelvis::PelvisSpec;
 use carus_anatomy::{Pelvis, TriSurface};
 use carus_contact::{
     ContactLaw, HeadAxes, MassProperties, PelvisCollider, RegionTable, RigidBodyModel, RigidPose,
@@ -18,7 +17,7 @@ use carus_contact::{
 use carus_fem::{BoundaryConditions, Material, MaterialRegion, Mesh, ModelOptions, TledModel};
 use glam::{DMat3, DVec3};
 
-use crate::scenario::{Presentation, Scenario, VISIBLE_HUMAN};
+use crate::scenario::{Presentation, Scenario};
 use crate::LabourError;
 
 /// Index of the head among the rigid bodies.
@@ -334,16 +333,9 @@ pub fn solid_properties(surface: &TriSurface, density: f64) -> (f64, DVec3, DMat
 }
 
 fn build_pelvis(s: &Scenario) -> Result<Pelvis, LabourError> {
-    match &s.pelvis {
-        PelvisSpec::Imported { landmarks_file } if landmarks_file.as_os_str() == VISIBLE_HUMAN => {
-            carus_anatomy::import::visible_human_female_pelvis()
-                .map(|p| p.pelvis)
-                .map_err(|e| LabourError::Anatomy(format!("pelvis: {e}")))
-        }
-        spec => spec
-            .build(&s.base_dir)
-            .map_err(|e| LabourError::Anatomy(format!("pelvis: {e}"))),
-    }
+    s.pelvis
+        .build(&s.base_dir)
+        .map_err(|e| LabourError::Anatomy(format!("pelvis: {e}")))
 }
 
 fn build_floor(s: &Scenario, pelvis: &Pelvis) -> Result<FloorScene, LabourError> {

@@ -19,7 +19,7 @@ mod spec;
 pub use diameters::{DiameterError, PelvisDiameters};
 pub use landmarks::{PelvisLandmarks, LANDMARK_NAMES};
 pub use measure::{measure, PelvisMeasurement, PlaneMeasurement};
-pub use spec::{PelvisBuildError, PelvisSpec};
+pub use spec::{PelvisBuildError, PelvisSpec, VISIBLE_HUMAN_FEMALE};
 pub(crate) use generate::mid_ring;
 pub(crate) use interpolate::SuperRing as MidRing;
 

@@ -7,7 +7,11 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use super::{Pelvis, PelvisDiameters, PelvisError};
-use crate::import::{import_pelvis, ImportError};
+use crate::import::{import_pelvis, visible_human_female_pelvis, ImportError};
+
+/// The name an imported pelvis takes to mean the shipped Visible Human
+/// Female pelvis, compiled into the program (no file needed at run time).
+pub const VISIBLE_HUMAN_FEMALE: &str = "visible-human-female";
 
 /// How a pelvis is made.
 #[derive(Debug, Clone, PartialEq)]
@@ -35,10 +39,14 @@ pub enum PelvisBuildError {
 
 impl PelvisSpec {
     /// Builds the pelvis; an imported one's path is taken relative to `base_dir`
-    /// (the folder of the file the spec came from).
+    /// (the folder of the file the spec came from), except the name
+    /// [`VISIBLE_HUMAN_FEMALE`], which is the shipped pelvis.
     pub fn build(&self, base_dir: &Path) -> Result<Pelvis, PelvisBuildError> {
         match self {
             PelvisSpec::Generated(d) => Ok(Pelvis::generate(d)?),
+            PelvisSpec::Imported { landmarks_file } if landmarks_file.as_os_str() == VISIBLE_HUMAN_FEMALE => {
+                Ok(visible_human_female_pelvis()?.pelvis)
+            }
             PelvisSpec::Imported { landmarks_file } => Ok(import_pelvis(&base_dir.join(landmarks_file))?.pelvis),
         }
     }

@@ -155,10 +155,19 @@ impl AnatomyFile {
                     .with_context(|| format!("{}: in the [{key}] table (keys and units: docs/ANATOMY.md)", path.display())),
             }
         }
+        // A scenario (it has a `name`) keeps the floor's shape in
+        // [floor.mesh], beside the tissue and coupling keys of its [floor].
+        let floor = if table.contains_key("name") {
+            part::<carus_labour::scenario::FloorSection>(path, &table, "floor")
+                .context("a scenario's [floor] table: keys in docs/SCENARIOS.md")?
+                .mesh
+        } else {
+            part(path, &table, "floor")?
+        };
         Ok(AnatomyFile {
             pelvis: part(path, &table, "pelvis")?,
             head: part(path, &table, "head")?,
-            floor: part(path, &table, "floor")?,
+            floor,
             path: Some(path.to_path_buf()),
         })
     }
@@ -177,5 +186,41 @@ impl AnatomyFile {
             PelvisSpec::Imported { landmarks_file } => format!("{source}, pelvis imported from {}", landmarks_file.display()),
             PelvisSpec::Generated(_) => source,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn load(text: &str) -> anyhow::Result<AnatomyFile> {
+        let dir = tempfile::tempdir()?;
+        let path = dir.path().join("file.toml");
+        std::fs::write(&path, text)?;
+        AnatomyFile::load(Some(&path))
+    }
+
+    #[test]
+    fn a_scenario_file_gives_its_floor_mesh_and_an_anatomy_file_its_floor() {
+        let scenario = carus_labour::scenario::Scenario::builtin("normal").unwrap();
+        let mut text = scenario.to_toml().unwrap();
+        text = text.replace("sag_mm = 20.0", "sag_mm = 12.0");
+        let file = load(&text).unwrap();
+        assert_eq!(file.floor.sag_mm, 12.0, "read from [floor.mesh]");
+        assert_eq!(file.head, scenario.head);
+        let anatomy = load("[floor]\nsag_mm = 15.0\n").unwrap();
+        assert_eq!(anatomy.floor.sag_mm, 15.0);
+        // A tissue key belongs to a scenario; in an anatomy file it is named.
+        let error = format!("{:#}", load("[floor]\nshear_modulus_pa = 16500.0\n").err().unwrap());
+        assert!(error.contains("[floor]") && error.contains("shear_modulus_pa"), "{error}");
+    }
+
+    #[test]
+    fn the_real_pelvis_scenario_names_the_shipped_pelvis_from_any_folder() {
+        let scenario = carus_labour::scenario::Scenario::builtin("real-pelvis").unwrap();
+        let file = load(&scenario.to_toml().unwrap()).unwrap();
+        let pelvis = file.pelvis().unwrap();
+        let imported = carus_anatomy::import::visible_human_female_pelvis().unwrap().pelvis;
+        assert_eq!(pelvis.landmarks, imported.landmarks);
     }
 }
