@@ -37,6 +37,15 @@ pub enum LabourError {
     Contact(#[from] carus_contact::ContactError),
     #[error("pelvic floor solver: {0}")]
     Floor(#[from] carus_fem::FemError),
+    /// An element of the floor turned inside out: where, and how far it was
+    /// stretched just before.
+    #[error("the pelvic floor failed at t = {time_s:.2} s: element {element} ({location}) turned inside out; {what}")]
+    FloorFailed {
+        time_s: f64,
+        element: usize,
+        location: String,
+        what: String,
+    },
     #[error("pose history: {0}")]
     History(#[from] carus_analysis::HistoryError),
     #[error("{path}: {message}")]

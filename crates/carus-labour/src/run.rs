@@ -373,6 +373,27 @@ mod tests {
         s
     }
 
+    #[test]
+    fn a_floor_element_turned_inside_out_is_named_where_it_lies() {
+        let s = coarse(0.1);
+        let scene = Scene::build(&s).unwrap();
+        let sim = Simulation::new(&scene).unwrap();
+        let (solver, floor) = (sim.solver().unwrap(), scene.floor.as_ref().unwrap());
+        let inverted = carus_fem::FemError::ElementInvertedDuringRun { element: 0, jacobian: -0.1, time_s: 12.5 };
+        let message = crate::sim::floor_failure(inverted, solver, floor, &s.floor.mesh).to_string();
+        assert!(
+            message.contains("failed at t = 12.50 s: element 0 (levator ani, left pubic insertion, at its attachment to bone)")
+                && message.contains("squeezed flat (largest stretch 1.0)")
+                && message.contains("elements_around"),
+            "{message}"
+        );
+        // Other solver errors pass through as they were.
+        let diverged = carus_fem::FemError::Diverged { time_s: 1.0, last_good_time_s: 0.9, what: "x".into() };
+        let text = diverged.to_string();
+        let passed = crate::sim::floor_failure(diverged, solver, floor, &s.floor.mesh);
+        assert!(matches!(passed, LabourError::Floor(_)) && passed.to_string().ends_with(&text));
+    }
+
     fn run_in(s: &Scenario, options: &RunOptions) -> (tempfile::TempDir, RunRecord) {
         let dir = tempfile::tempdir().unwrap();
         let record = run(s, dir.path(), options, &mut SilentObserver).unwrap();

@@ -409,7 +409,9 @@ impl<'a> Simulation<'a> {
             held_by.push(ids);
         }
         for _ in 0..self.substeps {
-            solver.step()?;
+            if let Err(e) = solver.step() {
+                return Err(floor_failure(e, solver, floor, &scene.scenario.floor.mesh));
+            }
         }
         solver.update_internal_forces()?;
         let pivot = self
@@ -527,6 +529,43 @@ impl<'a> Simulation<'a> {
 
 /// The floor's solver with a sub-step of `dt / n`, n the fewest sub-steps
 /// at or below the chosen fraction of the critical step; returns it with n.
+/// Says where a floor element turned inside out and what it means; other
+/// solver errors pass through. The solver has gone back to its last good
+/// state, whose stretch is what the element reached.
+pub(crate) fn floor_failure(
+    error: carus_fem::FemError,
+    solver: &TledSolver,
+    floor: &crate::scene::FloorScene,
+    parameters: &carus_anatomy::floor::FloorParameters,
+) -> LabourError {
+    let carus_fem::FemError::ElementInvertedDuringRun { element, time_s, .. } = error else {
+        return error.into();
+    };
+    let Some(location) = carus_anatomy::floor::element_location(parameters, &floor.mesh, element) else {
+        return error.into();
+    };
+    let stretch = solver.element_fields().max_principal_stretch[element];
+    let [(lien, _), (jing, _)] = carus_anatomy::floor::LEVATOR_STRETCH_AT_CROWNING;
+    let what = if stretch > lien {
+        format!(
+            "it had been stretched {stretch:.1} times, past the {lien}-{jing} that levator models predict \
+             at crowning in an uncomplicated birth (Lien et al. 2004, Jing et al. 2012), where real \
+             tissue is at risk of tearing; this elastic floor cannot tear"
+        )
+    } else {
+        format!("it was squeezed flat (largest stretch {stretch:.1}), pressed between the fetus and bone")
+    };
+    LabourError::FloorFailed {
+        time_s,
+        element,
+        location,
+        what: format!(
+            "{what}. Everything simulated so far is written; a finer floor ([floor.mesh] \
+             elements_around and elements_across) may carry the run further"
+        ),
+    }
+}
+
 fn new_solver(
     scene: &Scene,
     floor: &crate::scene::FloorScene,

@@ -422,17 +422,6 @@ impl<'a> TimeAxis<'a> {
     }
 }
 
-/// The largest levator stretch that models of an uncomplicated birth
-/// predict at crowning, with their sources: 3.26 in the medial
-/// pubococcygeus (Lien et al. 2004, Obstet. Gynecol. 103:31) and 4.64 at
-/// the pubovisceral enthesis (Jing et al. 2012, J. Biomech. 45:455). A floor
-/// stretched beyond them is past what those models let tissue reach in a
-/// birth, so the plot draws each level the run passes and the legend says so.
-const LEVATOR_STRETCH_AT_CROWNING: [(f64, &str); 2] = [
-    (3.26, "Lien et al. 2004"),
-    (4.64, "Jing et al. 2012"),
-];
-
 fn floor_plot(w: &mut String, input: &ReportInput, axis: &TimeAxis) -> Result<(), ReportError> {
     let _ = write!(
         w,
@@ -461,7 +450,7 @@ fn floor_plot(w: &mut String, input: &ReportInput, axis: &TimeAxis) -> Result<()
     let greatest = peak.map_or(1.0, |(_, s)| s);
     // Only the levels the run passes: a level above the data would squash
     // the curve of a floor that stays near rest.
-    let passed: Vec<(f64, &str)> = LEVATOR_STRETCH_AT_CROWNING
+    let passed: Vec<(f64, &str)> = carus_anatomy::floor::LEVATOR_STRETCH_AT_CROWNING
         .into_iter()
         .filter(|&(level, _)| greatest > level)
         .collect();

@@ -609,6 +609,58 @@ pub fn pelvic_floor(pelvis: &Pelvis, parameters: &FloorParameters) -> Result<Mes
     Ok(mesh)
 }
 
+/// The largest levator stretch that models of an uncomplicated birth
+/// predict at crowning, with their sources: 3.26 in the medial
+/// pubococcygeus (Lien et al. 2004, Obstet. Gynecol. 103:31) and 4.64 at
+/// the pubovisceral enthesis (Jing et al. 2012, J. Biomech. 45:455). Not a
+/// failure criterion: a floor stretched beyond them is past what those
+/// models let the levator reach in a birth.
+pub const LEVATOR_STRETCH_AT_CROWNING: [(f64, &str); 2] = [
+    (3.26, "Lien et al. 2004"),
+    (4.64, "Jing et al. 2012"),
+];
+
+/// Where element `element` of a floor built with `parameters` lies, in
+/// words a clinician reads: round the U (the mother's left or right pubic
+/// insertion, side, or the back on the midline) and across it (at the
+/// attachment to bone, at the hiatus rim, or between), with its tissue
+/// (levator ani or perineal body) from `mesh`. `None` past the last element.
+pub fn element_location(parameters: &FloorParameters, mesh: &Mesh, element: usize) -> Option<String> {
+    let (na, nc, nt) = (
+        parameters.elements_around,
+        parameters.elements_across,
+        parameters.elements_through,
+    );
+    if element >= na * nc * nt {
+        return None;
+    }
+    // Elements run through the thickness fastest, then across, then round.
+    let (i, j) = (element / (nc * nt), element / nt % nc);
+    let u = (i as f64 + 0.5) / na as f64;
+    let around = match u {
+        u if u < 0.1 => "left pubic insertion",
+        u if u < 0.4 => "left side",
+        u if u <= 0.6 => "back, on the midline",
+        u if u <= 0.9 => "right side",
+        _ => "right pubic insertion",
+    };
+    let across = match j {
+        0 => "at its attachment to bone",
+        j if j + 1 == nc => "at the hiatus rim",
+        _ => "between attachment and hiatus rim",
+    };
+    let tissue = if mesh
+        .element_sets
+        .get(PERINEAL_BODY)
+        .is_some_and(|set| set.contains(&(element as u32)))
+    {
+        PERINEAL_BODY
+    } else {
+        LEVATOR_ANI
+    };
+    Some(format!("{}, {around}, {across}", tissue.replace('_', " ")))
+}
+
 fn smoothstep(lo: f64, hi: f64, x: f64) -> f64 {
     let s = ((x - lo) / (hi - lo)).clamp(0.0, 1.0);
     s * s * (3.0 - 2.0 * s)
@@ -640,6 +692,27 @@ mod tests {
             parameters.elements_around * parameters.elements_across * parameters.elements_through;
         assert_eq!(mesh.element_count(), n);
         mesh
+    }
+
+    #[test]
+    fn an_element_is_located_where_it_lies() {
+        let pelvis = Pelvis::generate(&PelvisDiameters::default()).unwrap();
+        let parameters = FloorParameters { elements_through: 2, ..FloorParameters::default() };
+        let mesh = pelvic_floor(&pelvis, &parameters).unwrap();
+        let centre = |e: usize| mesh.element(e).iter().map(|&n| DVec3::from_array(mesh.nodes[n as usize])).sum::<DVec3>() / 8.0;
+        let attached = &mesh.node_sets[ATTACHED];
+        let touches_bone = |e: usize| mesh.element(e).iter().any(|n| attached.contains(n));
+        let last = mesh.element_count() - 1;
+        let place = |e: usize| element_location(&parameters, &mesh, e).unwrap();
+        // x runs to the mother's right, y forwards (CONVENTIONS.md).
+        assert_eq!(place(0), "levator ani, left pubic insertion, at its attachment to bone");
+        assert!(centre(0).x < 0.0 && centre(0).y > 0.0 && touches_bone(0));
+        assert!(place(last).starts_with("levator ani, right pubic insertion, at the hiatus rim"), "{}", place(last));
+        assert!(centre(last).x > 0.0);
+        let perineal = mesh.element_sets[PERINEAL_BODY][0] as usize;
+        assert!(place(perineal).starts_with("perineal body, back, on the midline"), "{}", place(perineal));
+        assert!(centre(perineal).y < centre(0).y);
+        assert_eq!(element_location(&parameters, &mesh, last + 1), None);
     }
 
     #[test]
