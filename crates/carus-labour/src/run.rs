@@ -384,7 +384,7 @@ mod tests {
         assert!(
             message.contains("failed at t = 12.50 s: element 0 (levator ani, left pubic insertion, at its attachment to bone)")
                 && message.contains("squeezed flat (largest stretch 1.0)")
-                && message.contains("elements_around"),
+                && message.contains("is written and stands"),
             "{message}"
         );
         // Other solver errors pass through as they were.

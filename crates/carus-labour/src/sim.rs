@@ -553,15 +553,18 @@ pub(crate) fn floor_failure(
              tissue is at risk of tearing; this elastic floor cannot tear"
         )
     } else {
-        format!("it was squeezed flat (largest stretch {stretch:.1}), pressed between the fetus and bone")
+        format!(
+            "it was squeezed flat (largest stretch {stretch:.1}), pressed between the fetus and bone: \
+             the floor has no contact of its own with the bone"
+        )
     };
     LabourError::FloorFailed {
         time_s,
         element,
         location,
         what: format!(
-            "{what}. Everything simulated so far is written; a finer floor ([floor.mesh] \
-             elements_around and elements_across) may carry the run further"
+            "{what}. Everything simulated up to here is written and stands; docs/LABOUR.md \
+             (\"What was tried\") lists the runs that end this way"
         ),
     }
 }
