@@ -527,8 +527,6 @@ impl<'a> Simulation<'a> {
     }
 }
 
-/// The floor's solver with a sub-step of `dt / n`, n the fewest sub-steps
-/// at or below the chosen fraction of the critical step; returns it with n.
 /// Says where a floor element turned inside out and what it means; other
 /// solver errors pass through. The solver has gone back to its last good
 /// state, whose stretch is what the element reached.
@@ -548,9 +546,9 @@ pub(crate) fn floor_failure(
     let [(lien, _), (jing, _)] = carus_anatomy::floor::LEVATOR_STRETCH_AT_CROWNING;
     let what = if stretch > lien {
         format!(
-            "it had been stretched {stretch:.1} times, past the {lien}-{jing} that levator models predict \
-             at crowning in an uncomplicated birth (Lien et al. 2004, Jing et al. 2012), where real \
-             tissue is at risk of tearing; this elastic floor cannot tear"
+            "it had been stretched {stretch:.1} times, past the {lien} that a levator model of an \
+             uncomplicated birth predicts at crowning (Lien et al. 2004; {jing} at most in Jing et al. \
+             2012), where real tissue is at risk of tearing; this elastic floor cannot tear"
         )
     } else {
         format!(
@@ -569,6 +567,8 @@ pub(crate) fn floor_failure(
     }
 }
 
+/// The floor's solver with a sub-step of `dt / n`, n the fewest sub-steps
+/// at or below the chosen fraction of the critical step; returns it with n.
 fn new_solver(
     scene: &Scene,
     floor: &crate::scene::FloorScene,
