@@ -543,12 +543,12 @@ pub(crate) fn floor_failure(
         return error.into();
     };
     let stretch = solver.element_fields().max_principal_stretch[element];
-    let [(lien, _), (jing, _)] = carus_anatomy::floor::LEVATOR_STRETCH_AT_CROWNING;
+    let [(lien, lien_source), (jing, jing_source)] = carus_anatomy::floor::LEVATOR_STRETCH_AT_CROWNING;
     let what = if stretch > lien {
         format!(
             "it had been stretched {stretch:.1} times, past the {lien} that a levator model of an \
-             uncomplicated birth predicts at crowning (Lien et al. 2004; {jing} at most in Jing et al. \
-             2012), where real tissue is at risk of tearing; this elastic floor cannot tear"
+             uncomplicated birth predicts at crowning ({lien_source}; {jing} at most in {jing_source}), \
+             where real tissue is at risk of tearing; this elastic floor cannot tear"
         )
     } else {
         format!(
