@@ -55,6 +55,9 @@ pub enum ContactSite {
     Coccyx,
     IschialSpines,
     PelvicSidewall,
+    /// The sacrospinous ligament with the coccygeus on it, closing the
+    /// canal behind the side wall below the ischial spines.
+    SacrospinousLigament,
     PelvicFloor,
 }
 
@@ -69,6 +72,7 @@ impl ContactSite {
             ContactSite::Coccyx => "coccyx",
             ContactSite::IschialSpines => "ischial_spines",
             ContactSite::PelvicSidewall => "pelvic_sidewall",
+            ContactSite::SacrospinousLigament => "sacrospinous_ligament",
             ContactSite::PelvicFloor => "pelvic_floor",
         }
     }

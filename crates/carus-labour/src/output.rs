@@ -24,6 +24,7 @@ pub const CONTACTS_CSV: &str = "contacts.csv";
 pub const MOVEMENTS_FILE: &str = "movements.json";
 pub const RUN_FILE: &str = "run.json";
 pub const PELVIS_VTU: &str = "pelvis.vtu";
+pub const LIGAMENTS_VTU: &str = "sacrospinous_ligaments.vtu";
 pub const HEAD_BODY_VTU: &str = "head_body.vtu";
 pub const TRUNK_BODY_VTU: &str = "trunk_body.vtu";
 pub const FRAMES_DIR: &str = "frames";

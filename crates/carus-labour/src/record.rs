@@ -73,6 +73,9 @@ pub struct Files {
     pub contacts_csv: String,
     pub movements: String,
     pub pelvis_vtu: String,
+    /// The sacrospinous ligaments, part of the canal's rigid wall.
+    #[serde(default)]
+    pub ligaments_vtu: String,
     /// Head and trunk surfaces in their body frames (place with the poses).
     pub head_body_vtu: String,
     pub trunk_body_vtu: Option<String>,

@@ -191,6 +191,13 @@ fn write_static(scene: &Scene, out_dir: &Path) -> Result<(), LabourError> {
         &p.triangles,
         &identity,
     )?;
+    let ligaments = carus_anatomy::floor::sacrospinous_ligaments(&scene.pelvis);
+    output::write_surface_vtu(
+        &out_dir.join(output::LIGAMENTS_VTU),
+        &ligaments.vertices,
+        &ligaments.triangles,
+        &identity,
+    )?;
     let h = &scene.head.surface;
     output::write_surface_vtu(
         &out_dir.join(output::HEAD_BODY_VTU),
@@ -338,6 +345,7 @@ fn finish(
             contacts_csv: output::CONTACTS_CSV.into(),
             movements: output::MOVEMENTS_FILE.into(),
             pelvis_vtu: output::PELVIS_VTU.into(),
+            ligaments_vtu: output::LIGAMENTS_VTU.into(),
             head_body_vtu: output::HEAD_BODY_VTU.into(),
             trunk_body_vtu: scene.trunk.as_ref().map(|_| output::TRUNK_BODY_VTU.into()),
             head_pvd,

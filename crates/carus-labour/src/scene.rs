@@ -86,13 +86,10 @@ impl Scene {
         let pelvis = build_pelvis(scenario)?;
         let canal = BirthCanal::from_pelvis(&pelvis)
             .map_err(|e| LabourError::Anatomy(format!("pelvic axis: {e}")))?;
-        let (labels, sites) = regions(&pelvis);
+        let CanalWall { surface: wall, labels, sites } = canal_wall(&pelvis);
         let names = sites.iter().map(|s| s.name().to_string()).collect();
-        let pelvis_collider = PelvisCollider::new(
-            &pelvis.surface.vertices,
-            &pelvis.surface.triangles,
-            Some(RegionTable { names, labels }),
-        )?;
+        let pelvis_collider =
+            PelvisCollider::new(&wall.vertices, &wall.triangles, Some(RegionTable { names, labels }))?;
 
         let s = scenario;
         let head_anatomy = FetalHead::with_subdivisions(&s.head, s.numerics.head_subdivisions)
@@ -379,9 +376,32 @@ fn build_floor(s: &Scenario, pelvis: &Pelvis) -> Result<FloorScene, LabourError>
     })
 }
 
+/// The rigid wall of the canal: the bone and the sacrospinous ligaments
+/// that close it behind the side walls below the spines
+/// (`carus_anatomy::floor::sacrospinous_ligaments`), with a site label per
+/// triangle and the sites the labels index.
+struct CanalWall {
+    surface: TriSurface,
+    labels: Vec<u16>,
+    sites: Vec<ContactSite>,
+}
+
+fn canal_wall(pelvis: &Pelvis) -> CanalWall {
+    let (mut labels, mut sites) = regions(pelvis);
+    let ligaments = carus_anatomy::floor::sacrospinous_ligaments(pelvis);
+    let mut surface = pelvis.surface.clone();
+    let offset = surface.vertices.len() as u32;
+    surface.vertices.extend(&ligaments.vertices);
+    surface.triangles.extend(ligaments.triangles.iter().map(|t| t.map(|v| v + offset)));
+    labels.resize(surface.triangles.len(), sites.len() as u16);
+    sites.push(ContactSite::SacrospinousLigament);
+    CanalWall { surface, labels, sites }
+}
+
 /// Labels each pelvis triangle with the part of the bony canal it belongs
 /// to: the nearest landmark group to its centroid (symphysis, pubic arch,
-/// promontory, sacrum, coccyx, spines, side wall). The floor is its own site.
+/// promontory, sacrum, coccyx, spines, side wall). The sacrospinous
+/// ligaments and the floor are sites of their own.
 fn regions(pelvis: &Pelvis) -> (Vec<u16>, Vec<ContactSite>) {
     let l = &pelvis.landmarks;
     let sites = vec![
@@ -431,13 +451,18 @@ fn regions(pelvis: &Pelvis) -> (Vec<u16>, Vec<ContactSite>) {
 mod tests {
     use super::*;
 
-    #[test]
-    fn a_head_over_the_symphysis_is_outside_the_canal() {
+    /// The normal scene with a coarse head and no floor: the canal alone.
+    fn coarse_normal_without_floor() -> Scene {
         let mut s = Scenario::builtin("normal").unwrap();
         s.numerics.head_subdivisions = 3;
         s.contact.sample_spacing_mm = 8.0;
         s.floor.enabled = false;
-        let scene = Scene::build(&s).unwrap();
+        Scene::build(&s).unwrap()
+    }
+
+    #[test]
+    fn a_head_over_the_symphysis_is_outside_the_canal() {
+        let scene = coarse_normal_without_floor();
         // The start: on the axis above the inlet.
         assert_eq!(scene.outside_canal(scene.start[HEAD].position_m), None);
         // Along the axis at the spines and just above the outlet: inside.
@@ -464,6 +489,32 @@ mod tests {
             scene.outside_canal(frame.point + 0.08 * frame.anterior),
             None
         );
+    }
+
+    #[test]
+    fn the_sacrospinous_ligaments_stop_the_fetus_where_the_bone_is_open() {
+        let scene = coarse_normal_without_floor();
+        let wall = canal_wall(&scene.pelvis);
+        let bone = scene.pelvis.surface.triangles.len();
+        assert!(wall.surface.triangles.len() > bone);
+        let collider = scene.pelvis_collider.surface();
+        for t in bone..wall.surface.triangles.len() {
+            assert_eq!(wall.sites[wall.labels[t] as usize], ContactSite::SacrospinousLigament);
+        }
+        // Each ligament's widest face, 2 mm beyond it on the outside: inside
+        // the wall, on the ligament, and at least a centimetre from any bone.
+        let per_side = (wall.surface.triangles.len() - bone) / 2;
+        for t in [bone + 1, bone + per_side + 1] {
+            let [a, b, c] = wall.surface.corners(t);
+            // Faces wind counter-clockwise seen from the canal.
+            let into_canal = (b - a).cross(c - a).normalize();
+            let behind = (a + b + c) / 3.0 - 0.002 * into_canal;
+            let hit = collider.closest_point(behind, 0.01).unwrap();
+            assert!((hit.signed_distance + 0.002).abs() < 1e-4, "{hit:?}");
+            assert!(hit.triangle as usize >= bone);
+            let to_bone = scene.pelvis.surface.vertices.iter().map(|v| (*v - behind).length()).fold(f64::MAX, f64::min);
+            assert!(to_bone > 0.01, "{to_bone}");
+        }
     }
 
     #[test]

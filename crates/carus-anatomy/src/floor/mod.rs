@@ -31,6 +31,7 @@ use serde::{Deserialize, Serialize};
 use carus_fem::mesh::{ElementKind, Mesh};
 
 use crate::pelvis::Pelvis;
+use crate::surface::TriSurface;
 
 /// Settable shape and resolution of the pelvic floor.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -321,6 +322,90 @@ impl HiatusFrame {
     }
 }
 
+/// The sacrospinous line on one side (`left`), `t` in [0, 1] from the
+/// ischial spine to the coccyx tip, where the levator's back part hangs
+/// from the ligament: it arrives square to the midline, so the two sides
+/// meet smoothly (a quadratic Bezier).
+fn sacrospinous_line(pelvis: &Pelvis, right: DVec3, left: bool, t: f64) -> DVec3 {
+    let l = &pelvis.landmarks;
+    let spine = if left { l.ischial_spine_left } else { l.ischial_spine_right };
+    let across = (spine - l.coccyx_tip).dot(right) * right;
+    let control = l.coccyx_tip + COCCYX_APPROACH * across;
+    (1.0 - t) * (1.0 - t) * spine + 2.0 * t * (1.0 - t) * control + t * t * l.coccyx_tip
+}
+
+/// Segments of each sacrospinous ligament along the sacrospinous line.
+const LIGAMENT_SEGMENTS: usize = 12;
+/// Half-height (m) of the band of bone searched for the sacrum's lateral
+/// margin at the S4-S5 level, along the sacrum and in front of it.
+const SACRAL_LEVEL_BAND: f64 = 0.005;
+/// The lower sacrum lies within this share of the half-interspinous
+/// distance from the midline (engineering choice: it keeps the search off
+/// the ischium).
+const SACRAL_WIDTH_SHARE: f64 = 0.6;
+
+/// The sacrospinous ligaments, with the coccygeus on them, as an open
+/// triangle surface facing the canal (pelvis frame, metres).
+///
+/// Below the ischial spines the bony canal is open behind its side walls
+/// (the sciatic foramina); in the body the ligament and the coccygeus close
+/// it from the spine to the lower sacrum and the coccyx, and the levator
+/// hangs from their lower border. Each ligament is the ruled strip between
+/// its lower border, the sacrospinous line (the floor's attachment,
+/// [`pelvic_floor`]), and its base, from the sacrum's lateral margin at
+/// the S4-S5 level to the coccyx tip: spine to sacrum at the top, narrowing
+/// to nothing at the coccyx tip, the ligament's triangle. Built from
+/// landmarks and the bone surface alone, so it fits generated and imported
+/// pelvises.
+pub fn sacrospinous_ligaments(pelvis: &Pelvis) -> TriSurface {
+    let l = &pelvis.landmarks;
+    let right = HiatusFrame::new(pelvis).right;
+    let middle = 0.5 * (l.ischial_spine_left + l.ischial_spine_right);
+    let along = (l.coccyx_tip - l.sacrum_s4_s5).normalize();
+    let forward = (l.symphysis_lower - l.sacrum_s4_s5).normalize();
+    let half_interspinous = 0.5 * (l.ischial_spine_right - l.ischial_spine_left).dot(right);
+    let mut surface = TriSurface::default();
+    for left in [true, false] {
+        let spine = if left { l.ischial_spine_left } else { l.ischial_spine_right };
+        // The sacrum's lateral margin at S4-S5: the bone at that level, no
+        // further forward than the landmark and within the sacrum's width
+        // (well inside the spines), nearest the spine.
+        let margin = pelvis
+            .surface
+            .vertices
+            .iter()
+            .filter(|v| {
+                let d = **v - l.sacrum_s4_s5;
+                d.dot(along).abs() < SACRAL_LEVEL_BAND
+                    && d.dot(forward) < SACRAL_LEVEL_BAND
+                    && (**v - middle).dot(right).abs() < SACRAL_WIDTH_SHARE * half_interspinous
+            })
+            .min_by(|a, b| (**a - spine).length_squared().total_cmp(&(**b - spine).length_squared()))
+            .copied()
+            .unwrap_or(l.sacrum_s4_s5);
+        let first = surface.vertices.len() as u32;
+        for k in 0..=LIGAMENT_SEGMENTS {
+            let t = k as f64 / LIGAMENT_SEGMENTS as f64;
+            surface.vertices.extend([sacrospinous_line(pelvis, right, left, t), margin.lerp(l.coccyx_tip, t)]);
+        }
+        for k in 0..LIGAMENT_SEGMENTS as u32 {
+            let (a, b, c, d) = (first + 2 * k, first + 2 * k + 2, first + 2 * k + 3, first + 2 * k + 1);
+            for [p, q, r] in [[a, b, c], [a, c, d]] {
+                let (vp, vq, vr) = (surface.vertices[p as usize], surface.vertices[q as usize], surface.vertices[r as usize]);
+                let normal = (vq - vp).cross(vr - vp);
+                if normal.length_squared() < 1e-14 {
+                    continue;
+                }
+                // Counter-clockwise seen from the canal, whose side the
+                // mid-pelvis centre lies on.
+                let towards_canal = middle - (vp + vq + vr) / 3.0;
+                surface.triangles.push(if normal.dot(towards_canal) >= 0.0 { [p, q, r] } else { [p, r, q] });
+            }
+        }
+    }
+    surface
+}
+
 impl Outline<'_> {
     /// Attachment on one side (`left`), `f` in [0, 1] from the pubis to the coccyx tip.
     fn attachment_half(&self, left: bool, f: f64) -> DVec3 {
@@ -339,12 +424,7 @@ impl Outline<'_> {
             let turn = PUBIC_ORIGIN_TURN + (16.0 - PUBIC_ORIGIN_TURN) * f / split;
             self.ring.at(sign * turn)
         } else {
-            // Spine to coccyx tip, arriving square to the midline so the two
-            // sides meet smoothly (a quadratic Bezier).
-            let t = (f - split) / (1.0 - split);
-            let across = (spine - l.coccyx_tip).dot(self.frame.right) * self.frame.right;
-            let control = l.coccyx_tip + COCCYX_APPROACH * across;
-            (1.0 - t) * (1.0 - t) * spine + 2.0 * t * (1.0 - t) * control + t * t * l.coccyx_tip
+            sacrospinous_line(self.pelvis, self.frame.right, left, (f - split) / (1.0 - split))
         }
     }
 
@@ -878,6 +958,60 @@ mod tests {
             &FloorParameters::default(),
             ANY_MIN_SCALED_JACOBIAN,
         );
+    }
+
+    /// Share of the ligaments' faces that the canal sees through a gap in
+    /// the bone: the ray from the canal below the spines to the face's
+    /// centre meets no bone on the way.
+    fn share_over_open_bone(pelvis: &Pelvis, ligaments: &TriSurface) -> f64 {
+        let l = &pelvis.landmarks;
+        let middle = 0.5 * (l.ischial_spine_left + l.ischial_spine_right);
+        let origin = middle.lerp(l.coccyx_tip, 0.3) + 0.01 * (l.symphysis_lower - l.sacrum_s4_s5).normalize();
+        let open = (0..ligaments.triangles.len())
+            .filter(|&t| {
+                let [a, b, c] = ligaments.corners(t);
+                let to_face = (a + b + c) / 3.0 - origin;
+                let direction = to_face.normalize();
+                !(0..pelvis.surface.triangles.len()).any(|u| {
+                    let [p, q, r] = pelvis.surface.corners(u);
+                    crate::pelvis::measure::ray_triangle(origin, direction, p, q, r)
+                        .is_some_and(|s| s < to_face.length())
+                })
+            })
+            .count();
+        open as f64 / ligaments.triangles.len() as f64
+    }
+
+    #[test]
+    fn the_sacrospinous_ligaments_span_the_opening_behind_the_spines() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../assets/anatomy/visible-human-female-pelvis.landmarks.toml");
+        let imported = crate::import::import_pelvis(&path).unwrap().pelvis;
+        let generated = Pelvis::generate(&PelvisDiameters::default()).unwrap();
+        for pelvis in [generated, imported] {
+            let ligaments = sacrospinous_ligaments(&pelvis);
+            // Most of each ligament spans an opening of the bony canal.
+            let share = share_over_open_bone(&pelvis, &ligaments);
+            assert!(share > 0.6, "only {share:.2} of the ligaments lie over open bone");
+            // Every face looks into the canal; each strip runs from the
+            // sacrospinous line to bone: spine to sacrum at the top,
+            // narrowing to nothing at the coccyx tip.
+            let l = &pelvis.landmarks;
+            let middle = 0.5 * (l.ischial_spine_left + l.ischial_spine_right);
+            for t in 0..ligaments.triangles.len() {
+                let [a, b, c] = ligaments.corners(t);
+                assert!((b - a).cross(c - a).dot(middle - (a + b + c) / 3.0) > 0.0);
+            }
+            let widths: Vec<f64> =
+                ligaments.vertices.chunks(2).map(|pair| (pair[1] - pair[0]).length()).collect();
+            let per_side = LIGAMENT_SEGMENTS + 1;
+            for side in widths.chunks(per_side) {
+                assert!(side[0] > 0.03 && side[per_side - 1] < 0.1 * side[0], "{side:?}");
+            }
+            for margin in [1, 2 * per_side + 1] {
+                assert!(pelvis.surface.vertices.contains(&ligaments.vertices[margin]));
+            }
+        }
     }
 
     #[test]

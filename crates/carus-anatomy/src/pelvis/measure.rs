@@ -224,7 +224,7 @@ fn canal_width(surface: &TriSurface, centre: DVec3, direction: DVec3) -> Option<
 }
 
 /// Distance along the ray `origin + s * dir` (s > 0) to triangle `abc` (Moller-Trumbore).
-fn ray_triangle(origin: DVec3, dir: DVec3, a: DVec3, b: DVec3, c: DVec3) -> Option<f64> {
+pub(crate) fn ray_triangle(origin: DVec3, dir: DVec3, a: DVec3, b: DVec3, c: DVec3) -> Option<f64> {
     let (e1, e2) = (b - a, c - a);
     let h = dir.cross(e2);
     let det = e1.dot(h);
