@@ -356,7 +356,8 @@ const SACRAL_WIDTH_SHARE: f64 = 0.6;
 /// the S4-S5 level to the coccyx tip: spine to sacrum at the top, narrowing
 /// to nothing at the coccyx tip, the ligament's triangle. Built from
 /// landmarks and the bone surface alone, so it fits generated and imported
-/// pelvises.
+/// pelvises (a pelvis of landmarks without a surface gets the S4-S5
+/// landmark as the sacral end).
 pub fn sacrospinous_ligaments(pelvis: &Pelvis) -> TriSurface {
     let l = &pelvis.landmarks;
     let right = HiatusFrame::new(pelvis).right;
