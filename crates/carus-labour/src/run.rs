@@ -191,11 +191,10 @@ fn write_static(scene: &Scene, out_dir: &Path) -> Result<(), LabourError> {
         &p.triangles,
         &identity,
     )?;
-    let ligaments = carus_anatomy::floor::sacrospinous_ligaments(&scene.pelvis);
     output::write_surface_vtu(
         &out_dir.join(output::LIGAMENTS_VTU),
-        &ligaments.vertices,
-        &ligaments.triangles,
+        &scene.ligaments.vertices,
+        &scene.ligaments.triangles,
         &identity,
     )?;
     let h = &scene.head.surface;

@@ -58,6 +58,8 @@ pub struct FloorScene {
 pub struct Scene {
     pub scenario: Scenario,
     pub pelvis: Pelvis,
+    /// The sacrospinous ligaments, part of the canal's rigid wall.
+    pub ligaments: TriSurface,
     pub canal: BirthCanal,
     pub pelvis_collider: PelvisCollider,
     /// The [`ContactSite`] of each pelvic region label.
@@ -86,7 +88,8 @@ impl Scene {
         let pelvis = build_pelvis(scenario)?;
         let canal = BirthCanal::from_pelvis(&pelvis)
             .map_err(|e| LabourError::Anatomy(format!("pelvic axis: {e}")))?;
-        let CanalWall { surface: wall, labels, sites } = canal_wall(&pelvis);
+        let ligaments = carus_anatomy::floor::sacrospinous_ligaments(&pelvis);
+        let CanalWall { surface: wall, labels, sites } = canal_wall(&pelvis, &ligaments);
         let names = sites.iter().map(|s| s.name().to_string()).collect();
         let pelvis_collider =
             PelvisCollider::new(&wall.vertices, &wall.triangles, Some(RegionTable { names, labels }))?;
@@ -158,6 +161,7 @@ impl Scene {
         let mut scene = Scene {
             scenario: scenario.clone(),
             pelvis,
+            ligaments,
             canal,
             pelvis_collider,
             sites,
@@ -377,18 +381,16 @@ fn build_floor(s: &Scenario, pelvis: &Pelvis) -> Result<FloorScene, LabourError>
 }
 
 /// The rigid wall of the canal: the bone and the sacrospinous ligaments
-/// that close it behind the side walls below the spines
-/// (`carus_anatomy::floor::sacrospinous_ligaments`), with a site label per
-/// triangle and the sites the labels index.
+/// that close it behind the side walls below the spines, with a site label
+/// per triangle and the sites the labels index.
 struct CanalWall {
     surface: TriSurface,
     labels: Vec<u16>,
     sites: Vec<ContactSite>,
 }
 
-fn canal_wall(pelvis: &Pelvis) -> CanalWall {
+fn canal_wall(pelvis: &Pelvis, ligaments: &TriSurface) -> CanalWall {
     let (mut labels, mut sites) = regions(pelvis);
-    let ligaments = carus_anatomy::floor::sacrospinous_ligaments(pelvis);
     let mut surface = pelvis.surface.clone();
     let offset = surface.vertices.len() as u32;
     surface.vertices.extend(&ligaments.vertices);
@@ -494,7 +496,7 @@ mod tests {
     #[test]
     fn the_sacrospinous_ligaments_stop_the_fetus_where_the_bone_is_open() {
         let scene = coarse_normal_without_floor();
-        let wall = canal_wall(&scene.pelvis);
+        let wall = canal_wall(&scene.pelvis, &scene.ligaments);
         let bone = scene.pelvis.surface.triangles.len();
         assert!(wall.surface.triangles.len() > bone);
         let collider = scene.pelvis_collider.surface();

@@ -322,13 +322,18 @@ impl HiatusFrame {
     }
 }
 
+fn ischial_spine(pelvis: &Pelvis, left: bool) -> DVec3 {
+    let l = &pelvis.landmarks;
+    if left { l.ischial_spine_left } else { l.ischial_spine_right }
+}
+
 /// The sacrospinous line on one side (`left`), `t` in [0, 1] from the
 /// ischial spine to the coccyx tip, where the levator's back part hangs
 /// from the ligament: it arrives square to the midline, so the two sides
 /// meet smoothly (a quadratic Bezier).
 fn sacrospinous_line(pelvis: &Pelvis, right: DVec3, left: bool, t: f64) -> DVec3 {
     let l = &pelvis.landmarks;
-    let spine = if left { l.ischial_spine_left } else { l.ischial_spine_right };
+    let spine = ischial_spine(pelvis, left);
     let across = (spine - l.coccyx_tip).dot(right) * right;
     let control = l.coccyx_tip + COCCYX_APPROACH * across;
     (1.0 - t) * (1.0 - t) * spine + 2.0 * t * (1.0 - t) * control + t * t * l.coccyx_tip
@@ -367,7 +372,7 @@ pub fn sacrospinous_ligaments(pelvis: &Pelvis) -> TriSurface {
     let half_interspinous = 0.5 * (l.ischial_spine_right - l.ischial_spine_left).dot(right);
     let mut surface = TriSurface::default();
     for left in [true, false] {
-        let spine = if left { l.ischial_spine_left } else { l.ischial_spine_right };
+        let spine = ischial_spine(pelvis, left);
         // The sacrum's lateral margin at S4-S5: the bone at that level, no
         // further forward than the landmark and within the sacrum's width
         // (well inside the spines), nearest the spine.
@@ -411,11 +416,7 @@ impl Outline<'_> {
     /// Attachment on one side (`left`), `f` in [0, 1] from the pubis to the coccyx tip.
     fn attachment_half(&self, left: bool, f: f64) -> DVec3 {
         let l = &self.pelvis.landmarks;
-        let spine = if left {
-            l.ischial_spine_left
-        } else {
-            l.ischial_spine_right
-        };
+        let spine = ischial_spine(self.pelvis, left);
         let sign = if left { 1.0 } else { -1.0 };
         let arch_length = self.arch_length(sign);
         // Chord length: a fair share of nodes for the curved tail.
