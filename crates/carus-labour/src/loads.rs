@@ -53,6 +53,11 @@ pub struct AxialMoments {
     pub bone_nm: f64,
     pub floor_nm: f64,
     pub neck_nm: f64,
+    /// The part of `neck_nm` that the force carried through the pivot
+    /// gives (the push from the trunk, off the head's centre); the rest
+    /// is the neck's bending and twisting springs and their damping.
+    #[serde(default)]
+    pub neck_push_nm: f64,
 }
 
 /// The loads at one recorded instant.

@@ -192,6 +192,7 @@ pub fn write_history_csv(
         "neck_flexion_deg",
         "neck_lateral_bending_deg",
         "neck_axial_rotation_deg",
+        "head_axial_moment_neck_push_nm",
     ];
     header.extend_from_slice(&poses);
     let mut csv = CsvWriter::create(path, &header).map_err(|e| output_error(path, e))?;
@@ -239,6 +240,7 @@ pub fn write_history_csv(
             Some(n) => values.extend([n.flexion_deg, n.lateral_bending_deg, n.axial_rotation_deg]),
             None => values.extend([f64::NAN; 3]),
         }
+        values.push(loads.get(k).map_or(f64::NAN, |l| l.head_axial.neck_push_nm));
         csv.row(&values).map_err(|e| output_error(path, e))?;
     }
     csv.flush().map_err(|e| output_error(path, e))

@@ -464,6 +464,28 @@ mod tests {
         assert!(csv.lines().skip(1).all(|r| r.split(',').count() == 13));
     }
 
+    /// The head started transverse (LOT) and flexed low in the canal under
+    /// a steady push: the trunk pushes through the atlanto-occipital pivot,
+    /// which lies off the head's centre towards the occiput, along its own
+    /// axis, behind the canal's forward turn; that force turns the occiput
+    /// backwards (theta down) (docs/LABOUR.md, seventh session).
+    #[test]
+    fn the_push_through_the_pivot_turns_a_transverse_occiput_backwards() {
+        let mut s = coarse(2.0);
+        s.start.station_mm = 40.0;
+        s.start.attitude_deg = 60.0;
+        s.expulsion.force_min_n = 120.0;
+        let (dir, record) = run_in(&s, &RunOptions::default());
+        let pushed: Vec<_> = record.loads.iter().filter(|l| l.time_s >= 0.5).collect();
+        assert!(pushed.len() >= 10);
+        for l in pushed {
+            let m = l.head_axial;
+            assert!(m.neck_push_nm < -0.05, "t = {}: {m:?}", l.time_s);
+        }
+        let csv = std::fs::read_to_string(dir.path().join(output::HISTORY_CSV)).unwrap();
+        assert!(csv.lines().next().unwrap().ends_with(",head_axial_moment_neck_push_nm"));
+    }
+
     /// The neck's joint angles are recorded from rest and written to the
     /// pose history; with the head neither bent sideways nor twisted much,
     /// its flexion is the rise of the detector's phi (the same angle about

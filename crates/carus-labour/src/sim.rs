@@ -492,6 +492,9 @@ impl<'a> Simulation<'a> {
             bone_nm: reports[HEAD].torque_about_com.dot(down),
             floor_nm: s.floor_wrench[HEAD].torque.dot(down),
             neck_nm: neck.map_or(0.0, |l| l.on_head.torque.dot(down)),
+            neck_push_nm: neck.map_or(0.0, |l| {
+                (pivot - s.bodies.position[HEAD]).cross(l.on_head.force).dot(down)
+            }),
         };
         forces.neck = neck.map(|l| l.angles);
     }

@@ -44,6 +44,11 @@ pub struct AxialMomentSample {
     pub bone_nm: f64,
     pub floor_nm: f64,
     pub neck_nm: f64,
+    /// The part of `neck_nm` from the force the trunk pushes through the
+    /// atlanto-occipital pivot (off the head's centre); the rest is the
+    /// neck's springs.
+    #[serde(default)]
+    pub neck_push_nm: f64,
 }
 
 /// Figures of the run (not of the labour).

@@ -503,13 +503,14 @@ fn axial_moment_plot(
         return Ok(());
     }
     let column = |f: fn(&AxialMomentSample) -> f64| m.iter().map(f).collect::<Vec<f64>>();
-    let (time_s, bone, floor, neck) = (
+    let (time_s, bone, floor, neck, push) = (
         column(|s| s.time_s),
         column(|s| s.bone_nm),
         column(|s| s.floor_nm),
         column(|s| s.neck_nm),
+        column(|s| s.neck_push_nm),
     );
-    if let Some(&bad) = [&time_s, &bone, &floor, &neck]
+    if let Some(&bad) = [&time_s, &bone, &floor, &neck, &push]
         .iter()
         .flat_map(|c| c.iter())
         .find(|v| !v.is_finite())
@@ -519,10 +520,11 @@ fn axial_moment_plot(
             value: bad,
         });
     }
-    let (bone_colour, floor_colour, neck_colour) = (
+    let (bone_colour, floor_colour, neck_colour, push_colour) = (
         RGBColor(200, 82, 0),
         RGBColor(68, 1, 84),
         RGBColor(31, 87, 153),
+        RGBColor(95, 170, 220),
     );
     let spec = axis.spec(
         "axial-moments",
@@ -541,6 +543,10 @@ fn axial_moment_plot(
                 values: &neck,
                 colour: neck_colour,
             },
+            Curve {
+                values: &push,
+                colour: push_colour,
+            },
         ],
         vec![0.0],
     );
@@ -552,7 +558,9 @@ fn axial_moment_plot(
          positive turns theta up (LOT towards OA): \
          <span style=\"color:#c85200\">&#9632; bone (friction included)</span> \
          <span style=\"color:#440154\">&#9632; pelvic floor</span> \
-         <span style=\"color:#1f5799\">&#9632; neck</span></small></figcaption>{svg}</figure>"
+         <span style=\"color:#1f5799\">&#9632; neck</span>, of which \
+         <span style=\"color:#5faadc\">&#9632; the push through the pivot</span></small>\
+         </figcaption>{svg}</figure>"
     );
     Ok(())
 }

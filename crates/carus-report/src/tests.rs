@@ -171,11 +171,12 @@ fn the_moments_that_turn_the_head_are_plotted_when_known() {
             bone_nm: 0.1 * k as f64,
             floor_nm: -0.2,
             neck_nm: 0.05,
+            neck_push_nm: -0.1,
         })
         .collect();
     let html = write_report_with(&input, None).unwrap().html;
     assert_eq!(html.matches("<svg").count(), 5, "four plots and the moments' (no floor)");
-    assert!(html.contains("id=\"plot-axial-moments\""));
+    assert!(html.contains("id=\"plot-axial-moments\"") && html.contains("the push through the pivot"));
     input.head_axial_moments[2].neck_nm = f64::INFINITY;
     assert!(matches!(
         write_report_with(&input, None),

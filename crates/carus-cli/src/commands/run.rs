@@ -174,6 +174,7 @@ fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result<Vec<String
                 bone_nm: l.head_axial.bone_nm,
                 floor_nm: l.head_axial.floor_nm,
                 neck_nm: l.head_axial.neck_nm,
+                neck_push_nm: l.head_axial.neck_push_nm,
             })
             .collect(),
         scene: Some(carus_report::ReportScene {
