@@ -493,7 +493,7 @@ impl<'a> Simulation<'a> {
             floor_nm: s.floor_wrench[HEAD].torque.dot(down),
             neck_nm: neck.map_or(0.0, |l| l.on_head.torque.dot(down)),
             neck_push_nm: neck.map_or(0.0, |l| {
-                (pivot - s.bodies.position[HEAD]).cross(l.on_head.force).dot(down)
+                Wrench::at_point(l.on_head.force, pivot, s.bodies.position[HEAD]).torque.dot(down)
             }),
         };
         forces.neck = neck.map(|l| l.angles);
