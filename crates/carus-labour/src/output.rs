@@ -69,7 +69,15 @@ pub fn read_checkpoint(dir: &Path) -> Result<Checkpoint, LabourError> {
     let text = std::fs::read_to_string(&path)
         .map_err(|e| output_error(&path, format!("{e}; is this the out dir of a `carus run`?")))?;
     serde_json::from_str(&text)
-        .map_err(|e| output_error(&path, format!("not a Carus checkpoint: {e}")))
+        .map_err(|e| {
+            output_error(
+                &path,
+                format!(
+                    "not a checkpoint this version of Carus can continue ({e}); if an older \
+                     version wrote it, run the scenario again from the start"
+                ),
+            )
+        })
 }
 
 /// A triangle surface as a VTU file (ASCII), placed by `pose`.

@@ -387,17 +387,25 @@ mod tests {
         let sim = Simulation::new(&scene).unwrap();
         let (solver, floor) = (sim.solver().unwrap(), scene.floor.as_ref().unwrap());
         let inverted = carus_fem::FemError::ElementInvertedDuringRun { element: 0, jacobian: -0.1, time_s: 12.5 };
-        let message = crate::sim::floor_failure(inverted, solver, floor, &s.floor.mesh).to_string();
+        let nodes = &floor.mesh.connectivity[..8];
+        let holders = [("held on the head", &nodes[..1]), ("held on the trunk", &[][..])];
+        let message = crate::sim::floor_failure(inverted, solver, floor, &s.floor.mesh, &holders).to_string();
+        // At its attachment, so some of the other nodes are fixed to bone.
+        let fixed = nodes[1..].iter().filter(|&&i| floor.attached[i as usize]).count();
+        assert!(fixed > 0 && fixed < 7);
         assert!(
             message.contains("failed at t = 12.50 s: element 0 (levator ani, left pubic insertion, at its attachment to bone)")
-                && message.contains("squeezed flat (largest stretch 1.0)")
+                && message.contains(&format!(
+                    "squeezed flat (largest stretch 1.0); of its 8 nodes, 1 held on the head, {fixed} fixed to bone, {} free",
+                    7 - fixed
+                ))
                 && message.contains("is written and stands"),
             "{message}"
         );
         // Other solver errors pass through as they were.
         let diverged = carus_fem::FemError::Diverged { time_s: 1.0, last_good_time_s: 0.9, what: "x".into() };
         let text = diverged.to_string();
-        let passed = crate::sim::floor_failure(diverged, solver, floor, &s.floor.mesh);
+        let passed = crate::sim::floor_failure(diverged, solver, floor, &s.floor.mesh, &holders);
         assert!(matches!(passed, LabourError::Floor(_)) && passed.to_string().ends_with(&text));
     }
 
@@ -464,6 +472,16 @@ mod tests {
         assert!(csv.lines().skip(1).all(|r| r.split(',').count() == 13));
     }
 
+    /// The coarse normal run for 2 s from `station_mm`, the head flexed 60
+    /// deg (LOT) and pushed with a steady 120 N.
+    fn flexed_head_pushed_low(station_mm: f64) -> Scenario {
+        let mut s = coarse(2.0);
+        s.start.station_mm = station_mm;
+        s.start.attitude_deg = 60.0;
+        s.expulsion.force_min_n = 120.0;
+        s
+    }
+
     /// The head started transverse (LOT) and flexed low in the canal under
     /// a steady push: the trunk pushes through the atlanto-occipital pivot,
     /// which lies off the head's centre towards the occiput, along its own
@@ -471,11 +489,7 @@ mod tests {
     /// backwards (theta down) (docs/LABOUR.md, seventh session).
     #[test]
     fn the_push_through_the_pivot_turns_a_transverse_occiput_backwards() {
-        let mut s = coarse(2.0);
-        s.start.station_mm = 40.0;
-        s.start.attitude_deg = 60.0;
-        s.expulsion.force_min_n = 120.0;
-        let (dir, record) = run_in(&s, &RunOptions::default());
+        let (dir, record) = run_in(&flexed_head_pushed_low(40.0), &RunOptions::default());
         let pushed: Vec<_> = record.loads.iter().filter(|l| l.time_s >= 0.5).collect();
         assert!(pushed.len() >= 10);
         for l in pushed {
@@ -484,6 +498,41 @@ mod tests {
         }
         let csv = std::fs::read_to_string(dir.path().join(output::HISTORY_CSV)).unwrap();
         assert!(csv.lines().next().unwrap().ends_with(",head_axial_moment_neck_push_nm"));
+    }
+
+    /// The floor slides on the bony wall but never passes into it: with the
+    /// head pressed low into the canal, every floor node that neither the
+    /// bone's attachment nor the fetus prescribes stays outside the wall, to
+    /// within the coupling's reach, and the wall does hold nodes.
+    #[test]
+    fn the_floor_slides_on_the_bone_never_into_it() {
+        let s = flexed_head_pushed_low(50.0);
+        let scene = Scene::build(&s).unwrap();
+        let floor = scene.floor.as_ref().unwrap();
+        let wall = scene.pelvis_collider.surface();
+        let reach = s.floor.coupling_reach_mm * 1e-3;
+        let mut sim = Simulation::new(&scene).unwrap();
+        let mut most_on_bone = 0;
+        // Where the mesh starts behind the wall (a node of the floor's outer
+        // face near its attachment), the coupling cannot reach it. The
+        // wall is an open surface, so its inside test only holds near it.
+        let depth = |x: DVec3, within: f64| wall.closest_point(x, within).map_or(0.0, |hit| hit.signed_distance);
+        let starts_outside: Vec<bool> = floor.reference.iter().map(|x| depth(*x, 0.05) > -reach).collect();
+        while sim.time_s() < s.numerics.end_time_s {
+            sim.step().unwrap();
+            let state = sim.state.floor.as_ref().unwrap();
+            most_on_bone = most_on_bone.max(state.bone.held().len());
+            let by_fetus: Vec<u32> = state.contacts.iter().flat_map(|c| c.held().iter().map(|h| h.node)).collect();
+            let u = sim.solver().unwrap().displacements();
+            for (i, (x, d)) in floor.reference.iter().zip(&u).enumerate() {
+                if floor.attached[i] || !starts_outside[i] || by_fetus.contains(&(i as u32)) {
+                    continue;
+                }
+                let d = depth(*x + DVec3::from_array(*d), 0.005);
+                assert!(d > -reach, "t = {}: node {i} {:.2} mm inside", sim.time_s(), -d * 1e3);
+            }
+        }
+        assert!(most_on_bone > 0);
     }
 
     /// The neck's joint angles are recorded from rest and written to the

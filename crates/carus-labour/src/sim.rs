@@ -13,7 +13,7 @@
 use carus_analysis::{ContactSite, PoseSample};
 use carus_contact::{
     pelvis_contacts, BodyContactState, BodyMotion, ContactReport, Neck, NeckAngles, NeckGeometry,
-    NeckLoad, RigidBodyState, TissueContact, Wrench,
+    NeckLoad, RigidBodyState, RigidPose, TissueContact, TriangleCollider, Wrench,
 };
 use carus_fem::{SolverSnapshot, StepControl, TledSolver};
 use glam::{DMat3, DVec3};
@@ -30,6 +30,9 @@ pub struct FloorState {
     pub solver: SolverSnapshot,
     /// Contact of the head (then the trunk) with the floor's nodes.
     pub contacts: Vec<TissueContact>,
+    /// Contact of the bony canal wall (with the sacrospinous ligaments)
+    /// with the floor's nodes: the tissue slides on the bone, never into it.
+    pub bone: TissueContact,
 }
 
 /// One recorded floor figure: the largest principal stretch over the floor.
@@ -133,6 +136,7 @@ impl<'a> Simulation<'a> {
                     contacts: (0..n)
                         .map(|_| TissueContact::new(reach))
                         .collect::<Result<_, _>>()?,
+                    bone: TissueContact::new(reach)?,
                 })
             }
             None => None,
@@ -384,19 +388,19 @@ impl<'a> Simulation<'a> {
             .map(|(x, d)| *x + DVec3::from_array(*d))
             .collect();
         solver.release_imposed();
-        let mut held_by: Vec<Vec<u32>> = Vec::with_capacity(floor_state.contacts.len());
-        // Nodes already prescribed: the attachment to bone, then those an
-        // earlier body (the head) holds. carus-fem's imposed displacements
-        // override fixed dofs, and a second imposition overrides the first.
+        // Who holds a node, first come first served (carus-fem's imposed
+        // displacements override its fixed dofs, and a later imposition
+        // overrides an earlier one): the attachment to bone, the bony wall,
+        // the head, the trunk. The bone does not give, while the fetus,
+        // held off it by a penalty, may press into it: tissue caught between
+        // the two stays on the bone and the fetus passes over it (squeezed
+        // aside, not flattened; docs/CONTACT.md).
         let mut prescribed = floor.attached.clone();
-        for (b, contact) in floor_state.contacts.iter_mut().enumerate() {
-            let collider = if b == HEAD {
-                &scene.head.collider
-            } else {
-                &scene.trunk.as_ref().expect("trunk").collider
-            };
-            let pose = self.state.bodies.pose(b);
-            let held = contact.update_except(collider, &pose, &nodes, &prescribed);
+        let mut hold = |contact: &mut TissueContact,
+                        collider: &TriangleCollider,
+                        pose: &RigidPose|
+         -> Result<Vec<u32>, LabourError> {
+            let held = contact.update_except(collider, pose, &nodes, &prescribed);
             let ids: Vec<u32> = held.iter().map(|h| h.node).collect();
             for &i in &ids {
                 prescribed[i as usize] = true;
@@ -406,11 +410,34 @@ impl<'a> Simulation<'a> {
                 .map(|h| (h.target - floor.reference[h.node as usize]).to_array())
                 .collect();
             solver.impose_displacements(&ids, &targets)?;
-            held_by.push(ids);
+            Ok(ids)
+        };
+        let poses = &self.state.bodies;
+        let on_bone = hold(
+            &mut floor_state.bone,
+            scene.pelvis_collider.surface(),
+            &RigidPose::IDENTITY,
+        )?;
+        let mut held_by = vec![hold(
+            &mut floor_state.contacts[HEAD],
+            &scene.head.collider,
+            &poses.pose(HEAD),
+        )?];
+        if let Some(trunk) = &scene.trunk {
+            held_by.push(hold(
+                &mut floor_state.contacts[TRUNK],
+                &trunk.collider,
+                &poses.pose(TRUNK),
+            )?);
         }
         for _ in 0..self.substeps {
             if let Err(e) = solver.step() {
-                return Err(floor_failure(e, solver, floor, &scene.scenario.floor.mesh));
+                let holders = [
+                    ("held on the bony wall", on_bone.as_slice()),
+                    ("held on the head", held_by[0].as_slice()),
+                    ("held on the trunk", held_by.get(1).map_or(&[][..], |v| v.as_slice())),
+                ];
+                return Err(floor_failure(e, solver, floor, &scene.scenario.floor.mesh, &holders));
             }
         }
         solver.update_internal_forces()?;
@@ -419,12 +446,17 @@ impl<'a> Simulation<'a> {
             .bodies
             .pose(HEAD)
             .point(scene.pivot_in_head);
-        for (b, (contact, ids)) in floor_state.contacts.iter_mut().zip(&held_by).enumerate() {
+        let push = |ids: &[u32]| -> Result<Vec<DVec3>, LabourError> {
             let f = solver.internal_forces(ids)?;
-            let on_body: Vec<DVec3> = f.iter().map(|v| -DVec3::from_array(*v)).collect();
-            let r = contact.reaction(&on_body, self.state.bodies.position[b], pivot)?;
+            Ok(f.iter().map(|v| -DVec3::from_array(*v)).collect())
+        };
+        for (b, (contact, ids)) in floor_state.contacts.iter_mut().zip(&held_by).enumerate() {
+            let r = contact.reaction(&push(ids)?, self.state.bodies.position[b], pivot)?;
             self.state.floor_wrench[b] = r.wrench();
         }
+        // The bone takes what the tissue presses on it; the reading only
+        // lets go of nodes that would pull on the bone (no adhesion).
+        floor_state.bone.reaction(&push(&on_bone)?, DVec3::ZERO, DVec3::ZERO)?;
         Ok(())
     }
 
@@ -530,14 +562,16 @@ impl<'a> Simulation<'a> {
     }
 }
 
-/// Says where a floor element turned inside out and what it means; other
-/// solver errors pass through. The solver has gone back to its last good
-/// state, whose stretch is what the element reached.
+/// Says where a floor element turned inside out, what it means and what
+/// held its nodes (`holders`: a description and the nodes it held in the
+/// failing step); other solver errors pass through. The solver has gone
+/// back to its last good state, whose stretch is what the element reached.
 pub(crate) fn floor_failure(
     error: carus_fem::FemError,
     solver: &TledSolver,
     floor: &crate::scene::FloorScene,
     parameters: &carus_anatomy::floor::FloorParameters,
+    holders: &[(&str, &[u32])],
 ) -> LabourError {
     let carus_fem::FemError::ElementInvertedDuringRun { element, time_s, .. } = error else {
         return error.into();
@@ -554,11 +588,31 @@ pub(crate) fn floor_failure(
              where real tissue is at risk of tearing; this elastic floor cannot tear"
         )
     } else {
-        format!(
-            "it was squeezed flat (largest stretch {stretch:.1}), pressed between the fetus and bone: \
-             the floor has no contact of its own with the bone"
-        )
+        format!("it was squeezed flat (largest stretch {stretch:.1})")
     };
+    let per_node = floor.mesh.kind.nodes_per_element();
+    let nodes = &floor.mesh.connectivity[element * per_node..(element + 1) * per_node];
+    let mut counts = vec![0usize; holders.len()];
+    let (mut fixed, mut free) = (0, 0);
+    for &i in nodes {
+        match holders.iter().position(|(_, ids)| ids.contains(&i)) {
+            Some(k) => counts[k] += 1,
+            None if floor.attached[i as usize] => fixed += 1,
+            None => free += 1,
+        }
+    }
+    let mut parts: Vec<String> = holders
+        .iter()
+        .zip(&counts)
+        .filter(|(_, &n)| n > 0)
+        .map(|((what, _), n)| format!("{n} {what}"))
+        .collect();
+    for (n, what) in [(fixed, "fixed to bone"), (free, "free")] {
+        if n > 0 {
+            parts.push(format!("{n} {what}"));
+        }
+    }
+    let what = format!("{what}; of its {} nodes, {}", nodes.len(), parts.join(", "));
     LabourError::FloorFailed {
         time_s,
         element,
