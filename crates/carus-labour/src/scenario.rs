@@ -290,6 +290,15 @@ pub struct FloorSection {
     /// element through its thickness (the inverted elements of
     /// docs/LABOUR.md). Such a node is left free until it comes out.
     pub coupling_reach_mm: f64,
+    /// Volume ratio J below which a floor element counts as crushed, and the
+    /// fetus lets go of its nodes (0 never lets go). Numerical, from the
+    /// tissue's near-incompressibility: with the bulk modulus 20 x the shear
+    /// (nu about 0.475) an element that has lost half its volume is not
+    /// deforming but being crushed between the fetus and bone, which a layer
+    /// one element thick cannot represent (real tissue is squeezed out
+    /// sideways). Let go, the fetus passes over the tissue instead of
+    /// flattening it until it turns inside out (docs/LABOUR.md).
+    pub crushed_volume_ratio: f64,
     /// Shape and resolution of the mesh (carus-anatomy FloorParameters).
     pub mesh: FloorParameters,
 }
@@ -303,6 +312,7 @@ impl Default for FloorSection {
             density_kg_per_m3: 1060.0,
             damping_per_s: 400.0,
             coupling_reach_mm: 1.0,
+            crushed_volume_ratio: 0.5,
             mesh: FloorParameters {
                 elements_around: 32,
                 elements_across: 6,
@@ -631,6 +641,15 @@ impl Scenario {
                 ));
             }
         }
+        let crushed = self.floor.crushed_volume_ratio;
+        if !(crushed.is_finite() && (0.0..1.0).contains(&crushed)) {
+            return Err(err(
+                "floor.crushed_volume_ratio",
+                crushed,
+                "must be at least 0 and below 1",
+                "a volume ratio J, e.g. 0.5 (0 never lets go)",
+            ));
+        }
         if self.contact.friction > 2.0 {
             return Err(err(
                 "contact.friction",
@@ -845,6 +864,10 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("start.position") && e.contains("face"), "{e}");
+        let e = parse("name = \"x\"\n[floor]\ncrushed_volume_ratio = 1.5\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("floor.crushed_volume_ratio") && e.contains("below 1"), "{e}");
         let e = parse("name = \"x\"\n[start]\nposition = \"XYZ\"\n")
             .unwrap_err()
             .to_string();

@@ -387,6 +387,12 @@ impl<'a> Simulation<'a> {
             .zip(&u)
             .map(|(x, d)| *x + DVec3::from_array(*d))
             .collect();
+        // The fetus lets go of crushed tissue (FloorSection::crushed_volume_ratio).
+        let crushed = crushed_nodes(
+            &floor.mesh,
+            &solver.element_fields().jacobian,
+            scene.scenario.floor.crushed_volume_ratio,
+        );
         solver.release_imposed();
         // Who holds a node, first come first served (carus-fem's imposed
         // displacements override its fixed dofs, and a later imposition
@@ -398,9 +404,15 @@ impl<'a> Simulation<'a> {
         let mut prescribed = floor.attached.clone();
         let mut hold = |contact: &mut TissueContact,
                         collider: &TriangleCollider,
-                        pose: &RigidPose|
+                        pose: &RigidPose,
+                        fetus: bool|
          -> Result<Vec<u32>, LabourError> {
-            let held = contact.update_except(collider, pose, &nodes, &prescribed);
+            let held = if fetus {
+                let except: Vec<bool> = prescribed.iter().zip(&crushed).map(|(p, c)| *p || *c).collect();
+                contact.update_except(collider, pose, &nodes, &except)
+            } else {
+                contact.update_except(collider, pose, &nodes, &prescribed)
+            };
             let ids: Vec<u32> = held.iter().map(|h| h.node).collect();
             for &i in &ids {
                 prescribed[i as usize] = true;
@@ -417,17 +429,20 @@ impl<'a> Simulation<'a> {
             &mut floor_state.bone,
             scene.pelvis_collider.surface(),
             &RigidPose::IDENTITY,
+            false,
         )?;
         let mut held_by = vec![hold(
             &mut floor_state.contacts[HEAD],
             &scene.head.collider,
             &poses.pose(HEAD),
+            true,
         )?];
         if let Some(trunk) = &scene.trunk {
             held_by.push(hold(
                 &mut floor_state.contacts[TRUNK],
                 &trunk.collider,
                 &poses.pose(TRUNK),
+                true,
             )?);
         }
         for _ in 0..self.substeps {
@@ -562,6 +577,21 @@ impl<'a> Simulation<'a> {
     }
 }
 
+/// Per node: whether it belongs to an element whose volume ratio J has
+/// fallen below `ratio` (crushed).
+fn crushed_nodes(mesh: &carus_fem::Mesh, jacobian: &[f64], ratio: f64) -> Vec<bool> {
+    let per_element = mesh.kind.nodes_per_element();
+    let mut crushed = vec![false; mesh.nodes.len()];
+    for (nodes, &j) in mesh.connectivity.chunks_exact(per_element).zip(jacobian) {
+        if j < ratio {
+            for &i in nodes {
+                crushed[i as usize] = true;
+            }
+        }
+    }
+    crushed
+}
+
 /// Says where a floor element turned inside out, what it means and what
 /// held its nodes (`holders`: a description and the nodes it held in the
 /// failing step); other solver errors pass through. The solver has gone
@@ -640,4 +670,32 @@ fn new_solver(
         StepControl::Refuse,
     )?;
     Ok((solver, substeps))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two H8 cubes side by side share a face: crushing the second marks its
+    /// eight nodes, the first cube's other four stay free, and 0 marks none.
+    #[test]
+    fn crushed_elements_mark_their_nodes() {
+        let mut nodes = Vec::new();
+        for z in 0..2 {
+            for y in 0..2 {
+                for x in 0..3 {
+                    nodes.push([x as f64, y as f64, z as f64]);
+                }
+            }
+        }
+        let id = |x: u32, y: u32, z: u32| x + 3 * y + 6 * z;
+        let cube = |x: u32| {
+            [id(x, 0, 0), id(x + 1, 0, 0), id(x + 1, 1, 0), id(x, 1, 0), id(x, 0, 1), id(x + 1, 0, 1), id(x + 1, 1, 1), id(x, 1, 1)]
+        };
+        let mesh = carus_fem::Mesh::new(carus_fem::ElementKind::H8, nodes, [cube(0), cube(1)].concat());
+        let crushed = crushed_nodes(&mesh, &[0.9, 0.3], 0.5);
+        let first_only: Vec<u32> = (0..12).filter(|i| !crushed[*i as usize]).collect();
+        assert_eq!(first_only, vec![id(0, 0, 0), id(0, 1, 0), id(0, 0, 1), id(0, 1, 1)]);
+        assert!(crushed_nodes(&mesh, &[0.9, 0.3], 0.0).iter().all(|c| !c));
+    }
 }
