@@ -387,7 +387,7 @@ mod tests {
         let sim = Simulation::new(&scene).unwrap();
         let (solver, floor) = (sim.solver().unwrap(), scene.floor.as_ref().unwrap());
         let inverted = carus_fem::FemError::ElementInvertedDuringRun { element: 0, jacobian: -0.1, time_s: 12.5 };
-        let nodes = &floor.mesh.connectivity[..8];
+        let nodes = floor.mesh.element(0);
         let holders = [("held on the head", &nodes[..1]), ("held on the trunk", &[][..])];
         let message = crate::sim::floor_failure(inverted, solver, floor, &s.floor.mesh, &holders).to_string();
         // At its attachment, so some of the other nodes are fixed to bone.

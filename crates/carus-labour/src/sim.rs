@@ -388,11 +388,12 @@ impl<'a> Simulation<'a> {
             .map(|(x, d)| *x + DVec3::from_array(*d))
             .collect();
         // The fetus lets go of crushed tissue (FloorSection::crushed_volume_ratio).
-        let crushed = crushed_nodes(
-            &floor.mesh,
-            &solver.element_fields().jacobian,
-            scene.scenario.floor.crushed_volume_ratio,
-        );
+        let ratio = scene.scenario.floor.crushed_volume_ratio;
+        let crushed = if ratio > 0.0 {
+            crushed_nodes(&floor.mesh, &solver.element_fields().jacobian, ratio)
+        } else {
+            vec![false; nodes.len()]
+        };
         solver.release_imposed();
         // Who holds a node, first come first served (carus-fem's imposed
         // displacements override its fixed dofs, and a later imposition
@@ -580,9 +581,8 @@ impl<'a> Simulation<'a> {
 /// Per node: whether it belongs to an element whose volume ratio J has
 /// fallen below `ratio` (crushed).
 fn crushed_nodes(mesh: &carus_fem::Mesh, jacobian: &[f64], ratio: f64) -> Vec<bool> {
-    let per_element = mesh.kind.nodes_per_element();
-    let mut crushed = vec![false; mesh.nodes.len()];
-    for (nodes, &j) in mesh.connectivity.chunks_exact(per_element).zip(jacobian) {
+    let mut crushed = vec![false; mesh.node_count()];
+    for (nodes, &j) in mesh.elements().zip(jacobian) {
         if j < ratio {
             for &i in nodes {
                 crushed[i as usize] = true;
@@ -620,8 +620,7 @@ pub(crate) fn floor_failure(
     } else {
         format!("it was squeezed flat (largest stretch {stretch:.1})")
     };
-    let per_node = floor.mesh.kind.nodes_per_element();
-    let nodes = &floor.mesh.connectivity[element * per_node..(element + 1) * per_node];
+    let nodes = floor.mesh.element(element);
     let mut counts = vec![0usize; holders.len()];
     let (mut fixed, mut free) = (0, 0);
     for &i in nodes {
@@ -676,26 +675,17 @@ fn new_solver(
 mod tests {
     use super::*;
 
-    /// Two H8 cubes side by side share a face: crushing the second marks its
-    /// eight nodes, the first cube's other four stay free, and 0 marks none.
+    /// Two H8 cells side by side share a face: crushing the second marks its
+    /// eight nodes, the first cell's other four stay free, and 0 marks none.
     #[test]
     fn crushed_elements_mark_their_nodes() {
-        let mut nodes = Vec::new();
-        for z in 0..2 {
-            for y in 0..2 {
-                for x in 0..3 {
-                    nodes.push([x as f64, y as f64, z as f64]);
-                }
-            }
-        }
-        let id = |x: u32, y: u32, z: u32| x + 3 * y + 6 * z;
-        let cube = |x: u32| {
-            [id(x, 0, 0), id(x + 1, 0, 0), id(x + 1, 1, 0), id(x, 1, 0), id(x, 0, 1), id(x + 1, 0, 1), id(x + 1, 1, 1), id(x, 1, 1)]
-        };
-        let mesh = carus_fem::Mesh::new(carus_fem::ElementKind::H8, nodes, [cube(0), cube(1)].concat());
+        let mesh = carus_fem::generate::box_h8([2.0, 1.0, 1.0], [2, 1, 1]);
         let crushed = crushed_nodes(&mesh, &[0.9, 0.3], 0.5);
-        let first_only: Vec<u32> = (0..12).filter(|i| !crushed[*i as usize]).collect();
-        assert_eq!(first_only, vec![id(0, 0, 0), id(0, 1, 0), id(0, 0, 1), id(0, 1, 1)]);
+        let second = mesh.element(1);
+        for (i, c) in crushed.iter().enumerate() {
+            assert_eq!(*c, second.contains(&(i as u32)), "node {i}");
+        }
+        assert_eq!(crushed.iter().filter(|c| !**c).count(), 4);
         assert!(crushed_nodes(&mesh, &[0.9, 0.3], 0.0).iter().all(|c| !c));
     }
 }
