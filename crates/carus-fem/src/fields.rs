@@ -1,7 +1,8 @@
 //! Output quantities evaluated from a displacement state, in f64: per-element
 //! von Mises stress, maximum principal stretch and Jacobian, and the
 //! kinetic, strain and hourglass energies. Evaluated on demand (for output
-//! frames), never inside the step loop.
+//! frames), never inside the step loop; the volume ratios alone are cheap
+//! enough for a coupling loop to read every step.
 
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -92,6 +93,34 @@ struct ElementResult {
     hourglass_j: f64,
 }
 
+/// One element's nodal displacements and shape derivatives, in f64.
+fn element_state<T: Real, const N: usize>(
+    k: &KernelData<T>,
+    e: usize,
+    u: &[T],
+) -> ([[f64; 3]; N], [[f64; 3]; N]) {
+    let eb = &k.elements;
+    let ue = std::array::from_fn(|a| std::array::from_fn(|c| u[3 * eb.node(e, a) + c].to_f64()));
+    let dh = std::array::from_fn(|a| std::array::from_fn(|i| eb.shape_derivative(e, a, i)));
+    (ue, dh)
+}
+
+/// Per element, J = det F alone: cheap enough for a coupling loop to read
+/// every step, without the stresses, stretches and energies of [`evaluate`].
+pub(crate) fn volume_ratios<T: Real>(k: &KernelData<T>, u: &[T]) -> Vec<f64> {
+    let ratio = |e| match k.elements.nodes_per_element {
+        8 => {
+            let (ue, dh) = element_state::<T, 8>(k, e, u);
+            det3(&deformation_gradient(&ue, &dh))
+        }
+        _ => {
+            let (ue, dh) = element_state::<T, 4>(k, e, u);
+            det3(&deformation_gradient(&ue, &dh))
+        }
+    };
+    (0..k.elements.element_count).map(ratio).collect()
+}
+
 fn evaluate_element<T: Real, const N: usize>(
     k: &KernelData<T>,
     e: usize,
@@ -99,10 +128,7 @@ fn evaluate_element<T: Real, const N: usize>(
     nodal_j: Option<&[f64]>,
 ) -> ElementResult {
     let eb = &k.elements;
-    let ue: [[f64; 3]; N] =
-        std::array::from_fn(|a| std::array::from_fn(|c| u[3 * eb.node(e, a) + c].to_f64()));
-    let dh: [[f64; 3]; N] =
-        std::array::from_fn(|a| std::array::from_fn(|i| eb.shape_derivative(e, a, i)));
+    let (ue, dh) = element_state::<T, N>(k, e, u);
     let co = Coefficients {
         c10: eb.coefficient(e, 0),
         c01: eb.coefficient(e, 1),

@@ -689,6 +689,12 @@ impl TledSolver {
         with_state_ref!(self, |k, s| fields::evaluate(k, anp, &s.u_curr).0)
     }
 
+    /// J = det F per element (one-point, as in [`Self::element_fields`]),
+    /// without the stresses and stretches: cheap enough for every step.
+    pub fn volume_ratios(&self) -> Vec<f64> {
+        with_state_ref!(self, |k, s| fields::volume_ratios(k, &s.u_curr))
+    }
+
     /// Kinetic, strain and hourglass energies of the current state.
     pub fn energies(&self) -> Energies {
         let anp = self.model.uses_anp();
@@ -803,6 +809,26 @@ mod tests {
     fn total_energy(solver: &TledSolver) -> f64 {
         let e = solver.energies();
         e.strain_j + e.hourglass_j
+    }
+
+    /// The per-step volume ratios are the output fields' J, element by
+    /// element, for H8, T4 and T4ANP.
+    #[test]
+    fn volume_ratios_are_the_fields_jacobian() {
+        let cases = [
+            (box_h8([0.1, 0.08, 0.06], [2, 2, 2]), TetFormulation::T4),
+            (box_t4([0.1, 0.08, 0.06], [2, 1, 1]), TetFormulation::T4Anp),
+        ];
+        for (mesh, tet_formulation) in cases {
+            let options = ModelOptions { tet_formulation, ..ModelOptions::default() };
+            let mut solver =
+                TledSolver::new(model(&mesh, options), &BoundaryConditions::default(), 1e-4, StepControl::Refuse)
+                    .unwrap();
+            set_displacement(&mut solver, &wavy(&mesh, 0.01));
+            let j = solver.volume_ratios();
+            assert_eq!(j, solver.element_fields().jacobian);
+            assert!(j.iter().any(|v| (v - 1.0).abs() > 1e-3), "{j:?}");
+        }
     }
 
     /// The internal forces are the gradient of the stored energy (strain plus

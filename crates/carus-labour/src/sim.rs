@@ -390,7 +390,7 @@ impl<'a> Simulation<'a> {
         // The fetus lets go of crushed tissue (FloorSection::crushed_volume_ratio).
         let ratio = scene.scenario.floor.crushed_volume_ratio;
         let crushed = if ratio > 0.0 {
-            crushed_nodes(&floor.mesh, &solver.element_fields().jacobian, ratio)
+            crushed_nodes(&floor.mesh, &solver.volume_ratios(), ratio)
         } else {
             vec![false; nodes.len()]
         };
