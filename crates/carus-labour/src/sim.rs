@@ -387,13 +387,8 @@ impl<'a> Simulation<'a> {
             .zip(&u)
             .map(|(x, d)| *x + DVec3::from_array(*d))
             .collect();
-        // The fetus lets go of crushed tissue (FloorSection::crushed_volume_ratio).
         let ratio = scene.scenario.floor.crushed_volume_ratio;
-        let crushed = if ratio > 0.0 {
-            crushed_nodes(&floor.mesh, &solver.volume_ratios(), ratio)
-        } else {
-            vec![false; nodes.len()]
-        };
+        let crushed = (ratio > 0.0).then(|| crushed_nodes(&floor.mesh, &solver.volume_ratios(), ratio));
         solver.release_imposed();
         // Who holds a node, first come first served (carus-fem's imposed
         // displacements override its fixed dofs, and a later imposition
@@ -406,14 +401,9 @@ impl<'a> Simulation<'a> {
         let mut hold = |contact: &mut TissueContact,
                         collider: &TriangleCollider,
                         pose: &RigidPose,
-                        fetus: bool|
+                        prescribed: &mut Vec<bool>|
          -> Result<Vec<u32>, LabourError> {
-            let held = if fetus {
-                let except: Vec<bool> = prescribed.iter().zip(&crushed).map(|(p, c)| *p || *c).collect();
-                contact.update_except(collider, pose, &nodes, &except)
-            } else {
-                contact.update_except(collider, pose, &nodes, &prescribed)
-            };
+            let held = contact.update_except(collider, pose, &nodes, prescribed);
             let ids: Vec<u32> = held.iter().map(|h| h.node).collect();
             for &i in &ids {
                 prescribed[i as usize] = true;
@@ -430,20 +420,24 @@ impl<'a> Simulation<'a> {
             &mut floor_state.bone,
             scene.pelvis_collider.surface(),
             &RigidPose::IDENTITY,
-            false,
+            &mut prescribed,
         )?;
+        // The fetus lets go of crushed tissue (FloorSection::crushed_volume_ratio).
+        for (p, c) in prescribed.iter_mut().zip(crushed.iter().flatten()) {
+            *p |= *c;
+        }
         let mut held_by = vec![hold(
             &mut floor_state.contacts[HEAD],
             &scene.head.collider,
             &poses.pose(HEAD),
-            true,
+            &mut prescribed,
         )?];
         if let Some(trunk) = &scene.trunk {
             held_by.push(hold(
                 &mut floor_state.contacts[TRUNK],
                 &trunk.collider,
                 &poses.pose(TRUNK),
-                true,
+                &mut prescribed,
             )?);
         }
         for _ in 0..self.substeps {
