@@ -130,6 +130,9 @@ pub struct PelvicAxis {
     segments: Vec<HermiteSegment>,
     /// `sigma` at the start of each table step: `segments.len() * STEPS + 1` entries.
     table_sigma: Vec<f64>,
+    /// The axis point at each `table_sigma`, kept because [`PelvicAxis::project`]
+    /// searches them on every call and each costs an arc-length inversion.
+    table_points: Vec<DVec3>,
     /// `sigma` of each plane centre, inlet first.
     plane_sigma: Vec<f64>,
     /// The mother's right (pelvis +x), projected off the tangent to give `x(sigma)`.
@@ -177,7 +180,14 @@ impl PelvicAxis {
             }
             plane_sigma.push(*table_sigma.last().expect("table is not empty"));
         }
-        let axis = PelvicAxis { segments, table_sigma, plane_sigma, right: right.normalize_or_zero() };
+        let mut axis = PelvicAxis {
+            segments,
+            table_sigma,
+            table_points: Vec::new(),
+            plane_sigma,
+            right: right.normalize_or_zero(),
+        };
+        axis.table_points = axis.table_sigma.iter().map(|&sigma| axis.point(sigma)).collect();
         // The transverse axis is the mother's right projected off the tangent:
         // refuse an axis that ever runs along it.
         let samples = 8 * axis.segments.len().max(1);
@@ -300,8 +310,7 @@ impl PelvicAxis {
         // Curved part: coarse search over the table, then refine each local
         // minimum with a bracketed Newton on d/dsigma |r - p|^2 / 2 = (r - p) . t.
         let n = self.table_sigma.len();
-        let dist = |k: usize| (self.point(self.table_sigma[k]) - point).length_squared();
-        let distances: Vec<f64> = (0..n).map(dist).collect();
+        let distances: Vec<f64> = self.table_points.iter().map(|&q| (q - point).length_squared()).collect();
         for k in 0..n {
             let left = if k > 0 { distances[k - 1] } else { f64::INFINITY };
             let right = if k + 1 < n { distances[k + 1] } else { f64::INFINITY };
