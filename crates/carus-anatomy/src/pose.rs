@@ -24,16 +24,19 @@ impl RigidPose {
     }
 
     /// A body-frame point in the pelvis frame.
+    #[inline]
     pub fn point(&self, body_point: DVec3) -> DVec3 {
         self.position_m + self.orientation * body_point
     }
 
     /// A body-frame direction in the pelvis frame.
+    #[inline]
     pub fn direction(&self, body_direction: DVec3) -> DVec3 {
         self.orientation * body_direction
     }
 
     /// A pelvis-frame point in the body frame.
+    #[inline]
     pub fn inverse_point(&self, point: DVec3) -> DVec3 {
         self.orientation.inverse() * (point - self.position_m)
     }

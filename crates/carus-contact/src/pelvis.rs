@@ -255,21 +255,23 @@ pub fn pelvis_contacts(
     let searched = band + pelvis.skin_m;
 
     let memory_in = &*memory;
-    // Per sample: the contact, the new friction anchor, and the query made
-    // (none when the clearance skipped it).
-    type Outcome = (Option<Contact>, Option<DVec3>, Option<Option<SurfacePoint>>);
-    let results: Vec<Outcome> = (0..samples.len())
+    // The samples the clearance cannot skip, found serially (a few
+    // nanoseconds each); most samples are skipped in most steps.
+    let due: Vec<(usize, DVec3)> = (0..samples.len())
+        .map(|i| (i, motion.pose.point(samples.points[i])))
+        .filter(|&(i, p)| !memory_in.clearance.is_clear(i, p))
+        .collect();
+    // Per sample queried: its index, where it is, what the query found, and
+    // the contact with its new friction anchor.
+    type Queried = (usize, DVec3, Option<SurfacePoint>, Option<(Contact, DVec3)>);
+    let queried: Vec<Queried> = due
         .into_par_iter()
         // Queries are ~1 us: hand rayon chunks big enough to pay for a split.
-        .with_min_len(128)
-        .map(|i| {
-            let p = motion.pose.point(samples.points[i]);
-            if memory_in.clearance.is_clear(i, p) {
-                return (None, None, None);
-            }
+        .with_min_len(32)
+        .map(|(i, p)| {
             let found = pelvis.surface.closest_point(p, searched);
             let Some(hit) = found.filter(|h| h.signed_distance < 0.0 && -h.signed_distance <= band) else {
-                return (None, None, Some(found));
+                return (i, p, found, None);
             };
             let velocity = motion.linear_velocity + motion.angular_velocity.cross(p - com);
             let stretch = memory_in.anchors[i].map_or(DVec3::ZERO, |a| p - a);
@@ -286,7 +288,7 @@ pub fn pelvis_contacts(
                 friction_force: f.friction,
                 sliding: f.sliding,
             };
-            (Some(contact), Some(p - f.stretch), Some(found))
+            (i, p, found, Some((contact, p - f.stretch)))
         })
         .collect();
 
@@ -300,17 +302,14 @@ pub fn pelvis_contacts(
         too_deep: 0,
         deepest_m: 0.0,
     };
-    for (i, (contact, anchor, query)) in results.into_iter().enumerate() {
-        memory.anchors[i] = anchor;
-        if let Some(found) = query {
-            let p = motion.pose.point(samples.points[i]);
-            memory.clearance.record(i, p, found.as_ref(), band, searched);
-            // A skipped sample keeps its flag: having moved less than its
-            // depth beyond the band, it is still that deep.
-            memory.too_deep[i] = found.is_some_and(|h| -h.signed_distance > band);
-        }
-        report.too_deep += usize::from(memory.too_deep[i]);
-        if let Some(c) = contact {
+    // A skipped sample was clear at its last query, so it has no anchor
+    // and keeps its depth flag: having moved less than its depth beyond
+    // the band, it is still that deep.
+    for (i, p, found, contact) in queried {
+        memory.clearance.record(i, p, found.as_ref(), band, searched);
+        memory.too_deep[i] = found.is_some_and(|h| -h.signed_distance > band);
+        memory.anchors[i] = contact.as_ref().map(|(_, anchor)| *anchor);
+        if let Some((c, _)) = contact {
             report.force += c.force();
             report.torque_about_com += (c.body_point - com).cross(c.force());
             report.moment_about_pivot += c.moment_about(pivot);
@@ -319,6 +318,7 @@ pub fn pelvis_contacts(
             report.contacts.push(c);
         }
     }
+    report.too_deep = memory.too_deep.iter().filter(|&&deep| deep).count();
     Ok(report)
 }
 
