@@ -41,6 +41,11 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    // The main thread joins the pool as one of its workers: a labour run
+    // calls dozens of small parallel passes per millisecond of simulated
+    // time, and from a thread outside the pool each would be handed to a
+    // worker and waited for (a wake-up and a sleep per pass).
+    let _ = rayon::ThreadPoolBuilder::new().use_current_thread().build_global();
     let result = match &cli.command {
         Command::Validate(args) => commands::validate::run(args),
         Command::Bench(cmd) => commands::bench::run(cmd),
