@@ -16,7 +16,7 @@
 //!   measure back on the mesh exactly ([`measure_hiatus`]).
 //!
 //! The sheet between them hangs below the straight line from attachment to
-//! rim (a bowl, deepest half-way, by half of `sag_mm`), so the floor sags
+//! rim (a bowl, deepest half-way, by `bowl_mm`), so the floor sags
 //! from its attachments towards the hiatus and forms the gutter that slopes
 //! forwards, downwards and medially (CARDINAL_MOVEMENTS.md, internal
 //! rotation). Everything is built from landmarks and planes only, so the
@@ -47,11 +47,18 @@ pub struct FloorParameters {
     /// below the outlet plane, whose antero-posterior line runs from the
     /// lower symphysis to the coccyx like the pubococcygeal line, mm; the
     /// sheet between attachment and rim hangs a further half of it (the
-    /// bowl). 20 mm: the M line (descent of the levator plate below the
+    /// bowl, `bowl_mm`). 20 mm: the M line (descent of the levator plate below the
     /// pubococcygeal line) averaged 1.9 +- 1.2 cm in the women without
     /// prolapse (pelvic pain group, n = 39) of Comiter et al. 1999,
     /// Urology 54:454 (4.1 cm with prolapse).
     pub sag_mm: f64,
+    /// How far the sheet hangs below the straight line from its attachment
+    /// to the hiatus rim, at the middle of that line, mm; negative arches it
+    /// up towards the pelvic cavity (a dome). 10 mm, a basin, is an
+    /// engineering choice (the iliococcygeus sagging between the tendinous
+    /// arch and the hiatus), not a measurement: no measured depth was found
+    /// (docs/LABOUR.md, floor shape).
+    pub bowl_mm: f64,
     /// Length of the urogenital (levator) hiatus, from the lower border of
     /// the symphysis to the back of the hiatus on the midline, mm: 50 mm, the
     /// H line (pubis to the posterior anal canal) averaged 5.2 +- 1.1 cm in
@@ -80,6 +87,7 @@ impl Default for FloorParameters {
         FloorParameters {
             thickness_mm: 7.0,
             sag_mm: 20.0,
+            bowl_mm: 10.0,
             hiatus_length_mm: 50.0,
             hiatus_width_mm: 38.0,
             perineal_body_mm: 8.0,
@@ -95,6 +103,8 @@ impl Default for FloorParameters {
 pub enum FloorError {
     #[error("{key} = {value} must be a positive, finite size")]
     NotPositive { key: &'static str, value: f64 },
+    #[error("{key} = {value} must be a finite length")]
+    NotFinite { key: &'static str, value: f64 },
     #[error("{key} = {value} is too coarse: at least {min} elements are needed")]
     TooFewElements {
         key: &'static str,
@@ -147,10 +157,6 @@ const HIATUS_WIDEST_SHARE: f64 = 0.5;
 /// The back of the hiatus may lie at most this share of the hiatus length
 /// below the outlet plane (beyond it the rim would turn almost vertical).
 const HIATUS_SAG_MAX_SHARE: f64 = 0.8;
-/// Depth of the bowl: each line from the attachment to the rim hangs below
-/// its chord by this share of `sag_mm` at its middle (engineering choice:
-/// the iliococcygeus sags between the tendinous arch and the hiatus).
-const BOWL_SHARE: f64 = 0.5;
 /// How far out (share of the spine's lateral offset) the tail's Bezier
 /// control point lies beside the coccyx tip.
 const COCCYX_APPROACH: f64 = 0.6;
@@ -171,6 +177,9 @@ impl FloorParameters {
             if !(value.is_finite() && value > 0.0) {
                 return Err(FloorError::NotPositive { key, value });
             }
+        }
+        if !self.bowl_mm.is_finite() {
+            return Err(FloorError::NotFinite { key: "bowl_mm", value: self.bowl_mm });
         }
         for (key, value, min) in [
             ("elements_around", self.elements_around, 8),
@@ -562,9 +571,10 @@ pub fn pelvic_floor(pelvis: &Pelvis, parameters: &FloorParameters) -> Result<Mes
     let (rows_a, rows_c, rows_t) = (na + 1, nc + 1, nt + 1);
     // Mid-surface: the levator bowl. Each line from the attachment to the
     // rim hangs below its chord (along the outlet normal) by a parabola
-    // whose depth is BOWL_SHARE of sag_mm, so the sheet sags from its
-    // attachments towards the hiatus.
+    // bowl_mm deep at its middle, so the sheet sags from its attachments
+    // towards the hiatus (or arches over them, bowl_mm < 0).
     let sag = 1e-3 * parameters.sag_mm;
+    let bowl = 1e-3 * parameters.bowl_mm;
     let mut middle = vec![DVec3::ZERO; rows_a * rows_c];
     for i in 0..rows_a {
         let u = i as f64 / na as f64;
@@ -574,7 +584,7 @@ pub fn pelvic_floor(pelvis: &Pelvis, parameters: &FloorParameters) -> Result<Mes
         for j in 0..rows_c {
             let r = j as f64 / nc as f64;
             middle[i * rows_c + j] = outer.lerp(inner, r)
-                + 4.0 * r * (1.0 - r) * taper * BOWL_SHARE * sag * outline.frame.down;
+                + 4.0 * r * (1.0 - r) * taper * bowl * outline.frame.down;
         }
     }
     // Thickness along the mid-surface normal (around x across, which points
@@ -916,7 +926,7 @@ mod tests {
                 }
                 let hang =
                     depth(middle(&mesh, &parameters, i, nc / 2)) - depth(outer.lerp(inner, 0.5));
-                assert!(hang < BOWL_SHARE * sag * 1e-3 + 1e-9);
+                assert!(hang < parameters.bowl_mm * 1e-3 + 1e-9);
             }
             // The rim sinks from the pubis to sag_mm below the outlet plane
             // behind; the attachment at the coccyx lies in that plane.
@@ -932,6 +942,31 @@ mod tests {
         assert!(matches!(
             pelvic_floor(&pelvis, &shallow),
             Err(FloorError::SagTooDeep { .. })
+        ));
+    }
+
+    #[test]
+    fn a_negative_bowl_arches_the_sheet_into_a_dome() {
+        let pelvis = Pelvis::generate(&PelvisDiameters::default()).unwrap();
+        let down = pelvis.planes.outlet.normal;
+        let depth = |p: DVec3| (p - pelvis.planes.outlet.centre).dot(down);
+        let parameters = FloorParameters { bowl_mm: -10.0, ..Default::default() };
+        let mesh = pelvic_floor(&pelvis, &parameters).unwrap();
+        let (na, nc) = (parameters.elements_around, parameters.elements_across);
+        for i in na / 6..=na - na / 6 {
+            let (outer, inner) = (middle(&mesh, &parameters, i, 0), middle(&mesh, &parameters, i, nc));
+            for j in 1..nc {
+                let r = j as f64 / nc as f64;
+                let above = depth(outer.lerp(inner, r)) - depth(middle(&mesh, &parameters, i, j));
+                assert!(above > 0.0, "row {i}, point {j} lies {above} m below its chord");
+            }
+            let rise = depth(outer.lerp(inner, 0.5)) - depth(middle(&mesh, &parameters, i, nc / 2));
+            assert!(rise < 10e-3 + 1e-9, "row {i} rises {rise} m");
+        }
+        let flat = FloorParameters { bowl_mm: f64::NAN, ..Default::default() };
+        assert!(matches!(
+            pelvic_floor(&pelvis, &flat),
+            Err(FloorError::NotFinite { key: "bowl_mm", .. })
         ));
     }
 
