@@ -15,9 +15,10 @@
 //!   pubis to `sag_mm` below the outlet plane at the back. These three
 //!   measure back on the mesh exactly ([`measure_hiatus`]).
 //!
-//! The sheet between them hangs below the straight line from attachment to
-//! rim (a bowl, deepest half-way, by `bowl_mm`), so the floor sags
-//! from its attachments towards the hiatus and forms the gutter that slopes
+//! The sheet between them arches above the straight line from attachment to
+//! rim (a dome, highest half-way, by `-bowl_mm`; a positive `bowl_mm` makes
+//! it a basin hanging below that line instead). Either way the floor descends
+//! from its attachments to the hiatus and forms the gutter that slopes
 //! forwards, downwards and medially (CARDINAL_MOVEMENTS.md, internal
 //! rotation). Everything is built from landmarks and planes only, so the
 //! floor fits generated and imported pelvises alike.
@@ -54,10 +55,17 @@ pub struct FloorParameters {
     pub sag_mm: f64,
     /// How far the sheet hangs below the straight line from its attachment
     /// to the hiatus rim, at the middle of that line, mm; negative arches it
-    /// up towards the pelvic cavity (a dome). 10 mm, a basin, is an
-    /// engineering choice (the iliococcygeus sagging between the tendinous
-    /// arch and the hiatus), not a measurement: no measured depth was found
-    /// (docs/LABOUR.md, floor shape).
+    /// up towards the pelvic cavity (a dome). -10 mm, a dome: on MRI at rest
+    /// the iliococcygeus is "a thin muscle with an upward convexity" in 12
+    /// nulliparous women (Singh, Reid & Berger 2002, Obstet Gynecol 99(3)),
+    /// it "assumed a convex shape (arch)" in 92 % of 84 nulliparas at term
+    /// (Boreham et al. 2005, Am J Obstet Gynecol 193:2159), and the levator
+    /// "was dome-shaped at rest", turning basin-shaped only while bearing
+    /// down ("The female pelvic floor: a dome - not a basin", Acta Obstet
+    /// Gynecol Scand, doi 10.3109/00016349709024586). The floor here is built
+    /// unloaded, so at rest. The depth, 10 mm, is an engineering choice kept
+    /// from the earlier basin (no measured figure was found); the outcome
+    /// depends on it strongly (docs/LABOUR.md, ninth session).
     pub bowl_mm: f64,
     /// Length of the urogenital (levator) hiatus, from the lower border of
     /// the symphysis to the back of the hiatus on the midline, mm: 50 mm, the
@@ -87,7 +95,7 @@ impl Default for FloorParameters {
         FloorParameters {
             thickness_mm: 7.0,
             sag_mm: 20.0,
-            bowl_mm: 10.0,
+            bowl_mm: -10.0,
             hiatus_length_mm: 50.0,
             hiatus_width_mm: 38.0,
             perineal_body_mm: 8.0,
@@ -897,13 +905,14 @@ mod tests {
     }
 
     #[test]
-    fn the_floor_is_a_bowl_sagging_towards_the_hiatus() {
+    fn a_positive_bowl_hangs_the_sheet_below_its_chords() {
         let pelvis = Pelvis::generate(&PelvisDiameters::default()).unwrap();
         let down = pelvis.planes.outlet.normal;
         let depth = |p: DVec3| (p - pelvis.planes.outlet.centre).dot(down);
         for sag in [10.0, 20.0, 30.0] {
             let parameters = FloorParameters {
                 sag_mm: sag,
+                bowl_mm: 10.0,
                 ..Default::default()
             };
             let mesh = pelvic_floor(&pelvis, &parameters).unwrap();
@@ -946,11 +955,12 @@ mod tests {
     }
 
     #[test]
-    fn a_negative_bowl_arches_the_sheet_into_a_dome() {
+    fn the_default_floor_is_a_dome_over_its_chords() {
         let pelvis = Pelvis::generate(&PelvisDiameters::default()).unwrap();
         let down = pelvis.planes.outlet.normal;
         let depth = |p: DVec3| (p - pelvis.planes.outlet.centre).dot(down);
-        let parameters = FloorParameters { bowl_mm: -10.0, ..Default::default() };
+        let parameters = FloorParameters::default();
+        assert_eq!(parameters.bowl_mm, -10.0);
         let mesh = pelvic_floor(&pelvis, &parameters).unwrap();
         let (na, nc) = (parameters.elements_around, parameters.elements_across);
         for i in na / 6..=na - na / 6 {
