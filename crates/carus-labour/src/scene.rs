@@ -341,7 +341,7 @@ fn build_pelvis(s: &Scenario) -> Result<Pelvis, LabourError> {
 
 fn build_floor(s: &Scenario, pelvis: &Pelvis) -> Result<FloorScene, LabourError> {
     let mesh = pelvic_floor(pelvis, &s.floor.mesh)
-        .map_err(|e| LabourError::Anatomy(format!("pelvic floor: {e}")))?;
+        .map_err(|e| LabourError::Anatomy(format!("pelvic floor ([floor.mesh] in the scenario): {e}")))?;
     let material = Material::neo_hookean(s.floor.shear_modulus_pa, s.floor.bulk_modulus_pa);
     let region = MaterialRegion {
         element_set: None,
@@ -452,6 +452,17 @@ fn regions(pelvis: &Pelvis) -> (Vec<u16>, Vec<ContactSite>) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A floor that cannot be built names its table, its key and a fix.
+    #[test]
+    fn a_bad_floor_shape_names_its_key_and_a_fix() {
+        let mut s = Scenario::builtin("normal").unwrap();
+        s.floor.mesh.bowl_mm = f64::NAN;
+        let e = Scene::build(&s).err().expect("refused").to_string();
+        for part in ["[floor.mesh]", "bowl_mm", "dome"] {
+            assert!(e.contains(part), "{e}");
+        }
+    }
 
     /// The normal scene with a coarse head and no floor: the canal alone.
     fn coarse_normal_without_floor() -> Scene {

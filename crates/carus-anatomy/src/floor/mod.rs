@@ -111,7 +111,7 @@ impl Default for FloorParameters {
 pub enum FloorError {
     #[error("{key} = {value} must be a positive, finite size")]
     NotPositive { key: &'static str, value: f64 },
-    #[error("{key} = {value} must be a finite length")]
+    #[error("{key} = {value} must be a finite length in mm (negative arches the sheet into a dome, positive hangs it as a basin; the default is -10)")]
     NotFinite { key: &'static str, value: f64 },
     #[error("{key} = {value} is too coarse: at least {min} elements are needed")]
     TooFewElements {
