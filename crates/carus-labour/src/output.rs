@@ -194,6 +194,7 @@ pub fn write_history_csv(
         "floor_fy_n",
         "floor_fz_n",
         "floor_peak_stretch",
+        "floor_inverted_corner_elements",
         "head_axial_moment_bone_nm",
         "head_axial_moment_floor_nm",
         "head_axial_moment_neck_nm",
@@ -236,6 +237,7 @@ pub fn write_history_csv(
             values.extend(f.to_array());
         }
         values.push(floor.get(k).map_or(f64::NAN, |f| f.peak_stretch));
+        values.push(floor.get(k).map_or(f64::NAN, |f| f.inverted_corner_elements as f64));
         match loads.get(k) {
             Some(l) => values.extend([
                 l.head_axial.bone_nm,

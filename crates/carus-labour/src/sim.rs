@@ -43,6 +43,11 @@ pub struct FloorSample {
     pub peak_von_mises_pa: f64,
     /// Floor nodes held by the fetus.
     pub held_nodes: usize,
+    /// Floor elements with a corner turned inside out (scaled Jacobian
+    /// below 0, Knupp 2000): the solver's inversion check, at the element's
+    /// centre, does not see them, and their stresses are not to be trusted.
+    #[serde(default)]
+    pub inverted_corner_elements: usize,
 }
 
 /// Everything that changes during a run; serializable, so a checkpoint
@@ -559,17 +564,37 @@ impl<'a> Simulation<'a> {
             head_axial: forces.head_axial,
             neck: forces.neck,
         });
-        if let (Some(solver), Some(floor)) = (&self.solver, &self.state.floor) {
+        if let (Some(solver), Some(floor), Some(scene_floor)) =
+            (&self.solver, &self.state.floor, &self.scene.floor)
+        {
             let fields = solver.element_fields();
             let peak = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
+            let nodes: Vec<[f64; 3]> = scene_floor
+                .reference
+                .iter()
+                .zip(solver.displacements())
+                .map(|(x, d)| (*x + DVec3::from_array(d)).to_array())
+                .collect();
             self.state.floor_samples.push(FloorSample {
                 time_s: self.time_s(),
                 peak_stretch: peak(&fields.max_principal_stretch),
                 peak_von_mises_pa: peak(&fields.von_mises_pa),
                 held_nodes: floor.contacts.iter().map(|c| c.held().len()).sum(),
+                inverted_corner_elements: inverted_corner_elements(&scene_floor.mesh, &nodes),
             });
         }
     }
+}
+
+/// How many elements of `mesh`, at node positions `nodes`, have a corner
+/// turned inside out (scaled Jacobian below 0).
+fn inverted_corner_elements(mesh: &carus_fem::Mesh, nodes: &[[f64; 3]]) -> usize {
+    mesh.elements()
+        .filter(|element| {
+            let x: Vec<[f64; 3]> = element.iter().map(|&i| nodes[i as usize]).collect();
+            carus_fem::quality::scaled_jacobian(mesh.kind, &x) < 0.0
+        })
+        .count()
 }
 
 /// Per node: whether it belongs to an element whose volume ratio J has
@@ -681,5 +706,24 @@ mod tests {
         }
         assert_eq!(crushed.iter().filter(|c| !**c).count(), 4);
         assert!(crushed_nodes(&mesh, &[0.9, 0.3], 0.0).iter().all(|c| !c));
+    }
+
+    /// Pushing one corner of the second of two H8 cells through its
+    /// opposite face inverts that corner alone: one element counted, though
+    /// the cell keeps most of its volume.
+    #[test]
+    fn an_inverted_corner_is_counted() {
+        let mesh = carus_fem::generate::box_h8([2.0, 1.0, 1.0], [2, 1, 1]);
+        let mut nodes = mesh.nodes.clone();
+        assert_eq!(inverted_corner_elements(&mesh, &nodes), 0);
+        // The second cell's corner farthest from the first along x, pushed
+        // back past the shared face.
+        let second = mesh.element(1);
+        let corner = *second
+            .iter()
+            .max_by(|&&a, &&b| mesh.nodes[a as usize][0].total_cmp(&mesh.nodes[b as usize][0]))
+            .unwrap() as usize;
+        nodes[corner][0] = 0.5;
+        assert_eq!(inverted_corner_elements(&mesh, &nodes), 1);
     }
 }
