@@ -123,6 +123,20 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
     })
 }
 
+/// The most floor elements with a corner turned inside out at one sample,
+/// out of all of them, and when they first appeared.
+fn inverted_corners(record: &RunRecord) -> String {
+    let most = record.floor.iter().map(|f| f.inverted_corner_elements).max().unwrap_or(0);
+    let first = record.floor.iter().find(|f| f.inverted_corner_elements > 0);
+    match first {
+        Some(f) => format!(
+            "up to {most} of {}, from t = {:.1} s",
+            record.summary.floor_elements, f.time_s
+        ),
+        None => format!("none of {}", record.summary.floor_elements),
+    }
+}
+
 /// Writes report.html beside the run's data. Pictures need a GPU or Mesa's
 /// lavapipe; without one the page is still written, with a note instead.
 fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result<Vec<String>> {
@@ -156,6 +170,11 @@ fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result<Vec<String
                 (
                     "floor sub-steps per rigid step".into(),
                     summary.floor_substeps_per_step.to_string(),
+                ),
+                (
+                    "floor elements with a corner turned inside out (stresses not to be trusted; docs/LABOUR.md)"
+                        .into(),
+                    inverted_corners(record),
                 ),
             ],
         },
@@ -304,4 +323,31 @@ fn serde_name<T: serde::Serialize>(value: &T) -> String {
         .ok()
         .and_then(|v| v.as_str().map(str::to_string))
         .unwrap_or_default()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The report's row names the most elements with an inverted corner at
+    /// one sample, out of the floor's, and when the first appeared.
+    #[test]
+    fn the_report_counts_inverted_corners() {
+        let mut s = Scenario::builtin("normal").unwrap();
+        s.numerics.head_subdivisions = 3;
+        s.contact.sample_spacing_mm = 8.0;
+        s.floor.mesh.elements_around = 16;
+        s.floor.mesh.elements_across = 3;
+        s.numerics.end_time_s = 0.3;
+        s.output.vtu = false;
+        let dir = tempfile::tempdir().unwrap();
+        let mut record =
+            carus_labour::run(&s, dir.path(), &RunOptions::default(), &mut carus_labour::SilentObserver).unwrap();
+        assert_eq!(record.summary.floor_elements, 48);
+        assert_eq!(inverted_corners(&record), "none of 48");
+        record.floor[1].inverted_corner_elements = 2;
+        record.floor[2].inverted_corner_elements = 5;
+        let t = record.floor[1].time_s;
+        assert_eq!(inverted_corners(&record), format!("up to 5 of 48, from t = {t:.1} s"));
+    }
 }
