@@ -310,11 +310,13 @@ impl PelvicAxis {
         // Curved part: coarse search over the table, then refine each local
         // minimum with a bracketed Newton on d/dsigma |r - p|^2 / 2 = (r - p) . t.
         let n = self.table_sigma.len();
-        let distances: Vec<f64> = self.table_points.iter().map(|&q| (q - point).length_squared()).collect();
+        let distance = |k: usize| self.table_points.get(k).map_or(f64::INFINITY, |&q| (q - point).length_squared());
+        // A sliding window over the table, so a call allocates nothing.
+        let mut window = [f64::INFINITY, distance(0), distance(1)];
         for k in 0..n {
-            let left = if k > 0 { distances[k - 1] } else { f64::INFINITY };
-            let right = if k + 1 < n { distances[k + 1] } else { f64::INFINITY };
-            if distances[k] > left || distances[k] > right {
+            let [left, here, right] = window;
+            window = [here, right, distance(k + 2)];
+            if here > left || here > right {
                 continue;
             }
             let lo = self.table_sigma[k.saturating_sub(1)];

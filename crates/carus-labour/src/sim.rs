@@ -385,13 +385,7 @@ impl<'a> Simulation<'a> {
             return Ok(());
         };
         let scene = self.scene;
-        let u = solver.displacements();
-        let nodes: Vec<DVec3> = floor
-            .reference
-            .iter()
-            .zip(&u)
-            .map(|(x, d)| *x + DVec3::from_array(*d))
-            .collect();
+        let nodes = deformed(&floor.reference, solver);
         let ratio = scene.scenario.floor.crushed_volume_ratio;
         let crushed = (ratio > 0.0).then(|| crushed_nodes(&floor.mesh, &solver.volume_ratios(), ratio));
         solver.release_imposed();
@@ -569,12 +563,7 @@ impl<'a> Simulation<'a> {
         {
             let fields = solver.element_fields();
             let peak = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
-            let nodes: Vec<[f64; 3]> = scene_floor
-                .reference
-                .iter()
-                .zip(solver.displacements())
-                .map(|(x, d)| (*x + DVec3::from_array(d)).to_array())
-                .collect();
+            let nodes = deformed(&scene_floor.reference, solver);
             self.state.floor_samples.push(FloorSample {
                 time_s: self.time_s(),
                 peak_stretch: peak(&fields.max_principal_stretch),
@@ -586,12 +575,21 @@ impl<'a> Simulation<'a> {
     }
 }
 
+/// The floor's nodes where they are now: reference plus displacement.
+fn deformed(reference: &[DVec3], solver: &TledSolver) -> Vec<DVec3> {
+    reference
+        .iter()
+        .zip(solver.displacements())
+        .map(|(x, d)| *x + DVec3::from_array(d))
+        .collect()
+}
+
 /// How many elements of `mesh`, at node positions `nodes`, have a corner
 /// turned inside out (scaled Jacobian below 0).
-fn inverted_corner_elements(mesh: &carus_fem::Mesh, nodes: &[[f64; 3]]) -> usize {
+fn inverted_corner_elements(mesh: &carus_fem::Mesh, nodes: &[DVec3]) -> usize {
     mesh.elements()
         .filter(|element| {
-            let x: Vec<[f64; 3]> = element.iter().map(|&i| nodes[i as usize]).collect();
+            let x: Vec<[f64; 3]> = element.iter().map(|&i| nodes[i as usize].to_array()).collect();
             carus_fem::quality::scaled_jacobian(mesh.kind, &x) < 0.0
         })
         .count()
@@ -714,7 +712,7 @@ mod tests {
     #[test]
     fn an_inverted_corner_is_counted() {
         let mesh = carus_fem::generate::box_h8([2.0, 1.0, 1.0], [2, 1, 1]);
-        let mut nodes = mesh.nodes.clone();
+        let mut nodes: Vec<DVec3> = mesh.nodes.iter().map(|&x| DVec3::from_array(x)).collect();
         assert_eq!(inverted_corner_elements(&mesh, &nodes), 0);
         // The second cell's corner farthest from the first along x, pushed
         // back past the shared face.
@@ -723,7 +721,7 @@ mod tests {
             .iter()
             .max_by(|&&a, &&b| mesh.nodes[a as usize][0].total_cmp(&mesh.nodes[b as usize][0]))
             .unwrap() as usize;
-        nodes[corner][0] = 0.5;
+        nodes[corner].x = 0.5;
         assert_eq!(inverted_corner_elements(&mesh, &nodes), 1);
     }
 }
