@@ -299,6 +299,18 @@ pub struct FloorSection {
     /// sideways). Let go, the fetus passes over the tissue instead of
     /// flattening it until it turns inside out (docs/LABOUR.md).
     pub crushed_volume_ratio: f64,
+    /// Hourglass control of the floor's one-point H8 elements (the
+    /// Flanagan-Belytschko stiffness of DESIGN.md), NiftySim's HGKappa; 0
+    /// switches it off. 0.075, the solver's default, with which it passes
+    /// docs/VALIDATION.md V3. Numerical; the floor's corners turn inside
+    /// out (`floor_inverted_corner_elements`) through the modes it resists.
+    pub hourglass_coefficient: f64,
+    /// The modulus that scales the hourglass stiffness (carus-fem
+    /// `HourglassModulus`): `dilatational` (lambda + 2 mu, NiftySim's
+    /// scaling, which every labour run since the first was measured with)
+    /// or `shear` (2 mu, the solver's default for nearly incompressible
+    /// solids, softer here by the bulk-to-shear ratio).
+    pub hourglass_modulus: carus_fem::HourglassModulus,
     /// Shape and resolution of the mesh (carus-anatomy FloorParameters).
     pub mesh: FloorParameters,
 }
@@ -313,6 +325,8 @@ impl Default for FloorSection {
             damping_per_s: 400.0,
             coupling_reach_mm: 1.0,
             crushed_volume_ratio: 0.5,
+            hourglass_coefficient: 0.075,
+            hourglass_modulus: carus_fem::HourglassModulus::Dilatational,
             mesh: FloorParameters {
                 elements_around: 32,
                 elements_across: 6,
@@ -612,6 +626,7 @@ impl Scenario {
                 self.fetus.head_angular_drag_nm_s_per_rad,
             ),
             ("floor.damping_per_s", self.floor.damping_per_s),
+            ("floor.hourglass_coefficient", self.floor.hourglass_coefficient),
             ("neck.flexion_nm_per_deg", self.neck.flexion_nm_per_deg),
             ("neck.extension_nm_per_deg", self.neck.extension_nm_per_deg),
             (
@@ -868,6 +883,16 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("floor.crushed_volume_ratio") && e.contains("below 1"), "{e}");
+        let e = parse("name = \"x\"\n[floor]\nhourglass_coefficient = -0.1\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("floor.hourglass_coefficient") && e.contains("zero or more"), "{e}");
+        let e = parse("name = \"x\"\n[floor]\nhourglass_modulus = \"bulk\"\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("hourglass_modulus") && e.contains("shear"), "{e}");
+        let s = parse("name = \"x\"\n[floor]\nhourglass_modulus = \"shear\"\n").unwrap();
+        assert_eq!(s.floor.hourglass_modulus, carus_fem::HourglassModulus::Shear);
         let e = parse("name = \"x\"\n[start]\nposition = \"XYZ\"\n")
             .unwrap_err()
             .to_string();

@@ -350,9 +350,8 @@ fn build_floor(s: &Scenario, pelvis: &Pelvis) -> Result<FloorScene, LabourError>
     };
     let options = ModelOptions {
         damping_per_s: s.floor.damping_per_s,
-        // NiftySim's scaling, which every labour run so far was measured
-        // with; the solver's default (shear, docs/VALIDATION.md V3) is softer.
-        hourglass_modulus: carus_fem::HourglassModulus::Dilatational,
+        hourglass_coefficient: s.floor.hourglass_coefficient,
+        hourglass_modulus: s.floor.hourglass_modulus,
         ..ModelOptions::default()
     };
     let model = Arc::new(TledModel::new(&mesh, &[region], &options)?);
@@ -462,6 +461,20 @@ mod tests {
         for part in ["[floor.mesh]", "bowl_mm", "dome"] {
             assert!(e.contains(part), "{e}");
         }
+    }
+
+    /// The floor's hourglass control is the scenario's, not a constant of
+    /// the scene: both keys reach its TLED model.
+    #[test]
+    fn the_floor_model_takes_the_scenarios_hourglass_control() {
+        let mut s = Scenario::builtin("normal").unwrap();
+        s.numerics.head_subdivisions = 3;
+        s.floor.hourglass_coefficient = 0.2;
+        s.floor.hourglass_modulus = carus_fem::HourglassModulus::Shear;
+        let scene = Scene::build(&s).unwrap();
+        let options = scene.floor.as_ref().unwrap().model.options();
+        assert_eq!(options.hourglass_coefficient, 0.2);
+        assert_eq!(options.hourglass_modulus, carus_fem::HourglassModulus::Shear);
     }
 
     /// The normal scene with a coarse head and no floor: the canal alone.
