@@ -309,7 +309,7 @@ pub struct FloorSection {
     /// `HourglassModulus`): `dilatational` (lambda + 2 mu, NiftySim's
     /// scaling, which every labour run since the first was measured with)
     /// or `shear` (2 mu, the solver's default for nearly incompressible
-    /// solids, softer here by the bulk-to-shear ratio).
+    /// solids; with the bulk modulus 20 x the shear, about 11 times softer).
     pub hourglass_modulus: carus_fem::HourglassModulus,
     /// Shape and resolution of the mesh (carus-anatomy FloorParameters).
     pub mesh: FloorParameters,
