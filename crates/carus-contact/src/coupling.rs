@@ -68,6 +68,14 @@ pub struct TissueContact {
     clearance: Clearance,
     /// Scratch: which nodes are kept from the last step (indexed by node).
     kept: Vec<bool>,
+    /// Whether a node found deeper inside than the reach is still held when
+    /// it was outside at its last query: it crossed the surface within one
+    /// coupling step instead of starting behind it.
+    #[serde(default)]
+    catch_crossings: bool,
+    /// Per node: outside the surface (or held on it) at its last query.
+    #[serde(default)]
+    outside: Vec<bool>,
 }
 
 impl TissueContact {
@@ -83,7 +91,20 @@ impl TissueContact {
             skin_m: DEFAULT_SKIN_M,
             clearance: Clearance::new(0),
             kept: Vec::new(),
+            catch_crossings: false,
+            outside: Vec::new(),
         })
+    }
+
+    /// Also holds nodes that crossed the surface since their last query,
+    /// however deep they now are. For a body tissue must never pass into
+    /// (bone), where a node thrown through its wall within one coupling
+    /// step (a snapping element) would otherwise stay behind it. Nodes
+    /// that were never seen outside (a mesh that starts behind the surface)
+    /// are still left alone.
+    pub fn catching_crossings(mut self) -> Self {
+        self.catch_crossings = true;
+        self
     }
 
     /// Sets the query skin, m: nodes clear of the body are not queried
@@ -130,6 +151,7 @@ impl TissueContact {
         if self.clearance.len() != nodes.len() {
             self.clearance = Clearance::new(nodes.len());
         }
+        self.outside.resize(nodes.len(), false);
         let searched = self.reach_m + self.skin_m;
         let rotation = pose.orientation;
 
@@ -145,8 +167,12 @@ impl TissueContact {
             }
             let found = body.closest_point(local, searched);
             self.clearance.record(i, local, found.as_ref(), self.reach_m, searched);
-            let Some(hit) = found.filter(|h| h.signed_distance.abs() <= self.reach_m) else { continue };
-            if hit.signed_distance < 0.0 || kept {
+            let Some(hit) = found else { continue };
+            let crossed = self.catch_crossings && self.outside[i];
+            let within = hit.signed_distance.abs() <= self.reach_m;
+            let held = (within && (hit.signed_distance < 0.0 || kept)) || (crossed && hit.signed_distance < 0.0);
+            self.outside[i] = held || hit.signed_distance >= 0.0;
+            if held {
                 self.held.push(HeldNode {
                     node: i as u32,
                     target: pose.point(hit.point),
@@ -245,6 +271,28 @@ mod tests {
             assert!(h.normal.dot(h.target - pose.position_m) > 0.0);
             assert!((nodes[h.node as usize] - pose.position_m).length() < 0.0501);
         }
+    }
+
+    /// A node seen outside and then found deeper than the reach crossed
+    /// the surface within a step: held when crossings are caught, left
+    /// alone otherwise; a node that starts that deep is never held.
+    #[test]
+    fn a_node_thrown_through_the_surface_is_caught_back() {
+        let body = ball();
+        let pose = RigidPose::new(DVec3::ZERO, DQuat::IDENTITY);
+        let reach = 0.5e-3;
+        let at = |r: f64| vec![DVec3::new(r, 0.0, 0.0), DVec3::new(0.047, 0.0, 0.0)];
+        let mut catching = TissueContact::new(reach).unwrap().catching_crossings();
+        let mut plain = TissueContact::new(reach).unwrap();
+        for contact in [&mut catching, &mut plain] {
+            // The second node starts deep inside the (faceted) 5 cm ball.
+            assert!(contact.update(&body, &pose, &at(0.051)).is_empty());
+        }
+        let caught: Vec<u32> = catching.update(&body, &pose, &at(0.047)).iter().map(|h| h.node).collect();
+        assert_eq!(caught, vec![0]);
+        let target = catching.held()[0].target;
+        assert!((target.length() - 0.05).abs() < 1e-3, "put back on the surface: {target}");
+        assert!(plain.update(&body, &pose, &at(0.047)).is_empty());
     }
 
     #[test]

@@ -505,12 +505,14 @@ mod tests {
         assert!(csv.lines().next().unwrap().ends_with(",head_axial_moment_neck_push_nm"));
     }
 
-    /// The floor slides on the bony wall but never passes into it: with the
+    /// The floor slides on the bony wall and never stays in it: with the
     /// head pressed low into the canal, every floor node that neither the
-    /// bone's attachment nor the fetus prescribes stays outside the wall, to
-    /// within the coupling's reach, and the wall does hold nodes.
+    /// bone's attachment nor the fetus prescribes is outside the wall to
+    /// within the coupling's reach, or, thrown through it within a step
+    /// (an element snapping back when the fetus lets go of it), held back
+    /// on the wall at the next step; and the wall does hold nodes.
     #[test]
-    fn the_floor_slides_on_the_bone_never_into_it() {
+    fn the_floor_slides_on_the_bone_and_never_stays_in_it() {
         let s = flexed_head_pushed_low(50.0);
         let scene = Scene::build(&s).unwrap();
         let floor = scene.floor.as_ref().unwrap();
@@ -523,18 +525,24 @@ mod tests {
         // wall is an open surface, so its inside test only holds near it.
         let depth = |x: DVec3, within: f64| wall.closest_point(x, within).map_or(0.0, |hit| hit.signed_distance);
         let starts_outside: Vec<bool> = floor.reference.iter().map(|x| depth(*x, 0.05) > -reach).collect();
+        let mut behind: Vec<usize> = Vec::new();
         while sim.time_s() < s.numerics.end_time_s {
             sim.step().unwrap();
             let state = sim.state.floor.as_ref().unwrap();
-            most_on_bone = most_on_bone.max(state.bone.held().len());
+            let on_bone: Vec<u32> = state.bone.held().iter().map(|h| h.node).collect();
+            most_on_bone = most_on_bone.max(on_bone.len());
+            for i in behind.drain(..) {
+                assert!(on_bone.contains(&(i as u32)), "t = {}: node {i} left behind the wall", sim.time_s());
+            }
             let by_fetus: Vec<u32> = state.contacts.iter().flat_map(|c| c.held().iter().map(|h| h.node)).collect();
             let u = sim.solver().unwrap().displacements();
             for (i, (x, d)) in floor.reference.iter().zip(&u).enumerate() {
                 if floor.attached[i] || !starts_outside[i] || by_fetus.contains(&(i as u32)) {
                     continue;
                 }
-                let d = depth(*x + DVec3::from_array(*d), 0.005);
-                assert!(d > -reach, "t = {}: node {i} {:.2} mm inside", sim.time_s(), -d * 1e3);
+                if depth(*x + DVec3::from_array(*d), 0.005) <= -reach {
+                    behind.push(i);
+                }
             }
         }
         assert!(most_on_bone > 0);

@@ -291,7 +291,10 @@ pub struct FloorSection {
     /// docs/LABOUR.md). Such a node is left free until it comes out.
     pub coupling_reach_mm: f64,
     /// Volume ratio J below which a floor element counts as crushed, and the
-    /// fetus lets go of its nodes (0 never lets go). Numerical, from the
+    /// fetus lets go of its nodes (0 never lets go); an element with a
+    /// corner turned inside out (scaled Jacobian below 0) counts as crushed
+    /// whatever its J, a sliver the centre's J cannot see (docs/LABOUR.md,
+    /// tenth session). Numerical, from the
     /// tissue's near-incompressibility: with the bulk modulus 20 x the shear
     /// (nu about 0.475) an element that has lost half its volume is not
     /// deforming but being crushed between the fetus and bone, which a layer

@@ -141,7 +141,9 @@ impl<'a> Simulation<'a> {
                     contacts: (0..n)
                         .map(|_| TissueContact::new(reach))
                         .collect::<Result<_, _>>()?,
-                    bone: TissueContact::new(reach)?,
+                    // Tissue never passes into bone: a node the floor
+                    // throws through the wall within a step is caught too.
+                    bone: TissueContact::new(reach)?.catching_crossings(),
                 })
             }
             None => None,
@@ -387,7 +389,8 @@ impl<'a> Simulation<'a> {
         let scene = self.scene;
         let nodes = deformed(&floor.reference, solver);
         let ratio = scene.scenario.floor.crushed_volume_ratio;
-        let crushed = (ratio > 0.0).then(|| crushed_nodes(&floor.mesh, &solver.volume_ratios(), ratio));
+        let crushed =
+            (ratio > 0.0).then(|| crushed_nodes(&floor.mesh, &nodes, &solver.volume_ratios(), ratio));
         solver.release_imposed();
         // Who holds a node, first come first served (carus-fem's imposed
         // displacements override its fixed dofs, and a later imposition
@@ -584,24 +587,29 @@ fn deformed(reference: &[DVec3], solver: &TledSolver) -> Vec<DVec3> {
         .collect()
 }
 
+/// Whether `element`, at node positions `nodes`, has a corner turned
+/// inside out (scaled Jacobian below 0).
+fn has_inverted_corner(kind: carus_fem::ElementKind, element: &[u32], nodes: &[DVec3]) -> bool {
+    let x: Vec<[f64; 3]> = element.iter().map(|&i| nodes[i as usize].to_array()).collect();
+    carus_fem::quality::scaled_jacobian(kind, &x) < 0.0
+}
+
 /// How many elements of `mesh`, at node positions `nodes`, have a corner
-/// turned inside out (scaled Jacobian below 0).
+/// turned inside out.
 fn inverted_corner_elements(mesh: &carus_fem::Mesh, nodes: &[DVec3]) -> usize {
     mesh.elements()
-        .filter(|element| {
-            let x: Vec<[f64; 3]> = element.iter().map(|&i| nodes[i as usize].to_array()).collect();
-            carus_fem::quality::scaled_jacobian(mesh.kind, &x) < 0.0
-        })
+        .filter(|element| has_inverted_corner(mesh.kind, element, nodes))
         .count()
 }
 
-/// Per node: whether it belongs to an element whose volume ratio J has
-/// fallen below `ratio` (crushed).
-fn crushed_nodes(mesh: &carus_fem::Mesh, jacobian: &[f64], ratio: f64) -> Vec<bool> {
+/// Per node: whether it belongs to a crushed element, one whose volume
+/// ratio J has fallen below `ratio` or which has a corner turned inside out
+/// at node positions `nodes` (a sliver: volume kept, shape lost).
+fn crushed_nodes(mesh: &carus_fem::Mesh, nodes: &[DVec3], jacobian: &[f64], ratio: f64) -> Vec<bool> {
     let mut crushed = vec![false; mesh.node_count()];
-    for (nodes, &j) in mesh.elements().zip(jacobian) {
-        if j < ratio {
-            for &i in nodes {
+    for (element, &j) in mesh.elements().zip(jacobian) {
+        if j < ratio || has_inverted_corner(mesh.kind, element, nodes) {
+            for &i in element {
                 crushed[i as usize] = true;
             }
         }
@@ -693,17 +701,43 @@ mod tests {
     use super::*;
 
     /// Two H8 cells side by side share a face: crushing the second marks its
-    /// eight nodes, the first cell's other four stay free, and 0 marks none.
+    /// eight nodes and the first cell's other four stay free.
     #[test]
     fn crushed_elements_mark_their_nodes() {
         let mesh = carus_fem::generate::box_h8([2.0, 1.0, 1.0], [2, 1, 1]);
-        let crushed = crushed_nodes(&mesh, &[0.9, 0.3], 0.5);
+        let nodes: Vec<DVec3> = mesh.nodes.iter().map(|&x| DVec3::from_array(x)).collect();
+        let crushed = crushed_nodes(&mesh, &nodes, &[0.9, 0.3], 0.5);
         let second = mesh.element(1);
         for (i, c) in crushed.iter().enumerate() {
             assert_eq!(*c, second.contains(&(i as u32)), "node {i}");
         }
         assert_eq!(crushed.iter().filter(|c| !**c).count(), 4);
-        assert!(crushed_nodes(&mesh, &[0.9, 0.3], 0.0).iter().all(|c| !c));
+        assert!(crushed_nodes(&mesh, &nodes, &[0.9, 0.3], 0.0).iter().all(|c| !c));
+    }
+
+    /// The second cell's corner farthest from the first along x, pushed
+    /// back past the face the cells share: the nodes so moved.
+    fn second_cell_with_a_corner_pushed_through(mesh: &carus_fem::Mesh) -> Vec<DVec3> {
+        let mut nodes: Vec<DVec3> = mesh.nodes.iter().map(|&x| DVec3::from_array(x)).collect();
+        let corner = *mesh
+            .element(1)
+            .iter()
+            .max_by(|&&a, &&b| mesh.nodes[a as usize][0].total_cmp(&mesh.nodes[b as usize][0]))
+            .unwrap() as usize;
+        nodes[corner].x = 0.5;
+        nodes
+    }
+
+    /// A sliver counts as crushed though its J stays above the ratio.
+    #[test]
+    fn an_element_with_an_inverted_corner_is_crushed() {
+        let mesh = carus_fem::generate::box_h8([2.0, 1.0, 1.0], [2, 1, 1]);
+        let nodes = second_cell_with_a_corner_pushed_through(&mesh);
+        let crushed = crushed_nodes(&mesh, &nodes, &[1.0, 0.9], 0.5);
+        let second = mesh.element(1);
+        for (i, c) in crushed.iter().enumerate() {
+            assert_eq!(*c, second.contains(&(i as u32)), "node {i}");
+        }
     }
 
     /// Pushing one corner of the second of two H8 cells through its
@@ -712,16 +746,9 @@ mod tests {
     #[test]
     fn an_inverted_corner_is_counted() {
         let mesh = carus_fem::generate::box_h8([2.0, 1.0, 1.0], [2, 1, 1]);
-        let mut nodes: Vec<DVec3> = mesh.nodes.iter().map(|&x| DVec3::from_array(x)).collect();
-        assert_eq!(inverted_corner_elements(&mesh, &nodes), 0);
-        // The second cell's corner farthest from the first along x, pushed
-        // back past the shared face.
-        let second = mesh.element(1);
-        let corner = *second
-            .iter()
-            .max_by(|&&a, &&b| mesh.nodes[a as usize][0].total_cmp(&mesh.nodes[b as usize][0]))
-            .unwrap() as usize;
-        nodes[corner].x = 0.5;
+        let reference: Vec<DVec3> = mesh.nodes.iter().map(|&x| DVec3::from_array(x)).collect();
+        assert_eq!(inverted_corner_elements(&mesh, &reference), 0);
+        let nodes = second_cell_with_a_corner_pushed_through(&mesh);
         assert_eq!(inverted_corner_elements(&mesh, &nodes), 1);
     }
 }
