@@ -590,8 +590,12 @@ fn deformed(reference: &[DVec3], solver: &TledSolver) -> Vec<DVec3> {
 /// Whether `element`, at node positions `nodes`, has a corner turned
 /// inside out (scaled Jacobian below 0).
 fn has_inverted_corner(kind: carus_fem::ElementKind, element: &[u32], nodes: &[DVec3]) -> bool {
-    let x: Vec<[f64; 3]> = element.iter().map(|&i| nodes[i as usize].to_array()).collect();
-    carus_fem::quality::scaled_jacobian(kind, &x) < 0.0
+    // Every step for every element: no allocation (an H8 has the most nodes).
+    let mut x = [[0.0; 3]; 8];
+    for (corner, &i) in x.iter_mut().zip(element) {
+        *corner = nodes[i as usize].to_array();
+    }
+    carus_fem::quality::scaled_jacobian(kind, &x[..element.len()]) < 0.0
 }
 
 /// How many elements of `mesh`, at node positions `nodes`, have a corner
