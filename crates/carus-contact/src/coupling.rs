@@ -273,26 +273,41 @@ mod tests {
         }
     }
 
-    /// A node seen outside and then found deeper than the reach crossed
-    /// the surface within a step: held when crossings are caught, left
-    /// alone otherwise; a node that starts that deep is never held.
-    #[test]
-    fn a_node_thrown_through_the_surface_is_caught_back() {
-        let body = ball();
-        let pose = RigidPose::new(DVec3::ZERO, DQuat::IDENTITY);
-        let reach = 0.5e-3;
-        let at = |r: f64| vec![DVec3::new(r, 0.0, 0.0), DVec3::new(0.047, 0.0, 0.0)];
-        let mut catching = TissueContact::new(reach).unwrap().catching_crossings();
-        let mut plain = TissueContact::new(reach).unwrap();
-        for contact in [&mut catching, &mut plain] {
-            // The second node starts deep inside the (faceted) 5 cm ball.
-            assert!(contact.update(&body, &pose, &at(0.051)).is_empty());
+    fn direction(polar: f64, azimuth: f64) -> DVec3 {
+        DVec3::new(polar.sin() * azimuth.cos(), polar.sin() * azimuth.sin(), polar.cos())
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+
+        /// However a node seen outside the ball crosses its surface within
+        /// one update (from any side, to any depth the search reaches), it
+        /// is held on the surface, pushing outwards, when crossings are
+        /// caught; without, a node deeper than the reach is not held. A
+        /// node that starts that deep is never held.
+        #[test]
+        fn every_crossing_is_caught(
+            from in (0.1f64..3.0, 0.0f64..6.3, 0.5e-3f64..8e-3),
+            to in (0.1f64..3.0, 0.0f64..6.3, 3e-3f64..8e-3),
+        ) {
+            let body = ball();
+            let pose = RigidPose::new(DVec3::new(0.01, -0.02, 0.03), DQuat::from_rotation_x(0.3));
+            let outside = pose.point(direction(from.0, from.1) * (0.05 + from.2));
+            let inside = pose.point(direction(to.0, to.1) * (0.05 - to.2));
+            let mut catching = TissueContact::new(0.5e-3).unwrap().catching_crossings();
+            let mut plain = TissueContact::new(0.5e-3).unwrap();
+            for contact in [&mut catching, &mut plain] {
+                proptest::prop_assert!(contact.update(&body, &pose, &[outside, inside]).is_empty());
+            }
+            let held = catching.update(&body, &pose, &[inside, inside]).to_vec();
+            proptest::prop_assert_eq!(held.len(), 1);
+            proptest::prop_assert_eq!(held[0].node, 0);
+            let r = (held[0].target - pose.position_m).length();
+            // On the faceted ball (12 x 24 facets inside the 5 cm sphere).
+            proptest::prop_assert!((0.048..=0.0501).contains(&r), "target radius {}", r);
+            proptest::prop_assert!(held[0].normal.dot(held[0].target - pose.position_m) > 0.0);
+            proptest::prop_assert!(plain.update(&body, &pose, &[inside, inside]).is_empty());
         }
-        let caught: Vec<u32> = catching.update(&body, &pose, &at(0.047)).iter().map(|h| h.node).collect();
-        assert_eq!(caught, vec![0]);
-        let target = catching.held()[0].target;
-        assert!((target.length() - 0.05).abs() < 1e-3, "put back on the surface: {target}");
-        assert!(plain.update(&body, &pose, &at(0.047)).is_empty());
     }
 
     #[test]
