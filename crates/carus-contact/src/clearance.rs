@@ -37,6 +37,11 @@ impl Clearance {
         p.distance_squared(self.checked_at[i]) < self.free_travel[i] * self.free_travel[i]
     }
 
+    /// How far point `i`, now at `p`, has moved since its last query.
+    pub(crate) fn travelled(&self, i: usize, p: DVec3) -> f64 {
+        p.distance(self.checked_at[i])
+    }
+
     /// Records a query of point `i` at `p` that searched `searched` far and
     /// found `hit`; contact means inside the surface by less than `band`.
     /// Returns how far the point may now move without a new query.

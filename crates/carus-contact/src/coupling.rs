@@ -69,13 +69,16 @@ pub struct TissueContact {
     /// Scratch: which nodes are kept from the last step (indexed by node).
     kept: Vec<bool>,
     /// Whether a node found deeper inside than the reach is still held when
-    /// it was outside at its last query: it crossed the surface within one
-    /// coupling step instead of starting behind it.
+    /// it was outside at its last query and has moved at least that far out
+    /// plus as far as it is now deep: it crossed the surface within one
+    /// coupling step instead of starting behind it or passing round the
+    /// edge of an open surface.
     #[serde(default)]
     catch_crossings: bool,
-    /// Per node: outside the surface (or held on it) at its last query.
+    /// Per node: its signed distance at its last query (0 if held on the
+    /// surface; none before its first).
     #[serde(default)]
-    outside: Vec<bool>,
+    last_distance: Vec<Option<f64>>,
 }
 
 impl TissueContact {
@@ -92,7 +95,7 @@ impl TissueContact {
             clearance: Clearance::new(0),
             kept: Vec::new(),
             catch_crossings: false,
-            outside: Vec::new(),
+            last_distance: Vec::new(),
         })
     }
 
@@ -101,7 +104,8 @@ impl TissueContact {
     /// (bone), where a node thrown through its wall within one coupling
     /// step (a snapping element) would otherwise stay behind it. Nodes
     /// that were never seen outside (a mesh that starts behind the surface)
-    /// are still left alone.
+    /// or that have not moved far enough to have come through (round a
+    /// free edge) are still left alone.
     pub fn catching_crossings(mut self) -> Self {
         self.catch_crossings = true;
         self
@@ -151,7 +155,7 @@ impl TissueContact {
         if self.clearance.len() != nodes.len() {
             self.clearance = Clearance::new(nodes.len());
         }
-        self.outside.resize(nodes.len(), false);
+        self.last_distance.resize(nodes.len(), None);
         let searched = self.reach_m + self.skin_m;
         let rotation = pose.orientation;
 
@@ -166,12 +170,20 @@ impl TissueContact {
                 continue;
             }
             let found = body.closest_point(local, searched);
+            let travelled = self.clearance.travelled(i, local);
             self.clearance.record(i, local, found.as_ref(), self.reach_m, searched);
             let Some(hit) = found else { continue };
-            let crossed = self.catch_crossings && self.outside[i];
+            // The signed distance changes no faster than the node moves, so
+            // a node that has not moved from where it was out to where it is
+            // in did not come through (an open surface's inside test flips
+            // round its free edges). 1 nm of slack for rounding.
+            let crossed = self.catch_crossings
+                && hit.signed_distance < 0.0
+                && self.last_distance[i]
+                    .is_some_and(|last| last >= 0.0 && last - hit.signed_distance <= travelled + 1e-9);
             let within = hit.signed_distance.abs() <= self.reach_m;
-            let held = (within && (hit.signed_distance < 0.0 || kept)) || (crossed && hit.signed_distance < 0.0);
-            self.outside[i] = held || hit.signed_distance >= 0.0;
+            let held = (within && (hit.signed_distance < 0.0 || kept)) || crossed;
+            self.last_distance[i] = Some(if held { 0.0 } else { hit.signed_distance });
             if held {
                 self.held.push(HeldNode {
                     node: i as u32,
@@ -308,6 +320,28 @@ mod tests {
             proptest::prop_assert!(held[0].normal.dot(held[0].target - pose.position_m) > 0.0);
             proptest::prop_assert!(plain.update(&body, &pose, &[inside, inside]).is_empty());
         }
+    }
+
+    /// An open square facing up (+z): a node that passes through it
+    /// obliquely is caught; one that swings round its free edge at 8 mm,
+    /// from 60 deg above its plane to 60 deg below, is not: 8 mm out and
+    /// 8 mm "in" after moving 13.9 mm, it never crossed the surface.
+    #[test]
+    fn a_node_round_a_free_edge_is_not_caught() {
+        let v = [(-0.05, -0.05), (0.05, -0.05), (0.05, 0.05), (-0.05, 0.05)].map(|(x, y)| DVec3::new(x, y, 0.0));
+        let square = TriangleCollider::new("square", &v, &[[0, 1, 2], [0, 2, 3]]).unwrap();
+        let pose = RigidPose::new(DVec3::ZERO, DQuat::IDENTITY);
+        let round = |degrees: f64| {
+            let a = degrees.to_radians();
+            DVec3::new(0.05 + 0.008 * a.cos(), 0.0, 0.008 * a.sin())
+        };
+        let mut contact = TissueContact::new(0.5e-3).unwrap().catching_crossings();
+        let before = [DVec3::new(0.0, 0.0, 1e-3), round(60.0)];
+        assert!(contact.update(&square, &pose, &before).is_empty());
+        let after = [DVec3::new(0.002, 0.0, -3e-3), round(-60.0)];
+        assert!(square.closest_point(after[1], 0.01).unwrap().signed_distance < -0.0079);
+        let held: Vec<u32> = contact.update(&square, &pose, &after).iter().map(|h| h.node).collect();
+        assert_eq!(held, vec![0]);
     }
 
     #[test]
