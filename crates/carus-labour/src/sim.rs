@@ -709,7 +709,7 @@ mod tests {
     #[test]
     fn crushed_elements_mark_their_nodes() {
         let mesh = carus_fem::generate::box_h8([2.0, 1.0, 1.0], [2, 1, 1]);
-        let nodes: Vec<DVec3> = mesh.nodes.iter().map(|&x| DVec3::from_array(x)).collect();
+        let nodes = reference_nodes(&mesh);
         let crushed = crushed_nodes(&mesh, &nodes, &[0.9, 0.3], 0.5);
         let second = mesh.element(1);
         for (i, c) in crushed.iter().enumerate() {
@@ -719,10 +719,15 @@ mod tests {
         assert!(crushed_nodes(&mesh, &nodes, &[0.9, 0.3], 0.0).iter().all(|c| !c));
     }
 
+    /// The mesh's nodes where it was built.
+    fn reference_nodes(mesh: &carus_fem::Mesh) -> Vec<DVec3> {
+        mesh.nodes.iter().map(|&x| DVec3::from_array(x)).collect()
+    }
+
     /// The second cell's corner farthest from the first along x, pushed
     /// back past the face the cells share: the nodes so moved.
     fn second_cell_with_a_corner_pushed_through(mesh: &carus_fem::Mesh) -> Vec<DVec3> {
-        let mut nodes: Vec<DVec3> = mesh.nodes.iter().map(|&x| DVec3::from_array(x)).collect();
+        let mut nodes = reference_nodes(mesh);
         let corner = *mesh
             .element(1)
             .iter()
@@ -750,8 +755,7 @@ mod tests {
     #[test]
     fn an_inverted_corner_is_counted() {
         let mesh = carus_fem::generate::box_h8([2.0, 1.0, 1.0], [2, 1, 1]);
-        let reference: Vec<DVec3> = mesh.nodes.iter().map(|&x| DVec3::from_array(x)).collect();
-        assert_eq!(inverted_corner_elements(&mesh, &reference), 0);
+        assert_eq!(inverted_corner_elements(&mesh, &reference_nodes(&mesh)), 0);
         let nodes = second_cell_with_a_corner_pushed_through(&mesh);
         assert_eq!(inverted_corner_elements(&mesh, &nodes), 1);
     }
