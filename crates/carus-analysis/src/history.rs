@@ -86,6 +86,10 @@ pub struct PoseSample {
     /// Present exactly when the history has a [`TrunkGeometry`].
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub trunk: Option<RigidPose>,
+    /// The lower trunk (abdomen and hips) when the spine bends; `trunk` is
+    /// then the thorax. The detector does not read it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lower_trunk: Option<RigidPose>,
     /// Expulsion force acting on the fetus, N.
     pub expulsion_force_n: DVec3,
     /// Sum of the contact forces of the bony pelvis on the fetus, N.

@@ -371,6 +371,7 @@ mod tests {
             time_s,
             head,
             trunk: trunk_pose,
+            lower_trunk: None,
             expulsion_force_n: DVec3::new(0.0, 0.0, -50.0),
             bone_contact_force_n: DVec3::ZERO,
             floor_contact_force_n: DVec3::ZERO,

@@ -15,14 +15,26 @@ use serde::{Deserialize, Serialize};
 #[serde(rename_all = "snake_case")]
 pub enum Body {
     Head,
+    /// The whole trunk, or the thorax when the spine bends.
     Trunk,
+    LowerTrunk,
 }
 
 impl Body {
+    /// The body at rigid-body index `b` (crate::scene's HEAD, TRUNK, LOWER_TRUNK).
+    pub fn of(b: usize) -> Body {
+        match b {
+            crate::scene::HEAD => Body::Head,
+            crate::scene::TRUNK => Body::Trunk,
+            _ => Body::LowerTrunk,
+        }
+    }
+
     pub fn name(self) -> &'static str {
         match self {
             Body::Head => "head",
             Body::Trunk => "trunk",
+            Body::LowerTrunk => "lower_trunk",
         }
     }
 }
@@ -70,6 +82,10 @@ pub struct LoadSample {
     /// The neck's joint angles from its rest pose (none without a trunk).
     #[serde(default)]
     pub neck: Option<NeckAngles>,
+    /// The thoracolumbar joint's angles from its rest pose, when the spine
+    /// bends (flexion bends the thorax forwards).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spine: Option<NeckAngles>,
 }
 
 /// One body's bone contacts summed by site; `sites[label]` is the site of

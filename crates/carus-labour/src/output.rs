@@ -27,6 +27,7 @@ pub const PELVIS_VTU: &str = "pelvis.vtu";
 pub const LIGAMENTS_VTU: &str = "sacrospinous_ligaments.vtu";
 pub const HEAD_BODY_VTU: &str = "head_body.vtu";
 pub const TRUNK_BODY_VTU: &str = "trunk_body.vtu";
+pub const LOWER_TRUNK_BODY_VTU: &str = "lower_trunk_body.vtu";
 pub const FRAMES_DIR: &str = "frames";
 
 fn output_error(path: &Path, e: impl std::fmt::Display) -> LabourError {
@@ -202,33 +203,23 @@ pub fn write_history_csv(
         "neck_lateral_bending_deg",
         "neck_axial_rotation_deg",
         "head_axial_moment_neck_push_nm",
+        "lower_trunk_x_m",
+        "lower_trunk_y_m",
+        "lower_trunk_z_m",
+        "lower_trunk_qx",
+        "lower_trunk_qy",
+        "lower_trunk_qz",
+        "lower_trunk_qw",
+        "spine_flexion_deg",
+        "spine_lateral_bending_deg",
+        "spine_axial_rotation_deg",
     ];
     header.extend_from_slice(&poses);
     let mut csv = CsvWriter::create(path, &header).map_err(|e| output_error(path, e))?;
     for (k, (row, sample)) in rows.iter().zip(&history.samples).enumerate() {
         let mut values: Vec<f64> = row.iter().map(|v| v.unwrap_or(f64::NAN)).collect();
-        let h = sample.head;
-        values.extend([
-            h.position_m.x,
-            h.position_m.y,
-            h.position_m.z,
-            h.orientation.x,
-            h.orientation.y,
-            h.orientation.z,
-            h.orientation.w,
-        ]);
-        match sample.trunk {
-            Some(t) => values.extend([
-                t.position_m.x,
-                t.position_m.y,
-                t.position_m.z,
-                t.orientation.x,
-                t.orientation.y,
-                t.orientation.z,
-                t.orientation.w,
-            ]),
-            None => values.extend([f64::NAN; 7]),
-        }
+        values.extend(pose_columns(Some(sample.head)));
+        values.extend(pose_columns(sample.trunk));
         for f in [
             sample.expulsion_force_n,
             sample.bone_contact_force_n,
@@ -251,9 +242,22 @@ pub fn write_history_csv(
             None => values.extend([f64::NAN; 3]),
         }
         values.push(loads.get(k).map_or(f64::NAN, |l| l.head_axial.neck_push_nm));
+        values.extend(pose_columns(sample.lower_trunk));
+        match loads.get(k).and_then(|l| l.spine) {
+            Some(n) => values.extend([n.flexion_deg, n.lateral_bending_deg, n.axial_rotation_deg]),
+            None => values.extend([f64::NAN; 3]),
+        }
         csv.row(&values).map_err(|e| output_error(path, e))?;
     }
     csv.flush().map_err(|e| output_error(path, e))
+}
+
+/// Position and orientation quaternion of a pose, NaN when there is none.
+fn pose_columns(pose: Option<RigidPose>) -> [f64; 7] {
+    pose.map_or([f64::NAN; 7], |p| {
+        let (x, q) = (p.position_m, p.orientation);
+        [x.x, x.y, x.z, q.x, q.y, q.z, q.w]
+    })
 }
 
 /// The contact loads as CSV, one row per recorded instant, body and site

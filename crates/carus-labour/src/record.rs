@@ -28,7 +28,10 @@ pub struct RunSummary {
     pub head_samples: usize,
     pub trunk_samples: usize,
     pub head_mass_kg: f64,
+    /// The trunk's mass, or the thorax's when the spine bends.
     pub trunk_mass_kg: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lower_trunk_mass_kg: Option<f64>,
 }
 
 /// An instant worth a picture (engagement, full internal rotation,
@@ -81,6 +84,11 @@ pub struct Files {
     pub trunk_body_vtu: Option<String>,
     pub head_pvd: Option<String>,
     pub trunk_pvd: Option<String>,
+    /// The lower trunk, when the spine bends.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lower_trunk_body_vtu: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lower_trunk_pvd: Option<String>,
     pub floor_pvd: Option<String>,
     pub checkpoint: String,
 }

@@ -14,7 +14,7 @@ use carus_contact::RigidPose;
 use crate::output::{self, Checkpoint};
 use crate::record::{key_moments, Files, RunRecord, RunSummary};
 use crate::scenario::Scenario;
-use crate::scene::{Scene, HEAD, TRUNK};
+use crate::scene::{Scene, HEAD, LOWER_TRUNK, TRUNK};
 use crate::sim::Simulation;
 use crate::LabourError;
 
@@ -204,13 +204,18 @@ fn write_static(scene: &Scene, out_dir: &Path) -> Result<(), LabourError> {
         &h.triangles,
         &identity,
     )?;
-    if let Some(t) = &scene.trunk {
-        output::write_surface_vtu(
-            &out_dir.join(output::TRUNK_BODY_VTU),
-            &t.surface.vertices,
-            &t.surface.triangles,
-            &identity,
-        )?;
+    for (t, file) in [
+        (&scene.trunk, output::TRUNK_BODY_VTU),
+        (&scene.lower_trunk, output::LOWER_TRUNK_BODY_VTU),
+    ] {
+        if let Some(t) = t {
+            output::write_surface_vtu(
+                &out_dir.join(file),
+                &t.surface.vertices,
+                &t.surface.triangles,
+                &identity,
+            )?;
+        }
     }
     Ok(())
 }
@@ -230,13 +235,18 @@ fn write_frame(
         &h.triangles,
         &bodies.pose(HEAD),
     )?;
-    if let Some(t) = &scene.trunk {
-        output::write_surface_vtu(
-            &out_dir.join(output::frame_name("trunk", k)),
-            &t.surface.vertices,
-            &t.surface.triangles,
-            &bodies.pose(TRUNK),
-        )?;
+    for (t, stem, b) in [
+        (&scene.trunk, "trunk", TRUNK),
+        (&scene.lower_trunk, "lower_trunk", LOWER_TRUNK),
+    ] {
+        if let Some(t) = t {
+            output::write_surface_vtu(
+                &out_dir.join(output::frame_name(stem, k)),
+                &t.surface.vertices,
+                &t.surface.triangles,
+                &bodies.pose(b),
+            )?;
+        }
     }
     if let (Some(floor), Some(solver)) = (&scene.floor, sim.solver()) {
         output::write_floor_vtu(
@@ -300,6 +310,11 @@ fn finish(
     } else {
         None
     };
+    let lower_trunk_pvd = if scene.lower_trunk.is_some() {
+        pvd("lower_trunk")?
+    } else {
+        None
+    };
     let floor_pvd = if scene.floor.is_some() {
         pvd("floor")?
     } else {
@@ -326,6 +341,7 @@ fn finish(
         trunk_samples: scene.trunk.as_ref().map_or(0, |t| t.samples.len()),
         head_mass_kg: scene.head.mass.mass_kg,
         trunk_mass_kg: scene.trunk.as_ref().map(|t| t.mass.mass_kg),
+        lower_trunk_mass_kg: scene.lower_trunk.as_ref().map(|t| t.mass.mass_kg),
     };
     let record = RunRecord {
         scenario: scene.scenario.clone(),
@@ -349,6 +365,11 @@ fn finish(
             trunk_body_vtu: scene.trunk.as_ref().map(|_| output::TRUNK_BODY_VTU.into()),
             head_pvd,
             trunk_pvd,
+            lower_trunk_body_vtu: scene
+                .lower_trunk
+                .as_ref()
+                .map(|_| output::LOWER_TRUNK_BODY_VTU.into()),
+            lower_trunk_pvd,
             floor_pvd,
             checkpoint: output::CHECKPOINT_FILE.into(),
         },
@@ -502,7 +523,7 @@ mod tests {
             assert!(m.neck_push_nm < -0.05, "t = {}: {m:?}", l.time_s);
         }
         let csv = std::fs::read_to_string(dir.path().join(output::HISTORY_CSV)).unwrap();
-        assert!(csv.lines().next().unwrap().ends_with(",head_axial_moment_neck_push_nm"));
+        assert!(csv.lines().next().unwrap().contains(",head_axial_moment_neck_push_nm,"));
     }
 
     /// The floor slides on the bony wall and never stays in it: with the
@@ -612,6 +633,12 @@ mod tests {
             a.summary.floor_substeps_per_step,
             b.summary.floor_substeps_per_step
         );
+        assert_same_motion(&a, &b, 1.0);
+    }
+
+    /// Two runs sampled at the same instants move the head alike: station
+    /// within `station_mm`, theta and phi within 2 degrees.
+    fn assert_same_motion(a: &RunRecord, b: &RunRecord, station_mm: f64) {
         let (sa, sb) = (
             &a.detector.as_ref().unwrap().series,
             &b.detector.as_ref().unwrap().series,
@@ -624,7 +651,7 @@ mod tests {
                 sa.phi_deg[k] - sb.phi_deg[k],
             );
             assert!(
-                ds.abs() < 1.0 && dtheta.abs() < 2.0 && dphi.abs() < 2.0,
+                ds.abs() < station_mm && dtheta.abs() < 2.0 && dphi.abs() < 2.0,
                 "t = {}: station {ds} mm, theta {dtheta}, phi {dphi} deg apart",
                 sa.time_s[k]
             );
@@ -633,10 +660,15 @@ mod tests {
 
     #[test]
     fn a_resumed_run_equals_an_uninterrupted_one_bit_for_bit() {
-        let s = coarse(2.0);
-        let (_, whole) = run_in(&s, &RunOptions::default());
+        assert_resumes_bit_for_bit(&coarse(2.0));
+    }
+
+    /// Stopped at 1 s and resumed from its checkpoint, a run of `s` ends
+    /// exactly as the uninterrupted one; returns that one.
+    fn assert_resumes_bit_for_bit(s: &Scenario) -> RunRecord {
+        let (_, whole) = run_in(s, &RunOptions::default());
         let (dir, half) = run_in(
-            &s,
+            s,
             &RunOptions {
                 stop_at_s: Some(1.0),
                 ..RunOptions::default()
@@ -651,6 +683,61 @@ mod tests {
         assert_eq!(resumed.floor, whole.floor);
         assert_eq!(resumed.detector, whole.detector);
         assert!(resumed.detector.is_some());
+        whole
+    }
+
+    /// The coarse normal scenario with a spine that bends at `bending` N m
+    /// per degree, in every direction and in twist.
+    fn with_spine(mut s: Scenario, bending: f64) -> Scenario {
+        s.spine.enabled = true;
+        s.spine.bending_nm_per_deg = bending;
+        s.spine.axial_rotation_nm_per_deg = bending;
+        s
+    }
+
+    /// Cut in two but held straight by a stiff joint, the trunk moves the
+    /// head as the one-piece trunk does, up to the joint's give along the
+    /// spine under the push (force_max_n / joint_stiffness_n_per_m, 4 mm):
+    /// the cut and the segments' masses change nothing by themselves.
+    /// Without the trunk's drag: shared by mass, it resists the pair's
+    /// turning more than the one body's (each segment's share acts at its
+    /// own centre).
+    #[test]
+    fn a_stiff_spine_moves_the_head_as_the_one_piece_trunk_does() {
+        let mut rigid = coarse(2.4);
+        rigid.fetus.trunk_linear_drag_n_s_per_m = 0.0;
+        rigid.fetus.trunk_angular_drag_nm_s_per_rad = 0.0;
+        let (_, a) = run_in(&rigid, &RunOptions::default());
+        let stiff = with_spine(rigid, 10.0);
+        let give_mm = 1e3 * stiff.expulsion.force_max_n / stiff.spine.joint_stiffness_n_per_m;
+        let (dir, b) = run_in(&stiff, &RunOptions::default());
+        assert!(b.summary.completed && b.summary.failure.is_none());
+        assert_same_motion(&a, &b, give_mm);
+        // The lower trunk is recorded with its joint, and barely bends.
+        assert!(b.history.samples.iter().all(|s| s.lower_trunk.is_some()));
+        assert!(a.history.samples.iter().all(|s| s.lower_trunk.is_none()));
+        for l in &b.loads {
+            let spine = l.spine.expect("spine angles");
+            assert!(spine.flexion_deg.abs().max(spine.lateral_bending_deg.abs()) < 1.0, "{spine:?}");
+        }
+        let csv = std::fs::read_to_string(dir.path().join(output::HISTORY_CSV)).unwrap();
+        assert!(csv.lines().next().unwrap().contains("lower_trunk_qw,spine_flexion_deg"));
+        assert_eq!(b.files.lower_trunk_body_vtu.as_deref(), Some(output::LOWER_TRUNK_BODY_VTU));
+        assert!(dir.path().join(output::LOWER_TRUNK_BODY_VTU).exists());
+    }
+
+    /// A soft spine bends where the stiff one does not, and a run with it
+    /// resumes bit for bit: the joint's rest pose is in the checkpoint.
+    #[test]
+    fn a_bending_spine_bends_and_resumes_bit_for_bit() {
+        let whole = assert_resumes_bit_for_bit(&with_spine(coarse(2.0), 0.1));
+        let largest = whole
+            .loads
+            .iter()
+            .filter_map(|l| l.spine)
+            .map(|a| a.flexion_deg.hypot(a.lateral_bending_deg))
+            .fold(0.0, f64::max);
+        assert!(largest > 2.0, "the spine bent at most {largest} deg");
     }
 
     #[test]

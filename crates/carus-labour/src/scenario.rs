@@ -118,6 +118,93 @@ impl Default for TrunkSection {
     }
 }
 
+/// `[spine]`: a fetal spine that bends at the thoracolumbar junction, the
+/// trunk then being two rigid segments (the thorax, which carries the head
+/// and the shoulders, and the lower trunk with the hips) joined by a
+/// six-degree-of-freedom spring like the neck's. The expulsion then acts on
+/// the lower trunk. No measured fetal or neonatal thoracolumbar stiffness
+/// or range was found (docs/LABOUR.md, tenth and eleventh sessions), so
+/// every value here is an engineering choice; docs/LABOUR.md gives the runs
+/// that show what they change.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SpineSection {
+    /// Off: the trunk is one rigid body.
+    pub enabled: bool,
+    /// Bending stiffness in flexion, extension and lateral bending, N m per
+    /// degree. Engineering choice: 0.1, ten times the neck's flexion
+    /// (REFERENCE_DATA.md) and a tenth of an adult cervical joint's 1.03
+    /// (Voo et al. 1998, an upper bound for a term fetus's trunk).
+    pub bending_nm_per_deg: f64,
+    /// Axial rotation (twist) stiffness, N m per degree. Engineering
+    /// choice: as the bending.
+    pub axial_rotation_nm_per_deg: f64,
+    /// End of the bending range to either side, degrees. Engineering
+    /// choice: 45.
+    pub bending_limit_deg: f64,
+    /// End of the twist range to either side, degrees. Engineering choice: 45.
+    pub axial_rotation_limit_deg: f64,
+    /// Stiffness added beyond a limit, N m per degree. Numerical, as the
+    /// neck's: it enforces the limit like a contact penalty.
+    pub end_range_stiffness_nm_per_deg: f64,
+    /// Stiffness of the joint against the segments' pulling apart, pushing
+    /// together or shearing, N/m. Numerical: it keeps the segments joined
+    /// (4 mm under the 120 N expulsion). The joint's point moves with an
+    /// effective mass of about 0.1 kg (the thorax, 0.72 kg and 9e-4 kg m^2,
+    /// and the lower trunk, 0.54 kg, each turning about its centre), so it
+    /// rings at about 550 rad/s, 0.55 rad per 1 ms rigid step.
+    pub joint_stiffness_n_per_m: f64,
+    /// Rotational dashpot, N m s/rad. Numerical: about half critical for
+    /// the bending spring (2 sqrt(k I) = 0.18 with I about 1.4e-3 kg m^2,
+    /// the two segments about the joint), and small enough for the explicit
+    /// step on the segments' own inertia (c dt / I about 0.3; 0.3 N m s/rad
+    /// with 600 N s/m at the joint made the pair tumble within 0.1 s).
+    pub rotational_damping_nm_s_per_rad: f64,
+    /// Linear dashpot at the joint, N s/m. Numerical: about half critical
+    /// for the joint spring (2 sqrt(k m) = 110 N s/m on the 0.1 kg), c dt / m
+    /// about 0.5.
+    pub linear_damping_n_s_per_m: f64,
+}
+
+impl Default for SpineSection {
+    fn default() -> Self {
+        SpineSection {
+            enabled: false,
+            bending_nm_per_deg: 0.1,
+            axial_rotation_nm_per_deg: 0.1,
+            bending_limit_deg: 45.0,
+            axial_rotation_limit_deg: 45.0,
+            end_range_stiffness_nm_per_deg: 1.0,
+            joint_stiffness_n_per_m: 3e4,
+            rotational_damping_nm_s_per_rad: 0.1,
+            linear_damping_n_s_per_m: 50.0,
+        }
+    }
+}
+
+impl SpineSection {
+    /// The thoracolumbar joint as carus-contact's six-degree-of-freedom
+    /// spring, the thorax in the head's place.
+    pub fn joint(&self) -> carus_contact::NeckStiffness {
+        carus_contact::NeckStiffness {
+            flexion_nm_per_deg: self.bending_nm_per_deg,
+            extension_nm_per_deg: self.bending_nm_per_deg,
+            lateral_bending_nm_per_deg: self.bending_nm_per_deg,
+            axial_rotation_nm_per_deg: self.axial_rotation_nm_per_deg,
+            compression_n_per_m: self.joint_stiffness_n_per_m,
+            tension_n_per_m: self.joint_stiffness_n_per_m,
+            shear_n_per_m: self.joint_stiffness_n_per_m,
+            rotational_damping_nm_s_per_rad: self.rotational_damping_nm_s_per_rad,
+            linear_damping_n_s_per_m: self.linear_damping_n_s_per_m,
+            flexion_limit_deg: self.bending_limit_deg,
+            extension_limit_deg: self.bending_limit_deg,
+            lateral_bending_limit_deg: self.bending_limit_deg,
+            axial_rotation_limit_deg: self.axial_rotation_limit_deg,
+            end_range_stiffness_nm_per_deg: self.end_range_stiffness_nm_per_deg,
+        }
+    }
+}
+
 /// `[start]`: where the fetus starts (an input, CARDINAL_MOVEMENTS.md).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -407,6 +494,8 @@ pub struct Scenario {
     #[serde(default)]
     pub trunk: TrunkSection,
     #[serde(default)]
+    pub spine: SpineSection,
+    #[serde(default)]
     pub start: StartSection,
     #[serde(default)]
     pub expulsion: ExpulsionSection,
@@ -649,6 +738,20 @@ impl Scenario {
                 "neck.end_range_stiffness_nm_per_deg",
                 self.neck.end_range_stiffness_nm_per_deg,
             ),
+            ("spine.bending_nm_per_deg", self.spine.bending_nm_per_deg),
+            ("spine.axial_rotation_nm_per_deg", self.spine.axial_rotation_nm_per_deg),
+            ("spine.bending_limit_deg", self.spine.bending_limit_deg),
+            ("spine.axial_rotation_limit_deg", self.spine.axial_rotation_limit_deg),
+            (
+                "spine.end_range_stiffness_nm_per_deg",
+                self.spine.end_range_stiffness_nm_per_deg,
+            ),
+            ("spine.joint_stiffness_n_per_m", self.spine.joint_stiffness_n_per_m),
+            (
+                "spine.rotational_damping_nm_s_per_rad",
+                self.spine.rotational_damping_nm_s_per_rad,
+            ),
+            ("spine.linear_damping_n_s_per_m", self.spine.linear_damping_n_s_per_m),
         ] {
             if !(value.is_finite() && value >= 0.0) {
                 return Err(err(
@@ -740,6 +843,14 @@ impl Scenario {
                 self.start.attitude_deg,
                 "is not a head attitude",
                 "degrees, -90 to 90 (positive flexed)",
+            ));
+        }
+        if self.spine.enabled && !self.trunk.enabled {
+            return Err(err(
+                "spine.enabled",
+                1.0,
+                "a spine that bends needs the trunk it bends",
+                "set trunk.enabled = true, or spine.enabled = false",
             ));
         }
         let mentum = self.start.position.is_mentum();
@@ -896,6 +1007,14 @@ mod tests {
         assert!(e.contains("hourglass_modulus") && e.contains("shear"), "{e}");
         let s = parse("name = \"x\"\n[floor]\nhourglass_modulus = \"shear\"\n").unwrap();
         assert_eq!(s.floor.hourglass_modulus, carus_fem::HourglassModulus::Shear);
+        let e = parse("name = \"x\"\n[spine]\nenabled = true\n[trunk]\nenabled = false\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("spine.enabled") && e.contains("trunk.enabled = true"), "{e}");
+        let e = parse("name = \"x\"\n[spine]\nbending_nm_per_deg = -0.1\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("spine.bending_nm_per_deg") && e.contains("zero or more"), "{e}");
         let e = parse("name = \"x\"\n[start]\nposition = \"XYZ\"\n")
             .unwrap_err()
             .to_string();

@@ -1,5 +1,6 @@
 //! The scene of one run, built once from a scenario: the rigid pelvis (with
-//! its contact regions), the fetal head and trunk as rigid bodies (surfaces,
+//! its contact regions), the fetal head and trunk (in two segments when the
+//! spine bends) as rigid bodies (surfaces,
 //! contact samples, mass properties from their volumes), the neck geometry,
 //! the TLED pelvic floor, and the starting pose. All constant: the mutable
 //! state lives in [`crate::state::SimState`].
@@ -22,8 +23,11 @@ use crate::LabourError;
 
 /// Index of the head among the rigid bodies.
 pub const HEAD: usize = 0;
-/// Index of the trunk among the rigid bodies (when there is one).
+/// Index of the trunk among the rigid bodies (when there is one): the
+/// whole trunk, or its thorax when the spine bends.
 pub const TRUNK: usize = 1;
+/// Index of the lower trunk among the rigid bodies (when the spine bends).
+pub const LOWER_TRUNK: usize = 2;
 
 /// One fetal part as a rigid body: its surface in its centre-of-mass frame,
 /// the contact samples on it, and the collider the floor nodes are tested against.
@@ -70,9 +74,18 @@ pub struct Scene {
     pub head_axes: HeadAxes,
     /// The atlanto-occipital pivot in the head's centre-of-mass frame.
     pub pivot_in_head: DVec3,
+    /// The whole trunk, or the thorax when the spine bends.
     pub trunk: Option<FetalBody>,
+    /// The shoulders, the trunk's centre and its spine axis, in the frame
+    /// of `trunk` (the detector's k: CARDINAL_MOVEMENTS.md, from the pivot
+    /// along the spine, so from the segment that carries the head).
     pub trunk_geometry: Option<TrunkGeometry>,
-    /// Spine axis k in the trunk's centre-of-mass frame.
+    /// Abdomen and hips, when the spine bends (`[spine]`).
+    pub lower_trunk: Option<FetalBody>,
+    /// The thoracolumbar joint in the frame of `trunk` (when the spine bends).
+    pub thoracolumbar_in_trunk: DVec3,
+    /// Spine axis k in the trunk's centre-of-mass frame (and the lower
+    /// trunk's: both are the anatomy's trunk frame, moved).
     pub spine_in_trunk: DVec3,
     pub bodies: RigidBodyModel,
     pub law: ContactLaw,
@@ -117,6 +130,8 @@ impl Scene {
 
         let mut bodies = RigidBodyModel::default();
         bodies.add(head.mass)?;
+        let mut lower_trunk = None;
+        let mut thoracolumbar_in_trunk = DVec3::ZERO;
         let (trunk, trunk_geometry, spine_in_trunk) = if s.trunk.enabled {
             let d = TrunkDiameters {
                 bisacromial_mm: s.trunk.bisacromial_mm,
@@ -124,17 +139,25 @@ impl Scene {
             };
             let anatomy =
                 Trunk::new(&d).map_err(|e| LabourError::Anatomy(format!("fetal trunk: {e}")))?;
-            let body = FetalBody::new(
-                "trunk",
-                &anatomy.surface,
-                s.fetus.density_kg_per_m3,
-                spacing,
-            )?;
+            let density = s.fetus.density_kg_per_m3;
+            let body = if s.spine.enabled {
+                let parts = anatomy.segments();
+                let thorax = FetalBody::new("thorax", &parts.thorax, density, spacing)?;
+                let lower = FetalBody::new("lower trunk", &parts.lower, density, spacing)?;
+                thoracolumbar_in_trunk = parts.thoracolumbar + thorax.frame_origin;
+                lower_trunk = Some(lower);
+                thorax
+            } else {
+                FetalBody::new("trunk", &anatomy.surface, density, spacing)?
+            };
             let mut g = TrunkGeometry::from_trunk(&anatomy);
             g.centre_m += body.frame_origin;
             g.right_acromion_m += body.frame_origin;
             g.left_acromion_m += body.frame_origin;
             bodies.add(body.mass)?;
+            if let Some(lower) = &lower_trunk {
+                bodies.add(lower.mass)?;
+            }
             (Some(body), Some(g), anatomy.spine_axis)
         } else {
             (None, None, DVec3::NEG_Z)
@@ -171,6 +194,8 @@ impl Scene {
             pivot_in_head,
             trunk,
             trunk_geometry,
+            lower_trunk,
+            thoracolumbar_in_trunk,
             spine_in_trunk,
             bodies,
             law,
@@ -219,16 +244,13 @@ impl Scene {
             }
         }
         let head = RigidPose::new(position, q_head);
-        let mut poses = vec![head];
-        if let Some(trunk) = &self.trunk {
-            let pivot = head.point(self.pivot_in_head);
-            // The trunk frame's origin is the pivot; its centre of mass sits at -frame_origin from it.
-            poses.push(RigidPose::new(
-                pivot - q_trunk * trunk.frame_origin,
-                q_trunk,
-            ));
-        }
-        poses
+        let pivot = head.point(self.pivot_in_head);
+        // The trunk frame's origin is the pivot; each segment's centre of
+        // mass sits at -frame_origin from it, the spine straight.
+        let segment = |b: &FetalBody| RigidPose::new(pivot - q_trunk * b.frame_origin, q_trunk);
+        std::iter::once(head)
+            .chain(self.trunk.iter().chain(&self.lower_trunk).map(segment))
+            .collect()
     }
 
     /// How far `head_centre` lies from the pelvic axis (m), when it is
@@ -250,6 +272,34 @@ impl Scene {
         let half_inlet = 0.5 * (l.iliopectineal_right - l.iliopectineal_left).length();
         let off = (head_centre - axis.point(sigma)).length();
         (off > half_inlet).then_some(off)
+    }
+
+    /// Rigid body `b`: the head, the trunk (or thorax), the lower trunk.
+    pub fn fetal_body(&self, b: usize) -> &FetalBody {
+        match b {
+            HEAD => &self.head,
+            TRUNK => self.trunk.as_ref().expect("a trunk body"),
+            _ => self.lower_trunk.as_ref().expect("a lower trunk body"),
+        }
+    }
+
+    /// The contact law of body `b` on bone.
+    pub fn contact_law(&self, b: usize) -> &ContactLaw {
+        if b == HEAD {
+            &self.law
+        } else {
+            &self.trunk_law
+        }
+    }
+
+    /// The body the expulsion pushes when it acts on the trunk: the
+    /// segment with the breech.
+    pub fn breech_body(&self) -> usize {
+        if self.lower_trunk.is_some() {
+            LOWER_TRUNK
+        } else {
+            TRUNK
+        }
     }
 
     /// The pivot of the neck in the pelvis frame at the start.
@@ -475,6 +525,38 @@ mod tests {
         let options = scene.floor.as_ref().unwrap().model.options();
         assert_eq!(options.hourglass_coefficient, 0.2);
         assert_eq!(options.hourglass_modulus, carus_fem::HourglassModulus::Shear);
+    }
+
+    /// A spine that bends cuts the trunk in two at the thoracolumbar joint:
+    /// the segments weigh what the whole trunk did, start joined at the
+    /// joint with the spine straight, and the shoulders ride on the thorax.
+    #[test]
+    fn a_bending_spine_cuts_the_trunk_at_the_thoracolumbar_joint() {
+        let mut s = Scenario::builtin("normal").unwrap();
+        s.numerics.head_subdivisions = 3;
+        s.floor.enabled = false;
+        let whole = Scene::build(&s).unwrap();
+        s.spine.enabled = true;
+        let cut = Scene::build(&s).unwrap();
+        assert_eq!((whole.bodies.len(), cut.bodies.len()), (2, 3));
+        let mass = |scene: &Scene| scene.bodies.mass_kg[TRUNK..].iter().sum::<f64>();
+        assert!((mass(&cut) - mass(&whole)).abs() < 1e-9 * mass(&whole));
+        assert_eq!(cut.breech_body(), LOWER_TRUNK);
+        assert_eq!(whole.breech_body(), TRUNK);
+        // One point of the joint for both segments at the start, on the
+        // spine line below the chest.
+        let joint = cut.start[TRUNK].point(cut.thoracolumbar_in_trunk);
+        let lower = cut.lower_trunk.as_ref().unwrap();
+        let in_lower = cut.start[LOWER_TRUNK].inverse_point(joint);
+        let in_anatomy = in_lower - lower.frame_origin;
+        assert!(in_anatomy.x.abs() < 1e-9 && in_anatomy.y.abs() < 1e-9 && in_anatomy.z < -0.1, "{in_anatomy}");
+        assert_eq!(cut.start[TRUNK].orientation, cut.start[LOWER_TRUNK].orientation);
+        // The acromions (trunk geometry, thorax frame) lie inside the thorax's extent.
+        let g = cut.trunk_geometry.as_ref().unwrap();
+        let (lo, hi) = cut.trunk.as_ref().unwrap().surface.bounds().unwrap();
+        for p in [g.left_acromion_m, g.right_acromion_m] {
+            assert!(p.cmpge(lo - 1e-9).all() && p.cmple(hi + 1e-9).all(), "{p} outside {lo}..{hi}");
+        }
     }
 
     /// The normal scene with a coarse head and no floor: the canal alone.

@@ -1,6 +1,6 @@
 //! The forward simulation: the mutable state of a run and the step
 //! pipeline, a short sequence of named stages:
-//! expulsion -> pelvis contacts (head, trunk) -> neck -> floor reaction ->
+//! expulsion -> pelvis contacts (head, trunk) -> neck (and spine) -> floor reaction ->
 //! passive resistance -> rigid integration -> floor coupling -> record
 //! (poses, and at the same instants the loads per site, crate::loads).
 //!
@@ -21,14 +21,14 @@ use serde::{Deserialize, Serialize};
 
 use crate::expulsion::Expulsion;
 use crate::loads::{self, AxialMoments, Body, LoadSample, SiteLoad};
-use crate::scene::{Scene, HEAD, TRUNK};
+use crate::scene::{Scene, HEAD, LOWER_TRUNK, TRUNK};
 use crate::LabourError;
 
 /// The floor's part of the mutable state.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FloorState {
     pub solver: SolverSnapshot,
-    /// Contact of the head (then the trunk) with the floor's nodes.
+    /// Contact of each fetal body (head, trunk, lower trunk) with the floor's nodes.
     pub contacts: Vec<TissueContact>,
     /// Contact of the bony canal wall (with the sacrospinous ligaments)
     /// with the floor's nodes: the tissue slides on the bone, never into it.
@@ -58,6 +58,9 @@ pub struct SimState {
     pub step: u64,
     pub bodies: RigidBodyState,
     pub neck: Option<Neck>,
+    /// The thoracolumbar joint, when the spine bends.
+    #[serde(default)]
+    pub spine: Option<Neck>,
     pub bone_contacts: Vec<BodyContactState>,
     pub floor: Option<FloorState>,
     /// The floor's force on each body from the last coupling, applied at the next step.
@@ -94,6 +97,7 @@ struct StepForces {
     sites: Vec<SiteLoad>,
     head_axial: AxialMoments,
     neck: Option<NeckAngles>,
+    spine: Option<NeckAngles>,
 }
 
 impl<'a> Simulation<'a> {
@@ -122,10 +126,29 @@ impl<'a> Simulation<'a> {
             }
             None => None,
         };
-        let mut bone_contacts = vec![BodyContactState::new(&scene.head.samples)];
-        if let Some(t) = &scene.trunk {
-            bone_contacts.push(BodyContactState::new(&t.samples));
-        }
+        let spine = match scene.lower_trunk {
+            Some(_) => {
+                let q_lower = scene.start[LOWER_TRUNK].orientation;
+                // The thorax takes the head's place: x ventral, z cranial
+                // (carus-anatomy's trunk frame), so flexion bends it forwards.
+                let geometry = NeckGeometry {
+                    head: TRUNK,
+                    trunk: LOWER_TRUNK,
+                    pivot: scene.start[TRUNK].point(scene.thoracolumbar_in_trunk),
+                    axes: carus_contact::HeadAxes {
+                        occipitofrontal: DVec3::X,
+                        vertex: DVec3::Z,
+                    },
+                    neck_axis: -(q_lower * scene.spine_in_trunk),
+                    joined_flexion_deg: 0.0,
+                };
+                Some(Neck::new(&scene.bodies, &bodies, geometry, scene.scenario.spine.joint())?)
+            }
+            None => None,
+        };
+        let bone_contacts = (0..scene.bodies.len())
+            .map(|b| BodyContactState::new(&scene.fetal_body(b).samples))
+            .collect();
         let dt = scene.scenario.numerics.rigid_dt_s;
         let solver = scene
             .floor
@@ -135,7 +158,7 @@ impl<'a> Simulation<'a> {
         let floor = match solver.as_ref() {
             Some((s, _)) => {
                 let reach = scene.scenario.floor.coupling_reach_mm * 1e-3;
-                let n = if scene.trunk.is_some() { 2 } else { 1 };
+                let n = scene.bodies.len();
                 Some(FloorState {
                     solver: s.snapshot(),
                     contacts: (0..n)
@@ -153,6 +176,7 @@ impl<'a> Simulation<'a> {
             step: 0,
             bodies,
             neck,
+            spine,
             bone_contacts,
             floor,
             floor_wrench: vec![Wrench::default(); body_count],
@@ -161,7 +185,9 @@ impl<'a> Simulation<'a> {
             loads: Vec::new(),
         };
         let mut sim = Simulation::from_state(scene, state)?;
-        let neck = sim.state.neck.as_ref().map(|n| n.load(&scene.bodies, &sim.state.bodies).angles);
+        let angles = |j: &Neck| j.load(&scene.bodies, &sim.state.bodies).angles;
+        let neck = sim.state.neck.as_ref().map(angles);
+        let spine = sim.state.spine.as_ref().map(angles);
         sim.record(StepForces {
             expulsion: sim.expulsion.force(0.0, sim.spine()),
             bone: DVec3::ZERO,
@@ -170,6 +196,7 @@ impl<'a> Simulation<'a> {
             sites: Vec::new(),
             head_axial: AxialMoments::default(),
             neck,
+            spine,
         });
         Ok(sim)
     }
@@ -229,10 +256,13 @@ impl<'a> Simulation<'a> {
         self.solver.as_ref()
     }
 
-    /// The spine direction k (towards the breech), pelvis frame.
+    /// The spine direction k (towards the breech) of the segment the
+    /// expulsion pushes, pelvis frame.
     fn spine(&self) -> DVec3 {
         match self.scene.trunk {
-            Some(_) => self.state.bodies.orientation[TRUNK] * self.scene.spine_in_trunk,
+            Some(_) => {
+                self.state.bodies.orientation[self.scene.breech_body()] * self.scene.spine_in_trunk
+            }
             // No trunk: the spine leaves the head at its rest direction in the head frame.
             None => self.state.bodies.orientation[HEAD] * -self.scene.head_axes.vertex,
         }
@@ -259,7 +289,9 @@ impl<'a> Simulation<'a> {
         let expulsion = self.expulsion.force(t, spine);
         let pivot = self.pivot();
         match (scene.trunk.is_some(), scene.scenario.expulsion.acts_on) {
-            (true, crate::scenario::ActsOn::Trunk) => wrenches[TRUNK].force += expulsion,
+            (true, crate::scenario::ActsOn::Trunk) => {
+                wrenches[scene.breech_body()].force += expulsion
+            }
             _ => {
                 wrenches[HEAD] +=
                     Wrench::at_point(expulsion, pivot, self.state.bodies.position[HEAD])
@@ -269,21 +301,11 @@ impl<'a> Simulation<'a> {
         // Contacts with the bony pelvis.
         let mut reports: Vec<ContactReport> = Vec::with_capacity(n);
         for (b, wrench) in wrenches.iter_mut().enumerate() {
-            let samples = if b == HEAD {
-                &scene.head.samples
-            } else {
-                &scene.trunk.as_ref().expect("trunk").samples
-            };
             let motion = self.motion(b);
-            let law = if b == HEAD {
-                &scene.law
-            } else {
-                &scene.trunk_law
-            };
             let report = pelvis_contacts(
                 &scene.pelvis_collider,
-                law,
-                samples,
+                scene.contact_law(b),
+                &scene.fetal_body(b).samples,
                 &motion,
                 pivot,
                 &mut self.state.bone_contacts[b],
@@ -292,13 +314,15 @@ impl<'a> Simulation<'a> {
             reports.push(report);
         }
 
-        // The neck.
-        let neck_load = self.state.neck.as_ref().map(|neck| {
-            let load = neck.load(&scene.bodies, &self.state.bodies);
-            wrenches[neck.head] += load.on_head;
-            wrenches[neck.trunk] += load.on_trunk;
+        // The neck, and the spine when it bends.
+        let mut joint = |j: &Neck| {
+            let load = j.load(&scene.bodies, &self.state.bodies);
+            wrenches[j.head] += load.on_head;
+            wrenches[j.trunk] += load.on_trunk;
             load
-        });
+        };
+        let neck_load = self.state.neck.as_ref().map(&mut joint);
+        let spine_angles = self.state.spine.as_ref().map(|j| joint(j).angles);
 
         // The floor's reaction from the last coupling.
         for (w, f) in wrenches.iter_mut().zip(&self.state.floor_wrench) {
@@ -306,6 +330,7 @@ impl<'a> Simulation<'a> {
         }
 
         let mut forces = self.classify(expulsion, &reports);
+        forces.spine = spine_angles;
         if (self.state.step + 1) % self.sample_every == 0 {
             self.site_loads(&mut forces, &reports, neck_load.as_ref(), pivot);
         }
@@ -345,15 +370,19 @@ impl<'a> Simulation<'a> {
     /// update of a linear dashpot to the surroundings.
     fn implicit_drag(&self, b: usize, w: Wrench) -> Wrench {
         let f = &self.scene.scenario.fetus;
+        let mass = &self.scene.bodies.mass_kg;
         let (c, ca) = if b == HEAD {
             (
                 f.head_linear_drag_n_s_per_m,
                 f.head_angular_drag_nm_s_per_rad,
             )
         } else {
+            // The trunk's resistance, shared by its segments by mass: the
+            // same total on a straight spine moving as one.
+            let share = mass[b] / mass[TRUNK..].iter().sum::<f64>();
             (
-                f.trunk_linear_drag_n_s_per_m,
-                f.trunk_angular_drag_nm_s_per_rad,
+                share * f.trunk_linear_drag_n_s_per_m,
+                share * f.trunk_angular_drag_nm_s_per_rad,
             )
         };
         let s = &self.state.bodies;
@@ -428,27 +457,23 @@ impl<'a> Simulation<'a> {
         for (p, c) in prescribed.iter_mut().zip(crushed.iter().flatten()) {
             *p |= *c;
         }
-        let mut held_by = vec![hold(
-            &mut floor_state.contacts[HEAD],
-            &scene.head.collider,
-            &poses.pose(HEAD),
-            &mut prescribed,
-        )?];
-        if let Some(trunk) = &scene.trunk {
-            held_by.push(hold(
-                &mut floor_state.contacts[TRUNK],
-                &trunk.collider,
-                &poses.pose(TRUNK),
-                &mut prescribed,
-            )?);
-        }
+        let held_by = floor_state
+            .contacts
+            .iter_mut()
+            .enumerate()
+            .map(|(b, contact)| {
+                let body = scene.fetal_body(b);
+                hold(contact, &body.collider, &poses.pose(b), &mut prescribed)
+            })
+            .collect::<Result<Vec<_>, _>>()?;
         for _ in 0..self.substeps {
             if let Err(e) = solver.step() {
-                let holders = [
-                    ("held on the bony wall", on_bone.as_slice()),
-                    ("held on the head", held_by[0].as_slice()),
-                    ("held on the trunk", held_by.get(1).map_or(&[][..], |v| v.as_slice())),
-                ];
+                let names: Vec<String> =
+                    (0..held_by.len()).map(|b| format!("held on the {}", Body::of(b).name().replace('_', " "))).collect();
+                let holders: Vec<(&str, &[u32])> =
+                    std::iter::once(("held on the bony wall", on_bone.as_slice()))
+                        .chain(names.iter().map(String::as_str).zip(held_by.iter().map(Vec::as_slice)))
+                        .collect();
                 return Err(floor_failure(e, solver, floor, &scene.scenario.floor.mesh, &holders));
             }
         }
@@ -503,6 +528,7 @@ impl<'a> Simulation<'a> {
             sites: Vec::new(),
             head_axial: AxialMoments::default(),
             neck: None,
+            spine: None,
         }
     }
 
@@ -518,7 +544,7 @@ impl<'a> Simulation<'a> {
         let scene = self.scene;
         let s = &self.state;
         for (b, report) in reports.iter().enumerate() {
-            let body = if b == HEAD { Body::Head } else { Body::Trunk };
+            let body = Body::of(b);
             forces
                 .sites
                 .extend(loads::bone_loads(body, report, &scene.sites, pivot));
@@ -550,6 +576,7 @@ impl<'a> Simulation<'a> {
             time_s: self.time_s(),
             head: pose(HEAD),
             trunk: self.scene.trunk.as_ref().map(|_| pose(TRUNK)),
+            lower_trunk: self.scene.lower_trunk.as_ref().map(|_| pose(LOWER_TRUNK)),
             expulsion_force_n: forces.expulsion,
             bone_contact_force_n: forces.bone,
             floor_contact_force_n: forces.floor,
@@ -560,6 +587,7 @@ impl<'a> Simulation<'a> {
             sites: forces.sites,
             head_axial: forces.head_axial,
             neck: forces.neck,
+            spine: forces.spine,
         });
         if let (Some(solver), Some(floor), Some(scene_floor)) =
             (&self.solver, &self.state.floor, &self.scene.floor)

@@ -113,6 +113,7 @@ impl Demo {
                     .trunk
                     .as_ref()
                     .map(|_| self.fetus.trunk.surface.clone()),
+                lower_trunk: None,
                 floor: Some(self.floor.clone()),
             }),
         }

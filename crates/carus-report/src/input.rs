@@ -75,6 +75,9 @@ pub struct ReportScene {
     /// Fetal trunk in the trunk body frame of the history, m; drawn only
     /// when the history records trunk poses.
     pub trunk: Option<TriSurface>,
+    /// The lower trunk in its body frame, m, when the spine bends (the
+    /// trunk is then the thorax); drawn when the history records its poses.
+    pub lower_trunk: Option<TriSurface>,
     /// The pelvic floor, deforming, coloured by stretch.
     pub floor: Option<FloorSurface>,
 }

@@ -24,6 +24,7 @@ const HEAD_RGB: [f32; 3] = [0.93, 0.72, 0.62];
 const TRUNK_RGB: [f32; 3] = [0.86, 0.64, 0.56];
 /// Name of the trunk's mesh, which the camera's fit leaves out.
 const TRUNK: &str = "fetal trunk";
+const LOWER_TRUNK: &str = "fetal lower trunk";
 /// Muscle colour for a floor without recorded stretch.
 const FLOOR_RGB: [f32; 3] = [0.78, 0.50, 0.50];
 /// Smallest upper end of the stretch colour scale, so a floor at rest is
@@ -77,7 +78,7 @@ pub fn draw(
     let bounds = posed
         .iter()
         .flat_map(|(meshes, _)| meshes.iter())
-        .filter(|mesh| mesh.name != TRUNK)
+        .filter(|mesh| mesh.name != TRUNK && mesh.name != LOWER_TRUNK)
         .filter_map(RenderMesh::bounds)
         .reduce(Bounds::union);
     moments
@@ -134,6 +135,9 @@ fn meshes_at(
     )];
     if let (Some(trunk), Some(pose)) = (&scene.trunk, &sample.trunk) {
         meshes.push(posed_mesh(TRUNK, trunk, pose, TRUNK_RGB));
+    }
+    if let (Some(lower), Some(pose)) = (&scene.lower_trunk, &sample.lower_trunk) {
+        meshes.push(posed_mesh(LOWER_TRUNK, lower, pose, TRUNK_RGB));
     }
     let mut floor_time_s = None;
     if let Some(floor) = &scene.floor {

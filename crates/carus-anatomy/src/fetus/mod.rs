@@ -20,7 +20,7 @@ pub use head::{
     FetalHead, HeadExtents, HeadLandmarks, HeadMeasurement, DEFAULT_HEAD_SUBDIVISIONS, HEAD_LANDMARK_NAMES,
 };
 pub use limbs::{CapsuleChain, Limbs};
-pub use trunk::{Trunk, TrunkDiameters, TrunkError, TrunkLandmarks, TrunkMeasurement};
+pub use trunk::{Trunk, TrunkDiameters, TrunkError, TrunkLandmarks, TrunkMeasurement, TrunkSegments};
 
 use glam::{DAffine3, DVec3};
 

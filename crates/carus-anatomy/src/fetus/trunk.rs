@@ -102,6 +102,11 @@ fn sections(d: &TrunkDiameters) -> [Section; 8] {
 /// Index of the shoulder (acromion) and hip (trochanter) sections.
 const SHOULDER: usize = 2;
 const HIP: usize = 5;
+/// Index of the section at the thoracolumbar junction, below the chest
+/// (0.95 S, 114 mm below the pivot for the 120 mm shoulders). Engineering
+/// estimate: in a term neonate the thoracic spine ends about halfway from
+/// the atlas to the sacral tip; the cut is where the trunk bends.
+const THORACOLUMBAR: usize = 4;
 
 /// Named points of the trunk, metres, trunk frame.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -146,40 +151,68 @@ fn ring_point(s: &Section, theta: f64) -> DVec3 {
     DVec3::new(s.centre_x + s.half_depth * shaped(sin), s.half_width * shaped(cos), s.z)
 }
 
+/// Closed surface of the rings of `sections`, capped by a fan to `top`
+/// above the first ring and to `bottom` below the last.
+fn closed_tube(sections: &[Section], top: DVec3, bottom: DVec3) -> TriSurface {
+    let n = RING_POINTS;
+    let mut vertices = Vec::with_capacity(sections.len() * n + 2);
+    for s in sections {
+        vertices.extend((0..n).map(|k| ring_point(s, std::f64::consts::TAU * k as f64 / n as f64)));
+    }
+    let apex = vertices.len() as u32;
+    vertices.push(top);
+    vertices.push(bottom);
+    let ring = |r: usize, k: usize| (r * n + k % n) as u32;
+    let mut triangles = Vec::with_capacity(2 * n * sections.len());
+    // Rings run clockwise seen from above (left -> ventral -> right), so
+    // going down, (upper k, lower k + 1, lower k) faces outwards.
+    for r in 0..sections.len() - 1 {
+        for k in 0..n {
+            triangles.push([ring(r, k), ring(r + 1, k + 1), ring(r + 1, k)]);
+            triangles.push([ring(r, k), ring(r, k + 1), ring(r + 1, k + 1)]);
+        }
+    }
+    let lowest = sections.len() - 1;
+    for k in 0..n {
+        triangles.push([apex, ring(0, k + 1), ring(0, k)]);
+        triangles.push([apex + 1, ring(lowest, k), ring(lowest, k + 1)]);
+    }
+    TriSurface::new(vertices, triangles)
+}
+
+/// Centre of a section's ring, where a flat cap closes it.
+fn section_centre(s: &Section) -> DVec3 {
+    DVec3::new(s.centre_x, 0.0, s.z)
+}
+
+/// The breech: below the last section, on its centre line.
+fn breech_point(sections: &[Section]) -> DVec3 {
+    let last = sections[sections.len() - 1];
+    DVec3::new(last.centre_x, 0.0, last.z - 0.5 * last.half_depth)
+}
+
+/// The trunk cut at the thoracolumbar junction into two closed segments,
+/// each capped flat at the cut, for a spine that bends there.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrunkSegments {
+    /// Neck, shoulders and chest (trunk frame).
+    pub thorax: TriSurface,
+    /// Abdomen, hips and buttocks (trunk frame).
+    pub lower: TriSurface,
+    /// The joint between them, on the spine line at the cut (trunk frame).
+    pub thoracolumbar: DVec3,
+}
+
 impl Trunk {
     pub fn new(d: &TrunkDiameters) -> Result<Self, TrunkError> {
         d.validate()?;
         let sections = sections(d);
+        let breech = breech_point(&sections);
+        let surface = closed_tube(&sections, section_centre(&sections[0]), breech);
         let n = RING_POINTS;
-        let mut vertices = Vec::with_capacity(sections.len() * n + 2);
-        for s in &sections {
-            vertices.extend((0..n).map(|k| ring_point(s, std::f64::consts::TAU * k as f64 / n as f64)));
-        }
-        let top = vertices.len() as u32;
-        let first = sections[0];
-        vertices.push(DVec3::new(first.centre_x, 0.0, first.z));
-        let last = sections[sections.len() - 1];
-        let breech = DVec3::new(last.centre_x, 0.0, last.z - 0.5 * last.half_depth);
-        vertices.push(breech);
-        let bottom = top + 1;
-
-        let ring = |r: usize, k: usize| (r * n + k % n) as u32;
-        let mut triangles = Vec::with_capacity(2 * n * sections.len());
-        // Rings run clockwise seen from above (left -> ventral -> right), so
-        // going down, (upper k, lower k + 1, lower k) faces outwards.
-        for r in 0..sections.len() - 1 {
-            for k in 0..n {
-                triangles.push([ring(r, k), ring(r + 1, k + 1), ring(r + 1, k)]);
-                triangles.push([ring(r, k), ring(r, k + 1), ring(r + 1, k + 1)]);
-            }
-        }
-        let lowest = sections.len() - 1;
-        for k in 0..n {
-            triangles.push([top, ring(0, k + 1), ring(0, k)]);
-            triangles.push([bottom, ring(lowest, k), ring(lowest, k + 1)]);
-        }
-
-        let at = |section: usize, quarter: usize| vertices[ring(section, quarter * n / 4) as usize];
+        let vertices = &surface.vertices;
+        let ring = |r: usize, k: usize| r * n + k % n;
+        let at = |section: usize, quarter: usize| vertices[ring(section, quarter * n / 4)];
         let acromion_left = at(SHOULDER, 0);
         let acromion_right = at(SHOULDER, 2);
         let trochanter_left = at(HIP, 0);
@@ -197,10 +230,22 @@ impl Trunk {
         };
         Ok(Trunk {
             diameters: *d,
-            surface: TriSurface::new(vertices, triangles),
+            surface,
             landmarks,
             spine_axis: -DVec3::Z,
         })
+    }
+
+    /// The two segments of a spine that bends at the thoracolumbar junction.
+    pub fn segments(&self) -> TrunkSegments {
+        let sections = sections(&self.diameters);
+        let (upper, lower) = (&sections[..=THORACOLUMBAR], &sections[THORACOLUMBAR..]);
+        let cut = section_centre(&sections[THORACOLUMBAR]);
+        TrunkSegments {
+            thorax: closed_tube(upper, section_centre(&sections[0]), cut),
+            lower: closed_tube(lower, cut, breech_point(&sections)),
+            thoracolumbar: DVec3::new(0.0, 0.0, sections[THORACOLUMBAR].z),
+        }
     }
 
     /// The trunk measured back, millimetres.
@@ -243,6 +288,26 @@ mod tests {
             prop_assert!((m.bisacromial_mm - s).abs() < 0.1);
             prop_assert!((m.bitrochanteric_mm - t).abs() < 0.1);
             prop_assert!((m.width_mm - s.max(t)).abs() < 0.1);
+        }
+
+        #[test]
+        fn the_segments_close_and_fill_the_trunk(s in 90.0..160.0f64, t in 70.0..120.0f64) {
+            let d = TrunkDiameters { bisacromial_mm: s, bitrochanteric_mm: t };
+            let trunk = Trunk::new(&d).unwrap();
+            let parts = trunk.segments();
+            parts.thorax.check_closed().unwrap();
+            parts.lower.check_closed().unwrap();
+            let (thorax, lower) = (parts.thorax.signed_volume(), parts.lower.signed_volume());
+            prop_assert!(thorax > 0.0 && lower > 0.0);
+            let whole = trunk.surface.signed_volume();
+            prop_assert!((thorax + lower - whole).abs() < 1e-9 * whole.max(1.0) + 1e-12);
+            // The shoulders ride on the thorax, the hips on the lower trunk.
+            let (_, thorax_top) = parts.thorax.bounds().unwrap();
+            let (lower_bottom, lower_top) = parts.lower.bounds().unwrap();
+            let l = trunk.landmarks;
+            prop_assert!(l.acromion_left.z > parts.thoracolumbar.z && l.trochanter_left.z < parts.thoracolumbar.z);
+            prop_assert!((lower_top.z - parts.thoracolumbar.z).abs() < 1e-12 && thorax_top.z <= 1e-12);
+            prop_assert!((lower_bottom.z - l.breech.z).abs() < 1e-12);
         }
     }
 

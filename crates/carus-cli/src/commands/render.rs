@@ -13,7 +13,7 @@ use carus_anatomy::floor::{pelvic_floor, ATTACHED, LEVATOR_ANI, PERINEAL_BODY};
 use carus_anatomy::pelvis::measure;
 use carus_anatomy::{Pelvis, TriSurface};
 use carus_fem::mesh::Mesh;
-use carus_labour::scene::{HEAD, TRUNK};
+use carus_labour::scene::{HEAD, LOWER_TRUNK, TRUNK};
 use carus_labour::{Scenario, Scene as LabourScene};
 use carus_render::{ContactSheet, RenderMesh, Renderer, Scene, View};
 use glam::{DMat3, DVec3};
@@ -460,13 +460,13 @@ fn scene_meshes(scene: &LabourScene) -> Vec<RenderMesh> {
         |v| head_pose.point(v),
         HEAD_RGB,
     )];
-    if let (Some(trunk), Some(pose)) = (&scene.trunk, scene.start.get(TRUNK)) {
-        meshes.push(surface_mesh(
-            "fetal trunk",
-            &trunk.surface,
-            |v| pose.point(v),
-            TRUNK_RGB,
-        ));
+    for (name, body, b) in [
+        ("fetal trunk", &scene.trunk, TRUNK),
+        ("fetal lower trunk", &scene.lower_trunk, LOWER_TRUNK),
+    ] {
+        if let (Some(body), Some(pose)) = (body, scene.start.get(b)) {
+            meshes.push(surface_mesh(name, &body.surface, |v| pose.point(v), TRUNK_RGB));
+        }
     }
     if let Some(floor) = &scene.floor {
         meshes.extend(floor_parts(&floor.mesh, |p| p));

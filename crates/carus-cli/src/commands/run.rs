@@ -200,6 +200,7 @@ fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result<Vec<String
             pelvis: Some(scene.pelvis.surface.clone()),
             head: scene.head.surface.clone(),
             trunk: scene.trunk.as_ref().map(|t| t.surface.clone()),
+            lower_trunk: scene.lower_trunk.as_ref().map(|t| t.surface.clone()),
             floor: None,
         }),
     };
