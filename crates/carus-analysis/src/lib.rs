@@ -24,6 +24,6 @@ pub use detector::{detect, DetectorReport};
 pub use history::{
     ContactSite, HeadGeometry, HistoryError, PoseHistory, PoseSample, RigidPose, TrunkGeometry,
 };
-pub use measures::Series;
+pub use measures::{Series, THETA_ILL_CONDITIONED_TILT_DEG};
 pub use movements::{Movement, Movements, Unit};
 pub use outcome::{Arrest, ArrestStage, Outcome};

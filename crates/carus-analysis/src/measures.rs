@@ -30,6 +30,12 @@ pub struct Series {
     pub theta_deg: Vec<f64>,
     /// Attitude: positive in flexion (chin towards chest).
     pub phi_deg: Vec<f64>,
+    /// Tilt of the occiput direction -o out of the canal cross-section,
+    /// positive when the occiput points down the canal. Theta is the
+    /// projection of -o onto the cross-section, so it loses its meaning as
+    /// this nears +-90 ([`THETA_ILL_CONDITIONED_TILT_DEG`]).
+    #[serde(default)]
+    pub occiput_tilt_deg: Vec<f64>,
     /// Sigma of the head centre (arc length from the inlet centre).
     pub head_sigma_mm: Vec<f64>,
     /// Depth of the left parietal eminence (head centre + BPD/2 along b)
@@ -71,6 +77,13 @@ struct HeadState {
 /// Angle in degrees of `direction` in the cross-section spanned by the
 /// local anterior axis `a` and transverse axis `x`, measured from `a`
 /// towards `x` (the mother's right): theta's convention.
+/// Occiput tilt beyond which theta is ill-conditioned: at 60 degrees the
+/// occiput direction's projection onto the cross-section is half its
+/// length, so a small turn of the head about an axis in the cross-section
+/// moves theta by up to twice as much as it would at no tilt (1 / cos),
+/// growing without bound towards 90 (docs/DETECTOR.md).
+pub const THETA_ILL_CONDITIONED_TILT_DEG: f64 = 60.0;
+
 pub fn cross_section_angle_deg(direction: DVec3, anterior: DVec3, transverse: DVec3) -> f64 {
     direction
         .dot(transverse)
@@ -140,6 +153,7 @@ impl Series {
             station_mm: Vec::with_capacity(n),
             theta_deg: Vec::with_capacity(n),
             phi_deg: Vec::with_capacity(n),
+            occiput_tilt_deg: Vec::with_capacity(n),
             head_sigma_mm: head_sigma.iter().map(|s| s * MM_PER_M).collect(),
             left_parietal_below_inlet_mm: Vec::with_capacity(n),
             right_parietal_below_inlet_mm: Vec::with_capacity(n),
@@ -163,6 +177,9 @@ impl Series {
                 frame.transverse,
             ));
             series.phi_deg.push(signed_angle_about_deg(-k, h.v, h.b));
+            let along = (-h.o).dot(frame.tangent);
+            let across = (-h.o - along * frame.tangent).length();
+            series.occiput_tilt_deg.push(along.atan2(across).to_degrees());
             let inlet = canal.inlet();
             series
                 .left_parietal_below_inlet_mm
@@ -208,6 +225,18 @@ impl Series {
         self.time_s.is_empty()
     }
 
+    /// The steepest occiput tilt, absolute, over the samples from `start_s`
+    /// to `end_s`; `None` when none lies there (or the series predates the
+    /// tilt).
+    pub fn steepest_occiput_tilt_deg(&self, start_s: f64, end_s: f64) -> Option<f64> {
+        self.time_s
+            .iter()
+            .zip(&self.occiput_tilt_deg)
+            .filter(|(t, _)| (start_s..=end_s).contains(*t))
+            .map(|(_, tilt)| tilt.abs())
+            .reduce(f64::max)
+    }
+
     /// Rows for a CSV file: the column names, then one row per sample
     /// (`None` for a column that does not apply, booleans as 0 and 1).
     pub fn table(&self) -> (Vec<&'static str>, Vec<Vec<Option<f64>>>) {
@@ -222,6 +251,10 @@ impl Series {
                 self.theta_deg.iter().copied().map(Some).collect(),
             ),
             ("phi_deg", self.phi_deg.iter().copied().map(Some).collect()),
+            (
+                "occiput_tilt_deg",
+                self.occiput_tilt_deg.iter().copied().map(Some).collect(),
+            ),
             (
                 "head_sigma_mm",
                 self.head_sigma_mm.iter().copied().map(Some).collect(),
@@ -420,6 +453,27 @@ mod tests {
                 "occiput {occiput} gave {theta}"
             );
         }
+    }
+
+    /// The occiput's tilt out of the cross-section: none for a head whose
+    /// occiput lies in it, +90 for one whose occiput points down the canal
+    /// (where theta means nothing), and the textbook's flexed head stays
+    /// well inside the range where theta is well conditioned.
+    #[test]
+    fn the_occiput_tilt_says_when_theta_means_little() {
+        let tilt = |o: DVec3, v: DVec3| {
+            let history = still(at_inlet(axes(o, v)), None);
+            Series::from_history(&history).occiput_tilt_deg[0]
+        };
+        assert!(tilt(DVec3::X, DVec3::NEG_Z).abs() < 1e-9);
+        // Occiput (-o) straight down the canal (-z at the inlet).
+        let down = tilt(DVec3::Z, DVec3::X);
+        assert!((down - 90.0).abs() < 1e-9, "{down}");
+        let canal = reference_canal();
+        let textbook = Series::from_history(&crate::synthetic::textbook(&canal));
+        let steepest = textbook.steepest_occiput_tilt_deg(f64::MIN, f64::MAX).unwrap();
+        assert!(steepest < THETA_ILL_CONDITIONED_TILT_DEG, "textbook tilt {steepest}");
+        assert_eq!(textbook.steepest_occiput_tilt_deg(-2.0, -1.0), None);
     }
 
     #[test]

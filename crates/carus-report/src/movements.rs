@@ -1,7 +1,7 @@
 //! How each movement is named and coloured, the same on the timeline and
 //! on the plots.
 
-use carus_analysis::{DetectorReport, Movement, Unit};
+use carus_analysis::{DetectorReport, Movement, Series, Unit, THETA_ILL_CONDITIONED_TILT_DEG};
 use plotters::style::RGBColor;
 
 /// A movement as the page shows it.
@@ -61,6 +61,21 @@ pub fn shown(detector: &DetectorReport) -> Vec<Shown<'_>> {
     rows
 }
 
+/// The observed rotations (read from theta) during which the occiput was
+/// tilted out of the canal's cross-section past the angle where theta is
+/// ill-conditioned: each row's label and the steepest tilt, degrees.
+pub fn ill_conditioned_rotations(rows: &[Shown], series: &Series) -> Vec<(&'static str, f64)> {
+    const ROTATIONS: [&str; 3] = ["internal_rotation", "external_rotation", "posterior_rotation"];
+    rows.iter()
+        .filter(|row| ROTATIONS.contains(&row.key) && row.movement.observed)
+        .filter_map(|row| {
+            let (start, end) = (row.movement.start_s?, row.movement.end_s?);
+            let tilt = series.steepest_occiput_tilt_deg(start, end)?;
+            (tilt > THETA_ILL_CONDITIONED_TILT_DEG).then_some((row.label, tilt))
+        })
+        .collect()
+}
+
 /// "12.3 mm" or "85 deg": a size with its unit, to the resolution a
 /// clinician reads.
 pub fn size_text(size: f64, unit: Unit) -> String {
@@ -84,5 +99,20 @@ mod tests {
         assert_eq!(size_text(12.345, Unit::Mm), "12.3 mm");
         assert_eq!(size_text(84.6, Unit::Deg), "85\u{b0}");
         assert_eq!(css(RGBColor(255, 0, 16)), "#ff0010");
+    }
+
+    /// The textbook's rotations are read from a well-conditioned theta; the
+    /// same rotations with the occiput pointing steeply down the canal are
+    /// flagged, each with its steepest tilt.
+    #[test]
+    fn rotations_read_at_a_steep_occiput_are_flagged() {
+        let canal = carus_analysis::synthetic::reference_canal();
+        let mut report = carus_analysis::detect(&carus_analysis::synthetic::textbook(&canal)).unwrap();
+        assert!(ill_conditioned_rotations(&shown(&report), &report.series).is_empty());
+        report.series.occiput_tilt_deg.iter_mut().for_each(|t| *t = -80.0);
+        let flagged = ill_conditioned_rotations(&shown(&report), &report.series);
+        let labels: Vec<&str> = flagged.iter().map(|(label, _)| *label).collect();
+        assert_eq!(labels, ["Internal rotation", "External rotation (restitution)"]);
+        assert!(flagged.iter().all(|(_, tilt)| *tilt == 80.0));
     }
 }

@@ -4,13 +4,13 @@
 
 use std::fmt::Write as _;
 
-use carus_analysis::{ArrestStage, DetectorReport, Outcome};
+use carus_analysis::{ArrestStage, DetectorReport, Outcome, Series, THETA_ILL_CONDITIONED_TILT_DEG};
 use plotters::style::RGBColor;
 
 use crate::error::ReportError;
 use crate::input::{AxialMomentSample, ReportInput};
 use crate::moments::{KeyMoment, MissedMoment};
-use crate::movements::{css, shown, size_text, Shown};
+use crate::movements::{css, ill_conditioned_rotations, shown, size_text, Shown};
 use crate::pictures::{MomentPictures, PICTURE_SIZE};
 use crate::plots::{self, Band, Curve, Mark, PlotSpec};
 
@@ -123,7 +123,7 @@ pub fn page(input: &ReportInput, parts: &Parts) -> Result<String, ReportError> {
     }
     let _ = writeln!(w, "</p></header>");
 
-    timeline(w, &rows, parts, time_range);
+    timeline(w, &rows, series, parts, time_range);
     pictures(w, parts);
     plots_section(w, input, &rows, parts, time_range)?;
     figures(w, input);
@@ -136,7 +136,7 @@ fn percent(t: f64, (t0, t1): (f64, f64)) -> f64 {
     (100.0 * (t - t0) / (t1 - t0)).clamp(0.0, 100.0)
 }
 
-fn timeline(w: &mut String, rows: &[Shown], parts: &Parts, range: (f64, f64)) {
+fn timeline(w: &mut String, rows: &[Shown], series: &Series, parts: &Parts, range: (f64, f64)) {
     let _ = write!(
         w,
         "<section id=\"movements\"><h2>Cardinal movements</h2>\
@@ -193,7 +193,17 @@ fn timeline(w: &mut String, rows: &[Shown], parts: &Parts, range: (f64, f64)) {
             }
         }
     }
-    let _ = writeln!(w, "</div></section>");
+    let _ = write!(w, "</div>");
+    for (label, tilt) in ill_conditioned_rotations(rows, series) {
+        let _ = write!(
+            w,
+            "<p class=\"note\" data-caveat=\"theta\">{label}: read from theta while the occiput \
+             pointed up to {tilt:.0}&deg; out of the canal's cross-section (theta, the occiput's \
+             direction projected onto it, is ill-conditioned past {THETA_ILL_CONDITIONED_TILT_DEG:.0}&deg;): \
+             a turn of the head about another axis can read as this rotation.</p>"
+        );
+    }
+    let _ = writeln!(w, "</section>");
 }
 
 fn pictures(w: &mut String, parts: &Parts) {
