@@ -7,7 +7,8 @@
 
 use crate::canal::BirthCanal;
 use crate::history::{PoseHistory, PoseSample};
-use glam::DVec3;
+use carus_anatomy::axis::AxisFrame;
+use glam::{DMat3, DQuat, DVec3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -36,6 +37,11 @@ pub struct Series {
     /// this nears +-90 ([`THETA_ILL_CONDITIONED_TILT_DEG`]).
     #[serde(default)]
     pub occiput_tilt_deg: Vec<f64>,
+    /// The head's turn about the canal axis on theta's scale, read so that
+    /// it stays well conditioned whatever the tilt ([`head_twist_deg`]);
+    /// equals theta for an untilted head. Unwrapped.
+    #[serde(default)]
+    pub head_twist_deg: Vec<f64>,
     /// Sigma of the head centre (arc length from the inlet centre).
     pub head_sigma_mm: Vec<f64>,
     /// Depth of the left parietal eminence (head centre + BPD/2 along b)
@@ -74,9 +80,6 @@ struct HeadState {
     b: DVec3,
 }
 
-/// Angle in degrees of `direction` in the cross-section spanned by the
-/// local anterior axis `a` and transverse axis `x`, measured from `a`
-/// towards `x` (the mother's right): theta's convention.
 /// Occiput tilt beyond which theta is ill-conditioned: at 60 degrees the
 /// occiput direction's projection onto the cross-section is half its
 /// length, so a small turn of the head about an axis in the cross-section
@@ -84,6 +87,26 @@ struct HeadState {
 /// growing without bound towards 90 (docs/DETECTOR.md).
 pub const THETA_ILL_CONDITIONED_TILT_DEG: f64 = 60.0;
 
+/// The head's turn about the canal's tangent t, degrees on theta's scale:
+/// the twist about t of the rotation that takes the head from the
+/// occiput-anterior attitude with its vertex down the canal (o = -a,
+/// v = t) to where it is, split as a twist about t after a swing about an
+/// axis in the cross-section (flexion, asynclitism). For q = twist * swing
+/// with the swing's axis normal to t, the twist's half-angle is
+/// atan2(q.xyz . t, q.w) whatever the swing, so the reading does not blow
+/// up as the occiput tilts (it is singular only with the vertex pointing
+/// back up the canal). Equals theta for an untilted head.
+fn head_twist_deg(h: &HeadState, frame: &AxisFrame) -> f64 {
+    let at_oa = DMat3::from_cols(-frame.anterior, -frame.transverse, frame.tangent);
+    let now = DMat3::from_cols(h.o, h.b, h.v);
+    let q = DQuat::from_mat3(&(now * at_oa.transpose()));
+    let q = if q.w < 0.0 { -q } else { q };
+    (2.0 * q.xyz().dot(frame.tangent).atan2(q.w)).to_degrees()
+}
+
+/// Angle in degrees of `direction` in the cross-section spanned by the
+/// local anterior axis `a` and transverse axis `x`, measured from `a`
+/// towards `x` (the mother's right): theta's convention.
 pub fn cross_section_angle_deg(direction: DVec3, anterior: DVec3, transverse: DVec3) -> f64 {
     direction
         .dot(transverse)
@@ -154,6 +177,7 @@ impl Series {
             theta_deg: Vec::with_capacity(n),
             phi_deg: Vec::with_capacity(n),
             occiput_tilt_deg: Vec::with_capacity(n),
+            head_twist_deg: Vec::with_capacity(n),
             head_sigma_mm: head_sigma.iter().map(|s| s * MM_PER_M).collect(),
             left_parietal_below_inlet_mm: Vec::with_capacity(n),
             right_parietal_below_inlet_mm: Vec::with_capacity(n),
@@ -180,6 +204,7 @@ impl Series {
             let along = (-h.o).dot(frame.tangent);
             let across = (-h.o - along * frame.tangent).length();
             series.occiput_tilt_deg.push(along.atan2(across).to_degrees());
+            series.head_twist_deg.push(head_twist_deg(h, &frame));
             let inlet = canal.inlet();
             series
                 .left_parietal_below_inlet_mm
@@ -198,6 +223,7 @@ impl Series {
                 .push((sample.bone_contact_force_n + sample.floor_contact_force_n).length());
         }
         unwrap_deg(&mut series.theta_deg);
+        unwrap_deg(&mut series.head_twist_deg);
         if let Some(trunk) = &history.trunk {
             let shoulders: Vec<ShoulderState> = history
                 .samples
@@ -254,6 +280,10 @@ impl Series {
             (
                 "occiput_tilt_deg",
                 self.occiput_tilt_deg.iter().copied().map(Some).collect(),
+            ),
+            (
+                "head_twist_deg",
+                self.head_twist_deg.iter().copied().map(Some).collect(),
             ),
             (
                 "head_sigma_mm",
@@ -393,7 +423,7 @@ mod tests {
     use super::*;
     use crate::history::{RigidPose, TrunkGeometry};
     use crate::synthetic::{ellipsoid_head, head_orientation, reference_canal, simple_trunk};
-    use glam::{DMat3, DQuat};
+
     use proptest::prelude::*;
 
     /// A two-sample history holding the given head pose (and trunk pose)
@@ -518,6 +548,37 @@ mod tests {
             (station - expected).abs() < 0.11,
             "station {station}, expected {expected}"
         );
+    }
+
+    /// The head's twist about the canal axis is theta for an untilted
+    /// head; with the occiput tilted 80 degrees down the canal, a 10 degree
+    /// tip of the head about the transverse axis swings theta by tens of
+    /// degrees and the twist by less than the tip (a tip after a large
+    /// swing does carry some twist: tan(twist / 2) = tan(5) tan(40) here),
+    /// while a true turn about the canal axis moves both alike.
+    #[test]
+    fn the_head_twist_holds_where_theta_swings() {
+        let series = |o: DVec3, v: DVec3, turn: DQuat| {
+            Series::from_history(&still(at_inlet(turn * axes(o, v)), None))
+        };
+        // LOT, untilted: both -90.
+        let s = series(DVec3::X, DVec3::NEG_Z, DQuat::IDENTITY);
+        assert!((s.theta_deg[0] + 90.0).abs() < 1e-9 && (s.head_twist_deg[0] + 90.0).abs() < 1e-9);
+        // LOT flexed 80 degrees: the occiput (-o) points mostly down (-z).
+        let a = 80f64.to_radians();
+        let (o, v) = (DVec3::new(a.cos(), 0.0, a.sin()), DVec3::new(a.sin(), 0.0, -a.cos()));
+        let flexed = series(o, v, DQuat::IDENTITY);
+        assert!((flexed.occiput_tilt_deg[0] - 80.0).abs() < 1e-9);
+        assert!((flexed.theta_deg[0] + 90.0).abs() < 1e-9 && (flexed.head_twist_deg[0] + 90.0).abs() < 1e-9);
+        // Tipped 10 degrees sideways about the transverse axis (+x at the
+        // inlet), which swings the short projection of the occiput.
+        let tipped = series(o, v, DQuat::from_rotation_x(10f64.to_radians()));
+        let (dtheta, dtwist) = (tipped.theta_deg[0] + 90.0, tipped.head_twist_deg[0] + 90.0);
+        assert!(dtheta.abs() > 30.0 && dtwist.abs() < 10.0, "theta moved {dtheta}, twist {dtwist}");
+        // Turned 30 degrees about the canal axis (-z): both move by 30.
+        let turned = series(o, v, DQuat::from_rotation_z(-30f64.to_radians()));
+        let (dtheta, dtwist) = (turned.theta_deg[0] + 90.0, turned.head_twist_deg[0] + 90.0);
+        assert!((dtheta - 30.0).abs() < 1e-6 && (dtwist - 30.0).abs() < 1e-6, "{dtheta} {dtwist}");
     }
 
     #[test]
