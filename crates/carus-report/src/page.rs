@@ -333,10 +333,27 @@ fn plots_section(
         values: &s.station_mm,
         colour: blue,
     }];
-    let theta = vec![Curve {
+    let orange = RGBColor(200, 82, 0);
+    let mut theta = vec![Curve {
         values: &s.theta_deg,
         colour: blue,
     }];
+    // The head's twist beside theta, where the series has it (older runs do not).
+    let twist = s.head_twist_deg.len() == s.len();
+    if twist {
+        theta.push(Curve {
+            values: &s.head_twist_deg,
+            colour: orange,
+        });
+    }
+    let theta_caption = if twist {
+        "<span style=\"color:#1f5799\">&#9632; theta, the occiput's direction projected on the \
+         canal's cross-section</span> <span style=\"color:#c85200\">&#9632; the head's twist about \
+         the canal axis, well conditioned however steeply the occiput tilts (docs/DETECTOR.md)</span>; \
+         0 = OA, +90 = ROT, -90 = LOT, \u{b1}180 = OP"
+    } else {
+        "occiput position: 0 = OA, +90 = ROT, -90 = LOT, \u{b1}180 = OP"
+    };
     let phi = vec![Curve {
         values: &s.phi_deg,
         colour: blue,
@@ -348,7 +365,7 @@ fn plots_section(
         },
         Curve {
             values: &s.contact_force_n,
-            colour: RGBColor(200, 82, 0),
+            colour: orange,
         },
     ];
     let figures = [
@@ -361,7 +378,7 @@ fn plots_section(
         (
             "theta",
             "Rotation theta",
-            "occiput position: 0 = OA, +90 = ROT, -90 = LOT, \u{b1}180 = OP",
+            theta_caption,
             plots::svg(&spec("theta", "theta (deg)", theta, vec![0.0]))?,
         ),
         (

@@ -60,6 +60,12 @@ fn the_textbook_report_shows_everything_on_one_page() {
     assert_eq!(html.matches("src=\"data:image/png;base64,").count(), 8);
     assert!(html.contains("imposed trajectory (carus-analysis synthetic::textbook), not the physics"));
     assert!(html.contains("No pelvic floor was simulated in this run."));
+    // Theta is plotted with the head's twist, and the textbook's rotations
+    // need no caveat: its occiput never tilts steeply.
+    let theta_plot = &html[html.find("id=\"plot-theta\"").unwrap()..];
+    let theta_plot = &theta_plot[..theta_plot.find("</figure>").unwrap()];
+    assert!(theta_plot.contains("twist about"));
+    assert!(!html.contains("data-caveat"));
 }
 
 #[test]
