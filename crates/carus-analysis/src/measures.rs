@@ -656,6 +656,29 @@ mod tests {
             prop_assert!((p0 - phi).abs() < 1e-6 && (p1 - phi).abs() < 1e-6);
         }
 
+        /// A head turned by theta about the canal's tangent after any tilt
+        /// about an axis in the cross-section (flexion, asynclitism, or a
+        /// mix, up to 85 degrees) reads theta as its twist, anywhere along
+        /// the canal, and its occiput tilts no more than the head was tilted.
+        #[test]
+        fn the_twist_of_a_tilted_head_is_its_turn_about_the_canal(
+            sigma_mm in -50.0f64..150.0,
+            theta in -179.0f64..179.0,
+            tilt in 0.0f64..85.0,
+            tilt_axis_deg in 0.0f64..360.0,
+        ) {
+            let canal = reference_canal();
+            let f = canal.axis().frame(sigma_mm / 1000.0);
+            // Occiput anterior, vertex down the canal: o = -a, v = t.
+            let at_oa = DQuat::from_mat3(&DMat3::from_cols(-f.anterior, -f.transverse, f.tangent));
+            let (s, c) = tilt_axis_deg.to_radians().sin_cos();
+            let tilted = DQuat::from_axis_angle(c * f.anterior + s * f.transverse, tilt.to_radians());
+            let q = DQuat::from_axis_angle(f.tangent, theta.to_radians()) * tilted * at_oa;
+            let series = Series::from_history(&still(RigidPose { position_m: f.point, orientation: q }, None));
+            prop_assert!(wrap_deg(series.head_twist_deg[0] - theta).abs() < 1e-6, "{}", series.head_twist_deg[0]);
+            prop_assert!(series.occiput_tilt_deg[0].abs() <= tilt + 1e-6);
+        }
+
         /// phi depends only on the head's orientation relative to the trunk:
         /// any common rigid motion of both leaves it unchanged.
         #[test]
