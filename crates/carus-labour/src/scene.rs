@@ -12,7 +12,7 @@ use carus_anatomy::fetus::{FetalHead, Trunk, TrunkDiameters};
 use carus_anatomy::floor::{pelvic_floor, ATTACHED};
 use carus_anatomy::{Pelvis, TriSurface};
 use carus_contact::{
-    ContactLaw, HeadAxes, MassProperties, PelvisCollider, RegionTable, RigidBodyModel, RigidPose,
+    ContactLaw, HeadAxes, MassProperties, NeckGeometry, PelvisCollider, RegionTable, RigidBodyModel, RigidPose,
     SurfaceSamples, TriangleCollider,
 };
 use carus_fem::{BoundaryConditions, Material, MaterialRegion, Mesh, ModelOptions, TledModel};
@@ -82,8 +82,11 @@ pub struct Scene {
     pub trunk_geometry: Option<TrunkGeometry>,
     /// Abdomen and hips, when the spine bends (`[spine]`).
     pub lower_trunk: Option<FetalBody>,
-    /// The thoracolumbar joint in the frame of `trunk` (when the spine bends).
-    pub thoracolumbar_in_trunk: DVec3,
+    /// The neck joining head and trunk at the start (when there is a trunk).
+    pub neck_joint: Option<NeckGeometry>,
+    /// The thoracolumbar joint of thorax and lower trunk at the start
+    /// (when the spine bends).
+    pub spine_joint: Option<NeckGeometry>,
     /// Spine axis k in the trunk's centre-of-mass frame (and the lower
     /// trunk's: both are the anatomy's trunk frame, moved).
     pub spine_in_trunk: DVec3,
@@ -131,7 +134,8 @@ impl Scene {
         let mut bodies = RigidBodyModel::default();
         bodies.add(head.mass)?;
         let mut lower_trunk = None;
-        let mut thoracolumbar_in_trunk = DVec3::ZERO;
+        // The thoracolumbar joint in the thorax's frame.
+        let mut thoracolumbar = None;
         let (trunk, trunk_geometry, spine_in_trunk) = if s.trunk.enabled {
             let d = TrunkDiameters {
                 bisacromial_mm: s.trunk.bisacromial_mm,
@@ -144,7 +148,7 @@ impl Scene {
                 let parts = anatomy.segments();
                 let thorax = FetalBody::new("thorax", &parts.thorax, density, spacing)?;
                 let lower = FetalBody::new("lower trunk", &parts.lower, density, spacing)?;
-                thoracolumbar_in_trunk = parts.thoracolumbar + thorax.frame_origin;
+                thoracolumbar = Some(parts.thoracolumbar + thorax.frame_origin);
                 lower_trunk = Some(lower);
                 thorax
             } else {
@@ -195,7 +199,8 @@ impl Scene {
             trunk,
             trunk_geometry,
             lower_trunk,
-            thoracolumbar_in_trunk,
+            neck_joint: None,
+            spine_joint: None,
             spine_in_trunk,
             bodies,
             law,
@@ -204,6 +209,29 @@ impl Scene {
             start: Vec::new(),
         };
         scene.start = scene.start_poses();
+        scene.neck_joint = scene.trunk.is_some().then(|| NeckGeometry {
+            head: HEAD,
+            trunk: TRUNK,
+            pivot: scene.start_pivot(),
+            axes: scene.head_axes,
+            neck_axis: -(scene.start[TRUNK].orientation * scene.spine_in_trunk),
+            // The start pose puts the trunk at neutral and the head at the
+            // scenario's attitude (Scene::start_poses).
+            joined_flexion_deg: scenario.start.attitude_deg,
+        });
+        // The thorax takes the head's place: x ventral, z cranial
+        // (carus-anatomy's trunk frame), so flexion bends it forwards.
+        scene.spine_joint = thoracolumbar.map(|joint| NeckGeometry {
+            head: TRUNK,
+            trunk: LOWER_TRUNK,
+            pivot: scene.start[TRUNK].point(joint),
+            axes: HeadAxes {
+                occipitofrontal: DVec3::X,
+                vertex: DVec3::Z,
+            },
+            neck_axis: -(scene.start[LOWER_TRUNK].orientation * scene.spine_in_trunk),
+            joined_flexion_deg: 0.0,
+        });
         Ok(scene)
     }
 
@@ -545,7 +573,7 @@ mod tests {
         assert_eq!(whole.breech_body(), TRUNK);
         // One point of the joint for both segments at the start, on the
         // spine line below the chest.
-        let joint = cut.start[TRUNK].point(cut.thoracolumbar_in_trunk);
+        let joint = cut.spine_joint.unwrap().pivot;
         let lower = cut.lower_trunk.as_ref().unwrap();
         let in_lower = cut.start[LOWER_TRUNK].inverse_point(joint);
         let in_anatomy = in_lower - lower.frame_origin;

@@ -104,48 +104,13 @@ impl<'a> Simulation<'a> {
     /// A fresh run at the scenario's start.
     pub fn new(scene: &'a Scene) -> Result<Self, LabourError> {
         let bodies = RigidBodyState::at_rest(&scene.bodies, &scene.start)?;
-        let neck = match scene.trunk {
-            Some(_) => {
-                let q_trunk = scene.start[TRUNK].orientation;
-                let geometry = NeckGeometry {
-                    head: HEAD,
-                    trunk: TRUNK,
-                    pivot: scene.start_pivot(),
-                    axes: scene.head_axes,
-                    neck_axis: -(q_trunk * scene.spine_in_trunk),
-                    // The start pose puts the trunk at neutral and the head
-                    // at the scenario's attitude (Scene::start_poses).
-                    joined_flexion_deg: scene.scenario.start.attitude_deg,
-                };
-                Some(Neck::new(
-                    &scene.bodies,
-                    &bodies,
-                    geometry,
-                    scene.scenario.neck,
-                )?)
-            }
-            None => None,
+        let join = |geometry: Option<NeckGeometry>, stiffness| {
+            geometry
+                .map(|g| Neck::new(&scene.bodies, &bodies, g, stiffness))
+                .transpose()
         };
-        let spine = match scene.lower_trunk {
-            Some(_) => {
-                let q_lower = scene.start[LOWER_TRUNK].orientation;
-                // The thorax takes the head's place: x ventral, z cranial
-                // (carus-anatomy's trunk frame), so flexion bends it forwards.
-                let geometry = NeckGeometry {
-                    head: TRUNK,
-                    trunk: LOWER_TRUNK,
-                    pivot: scene.start[TRUNK].point(scene.thoracolumbar_in_trunk),
-                    axes: carus_contact::HeadAxes {
-                        occipitofrontal: DVec3::X,
-                        vertex: DVec3::Z,
-                    },
-                    neck_axis: -(q_lower * scene.spine_in_trunk),
-                    joined_flexion_deg: 0.0,
-                };
-                Some(Neck::new(&scene.bodies, &bodies, geometry, scene.scenario.spine.joint())?)
-            }
-            None => None,
-        };
+        let neck = join(scene.neck_joint, scene.scenario.neck)?;
+        let spine = join(scene.spine_joint, scene.scenario.spine.joint())?;
         let bone_contacts = (0..scene.bodies.len())
             .map(|b| BodyContactState::new(&scene.fetal_body(b).samples))
             .collect();
