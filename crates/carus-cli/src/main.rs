@@ -37,6 +37,8 @@ enum Command {
     Run(commands::run::RunArgs),
     /// List the built-in scenarios, or print one as TOML.
     Scenarios(commands::scenarios::ScenariosArgs),
+    /// Run a scenario at every combination of the values given, and tabulate the outcomes.
+    Sweep(commands::sweep::SweepArgs),
 }
 
 fn main() -> ExitCode {
@@ -55,6 +57,7 @@ fn main() -> ExitCode {
         Command::Render(args) => commands::render::run(args),
         Command::Run(args) => commands::run::run(args),
         Command::Scenarios(args) => commands::scenarios::run(args),
+        Command::Sweep(args) => commands::sweep::run(args),
     };
     match result {
         Ok(Status::Success) => ExitCode::SUCCESS,

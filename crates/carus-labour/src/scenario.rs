@@ -37,6 +37,12 @@ pub enum ScenarioError {
     },
     #[error("no built-in scenario named `{0}`; `carus scenarios` lists them")]
     UnknownBuiltin(String),
+    #[error("`{setting}`: {problem}\n  hint: {hint}")]
+    Setting {
+        setting: String,
+        problem: String,
+        hint: String,
+    },
     #[error("cannot write the scenario as TOML: {0}")]
     Serialize(#[from] toml::ser::Error),
 }
@@ -587,6 +593,53 @@ impl Scenario {
         Ok(text)
     }
 
+    /// This scenario with one key changed: `key` is a dotted path as `carus
+    /// scenarios show` writes it (`expulsion.period_s`), `value` TOML text
+    /// (`32.0`, `true`, `"pivot"`; a bare word is taken as a string). The
+    /// result is checked as a file would be, so an unknown key or an
+    /// impossible value is refused with the key named.
+    pub fn with_setting(&self, key: &str, value: &str) -> Result<Scenario, ScenarioError> {
+        let label = PathBuf::from(format!("{} with {key} = {value}", self.name));
+        let refuse = |problem: &str, hint: &str| ScenarioError::Setting {
+            setting: format!("{key} = {value}"),
+            problem: problem.into(),
+            hint: hint.into(),
+        };
+        let parsed = match format!("v = {value}").parse::<toml::Table>() {
+            Ok(mut t) => t.remove("v").expect("the one key parsed"),
+            Err(_) => toml::Value::String(value.to_string()),
+        };
+        let mut table = toml::Table::try_from(self)?;
+        let mut parts: Vec<&str> = key.split('.').collect();
+        let leaf = parts.pop().filter(|k| !k.is_empty()).ok_or_else(|| {
+            refuse("no key given", "write SECTION.KEY=VALUE, e.g. expulsion.period_s=32")
+        })?;
+        let mut section = &mut table;
+        for part in parts {
+            section = match section
+                .entry(part)
+                .or_insert_with(|| toml::Value::Table(toml::Table::new()))
+            {
+                toml::Value::Table(t) => t,
+                _ => {
+                    return Err(refuse(
+                        &format!("`{part}` is a value, not a section"),
+                        "the keys are those `carus scenarios show normal` lists",
+                    ))
+                }
+            };
+        }
+        section.insert(leaf.to_string(), parsed);
+        let text = toml::to_string(&table)?;
+        // Line numbers would point into the generated text: name the setting instead.
+        Scenario::parse(&label, &text, self.base_dir.clone()).map_err(|e| match e {
+            ScenarioError::Syntax {
+                key, message, hint, ..
+            } => refuse(&format!("{key}{message}"), &hint),
+            other => other,
+        })
+    }
+
     /// Impossible values, named by their key with a hint.
     fn check(&self, path: &Path) -> Result<(), ScenarioError> {
         let err = |key: &'static str, value: f64, problem: &str, hint: &str| ScenarioError::Value {
@@ -945,6 +998,29 @@ mod tests {
                 assert!(shown.contains(table), "{name}: {table} missing");
             }
         }
+    }
+
+    #[test]
+    fn a_setting_changes_one_key_and_is_checked_like_a_file() {
+        let normal = Scenario::builtin("normal").unwrap();
+        let slower = normal.with_setting("expulsion.period_s", "32").unwrap();
+        assert_eq!(slower.expulsion.period_s, 32.0);
+        assert_eq!(Scenario { expulsion: normal.expulsion, ..slower.clone() }, normal);
+        let spine = normal.with_setting("spine.enabled", "true").unwrap();
+        assert!(spine.spine.enabled);
+        let pivot = normal.with_setting("expulsion.acts_on", "pivot").unwrap();
+        assert_eq!(pivot.expulsion.acts_on, ActsOn::Pivot);
+
+        let e = normal.with_setting("expulsion.periods", "32").unwrap_err().to_string();
+        assert!(e.contains("expulsion.periods = 32") && e.contains("unknown field"), "{e}");
+        assert!(!e.contains(".toml:"), "no line of generated text: {e}");
+        let e = normal.with_setting("expulsion.period_s", "-8").unwrap_err().to_string();
+        assert!(e.contains("expulsion.period_s") && e.contains("-8"), "{e}");
+        let e = normal.with_setting("expulsion.period_s", "fast").unwrap_err().to_string();
+        assert!(e.contains("period_s") && e.contains("invalid type"), "{e}");
+        let e = normal.with_setting("expulsion.period_s.x", "1").unwrap_err().to_string();
+        assert!(e.contains("`period_s` is a value"), "{e}");
+        assert!(normal.with_setting("", "1").is_err());
     }
 
     #[test]

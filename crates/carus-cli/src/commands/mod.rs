@@ -7,6 +7,7 @@ pub mod render;
 pub mod run;
 pub mod scenarios;
 pub mod solve;
+pub mod sweep;
 pub mod validate;
 
 /// How a command that ran to completion ended.
@@ -32,4 +33,18 @@ pub fn progress_bar() -> indicatif::ProgressBar {
 pub fn print_json<T: serde::Serialize>(value: &T) -> anyhow::Result<()> {
     println!("{}", serde_json::to_string_pretty(value)?);
     Ok(())
+}
+
+/// The normal scenario made coarse for the commands' tests: a coarser
+/// head, sparser contact samples, a small floor, `end_s` simulated, no VTU.
+#[cfg(test)]
+pub fn coarse_normal(end_s: f64) -> carus_labour::Scenario {
+    let mut s = carus_labour::Scenario::builtin("normal").unwrap();
+    s.numerics.head_subdivisions = 3;
+    s.contact.sample_spacing_mm = 8.0;
+    s.floor.mesh.elements_around = 16;
+    s.floor.mesh.elements_across = 3;
+    s.numerics.end_time_s = end_s;
+    s.output.vtu = false;
+    s
 }

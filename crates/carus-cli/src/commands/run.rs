@@ -139,7 +139,7 @@ fn inverted_corners(record: &RunRecord) -> String {
 
 /// Writes report.html beside the run's data. Pictures need a GPU or Mesa's
 /// lavapipe; without one the page is still written, with a note instead.
-fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result<Vec<String>> {
+pub(super) fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result<Vec<String>> {
     let Some(detector) = &record.detector else {
         return Ok(vec![
             "no report: the run stopped before its second pose sample".into(),
@@ -210,7 +210,7 @@ fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result<Vec<String
     )?)
 }
 
-fn load(name: Option<&str>) -> anyhow::Result<Scenario> {
+pub(super) fn load(name: Option<&str>) -> anyhow::Result<Scenario> {
     let name = name.unwrap_or("normal");
     if BUILTINS.iter().any(|(n, _)| *n == name) {
         return Ok(Scenario::builtin(name)?);
@@ -228,7 +228,7 @@ fn load(name: Option<&str>) -> anyhow::Result<Scenario> {
 
 /// The out dir: as given, or runs/<name>-<n> with the first free n. An
 /// existing run is never overwritten without `--force`.
-fn prepare_out_dir(out: Option<&Path>, name: &str, force: bool) -> anyhow::Result<PathBuf> {
+pub(super) fn prepare_out_dir(out: Option<&Path>, name: &str, force: bool) -> anyhow::Result<PathBuf> {
     let dir = match out {
         Some(d) => d.to_path_buf(),
         None => (1..)
@@ -254,7 +254,7 @@ fn prepare_out_dir(out: Option<&Path>, name: &str, force: bool) -> anyhow::Resul
     Ok(dir)
 }
 
-fn json_summary(record: &RunRecord, out_dir: &Path) -> serde_json::Value {
+pub(super) fn json_summary(record: &RunRecord, out_dir: &Path) -> serde_json::Value {
     let movements: serde_json::Map<String, serde_json::Value> = movements(record)
         .into_iter()
         .map(|(k, v)| (k.to_string(), serde_json::to_value(v).expect("plain data")))
@@ -274,7 +274,7 @@ fn json_summary(record: &RunRecord, out_dir: &Path) -> serde_json::Value {
 
 /// The seven movements under their canonical keys; all unobserved when the
 /// run stopped before there was anything to detect.
-fn movements(record: &RunRecord) -> Vec<(&'static str, Movement)> {
+pub(super) fn movements(record: &RunRecord) -> Vec<(&'static str, Movement)> {
     let all = record
         .detector
         .as_ref()
@@ -319,7 +319,7 @@ fn print_summary(record: &RunRecord, out_dir: &Path) {
 
 /// The name an enum value has in the JSON output (e.g. `mid-pelvis`), so
 /// the text summary and `--json` speak the same words.
-fn serde_name<T: serde::Serialize>(value: &T) -> String {
+pub(super) fn serde_name<T: serde::Serialize>(value: &T) -> String {
     serde_json::to_value(value)
         .ok()
         .and_then(|v| v.as_str().map(str::to_string))
@@ -334,13 +334,7 @@ mod tests {
     /// one sample, out of the floor's, and when the first appeared.
     #[test]
     fn the_report_counts_inverted_corners() {
-        let mut s = Scenario::builtin("normal").unwrap();
-        s.numerics.head_subdivisions = 3;
-        s.contact.sample_spacing_mm = 8.0;
-        s.floor.mesh.elements_around = 16;
-        s.floor.mesh.elements_across = 3;
-        s.numerics.end_time_s = 0.3;
-        s.output.vtu = false;
+        let s = crate::commands::coarse_normal(0.3);
         let dir = tempfile::tempdir().unwrap();
         let mut record =
             carus_labour::run(&s, dir.path(), &RunOptions::default(), &mut carus_labour::SilentObserver).unwrap();

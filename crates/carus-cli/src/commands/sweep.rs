@@ -1,0 +1,469 @@
+//! `carus sweep [NAME|FILE] --set KEY=V1,V2,... [--set ...] [--out DIR]
+//! [--jobs N] [--json] [--force] [--quiet]`: one labour run per combination
+//! of the values given (every combination of every `--set`), each a whole
+//! run in its own folder, and a table of their outcomes and movements
+//! (sweep.csv, sweep.json) rewritten as each run ends, so Ctrl-C or a
+//! failed run loses none that finished. The parameter studies of
+//! docs/LABOUR.md are sweeps.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+
+use anyhow::{bail, Context};
+use carus_labour::{RunOptions, RunRecord, Scenario, SilentObserver};
+use rayon::prelude::*;
+use serde_json::json;
+
+use super::run::{json_summary, load, movements, prepare_out_dir, serde_name, write_report};
+use super::{print_json, Status};
+
+/// The station at which CARDINAL_MOVEMENTS.md's window for internal
+/// rotation closes: where the head should have turned by, mm.
+const INTERNAL_ROTATION_WINDOW_END_MM: f64 = 50.0;
+
+#[derive(clap::Args)]
+pub struct SweepArgs {
+    /// A built-in scenario name (`carus scenarios`) or a scenario file (TOML). Default: normal.
+    pub scenario: Option<String>,
+    /// KEY=V1,V2,...: a dotted key as `carus scenarios show` writes it and
+    /// the values to run it at (TOML values; repeat for more keys: every
+    /// combination runs).
+    #[arg(long = "set", value_name = "KEY=VALUES", required = true)]
+    pub settings: Vec<String>,
+    /// Output folder; default runs/sweep-<scenario>-<n>, the first free n.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Runs at a time; default one per core.
+    #[arg(long)]
+    pub jobs: Option<usize>,
+    /// Print one JSON object on standard output and nothing else there.
+    #[arg(long)]
+    pub json: bool,
+    /// Replace an existing sweep in the output folder.
+    #[arg(long)]
+    pub force: bool,
+    /// No notes on standard error.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// One key and the values it takes.
+#[derive(Debug, Clone, PartialEq)]
+struct Setting {
+    key: String,
+    values: Vec<String>,
+}
+
+fn parse_setting(text: &str) -> anyhow::Result<Setting> {
+    let Some((key, values)) = text.split_once('=') else {
+        bail!("--set {text}: write KEY=V1,V2,..., e.g. --set expulsion.period_s=8,16,32");
+    };
+    let values: Vec<String> = values.split(',').map(|v| v.trim().to_string()).collect();
+    if key.trim().is_empty() || values.iter().any(String::is_empty) {
+        bail!("--set {text}: a key and at least one value, none empty, e.g. --set contact.friction=0.1,0.35");
+    }
+    Ok(Setting {
+        key: key.trim().to_string(),
+        values,
+    })
+}
+
+/// Every combination of the settings' values, the first setting varying slowest.
+fn combinations(settings: &[Setting]) -> Vec<Vec<(String, String)>> {
+    settings.iter().fold(vec![Vec::new()], |acc, s| {
+        acc.iter()
+            .flat_map(|prefix| {
+                s.values.iter().map(move |v| {
+                    let mut c = prefix.clone();
+                    c.push((s.key.clone(), v.clone()));
+                    c
+                })
+            })
+            .collect()
+    })
+}
+
+/// A variant's folder name: its number and settings, in characters any
+/// file system takes.
+fn folder_name(index: usize, combination: &[(String, String)]) -> String {
+    let settings: Vec<String> = combination.iter().map(|(k, v)| format!("{k}={v}")).collect();
+    let name: String = settings
+        .join("_")
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() || "._=+-".contains(c) { c } else { '-' })
+        .collect();
+    format!("{:02}-{name}", index + 1)
+}
+
+/// The finished run of one variant, as the table reports it.
+struct Finished {
+    summary: serde_json::Value,
+    row: Vec<String>,
+}
+
+pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
+    let settings = args
+        .settings
+        .iter()
+        .map(|s| parse_setting(s))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let base = load(args.scenario.as_deref())?;
+    let combinations = combinations(&settings);
+    // Every variant is checked before any runs, so a typo costs nothing.
+    let scenarios = combinations
+        .iter()
+        .map(|c| {
+            c.iter()
+                .try_fold(base.clone(), |s, (k, v)| s.with_setting(k, v))
+                .map_err(anyhow::Error::from)
+        })
+        .collect::<anyhow::Result<Vec<Scenario>>>()?;
+    let out_dir = prepare_out_dir(
+        args.out.as_deref(),
+        &format!("sweep-{}", base.name),
+        args.force,
+    )?;
+    let stop = Arc::new(AtomicBool::new(false));
+    {
+        let stop = stop.clone();
+        let _ = ctrlc::set_handler(move || stop.store(true, Ordering::Relaxed));
+    }
+    let jobs = args
+        .jobs
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+        .max(1);
+    if !args.quiet {
+        eprintln!(
+            "sweeping `{}` over {} runs, {jobs} at a time, into {}",
+            base.name,
+            scenarios.len(),
+            out_dir.display()
+        );
+    }
+    let keys: Vec<&str> = settings.iter().map(|s| s.key.as_str()).collect();
+    let table = Mutex::new((0..scenarios.len()).map(|_| None).collect::<Vec<Option<Finished>>>());
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(jobs)
+        .build()
+        .context("cannot start the sweep's threads")?;
+    let failures = pool.install(|| {
+        (0..scenarios.len())
+            .into_par_iter()
+            .map(|i| {
+                if stop.load(Ordering::Relaxed) {
+                    return Ok(false);
+                }
+                let dir = out_dir.join(folder_name(i, &combinations[i]));
+                let finished = run_variant(&scenarios[i], &dir, &combinations[i], &stop, args.quiet)?;
+                let failed = finished.summary["failure"].is_string();
+                let mut rows = table.lock().expect("no run panics while holding the table");
+                rows[i] = Some(finished);
+                write_table(&out_dir, &keys, &rows)?;
+                Ok(failed)
+            })
+            .collect::<anyhow::Result<Vec<bool>>>()
+    })?;
+    let rows = table.into_inner().expect("no run panics while holding the table");
+    write_table(&out_dir, &keys, &rows)?;
+    let done = rows.iter().flatten().count();
+    if args.json {
+        print_json(&sweep_json(&out_dir, &keys, &rows))?;
+    } else {
+        print_table(&keys, &rows);
+        println!("results in {} (sweep.csv, sweep.json, one folder per run)", out_dir.display());
+    }
+    if done < rows.len() {
+        eprintln!(
+            "stopped after {done} of {} runs; each unfinished one continues with carus run --resume on its folder",
+            rows.len()
+        );
+    }
+    Ok(if failures.iter().any(|&f| f) || done < rows.len() {
+        Status::Failed
+    } else {
+        Status::Success
+    })
+}
+
+/// Runs one variant into `dir` with its report, as `carus run` would.
+fn run_variant(
+    scenario: &Scenario,
+    dir: &Path,
+    combination: &[(String, String)],
+    stop: &Arc<AtomicBool>,
+    quiet: bool,
+) -> anyhow::Result<Finished> {
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let options = RunOptions {
+        stop: Some(stop.clone()),
+        stop_at_s: None,
+    };
+    let record = carus_labour::run(scenario, dir, &options, &mut SilentObserver)?;
+    if let Err(error) = write_report(&record, dir) {
+        eprintln!("warning: {}: report.html was not written: {error:#}", dir.display());
+    }
+    let mut summary = json_summary(&record, dir);
+    summary["set"] = combination
+        .iter()
+        .map(|(k, v)| (k.clone(), json!(v)))
+        .collect::<serde_json::Map<_, _>>()
+        .into();
+    summary["at_station_50mm"] = at_window_end(&record);
+    if !quiet {
+        let note = record.summary.failure.as_deref().map_or(String::new(), |f| format!(": ended early, {f}"));
+        eprintln!("finished {} in {:.0} s{note}", dir.display(), record.summary.wall_s);
+    }
+    let row = table_row(&record, dir, combination, &summary);
+    Ok(Finished { summary, row })
+}
+
+/// Where the head was turned when its leading point first reached station
+/// +50 mm, or null if it never did: theta (CARDINAL_MOVEMENTS.md), the
+/// head's twist about the canal and the occiput's tilt, which says whether
+/// theta can be trusted there (docs/DETECTOR.md).
+fn at_window_end(record: &RunRecord) -> serde_json::Value {
+    let Some(series) = record.detector.as_ref().map(|d| &d.series) else {
+        return serde_json::Value::Null;
+    };
+    series
+        .station_mm
+        .iter()
+        .position(|&s| s >= INTERNAL_ROTATION_WINDOW_END_MM)
+        .map_or(serde_json::Value::Null, |k| {
+            json!({
+                "time_s": series.time_s[k],
+                "theta_deg": series.theta_deg[k],
+                "head_twist_deg": series.head_twist_deg[k],
+                "occiput_tilt_deg": series.occiput_tilt_deg[k],
+            })
+        })
+}
+
+fn header(keys: &[&str]) -> Vec<String> {
+    let mut h = vec!["run".to_string()];
+    h.extend(keys.iter().map(|k| k.to_string()));
+    h.extend(
+        [
+            "delivered",
+            "arrest_stage",
+            "arrest_against",
+            "arrest_station_mm",
+            "engagement_mm",
+            "descent_mm",
+            "flexion_deg",
+            "internal_rotation_deg",
+            "extension_deg",
+            "external_rotation_deg",
+            "expulsion_mm",
+            "posterior_rotation_deg",
+            "theta_at_station_50mm_deg",
+            "head_twist_at_station_50mm_deg",
+            "occiput_tilt_at_station_50mm_deg",
+            "simulated_s",
+            "wall_s",
+            "completed",
+            "failure",
+        ]
+        .map(String::from),
+    );
+    h
+}
+
+fn table_row(
+    record: &RunRecord,
+    dir: &Path,
+    combination: &[(String, String)],
+    summary: &serde_json::Value,
+) -> Vec<String> {
+    let number = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v}"));
+    let s = &record.summary;
+    let mut row = vec![dir.file_name().map_or(String::new(), |n| n.to_string_lossy().into_owned())];
+    row.extend(combination.iter().map(|(_, v)| v.clone()));
+    row.push(s.outcome.delivered.to_string());
+    let arrest = s.outcome.arrest.as_ref();
+    row.push(arrest.map_or(String::new(), |a| serde_name(&a.stage)));
+    row.push(arrest.map_or(String::new(), |a| a.against.clone()));
+    row.push(number(arrest.map(|a| a.station_mm)));
+    row.extend(
+        movements(record)
+            .into_iter()
+            .map(|(_, m)| number(m.observed.then_some(m.size).flatten())),
+    );
+    let posterior = record.detector.as_ref().map(|d| d.posterior_rotation);
+    row.push(number(posterior.filter(|m| m.observed).and_then(|m| m.size)));
+    let at = &summary["at_station_50mm"];
+    for key in ["theta_deg", "head_twist_deg", "occiput_tilt_deg"] {
+        row.push(number(at[key].as_f64()));
+    }
+    row.push(number(Some(s.simulated_s)));
+    row.push(number(Some(s.wall_s)));
+    row.push(s.completed.to_string());
+    row.push(s.failure.clone().unwrap_or_default());
+    row
+}
+
+/// A CSV field, quoted when it holds a comma, quote or line break.
+fn field(text: &str) -> String {
+    if text.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", text.replace('"', "\"\""))
+    } else {
+        text.to_string()
+    }
+}
+
+/// sweep.csv and sweep.json with the runs finished so far, in sweep order.
+fn write_table(out_dir: &Path, keys: &[&str], rows: &[Option<Finished>]) -> anyhow::Result<()> {
+    let mut csv = header(keys).iter().map(|h| field(h)).collect::<Vec<_>>().join(",");
+    csv.push('\n');
+    for row in rows.iter().flatten() {
+        csv.push_str(&row.row.iter().map(|f| field(f)).collect::<Vec<_>>().join(","));
+        csv.push('\n');
+    }
+    let path = out_dir.join("sweep.csv");
+    std::fs::write(&path, csv).with_context(|| format!("cannot write {}", path.display()))?;
+    let path = out_dir.join("sweep.json");
+    let text = serde_json::to_string_pretty(&sweep_json(out_dir, keys, rows))?;
+    std::fs::write(&path, text).with_context(|| format!("cannot write {}", path.display()))
+}
+
+fn sweep_json(out_dir: &Path, keys: &[&str], rows: &[Option<Finished>]) -> serde_json::Value {
+    json!({
+        "out_dir": out_dir.display().to_string(),
+        "settings": keys,
+        "runs_planned": rows.len(),
+        "runs": rows.iter().flatten().map(|r| r.summary.clone()).collect::<Vec<_>>(),
+    })
+}
+
+/// The table on standard output: settings, outcome and observed movements.
+fn print_table(keys: &[&str], rows: &[Option<Finished>]) {
+    for finished in rows.iter().flatten() {
+        let r = &finished.summary;
+        let set: Vec<String> = keys.iter().map(|k| format!("{k}={}", r["set"][*k].as_str().unwrap_or(""))).collect();
+        let outcome = if r["outcome"]["delivered"] == json!(true) {
+            "delivered".to_string()
+        } else if let Some(a) = r["outcome"]["arrest"].as_object() {
+            format!(
+                "arrest at the {} ({:+.1} mm) against {}",
+                a["stage"].as_str().unwrap_or(""),
+                a["station_mm"].as_f64().unwrap_or(f64::NAN),
+                a["against"].as_str().unwrap_or("")
+            )
+        } else {
+            "neither delivered nor arrested".to_string()
+        };
+        let observed: Vec<&str> = r["movements"]
+            .as_object()
+            .map(|m| {
+                m.iter()
+                    .filter(|(_, v)| v["observed"] == json!(true))
+                    .map(|(k, _)| k.as_str())
+                    .collect()
+            })
+            .unwrap_or_default();
+        let failure = r["failure"].as_str().map_or(String::new(), |f| format!("; ended early: {f}"));
+        let observed = if observed.is_empty() {
+            "no movement observed".to_string()
+        } else {
+            observed.join(", ")
+        };
+        println!("{}: {outcome}; {observed}{failure}", set.join(" "));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn settings_parse_into_keys_and_values() {
+        assert_eq!(
+            parse_setting("expulsion.period_s=8, 16,32").unwrap(),
+            Setting {
+                key: "expulsion.period_s".into(),
+                values: vec!["8".into(), "16".into(), "32".into()]
+            }
+        );
+        for bad in ["expulsion.period_s", "=8", "contact.friction=0.1,", "x="] {
+            assert!(parse_setting(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn every_combination_runs_once_the_first_key_slowest() {
+        let settings = [
+            parse_setting("a=1,2").unwrap(),
+            parse_setting("b=x,y,z").unwrap(),
+        ];
+        let c = combinations(&settings);
+        assert_eq!(c.len(), 6);
+        assert_eq!(c[0], vec![("a".into(), "1".into()), ("b".into(), "x".into())]);
+        assert_eq!(c[5], vec![("a".into(), "2".into()), ("b".into(), "z".into())]);
+        assert_eq!(folder_name(4, &c[4]), "05-a=2_b=y");
+        assert_eq!(folder_name(0, &[("start.position".into(), "\"LOT\"".into())]), "01-start.position=-LOT-");
+    }
+
+    #[test]
+    fn fields_with_commas_are_quoted() {
+        assert_eq!(field("a, \"b\""), "\"a, \"\"b\"\"\"");
+        assert_eq!(field("mid-pelvis"), "mid-pelvis");
+    }
+
+    /// A sweep of two short runs of a coarse normal scenario: both run, each
+    /// as a plain run of the same settings would (bit for bit), and the
+    /// table holds a row for each with its setting.
+    #[test]
+    fn a_sweep_runs_every_variant_as_carus_run_would() {
+        let mut s = crate::commands::coarse_normal(0.3);
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("coarse.toml");
+        std::fs::write(&file, s.to_toml().unwrap()).unwrap();
+        let out = dir.path().join("sweep");
+        let args = SweepArgs {
+            scenario: Some(file.display().to_string()),
+            settings: vec!["expulsion.force_max_n=60,120".into()],
+            out: Some(out.clone()),
+            jobs: Some(2),
+            json: true,
+            force: false,
+            quiet: true,
+        };
+        assert!(matches!(run(&args).unwrap(), Status::Success));
+
+        let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
+        let lines: Vec<&str> = csv.lines().collect();
+        assert_eq!(lines.len(), 3, "{csv}");
+        assert!(lines[0].starts_with("run,expulsion.force_max_n,delivered,arrest_stage"), "{}", lines[0]);
+        assert!(lines[1].starts_with("01-expulsion.force_max_n=60,60,"), "{}", lines[1]);
+        assert!(lines[2].starts_with("02-expulsion.force_max_n=120,120,"), "{}", lines[2]);
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("sweep.json")).unwrap()).unwrap();
+        assert_eq!(json["runs"].as_array().unwrap().len(), 2);
+        assert_eq!(json["runs"][1]["set"]["expulsion.force_max_n"], "120");
+        assert_eq!(json["runs"][1]["simulated_s"], json!(0.3));
+
+        // The second variant against a plain run of the same scenario.
+        s.expulsion.force_max_n = 120.0;
+        let plain = dir.path().join("plain");
+        std::fs::create_dir(&plain).unwrap();
+        let record = carus_labour::run(&s, &plain, &RunOptions::default(), &mut SilentObserver).unwrap();
+        let swept = std::fs::read_to_string(out.join("02-expulsion.force_max_n=120/pose_history.csv")).unwrap();
+        assert_eq!(swept, std::fs::read_to_string(plain.join("pose_history.csv")).unwrap());
+        assert!(record.summary.completed);
+
+        // An existing sweep is not overwritten, and a bad key runs nothing.
+        assert!(run(&args).is_err());
+        let bad = SweepArgs {
+            settings: vec!["expulsion.period=8".into()],
+            out: Some(dir.path().join("bad")),
+            ..args
+        };
+        let Err(e) = run(&bad) else {
+            panic!("a sweep over an unknown key ran");
+        };
+        let e = e.to_string();
+        assert!(e.contains("expulsion.period = 8"), "{e}");
+        assert!(!dir.path().join("bad").exists());
+    }
+}
