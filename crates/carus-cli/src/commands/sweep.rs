@@ -155,7 +155,9 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
                     return Ok(false);
                 }
                 let dir = out_dir.join(folder_name(i, &combinations[i]));
-                let finished = run_variant(&scenarios[i], &dir, &combinations[i], &stop, args.quiet)?;
+                // A run that cannot be made is a row of the table, not the end of the sweep.
+                let finished = run_variant(&scenarios[i], &dir, &combinations[i], &stop, args.quiet)
+                    .unwrap_or_else(|error| unmade(&dir, &combinations[i], &keys, &error));
                 let failed = finished.summary["failure"].is_string();
                 let mut rows = table.lock().expect("no run panics while holding the table");
                 rows[i] = Some(finished);
@@ -166,16 +168,20 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
     })?;
     let rows = table.into_inner().expect("no run panics while holding the table");
     write_table(&out_dir, &keys, &rows)?;
-    let done = rows.iter().flatten().count();
+    let done = rows
+        .iter()
+        .flatten()
+        .filter(|r| r.summary["completed"] == json!(true))
+        .count();
     if args.json {
         print_json(&sweep_json(&out_dir, &keys, &rows))?;
     } else {
         print_table(&keys, &rows);
         println!("results in {} (sweep.csv, sweep.json, one folder per run)", out_dir.display());
     }
-    if done < rows.len() {
+    if stop.load(Ordering::Relaxed) {
         eprintln!(
-            "stopped after {done} of {} runs; each unfinished one continues with carus run --resume on its folder",
+            "stopped with {done} of {} runs complete; a stopped run continues with carus run --resume on its folder",
             rows.len()
         );
     }
@@ -204,18 +210,47 @@ fn run_variant(
         eprintln!("warning: {}: report.html was not written: {error:#}", dir.display());
     }
     let mut summary = json_summary(&record, dir);
-    summary["set"] = combination
-        .iter()
-        .map(|(k, v)| (k.clone(), json!(v)))
-        .collect::<serde_json::Map<_, _>>()
-        .into();
+    summary["set"] = set_json(combination);
     summary["at_station_50mm"] = at_window_end(&record);
     if !quiet {
         let note = record.summary.failure.as_deref().map_or(String::new(), |f| format!(": ended early, {f}"));
-        eprintln!("finished {} in {:.0} s{note}", dir.display(), record.summary.wall_s);
+        let verb = if record.summary.completed { "finished" } else { "stopped" };
+        eprintln!("{verb} {} in {:.0} s{note}", dir.display(), record.summary.wall_s);
     }
     let row = table_row(&record, dir, combination, &summary);
     Ok(Finished { summary, row })
+}
+
+/// A variant's settings as a JSON object, key to value as given.
+fn set_json(combination: &[(String, String)]) -> serde_json::Value {
+    combination
+        .iter()
+        .map(|(k, v)| (k.clone(), json!(v)))
+        .collect::<serde_json::Map<_, _>>()
+        .into()
+}
+
+/// The row of a variant whose run could not be made (its folder not
+/// writable, say): the settings and why.
+fn unmade(dir: &Path, combination: &[(String, String)], keys: &[&str], error: &anyhow::Error) -> Finished {
+    let why = format!("{error:#}");
+    let mut row = vec![String::new(); header(keys).len()];
+    row[0] = dir.file_name().map_or(String::new(), |n| n.to_string_lossy().into_owned());
+    for (k, (_, v)) in combination.iter().enumerate() {
+        row[k + 1] = v.clone();
+    }
+    let last = row.len() - 1;
+    row[last - 1] = "false".into();
+    row[last] = why.clone();
+    Finished {
+        summary: json!({
+            "set": set_json(combination),
+            "out_dir": dir.display().to_string(),
+            "completed": false,
+            "failure": why,
+        }),
+        row,
+    }
 }
 
 /// Where the head was turned when its leading point first reached station
@@ -341,7 +376,9 @@ fn print_table(keys: &[&str], rows: &[Option<Finished>]) {
     for finished in rows.iter().flatten() {
         let r = &finished.summary;
         let set: Vec<String> = keys.iter().map(|k| format!("{k}={}", r["set"][*k].as_str().unwrap_or(""))).collect();
-        let outcome = if r["outcome"]["delivered"] == json!(true) {
+        let outcome = if r["outcome"].is_null() {
+            "not run".to_string()
+        } else if r["outcome"]["delivered"] == json!(true) {
             "delivered".to_string()
         } else if let Some(a) = r["outcome"]["arrest"].as_object() {
             format!(
@@ -362,7 +399,11 @@ fn print_table(keys: &[&str], rows: &[Option<Finished>]) {
                     .collect()
             })
             .unwrap_or_default();
-        let failure = r["failure"].as_str().map_or(String::new(), |f| format!("; ended early: {f}"));
+        let failure = match (r["failure"].as_str(), r["completed"].as_bool()) {
+            (Some(f), _) => format!("; ended early: {f}"),
+            (None, Some(false)) => format!("; stopped at t = {:.1} s", r["simulated_s"].as_f64().unwrap_or(0.0)),
+            _ => String::new(),
+        };
         let observed = if observed.is_empty() {
             "no movement observed".to_string()
         } else {
@@ -402,6 +443,21 @@ mod tests {
         assert_eq!(c[5], vec![("a".into(), "2".into()), ("b".into(), "z".into())]);
         assert_eq!(folder_name(4, &c[4]), "05-a=2_b=y");
         assert_eq!(folder_name(0, &[("start.position".into(), "\"LOT\"".into())]), "01-start.position=-LOT-");
+    }
+
+    #[test]
+    fn a_run_that_cannot_be_made_is_a_row_with_its_reason() {
+        let combination = [("contact.friction".to_string(), "0.1".to_string())];
+        let error = anyhow::anyhow!("cannot create runs/x");
+        let r = unmade(Path::new("runs/x/01-contact.friction=0.1"), &combination, &["contact.friction"], &error);
+        let header = header(&["contact.friction"]);
+        assert_eq!(r.row.len(), header.len());
+        assert_eq!(r.row[0], "01-contact.friction=0.1");
+        assert_eq!(r.row[1], "0.1");
+        assert_eq!(r.row[header.len() - 2], "false");
+        assert_eq!(r.row[header.len() - 1], "cannot create runs/x");
+        assert_eq!(r.summary["set"]["contact.friction"], "0.1");
+        assert_eq!(r.summary["failure"], "cannot create runs/x");
     }
 
     #[test]
