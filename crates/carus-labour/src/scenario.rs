@@ -433,11 +433,16 @@ impl Default for FloorSection {
     }
 }
 
-/// `[numerics]`: numerical settings (none shapes the outcome beyond accuracy).
+/// `[numerics]`: numerical settings (none should shape the outcome beyond accuracy).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct NumericsSection {
-    /// Rigid-body step, s (contact stability: docs/CONTACT.md).
+    /// Rigid-body step, s: 0.5 ms. Contact stability (docs/CONTACT.md):
+    /// a head wedged at the outlet is held by contacts of about 6e5 N/m
+    /// summed, which puts a 1 ms step past the stable limit, and its
+    /// contact forces then alternate every step; at 0.5 ms they do not,
+    /// and 0.25 ms arrests it within 1 mm of the same station
+    /// (docs/LABOUR.md, twelfth session).
     pub rigid_dt_s: f64,
     /// Simulated time at which the run ends, s.
     pub end_time_s: f64,
@@ -454,7 +459,7 @@ pub struct NumericsSection {
 impl Default for NumericsSection {
     fn default() -> Self {
         NumericsSection {
-            rigid_dt_s: 1e-3,
+            rigid_dt_s: 5e-4,
             end_time_s: 60.0,
             stop_when_delivered: true,
             head_subdivisions: 4,
