@@ -184,6 +184,35 @@ mod tests {
         assert!(damped.critical_time_step(1.0, 1.0e4) < 0.02);
     }
 
+    /// A body pushed onto the penalty layer and integrated as the rigid
+    /// step does (semi-implicit Euler, the law evaluated at the step's
+    /// start): under the critical step a disturbance dies away; past it the
+    /// contact force alternates every step and never settles, as a wedged
+    /// head's did at a 1 ms step (docs/CONTACT.md).
+    #[test]
+    fn past_the_critical_step_the_contact_force_alternates_every_step() {
+        let law = ContactLaw::default();
+        let (mass, stiffness, push) = (0.3, 6.0e5, 100.0);
+        let area = stiffness / law.penalty_stiffness_pa_per_m;
+        let n = DVec3::Z;
+        let alternation = |dt: f64| {
+            // Start 20 % deeper than at rest, at rest.
+            let (mut depth, mut rate) = (1.2 * push / stiffness, 0.0);
+            let mut forces = Vec::new();
+            for _ in 0..4000 {
+                let f = law.evaluate(area, depth, n, -rate * n, DVec3::ZERO).normal.z;
+                rate += dt * (push - f) / mass;
+                depth += dt * rate;
+                forces.push(f);
+            }
+            let tail = &forces[forces.len() - 101..];
+            tail.windows(3).map(|w| (w[1] - 0.5 * (w[0] + w[2])).abs()).fold(0.0, f64::max)
+        };
+        let critical = law.critical_time_step(mass, stiffness);
+        assert!(alternation(0.9 * critical) < 1e-6 * push, "{}", alternation(0.9 * critical));
+        assert!(alternation(1.1 * critical) > 0.1 * push, "{}", alternation(1.1 * critical));
+    }
+
     #[test]
     fn invalid_parameters_are_named() {
         let law = ContactLaw { friction_coefficient: -0.1, ..ContactLaw::default() };
