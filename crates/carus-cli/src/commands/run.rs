@@ -16,22 +16,29 @@ use serde_json::json;
 
 use super::{print_json, Status};
 
+/// Where a labour command writes and what it prints (`carus run`, `carus sweep`).
 #[derive(clap::Args)]
-pub struct RunArgs {
-    /// A built-in scenario name (`carus scenarios`) or a scenario file (TOML). Default: normal.
-    pub scenario: Option<String>,
-    /// Output folder; default runs/<scenario>-<n>, the first free n.
+pub struct OutputArgs {
+    /// Output folder; default runs/<scenario>-<n> (a sweep's runs/sweep-<scenario>-<n>), the first free n.
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Print one JSON object on standard output and nothing else there.
     #[arg(long)]
     pub json: bool,
-    /// Replace an existing run in the output folder.
+    /// Replace what the output folder holds.
     #[arg(long)]
     pub force: bool,
     /// No progress or notes on standard error.
     #[arg(long)]
     pub quiet: bool,
+}
+
+#[derive(clap::Args)]
+pub struct RunArgs {
+    /// A built-in scenario name (`carus scenarios`) or a scenario file (TOML). Default: normal.
+    pub scenario: Option<String>,
+    #[command(flatten)]
+    pub output: OutputArgs,
     /// Continue the run in DIR from its last checkpoint.
     #[arg(long, value_name = "DIR", conflicts_with_all = ["scenario", "out", "force"])]
     pub resume: Option<PathBuf>,
@@ -61,13 +68,13 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
         stop: Some(stop.clone()),
         stop_at_s: None,
     };
-    let show = !args.quiet && std::io::stderr().is_terminal();
+    let show = !args.output.quiet && std::io::stderr().is_terminal();
     let bar = show.then(super::progress_bar);
     let mut observer = Bar(bar);
 
     let (out_dir, record) = match &args.resume {
         Some(dir) => {
-            if !args.quiet {
+            if !args.output.quiet {
                 eprintln!("resuming the run in {}", dir.display());
             }
             (
@@ -77,8 +84,8 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
         }
         None => {
             let scenario = load(args.scenario.as_deref())?;
-            let out_dir = prepare_out_dir(args.out.as_deref(), &scenario.name, args.force)?;
-            if !args.quiet {
+            let out_dir = prepare_out_dir(args.output.out.as_deref(), &scenario.name, args.output.force)?;
+            if !args.output.quiet {
                 eprintln!(
                     "running scenario `{}` into {}",
                     scenario.name,
@@ -104,14 +111,14 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
     }
     if let Some(failure) = &record.summary.failure {
         eprintln!("error: the run ended early at t = {:.2} s: {failure} (everything up to then is written)", record.summary.simulated_s);
-    } else if !record.summary.completed && !args.quiet {
+    } else if !record.summary.completed && !args.output.quiet {
         eprintln!(
             "stopped at t = {:.2} s; continue with: carus run --resume {}",
             record.summary.simulated_s,
             out_dir.display()
         );
     }
-    if args.json {
+    if args.output.json {
         print_json(&json_summary(&record, &out_dir))?;
     } else {
         print_summary(&record, &out_dir);

@@ -6,7 +6,7 @@
 //! failed run loses none that finished. The parameter studies of
 //! docs/LABOUR.md are sweeps.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
@@ -15,7 +15,7 @@ use carus_labour::{RunOptions, RunRecord, Scenario, SilentObserver};
 use rayon::prelude::*;
 use serde_json::json;
 
-use super::run::{json_summary, load, movements, prepare_out_dir, serde_name, write_report};
+use super::run::{json_summary, load, movements, prepare_out_dir, serde_name, write_report, OutputArgs};
 use super::{print_json, Status};
 
 /// The station at which CARDINAL_MOVEMENTS.md's window for internal
@@ -31,21 +31,11 @@ pub struct SweepArgs {
     /// combination runs).
     #[arg(long = "set", value_name = "KEY=VALUES", required = true)]
     pub settings: Vec<String>,
-    /// Output folder; default runs/sweep-<scenario>-<n>, the first free n.
-    #[arg(long)]
-    pub out: Option<PathBuf>,
     /// Runs at a time; default one per core.
     #[arg(long)]
     pub jobs: Option<usize>,
-    /// Print one JSON object on standard output and nothing else there.
-    #[arg(long)]
-    pub json: bool,
-    /// Replace an existing sweep in the output folder.
-    #[arg(long)]
-    pub force: bool,
-    /// No notes on standard error.
-    #[arg(long)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub output: OutputArgs,
 }
 
 /// One key and the values it takes.
@@ -120,9 +110,9 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
         })
         .collect::<anyhow::Result<Vec<Scenario>>>()?;
     let out_dir = prepare_out_dir(
-        args.out.as_deref(),
+        args.output.out.as_deref(),
         &format!("sweep-{}", base.name),
-        args.force,
+        args.output.force,
     )?;
     let stop = Arc::new(AtomicBool::new(false));
     {
@@ -133,7 +123,7 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
         .jobs
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
         .max(1);
-    if !args.quiet {
+    if !args.output.quiet {
         eprintln!(
             "sweeping `{}` over {} runs, {jobs} at a time, into {}",
             base.name,
@@ -156,7 +146,7 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
                 }
                 let dir = out_dir.join(folder_name(i, &combinations[i]));
                 // A run that cannot be made is a row of the table, not the end of the sweep.
-                let finished = run_variant(&scenarios[i], &dir, &combinations[i], &stop, args.quiet)
+                let finished = run_variant(&scenarios[i], &dir, &combinations[i], &stop, args.output.quiet)
                     .unwrap_or_else(|error| unmade(&dir, &combinations[i], &keys, &error));
                 let failed = finished.summary["failure"].is_string();
                 let mut rows = table.lock().expect("no run panics while holding the table");
@@ -173,7 +163,7 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
         .flatten()
         .filter(|r| r.summary["completed"] == json!(true))
         .count();
-    if args.json {
+    if args.output.json {
         print_json(&sweep_json(&out_dir, &keys, &rows))?;
     } else {
         print_table(&keys, &rows);
@@ -479,11 +469,13 @@ mod tests {
         let args = SweepArgs {
             scenario: Some(file.display().to_string()),
             settings: vec!["expulsion.force_max_n=60,120".into()],
-            out: Some(out.clone()),
             jobs: Some(2),
-            json: true,
-            force: false,
-            quiet: true,
+            output: OutputArgs {
+                out: Some(out.clone()),
+                json: true,
+                force: false,
+                quiet: true,
+            },
         };
         assert!(matches!(run(&args).unwrap(), Status::Success));
 
@@ -512,7 +504,10 @@ mod tests {
         assert!(run(&args).is_err());
         let bad = SweepArgs {
             settings: vec!["expulsion.period=8".into()],
-            out: Some(dir.path().join("bad")),
+            output: OutputArgs {
+                out: Some(dir.path().join("bad")),
+                ..args.output
+            },
             ..args
         };
         let Err(e) = run(&bad) else {
