@@ -11,16 +11,13 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
 use anyhow::{bail, Context};
+use carus_analysis::movements::ROTATION_STATION_MAX_MM;
 use carus_labour::{RunOptions, RunRecord, Scenario, SilentObserver};
 use rayon::prelude::*;
 use serde_json::json;
 
 use super::run::{json_summary, load, movements, prepare_out_dir, serde_name, write_report, OutputArgs};
 use super::{print_json, Status};
-
-/// The station at which CARDINAL_MOVEMENTS.md's window for internal
-/// rotation closes: where the head should have turned by, mm.
-const INTERNAL_ROTATION_WINDOW_END_MM: f64 = 50.0;
 
 #[derive(clap::Args)]
 pub struct SweepArgs {
@@ -244,7 +241,8 @@ fn unmade(dir: &Path, combination: &[(String, String)], keys: &[&str], error: &a
 }
 
 /// Where the head was turned when its leading point first reached station
-/// +50 mm, or null if it never did: theta (CARDINAL_MOVEMENTS.md), the
+/// +50 mm, where CARDINAL_MOVEMENTS.md's window for internal rotation
+/// closes, or null if it never did: theta (CARDINAL_MOVEMENTS.md), the
 /// head's twist about the canal and the occiput's tilt, which says whether
 /// theta can be trusted there (docs/DETECTOR.md).
 fn at_window_end(record: &RunRecord) -> serde_json::Value {
@@ -254,7 +252,7 @@ fn at_window_end(record: &RunRecord) -> serde_json::Value {
     series
         .station_mm
         .iter()
-        .position(|&s| s >= INTERNAL_ROTATION_WINDOW_END_MM)
+        .position(|&s| s >= ROTATION_STATION_MAX_MM)
         .map_or(serde_json::Value::Null, |k| {
             json!({
                 "time_s": series.time_s[k],
