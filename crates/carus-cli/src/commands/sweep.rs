@@ -12,6 +12,7 @@ use std::sync::{Arc, Mutex};
 
 use anyhow::{bail, Context};
 use carus_analysis::movements::ROTATION_STATION_MAX_MM;
+use carus_analysis::Movements;
 use carus_labour::{RunOptions, RunRecord, Scenario, SilentObserver};
 use rayon::prelude::*;
 use serde_json::json;
@@ -263,22 +264,21 @@ fn at_window_end(record: &RunRecord) -> serde_json::Value {
         })
 }
 
+/// sweep.csv's columns: the run, each setting, the outcome, each movement
+/// under its canonical key and unit (in the detector's order, the order
+/// `table_row` writes them), then the rest.
 fn header(keys: &[&str]) -> Vec<String> {
     let mut h = vec!["run".to_string()];
     h.extend(keys.iter().map(|k| k.to_string()));
+    h.extend(["delivered", "arrest_stage", "arrest_against", "arrest_station_mm"].map(String::from));
+    h.extend(
+        Movements::none()
+            .by_key()
+            .iter()
+            .map(|(k, m)| format!("{k}_{}", serde_name(&m.unit))),
+    );
     h.extend(
         [
-            "delivered",
-            "arrest_stage",
-            "arrest_against",
-            "arrest_station_mm",
-            "engagement_mm",
-            "descent_mm",
-            "flexion_deg",
-            "internal_rotation_deg",
-            "extension_deg",
-            "external_rotation_deg",
-            "expulsion_mm",
             "posterior_rotation_deg",
             "theta_at_station_50mm_deg",
             "head_twist_at_station_50mm_deg",
