@@ -29,7 +29,7 @@ pub use law::{
     default_penalty_stiffness, ContactForce, ContactLaw, DESIGN_EXPULSION_FORCE_N, DESIGN_HEAD_RADIUS_M,
     DESIGN_PENETRATION_M,
 };
-pub use neck::{HeadAxes, Neck, NeckAngles, NeckGeometry, NeckLoad, NeckStiffness};
+pub use neck::{HeadAxes, Neck, NeckAngles, NeckGeometry, NeckLoad, NeckStiffness, StableStep};
 pub use overlap::overlapping_triangles;
 pub use pelvis::{
     pelvis_contacts, BodyContactState, BodyMotion, Contact, ContactReport, PelvisCollider, RegionTable,

@@ -3,7 +3,7 @@
 //! and extension and in compression and tension (REFERENCE_DATA.md, from
 //! Lapeer et al. 2019 / Sadulaev 2019).
 
-use glam::{DQuat, DVec3};
+use glam::{DMat3, DQuat, DVec3};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{check_non_negative, ContactError};
@@ -87,6 +87,44 @@ impl Default for NeckStiffness {
             end_range_stiffness_nm_per_deg: 1.0,
         }
     }
+}
+
+/// The semi-implicit Euler stability limit of a spring `k` with a dashpot
+/// `c` on a body of inverse mass `inverse_mass` (per kg, or per kg m^2 for
+/// a rotation): 2 / omega (sqrt(1 + zeta^2) - zeta), omega^2 = k / m,
+/// zeta = c / (2 m omega); the bound of [`crate::ContactLaw::critical_time_step`].
+fn damped_stable_step(k: f64, inverse_mass: f64, c: f64) -> f64 {
+    let omega = (k * inverse_mass).sqrt();
+    if omega == 0.0 {
+        return f64::INFINITY;
+    }
+    let zeta = 0.5 * c * inverse_mass / omega;
+    2.0 / omega * ((1.0 + zeta * zeta).sqrt() - zeta)
+}
+
+/// Largest eigenvalue of a symmetric 3 x 3 matrix, in closed form (the
+/// trigonometric solution of the characteristic cubic).
+fn largest_eigenvalue(a: DMat3) -> f64 {
+    let m = a.to_cols_array_2d();
+    let off = m[0][1] * m[0][1] + m[0][2] * m[0][2] + m[1][2] * m[1][2];
+    if off == 0.0 {
+        return m[0][0].max(m[1][1]).max(m[2][2]);
+    }
+    let q = (m[0][0] + m[1][1] + m[2][2]) / 3.0;
+    let p = (((m[0][0] - q).powi(2) + (m[1][1] - q).powi(2) + (m[2][2] - q).powi(2) + 2.0 * off) / 6.0).sqrt();
+    let b = (a - DMat3::from_diagonal(DVec3::splat(q))) * (1.0 / p);
+    let half_det = (0.5 * b.determinant()).clamp(-1.0, 1.0);
+    q + 2.0 * p * (half_det.acos() / 3.0).cos()
+}
+
+/// The longest stable rigid step of a joint ([`Neck::stable_step`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StableStep {
+    pub dt_s: f64,
+    /// The [`NeckStiffness`] field that sets it.
+    pub limited_by: &'static str,
+    /// That field's value.
+    pub stiffness: f64,
 }
 
 /// The head's anatomical axes in the head's body frame (CONVENTIONS.md):
@@ -306,6 +344,73 @@ impl Neck {
         JointAxes { lateral: flexion.cross(axial), flexion, axial }
     }
 
+    /// The longest rigid step at which the joint's springs are stable with
+    /// the bodies as they stand in `state`, and the stiffness that sets it.
+    /// Each spring is taken on its own, as [`crate::ContactLaw::critical_time_step`]
+    /// takes a contact (the semi-implicit Euler bound with its dashpot's
+    /// damping): compression and tension on the pair's inverse mass at the
+    /// pivot along the neck axis, shear on its largest value across it, and
+    /// the stiffest rotational spring with its end of range about the axis
+    /// the pair turns most easily about.
+    pub fn stable_step(&self, model: &RigidBodyModel, state: &RigidBodyState) -> StableStep {
+        let s = &self.stiffness;
+        let (h, t) = (self.head, self.trunk);
+        // Velocity of a body's point r from its centre per unit impulse
+        // there: 1/m + [r]x^T I^-1 [r]x.
+        let point_inverse_mass = |b: usize, in_body: DVec3| {
+            let q = state.orientation[b];
+            let r = q * in_body;
+            let cross = DMat3::from_cols_array(&[0.0, r.z, -r.y, -r.z, 0.0, r.x, r.y, -r.x, 0.0]);
+            DMat3::from_diagonal(DVec3::splat(1.0 / model.mass_kg[b]))
+                + cross.transpose() * model.inverse_inertia_world(b, q) * cross
+        };
+        let w = point_inverse_mass(h, self.pivot_in_head) + point_inverse_mass(t, self.pivot_in_trunk);
+        let axis = state.orientation[t] * self.neck_axis_in_trunk;
+        let across = DMat3::IDENTITY - DMat3::from_cols(axis * axis.x, axis * axis.y, axis * axis.z);
+        let along_inverse_mass = axis.dot(w * axis);
+        let across_inverse_mass = largest_eigenvalue(across * w * across);
+        let c = s.linear_damping_n_s_per_m;
+        let linear = [
+            ("compression_n_per_m", s.compression_n_per_m, along_inverse_mass),
+            ("tension_n_per_m", s.tension_n_per_m, along_inverse_mass),
+            ("shear_n_per_m", s.shear_n_per_m, across_inverse_mass),
+        ]
+        .map(|(name, k, inverse_mass)| StableStep {
+            dt_s: damped_stable_step(k, inverse_mass, c),
+            limited_by: name,
+            stiffness: k,
+        });
+
+        let (name, k) = [
+            ("flexion_nm_per_deg", s.flexion_nm_per_deg),
+            ("extension_nm_per_deg", s.extension_nm_per_deg),
+            ("lateral_bending_nm_per_deg", s.lateral_bending_nm_per_deg),
+            ("axial_rotation_nm_per_deg", s.axial_rotation_nm_per_deg),
+            ("end_range_stiffness_nm_per_deg", s.end_range_stiffness_nm_per_deg),
+        ]
+        .into_iter()
+        .fold(("", 0.0), |a, b| if b.1 > a.1 { b } else { a });
+        // Past a limit the end-of-range spring adds to the joint's own.
+        let k_past_limit = s.end_range_stiffness_nm_per_deg
+            + s.flexion_nm_per_deg.max(s.extension_nm_per_deg).max(s.lateral_bending_nm_per_deg).max(s.axial_rotation_nm_per_deg);
+        let turning_inverse_inertia = largest_eigenvalue(
+            model.inverse_inertia_world(h, state.orientation[h]) + model.inverse_inertia_world(t, state.orientation[t]),
+        );
+        let rotational = StableStep {
+            dt_s: damped_stable_step(
+                k_past_limit * 180.0 / std::f64::consts::PI,
+                turning_inverse_inertia,
+                s.rotational_damping_nm_s_per_rad,
+            ),
+            limited_by: name,
+            stiffness: k,
+        };
+        linear.into_iter().chain([rotational]).fold(
+            StableStep { dt_s: f64::INFINITY, limited_by: "", stiffness: 0.0 },
+            |a, b| if b.dt_s < a.dt_s { b } else { a },
+        )
+    }
+
     /// Spring and dashpot loads on both bodies at the current state.
     pub fn load(&self, model: &RigidBodyModel, state: &RigidBodyState) -> NeckLoad {
         let s = &self.stiffness;
@@ -368,7 +473,6 @@ impl Neck {
 mod tests {
     use super::*;
     use crate::rigid::{MassProperties, RigidPose};
-    use glam::DMat3;
 
     /// Head above trunk along z, pivot between them, head axes o = +y, v = +z.
     fn setup() -> (RigidBodyModel, RigidBodyState, Neck) {
@@ -558,6 +662,46 @@ mod tests {
                 / (2.0 * h.to_radians());
             let work_rate = load.elastic_moment_on_head.dot(u);
             proptest::prop_assert!((slope + work_rate).abs() < 1e-6, "slope {slope} moment {work_rate}");
+        }
+    }
+
+    /// The step bound is sharp: a neck stepped just below it oscillates,
+    /// just above it blows up.
+    #[test]
+    fn the_stable_step_is_where_the_neck_starts_to_blow_up() {
+        let (model, state, mut neck) = setup();
+        neck.stiffness.shear_n_per_m = 1e6;
+        let limit = neck.stable_step(&model, &state);
+        assert_eq!(limit.limited_by, "shear_n_per_m");
+        // Head at (0, 0, 0.05), trunk at (0, 0, -0.1), pivot at the origin,
+        // I = 1e-3: across the neck 1/0.6 + 0.05^2/1e-3 + 1/2.5 + 0.1^2/1e-3.
+        let inverse_mass: f64 = 1.0 / 0.6 + 2.5 + 0.4 + 10.0;
+        let omega = (1e6 * inverse_mass).sqrt();
+        let zeta = 0.5 * neck.stiffness.linear_damping_n_s_per_m * inverse_mass / omega;
+        assert!((limit.dt_s - 2.0 / omega * ((1.0 + zeta * zeta).sqrt() - zeta)).abs() < 1e-12);
+
+        let largest_gap = |dt: f64| {
+            let mut s = state.clone();
+            s.position[0].x += 1e-4;
+            let mut largest: f64 = 0.0;
+            for _ in 0..2000 {
+                let load = neck.load(&model, &s);
+                s.step(&model, &[load.on_head, load.on_trunk], dt).unwrap();
+                largest = largest.max(s.pose(0).point(neck.pivot_in_head).distance(s.pose(1).point(neck.pivot_in_trunk)));
+            }
+            largest
+        };
+        assert!(largest_gap(0.95 * limit.dt_s) < 2e-4);
+        assert!(largest_gap(1.05 * limit.dt_s) > 1e-2);
+    }
+
+    #[test]
+    fn the_largest_eigenvalue_of_a_turned_diagonal_is_its_largest_entry() {
+        let q = DQuat::from_axis_angle(DVec3::new(1.0, 2.0, -0.5).normalize(), 0.7);
+        for d in [DVec3::new(3.0, 1.0, 2.0), DVec3::new(1.0, 1.0, 5.0), DVec3::new(2.0, 2.0, 2.0), DVec3::new(0.0, 4.0, 0.0)] {
+            let r = DMat3::from_quat(q);
+            let a = r * DMat3::from_diagonal(d) * r.transpose();
+            assert!((largest_eigenvalue(a) - d.max_element()).abs() < 1e-12, "{d}");
         }
     }
 

@@ -57,4 +57,14 @@ pub enum LabourError {
     Checkpoint(String),
     #[error("{0}")]
     LeftCanal(String),
+    /// A joint stiffer than the rigid step can integrate: the run would
+    /// blow up within its first steps.
+    #[error("`{section}.{key}` = {stiffness}: its spring is unstable at the rigid step numerics.rigid_dt_s = {dt_s} s; the step must be below {limit_s:.3e} s for it\n  hint: set numerics.rigid_dt_s below {limit_s:.3e}, or lower {section}.{key}")]
+    UnstableJoint {
+        section: &'static str,
+        key: &'static str,
+        stiffness: f64,
+        dt_s: f64,
+        limit_s: f64,
+    },
 }

@@ -401,6 +401,20 @@ mod tests {
         s
     }
 
+    /// A neck too stiff for the rigid step is refused before the first
+    /// step, naming the key, rather than flinging the head out of the canal.
+    #[test]
+    fn a_joint_too_stiff_for_the_step_is_refused_with_its_key() {
+        let mut s = coarse(0.1);
+        s.numerics.rigid_dt_s = 5e-4;
+        s.neck.shear_n_per_m = 3.3618e6;
+        let scene = Scene::build(&s).unwrap();
+        let e = Simulation::new(&scene).err().expect("refused").to_string();
+        assert!(e.contains("`neck.shear_n_per_m` = 3361800") && e.contains("numerics.rigid_dt_s"), "{e}");
+        s.numerics.rigid_dt_s = 2.5e-4;
+        assert!(Simulation::new(&Scene::build(&s).unwrap()).is_ok());
+    }
+
     #[test]
     fn a_floor_element_turned_inside_out_is_named_where_it_lies() {
         let s = coarse(0.1);

@@ -244,8 +244,36 @@ pub enum ActsOn {
     Pivot,
 }
 
+/// Which way the expulsion pushes: `"fetal_spine"`, `"inlet_axis"`, or a
+/// fixed direction `[x, y, z]` in the pelvis frame (CONVENTIONS.md: x to
+/// the mother's right, y anterior, z cranial), scaled to unit length.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(
+    untagged,
+    expecting = "not a direction: use \"fetal_spine\", \"inlet_axis\" or [x, y, z] in the pelvis frame (x right, y anterior, z cranial)"
+)]
+pub enum ExpulsionDirection {
+    Named(NamedDirection),
+    Fixed([f64; 3]),
+}
+
+/// The directions `[expulsion] direction` knows by name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum NamedDirection {
+    /// Along the fetal spine, from the breech towards the head: the fundus
+    /// pressing on the breech (the seed's generator, issue 4's default).
+    FetalSpine,
+    /// Down the axis of the pelvic inlet (-z, normal to the inlet plane),
+    /// fixed in the pelvis whatever the fetus does: the intra-uterine
+    /// pressure's resultant through the opening it pushes the fetus into
+    /// (REFERENCE_DATA.md derives the expulsive force as that pressure over
+    /// the head's area). A textbook idealisation, not a measured direction.
+    InletAxis,
+}
+
 /// `[expulsion]`: the seed's generator, a sinusoid between a minimum and a
-/// maximum along the fetal spine.
+/// maximum, by default along the fetal spine.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ExpulsionSection {
@@ -257,6 +285,8 @@ pub struct ExpulsionSection {
     /// literature; compressed in time here (numerical choice).
     pub period_s: f64,
     pub acts_on: ActsOn,
+    /// The push's direction; `fetal_spine` by default.
+    pub direction: ExpulsionDirection,
 }
 
 impl Default for ExpulsionSection {
@@ -266,6 +296,7 @@ impl Default for ExpulsionSection {
             force_max_n: 120.0,
             period_s: 8.0,
             acts_on: ActsOn::Trunk,
+            direction: ExpulsionDirection::Named(NamedDirection::FetalSpine),
         }
     }
 }
@@ -903,6 +934,18 @@ impl Scenario {
                 "degrees, -90 to 90 (positive flexed)",
             ));
         }
+        if let ExpulsionDirection::Fixed(v) = self.expulsion.direction {
+            let length = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+            if !(length.is_finite() && length > 1e-9) {
+                return Err(ScenarioError::Value {
+                    path: path.to_path_buf(),
+                    key: "expulsion.direction",
+                    value: format!("{v:?}"),
+                    problem: "has no direction (zero or not finite)".into(),
+                    hint: "a vector in the pelvis frame, e.g. [0.0, 0.0, -1.0] down the inlet axis, or \"fetal_spine\"".into(),
+                });
+            }
+        }
         if self.spine.enabled && !self.trunk.enabled {
             return Err(err(
                 "spine.enabled",
@@ -1026,6 +1069,31 @@ mod tests {
         let e = normal.with_setting("expulsion.period_s.x", "1").unwrap_err().to_string();
         assert!(e.contains("`period_s` is a value"), "{e}");
         assert!(normal.with_setting("", "1").is_err());
+    }
+
+    #[test]
+    fn the_push_direction_is_named_or_a_vector_and_refused_with_a_hint() {
+        let normal = Scenario::builtin("normal").unwrap();
+        assert_eq!(
+            normal.expulsion.direction,
+            ExpulsionDirection::Named(NamedDirection::FetalSpine)
+        );
+        let inlet = normal.with_setting("expulsion.direction", "inlet_axis").unwrap();
+        assert_eq!(inlet.expulsion.direction, ExpulsionDirection::Named(NamedDirection::InletAxis));
+        let fixed = normal.with_setting("expulsion.direction", "[0.0, 0.2, -1.0]").unwrap();
+        assert_eq!(fixed.expulsion.direction, ExpulsionDirection::Fixed([0.0, 0.2, -1.0]));
+        for s in [&inlet, &fixed] {
+            assert_eq!(&parse(&s.to_toml().unwrap()).unwrap(), s, "round trip through show");
+        }
+
+        let e = normal.with_setting("expulsion.direction", "downwards").unwrap_err().to_string();
+        assert!(e.contains("expulsion.direction") && e.contains("inlet_axis"), "{e}");
+        let e = normal.with_setting("expulsion.direction", "[0, 0]").unwrap_err().to_string();
+        assert!(e.contains("expulsion.direction") && e.contains("[x, y, z]"), "{e}");
+        let e = parse("name = \"x\"\n[expulsion]\ndirection = [0.0, 0.0, 0.0]\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("test.toml") && e.contains("expulsion.direction") && e.contains("zero"), "{e}");
     }
 
     #[test]

@@ -535,7 +535,7 @@ mod tests {
     fn a_bad_floor_shape_names_its_key_and_a_fix() {
         let mut s = Scenario::builtin("normal").unwrap();
         s.floor.mesh.bowl_mm = f64::NAN;
-        let e = Scene::build(&s).err().expect("refused").to_string();
+        let e = Scene::build(&s).expect_err("refused").to_string();
         for part in ["[floor.mesh]", "bowl_mm", "dome"] {
             assert!(e.contains(part), "{e}");
         }

@@ -111,10 +111,23 @@ impl<'a> Simulation<'a> {
         };
         let neck = join(scene.neck_joint, scene.scenario.neck)?;
         let spine = join(scene.spine_joint, scene.scenario.spine.joint())?;
+        let dt = scene.scenario.numerics.rigid_dt_s;
+        for (section, joint) in [("neck", &neck), ("spine", &spine)] {
+            if let Some(limit) = joint.as_ref().map(|j| j.stable_step(&scene.bodies, &bodies)) {
+                if dt > limit.dt_s {
+                    return Err(LabourError::UnstableJoint {
+                        section,
+                        key: limit.limited_by,
+                        stiffness: limit.stiffness,
+                        dt_s: dt,
+                        limit_s: limit.dt_s,
+                    });
+                }
+            }
+        }
         let bone_contacts = (0..scene.bodies.len())
             .map(|b| BodyContactState::new(&scene.fetal_body(b).samples))
             .collect();
-        let dt = scene.scenario.numerics.rigid_dt_s;
         let solver = scene
             .floor
             .as_ref()

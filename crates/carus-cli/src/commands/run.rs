@@ -79,7 +79,8 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
             }
             (
                 dir.clone(),
-                carus_labour::resume(dir, &options, &mut observer),
+                carus_labour::resume(dir, &options, &mut observer)
+                    .with_context(|| format!("run in {}", dir.display())),
             )
         }
         None => {
@@ -92,7 +93,8 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
                     out_dir.display()
                 );
             }
-            let record = carus_labour::run(&scenario, &out_dir, &options, &mut observer);
+            let record = carus_labour::run(&scenario, &out_dir, &options, &mut observer)
+                .with_context(|| format!("scenario {}", args.scenario.as_deref().unwrap_or("normal")));
             (out_dir, record)
         }
     };

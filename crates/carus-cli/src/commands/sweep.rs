@@ -47,13 +47,27 @@ fn parse_setting(text: &str) -> anyhow::Result<Setting> {
     let Some((key, values)) = text.split_once('=') else {
         bail!("--set {text}: write KEY=V1,V2,..., e.g. --set expulsion.period_s=8,16,32");
     };
-    let values: Vec<String> = values.split(',').map(|v| v.trim().to_string()).collect();
+    let values: Vec<String> = split_outside_brackets(values).map(|v| v.trim().to_string()).collect();
     if key.trim().is_empty() || values.iter().any(String::is_empty) {
         bail!("--set {text}: a key and at least one value, none empty, e.g. --set contact.friction=0.1,0.35");
     }
     Ok(Setting {
         key: key.trim().to_string(),
         values,
+    })
+}
+
+/// The values of a list split at its commas, but not at those inside a
+/// TOML array (`fetal_spine,[0.0,0.2,-1.0]` is two values).
+fn split_outside_brackets(list: &str) -> impl Iterator<Item = &str> {
+    let mut depth = 0i32;
+    list.split(move |c| {
+        match c {
+            '[' => depth += 1,
+            ']' => depth -= 1,
+            _ => {}
+        }
+        c == ',' && depth == 0
     })
 }
 
@@ -413,6 +427,10 @@ mod tests {
                 key: "expulsion.period_s".into(),
                 values: vec!["8".into(), "16".into(), "32".into()]
             }
+        );
+        assert_eq!(
+            parse_setting("expulsion.direction=fetal_spine,[0.0, 0.2,-1.0]").unwrap().values,
+            vec!["fetal_spine".to_string(), "[0.0, 0.2,-1.0]".to_string()]
         );
         for bad in ["expulsion.period_s", "=8", "contact.friction=0.1,", "x="] {
             assert!(parse_setting(bad).is_err(), "{bad}");
