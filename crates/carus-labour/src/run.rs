@@ -413,6 +413,15 @@ mod tests {
         assert!(e.contains("`neck.shear_n_per_m` = 3361800") && e.contains("numerics.rigid_dt_s"), "{e}");
         s.numerics.rigid_dt_s = 2.5e-4;
         assert!(Simulation::new(&Scene::build(&s).unwrap()).is_ok());
+
+        // The spine's joint is named by the spine's own keys.
+        s.numerics.rigid_dt_s = 5e-4;
+        s.neck.shear_n_per_m = carus_contact::NeckStiffness::default().shear_n_per_m;
+        s.spine.enabled = true;
+        s.spine.joint_stiffness_n_per_m = 1e8;
+        let scene = Scene::build(&s).unwrap();
+        let e = Simulation::new(&scene).err().expect("refused").to_string();
+        assert!(e.contains("`spine.joint_stiffness_n_per_m` = 100000000"), "{e}");
     }
 
     #[test]

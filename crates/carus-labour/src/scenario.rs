@@ -209,6 +209,16 @@ impl SpineSection {
             end_range_stiffness_nm_per_deg: self.end_range_stiffness_nm_per_deg,
         }
     }
+
+    /// The `[spine]` key that sets a field of [`SpineSection::joint`].
+    pub fn key_of(joint_field: &'static str) -> &'static str {
+        match joint_field {
+            "compression_n_per_m" | "tension_n_per_m" | "shear_n_per_m" => "joint_stiffness_n_per_m",
+            "flexion_nm_per_deg" | "extension_nm_per_deg" | "lateral_bending_nm_per_deg" => "bending_nm_per_deg",
+            "flexion_limit_deg" | "extension_limit_deg" | "lateral_bending_limit_deg" => "bending_limit_deg",
+            other => other,
+        }
+    }
 }
 
 /// `[start]`: where the fetus starts (an input, CARDINAL_MOVEMENTS.md).

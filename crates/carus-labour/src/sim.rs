@@ -117,7 +117,10 @@ impl<'a> Simulation<'a> {
                 if dt > limit.dt_s {
                     return Err(LabourError::UnstableJoint {
                         section,
-                        key: limit.limited_by,
+                        key: match section {
+                            "spine" => crate::scenario::SpineSection::key_of(limit.limited_by),
+                            _ => limit.limited_by,
+                        },
                         stiffness: limit.stiffness,
                         dt_s: dt,
                         limit_s: limit.dt_s,
