@@ -125,7 +125,7 @@ impl ContactLaw {
     pub fn critical_time_step(&self, effective_mass_kg: f64, normal_stiffness_n_per_m: f64) -> f64 {
         let omega = (normal_stiffness_n_per_m / effective_mass_kg).sqrt();
         let zeta = 0.5 * omega * self.damping_time_s;
-        2.0 / omega * ((1.0 + zeta * zeta).sqrt() - zeta)
+        semi_implicit_step_limit(omega, zeta)
     }
 
     /// Tangent stiffness of the contact of a sphere of radius `radius_m`
@@ -135,6 +135,13 @@ impl ContactLaw {
     pub fn design_normal_stiffness(&self, radius_m: f64, force_n: f64) -> f64 {
         2.0 * (std::f64::consts::PI * radius_m * self.penalty_stiffness_pa_per_m * force_n).sqrt()
     }
+}
+
+/// The longest stable semi-implicit Euler step of an oscillator of
+/// natural frequency `omega` (rad/s) and damping ratio `zeta`:
+/// `2 / omega (sqrt(1 + zeta^2) - zeta)`.
+pub(crate) fn semi_implicit_step_limit(omega: f64, zeta: f64) -> f64 {
+    2.0 / omega * ((1.0 + zeta * zeta).sqrt() - zeta)
 }
 
 #[cfg(test)]

@@ -7,6 +7,7 @@ use glam::{DMat3, DQuat, DVec3};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{check_non_negative, ContactError};
+use crate::law::semi_implicit_step_limit;
 use crate::rigid::{RigidBodyModel, RigidBodyState, Wrench};
 
 /// Stiffness and damping of the neck. Angles in degrees as the source gives
@@ -91,15 +92,13 @@ impl Default for NeckStiffness {
 
 /// The semi-implicit Euler stability limit of a spring `k` with a dashpot
 /// `c` on a body of inverse mass `inverse_mass` (per kg, or per kg m^2 for
-/// a rotation): 2 / omega (sqrt(1 + zeta^2) - zeta), omega^2 = k / m,
-/// zeta = c / (2 m omega); the bound of [`crate::ContactLaw::critical_time_step`].
+/// a rotation): omega^2 = k / m, zeta = c / (2 m omega).
 fn damped_stable_step(k: f64, inverse_mass: f64, c: f64) -> f64 {
     let omega = (k * inverse_mass).sqrt();
     if omega == 0.0 {
         return f64::INFINITY;
     }
-    let zeta = 0.5 * c * inverse_mass / omega;
-    2.0 / omega * ((1.0 + zeta * zeta).sqrt() - zeta)
+    semi_implicit_step_limit(omega, 0.5 * c * inverse_mass / omega)
 }
 
 /// Largest eigenvalue of a symmetric 3 x 3 matrix, in closed form (the
@@ -386,24 +385,22 @@ impl Neck {
             ("extension_nm_per_deg", s.extension_nm_per_deg),
             ("lateral_bending_nm_per_deg", s.lateral_bending_nm_per_deg),
             ("axial_rotation_nm_per_deg", s.axial_rotation_nm_per_deg),
-            ("end_range_stiffness_nm_per_deg", s.end_range_stiffness_nm_per_deg),
         ]
         .into_iter()
         .fold(("", 0.0), |a, b| if b.1 > a.1 { b } else { a });
-        // Past a limit the end-of-range spring adds to the joint's own.
-        let k_past_limit = s.end_range_stiffness_nm_per_deg
-            + s.flexion_nm_per_deg.max(s.extension_nm_per_deg).max(s.lateral_bending_nm_per_deg).max(s.axial_rotation_nm_per_deg);
+        let end_range = s.end_range_stiffness_nm_per_deg;
         let turning_inverse_inertia = largest_eigenvalue(
             model.inverse_inertia_world(h, state.orientation[h]) + model.inverse_inertia_world(t, state.orientation[t]),
         );
         let rotational = StableStep {
+            // Past a limit the end-of-range spring adds to the joint's own.
             dt_s: damped_stable_step(
-                k_past_limit * 180.0 / std::f64::consts::PI,
+                (k + end_range) * 180.0 / std::f64::consts::PI,
                 turning_inverse_inertia,
                 s.rotational_damping_nm_s_per_rad,
             ),
-            limited_by: name,
-            stiffness: k,
+            limited_by: if end_range > k { "end_range_stiffness_nm_per_deg" } else { name },
+            stiffness: k.max(end_range),
         };
         linear.into_iter().chain([rotational]).fold(
             StableStep { dt_s: f64::INFINITY, limited_by: "", stiffness: 0.0 },

@@ -112,15 +112,17 @@ impl<'a> Simulation<'a> {
         let neck = join(scene.neck_joint, scene.scenario.neck)?;
         let spine = join(scene.spine_joint, scene.scenario.spine.joint())?;
         let dt = scene.scenario.numerics.rigid_dt_s;
-        for (section, joint) in [("neck", &neck), ("spine", &spine)] {
+        // Each joint's error names the key its own section spells.
+        let neck_key: fn(&'static str) -> &'static str = |field| field;
+        for (section, joint, key_of) in [
+            ("neck", &neck, neck_key),
+            ("spine", &spine, crate::scenario::SpineSection::key_of),
+        ] {
             if let Some(limit) = joint.as_ref().map(|j| j.stable_step(&scene.bodies, &bodies)) {
                 if dt > limit.dt_s {
                     return Err(LabourError::UnstableJoint {
                         section,
-                        key: match section {
-                            "spine" => crate::scenario::SpineSection::key_of(limit.limited_by),
-                            _ => limit.limited_by,
-                        },
+                        key: key_of(limit.limited_by),
                         stiffness: limit.stiffness,
                         dt_s: dt,
                         limit_s: limit.dt_s,
