@@ -6,14 +6,14 @@
 use carus_anatomy::fetus::{FetalHead, HeadDiameters};
 use carus_anatomy::pelvis::PelvisDiameters;
 use carus_anatomy::Pelvis;
-use carus_contact::{pelvis_contacts, BodyContactState, BodyMotion, ContactLaw, PelvisCollider, RigidPose, SurfaceSamples};
+use carus_contact::{obstacle_contacts, BodyContactState, BodyMotion, ContactLaw, RigidObstacle, RigidPose, SurfaceSamples};
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::{DMat3, DQuat, DVec3};
 
 fn sweep(c: &mut Criterion) {
     let pelvis = Pelvis::generate(&PelvisDiameters::default()).unwrap();
     let head = FetalHead::new(&HeadDiameters::default()).unwrap();
-    let collider = PelvisCollider::new(&pelvis.surface.vertices, &pelvis.surface.triangles, None).unwrap();
+    let collider = RigidObstacle::new("pelvis", &pelvis.surface.vertices, &pelvis.surface.triangles, None).unwrap();
     let samples = SurfaceSamples::from_vertices("fetal head", &head.surface.vertices, &head.surface.triangles).unwrap();
     let law = ContactLaw::default();
     let mut memory = BodyContactState::new(&samples);
@@ -38,7 +38,7 @@ fn sweep(c: &mut Criterion) {
     let start = std::time::Instant::now();
     while sigma <= outlet {
         let motion = BodyMotion { pose: pose_at(sigma), linear_velocity: DVec3::ZERO, angular_velocity: DVec3::ZERO };
-        let report = pelvis_contacts(&collider, &law, &samples, &motion, motion.pose.position_m, &mut memory).unwrap();
+        let report = obstacle_contacts(&collider, &law, &samples, &motion, motion.pose.position_m, &mut memory).unwrap();
         passes += 1;
         if first_contact.is_none() && !report.contacts.is_empty() {
             first_contact = Some(sigma);
@@ -66,11 +66,11 @@ fn sweep(c: &mut Criterion) {
     );
 
     let mid = pose_at(pelvis.plane_sigmas()[2]);
-    c.bench_function("pelvis_contacts cold: default head at the mid-pelvis", |b| {
+    c.bench_function("obstacle_contacts cold: default head at the mid-pelvis", |b| {
         b.iter(|| {
             let mut fresh = BodyContactState::new(&samples);
             let motion = BodyMotion { pose: mid, linear_velocity: DVec3::ZERO, angular_velocity: DVec3::ZERO };
-            pelvis_contacts(&collider, &law, &samples, &motion, mid.position_m, &mut fresh).unwrap()
+            obstacle_contacts(&collider, &law, &samples, &motion, mid.position_m, &mut fresh).unwrap()
         })
     });
 }

@@ -3,7 +3,7 @@
 //! query for a 10k-node pelvic floor.
 
 use carus_contact::{
-    pelvis_contacts, BodyMotion, ContactLaw, BodyContactState, PelvisCollider, RigidPose, SurfaceSamples, TissueContact,
+    obstacle_contacts, BodyMotion, ContactLaw, BodyContactState, RigidObstacle, RigidPose, SurfaceSamples, TissueContact,
     TriangleCollider,
 };
 use criterion::{criterion_group, criterion_main, Criterion};
@@ -22,7 +22,7 @@ fn contact_pass(c: &mut Criterion) {
     for tri in &mut t {
         tri.swap(1, 2);
     }
-    let pelvis = PelvisCollider::new(&v, &t, None).unwrap();
+    let pelvis = RigidObstacle::new("pelvis", &v, &t, None).unwrap();
     // The head: radius 4.75 cm, pressed 0.5 mm into the wall on one side.
     let (hv, ht) = ball(0.0475, 80, 40);
     let samples = SurfaceSamples::from_vertices("head", &hv, &ht).unwrap();
@@ -33,7 +33,7 @@ fn contact_pass(c: &mut Criterion) {
     };
     let law = ContactLaw::default();
     let mut anchors = BodyContactState::new(&samples);
-    let report = pelvis_contacts(&pelvis, &law, &samples, &motion, DVec3::ZERO, &mut anchors).unwrap();
+    let report = obstacle_contacts(&pelvis, &law, &samples, &motion, DVec3::ZERO, &mut anchors).unwrap();
     eprintln!(
         "pelvis {} triangles, head {} samples, {} contacts, force {:.1} N",
         pelvis.surface().triangle_count(),
@@ -42,16 +42,16 @@ fn contact_pass(c: &mut Criterion) {
         report.force.length()
     );
     // Cold: a fresh state queries every sample (the first step of a run).
-    c.bench_function("pelvis_contacts cold: head 3k samples vs 50k triangles", |b| {
+    c.bench_function("obstacle_contacts cold: head 3k samples vs 50k triangles", |b| {
         b.iter(|| {
             let mut fresh = BodyContactState::new(&samples);
-            pelvis_contacts(&pelvis, &law, &samples, &motion, DVec3::ZERO, &mut fresh).unwrap()
+            obstacle_contacts(&pelvis, &law, &samples, &motion, DVec3::ZERO, &mut fresh).unwrap()
         })
     });
     // Moving: the head advances 5 um per step (0.05 m/s at a 1e-4 s step),
     // so the clearance skin skips the samples clear of the wall.
     let mut step = 0u64;
-    c.bench_function("pelvis_contacts moving 5 um/step: head 3k samples vs 50k triangles", |b| {
+    c.bench_function("obstacle_contacts moving 5 um/step: head 3k samples vs 50k triangles", |b| {
         b.iter(|| {
             step += 1;
             let phase = step as f64 * 5e-6 / 1e-3;
@@ -59,7 +59,7 @@ fn contact_pass(c: &mut Criterion) {
                 pose: RigidPose::new(motion.pose.position_m + DVec3::new(0.0, 1e-3 * phase.sin(), 1e-3 * phase.cos()), DQuat::IDENTITY),
                 ..motion
             };
-            pelvis_contacts(&pelvis, &law, &samples, &moved, DVec3::ZERO, &mut anchors).unwrap()
+            obstacle_contacts(&pelvis, &law, &samples, &moved, DVec3::ZERO, &mut anchors).unwrap()
         })
     });
 

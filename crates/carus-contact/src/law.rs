@@ -135,6 +135,13 @@ impl ContactLaw {
     pub fn design_normal_stiffness(&self, radius_m: f64, force_n: f64) -> f64 {
         2.0 * (std::f64::consts::PI * radius_m * self.penalty_stiffness_pa_per_m * force_n).sqrt()
     }
+
+    /// How deep a sphere of radius `radius_m` sinks into a flat wall under
+    /// this law carrying `force_n`: F = k pi R d^2, so d = sqrt(F / (pi R k)).
+    /// The default bone law gives [`DESIGN_PENETRATION_M`] at the design load.
+    pub fn design_penetration(&self, radius_m: f64, force_n: f64) -> f64 {
+        (force_n / (std::f64::consts::PI * radius_m * self.penalty_stiffness_pa_per_m)).sqrt()
+    }
 }
 
 /// The longest stable semi-implicit Euler step of an oscillator of
@@ -147,6 +154,13 @@ pub(crate) fn semi_implicit_step_limit(omega: f64, zeta: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The design penetration inverts the default stiffness's sizing.
+    #[test]
+    fn the_default_law_sinks_its_design_penetration_at_the_design_load() {
+        let d = ContactLaw::default().design_penetration(DESIGN_HEAD_RADIUS_M, DESIGN_EXPULSION_FORCE_N);
+        assert!((d - DESIGN_PENETRATION_M).abs() < 1e-12, "{d}");
+    }
 
     #[test]
     fn default_penetrates_one_millimetre_at_the_design_force() {

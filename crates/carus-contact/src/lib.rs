@@ -1,5 +1,5 @@
 //! Contact mechanics of Carus: collision detection between the rigid fetus
-//! and the rigid bony pelvis, the penalty contact law with Coulomb friction
+//! and the rigid bony pelvis, and between the fetus's own head and trunk, the penalty contact law with Coulomb friction
 //! and per-contact moments, the rigid-body dynamics that contact drives, the
 //! six-degree-of-freedom fetal neck, and the rigid-soft coupling helpers the
 //! labour loop uses with the TLED pelvic floor. Method, parameters and
@@ -15,8 +15,9 @@ mod coupling;
 mod error;
 mod law;
 mod neck;
+mod obstacle;
 mod overlap;
-mod pelvis;
+mod pair;
 mod rigid;
 mod sampling;
 mod tri_tri;
@@ -31,8 +32,9 @@ pub use law::{
 };
 pub use neck::{HeadAxes, Neck, NeckAngles, NeckGeometry, NeckLoad, NeckStiffness, StableStep};
 pub use overlap::overlapping_triangles;
-pub use pelvis::{
-    pelvis_contacts, BodyContactState, BodyMotion, Contact, ContactReport, PelvisCollider, RegionTable,
+pub use pair::{pair_contacts, PairReport};
+pub use obstacle::{
+    obstacle_contacts, BodyContactState, BodyMotion, Contact, ContactReport, RigidObstacle, RegionTable,
     DEFAULT_SEARCH_DEPTH_M,
 };
 pub use rigid::{MassProperties, RigidBodyModel, RigidBodyState, RigidPose, Wrench};

@@ -70,6 +70,9 @@ pub struct AxialMoments {
     /// is the neck's bending and twisting springs and their damping.
     #[serde(default)]
     pub neck_push_nm: f64,
+    /// The trunk's contact on the head (chin on chest, shoulders on the skull).
+    #[serde(default)]
+    pub trunk_nm: f64,
 }
 
 /// The loads at one recorded instant.
@@ -79,6 +82,9 @@ pub struct LoadSample {
     /// One entry per body and site that carried load, head first.
     pub sites: Vec<SiteLoad>,
     pub head_axial: AxialMoments,
+    /// The trunk's contact force on the head, N (zero without that contact).
+    #[serde(default)]
+    pub head_trunk_force_n: DVec3,
     /// The neck's joint angles from its rest pose (none without a trunk).
     #[serde(default)]
     pub neck: Option<NeckAngles>,

@@ -213,6 +213,10 @@ pub fn write_history_csv(
         "spine_flexion_deg",
         "spine_lateral_bending_deg",
         "spine_axial_rotation_deg",
+        "head_trunk_fx_n",
+        "head_trunk_fy_n",
+        "head_trunk_fz_n",
+        "head_axial_moment_trunk_nm",
     ];
     header.extend_from_slice(&poses);
     let mut csv = CsvWriter::create(path, &header).map_err(|e| output_error(path, e))?;
@@ -246,6 +250,13 @@ pub fn write_history_csv(
         match loads.get(k).and_then(|l| l.spine) {
             Some(n) => values.extend([n.flexion_deg, n.lateral_bending_deg, n.axial_rotation_deg]),
             None => values.extend([f64::NAN; 3]),
+        }
+        match loads.get(k) {
+            Some(l) => {
+                values.extend(l.head_trunk_force_n.to_array());
+                values.push(l.head_axial.trunk_nm);
+            }
+            None => values.extend([f64::NAN; 4]),
         }
         csv.row(&values).map_err(|e| output_error(path, e))?;
     }

@@ -335,6 +335,13 @@ pub struct ContactSection {
     pub trunk_penalty_stiffness_pa_per_m: f64,
     /// Spacing of the contact samples on the fetal surface, mm (numerical).
     pub sample_spacing_mm: f64,
+    /// Contact of the head with the trunk below the neck: the chin meets
+    /// the chest and the shoulders meet the skull (the trunk's law, its
+    /// soft cover on the head as on bone; the same friction). Without it
+    /// the rigid bodies pass through each other wherever the neck spring
+    /// lets them (up to 45 mm in the runs of docs/LABOUR.md, fifteenth
+    /// session); off reproduces the runs before it.
+    pub head_trunk: bool,
 }
 
 /// Young's modulus of the trunk's soft-tissue cover, Pa: 3 x 20 kPa, a
@@ -355,6 +362,7 @@ impl Default for ContactSection {
             trunk_penalty_stiffness_pa_per_m: TRUNK_SOFT_TISSUE_MODULUS_PA
                 / TRUNK_SOFT_TISSUE_DEPTH_M,
             sample_spacing_mm: 4.0,
+            head_trunk: true,
         }
     }
 }

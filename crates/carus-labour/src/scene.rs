@@ -12,8 +12,8 @@ use carus_anatomy::fetus::{FetalHead, Trunk, TrunkDiameters};
 use carus_anatomy::floor::{pelvic_floor, ATTACHED};
 use carus_anatomy::{Pelvis, TriSurface};
 use carus_contact::{
-    ContactLaw, HeadAxes, MassProperties, NeckGeometry, PelvisCollider, RegionTable, RigidBodyModel, RigidPose,
-    SurfaceSamples, TriangleCollider,
+    ContactLaw, HeadAxes, MassProperties, NeckGeometry, RegionTable, RigidBodyModel, RigidObstacle, RigidPose,
+    SurfaceSamples, TriangleCollider, DESIGN_PENETRATION_M,
 };
 use carus_fem::{BoundaryConditions, Material, MaterialRegion, Mesh, ModelOptions, TledModel};
 use glam::{DMat3, DVec3};
@@ -41,6 +41,19 @@ pub struct FetalBody {
     pub frame_origin: DVec3,
 }
 
+/// The head as an obstacle to the trunk below its neck: the chin meets the
+/// chest, and the shoulders meet the skull instead of sliding into it.
+/// The neck itself (the trunk's surface above the base of the neck, which
+/// overlaps the skull base at rest) is the neck joint's, not this contact's.
+#[derive(Debug)]
+pub struct HeadTrunkContact {
+    /// The head's surface in its centre-of-mass frame.
+    pub head: RigidObstacle,
+    /// The trunk's (or thorax's) samples below the base of the neck, in
+    /// its centre-of-mass frame.
+    pub trunk_samples: SurfaceSamples,
+}
+
 /// The pelvic floor's constant data.
 #[derive(Debug)]
 pub struct FloorScene {
@@ -65,7 +78,7 @@ pub struct Scene {
     /// The sacrospinous ligaments, part of the canal's rigid wall.
     pub ligaments: TriSurface,
     pub canal: BirthCanal,
-    pub pelvis_collider: PelvisCollider,
+    pub pelvis_collider: RigidObstacle,
     /// The [`ContactSite`] of each pelvic region label.
     pub sites: Vec<ContactSite>,
     pub head: FetalBody,
@@ -92,8 +105,11 @@ pub struct Scene {
     pub spine_in_trunk: DVec3,
     pub bodies: RigidBodyModel,
     pub law: ContactLaw,
-    /// The trunk's law on bone (softer: the shoulders are soft tissue).
+    /// The trunk's law on bone (softer: the shoulders are soft tissue),
+    /// and on the head.
     pub trunk_law: ContactLaw,
+    /// The head against the trunk (`[contact] head_trunk`), when there is a trunk.
+    pub head_trunk: Option<HeadTrunkContact>,
     pub floor: Option<FloorScene>,
     /// Starting poses (head, then trunk), pelvis frame.
     pub start: Vec<RigidPose>,
@@ -108,7 +124,7 @@ impl Scene {
         let CanalWall { surface: wall, labels, sites } = canal_wall(&pelvis, &ligaments);
         let names = sites.iter().map(|s| s.name().to_string()).collect();
         let pelvis_collider =
-            PelvisCollider::new(&wall.vertices, &wall.triangles, Some(RegionTable { names, labels }))?;
+            RigidObstacle::new("pelvis", &wall.vertices, &wall.triangles, Some(RegionTable { names, labels }))?;
 
         let s = scenario;
         let head_anatomy = FetalHead::with_subdivisions(&s.head, s.numerics.head_subdivisions)
@@ -136,7 +152,7 @@ impl Scene {
         let mut lower_trunk = None;
         // The thoracolumbar joint in the thorax's frame.
         let mut thoracolumbar = None;
-        let (trunk, trunk_geometry, spine_in_trunk) = if s.trunk.enabled {
+        let (trunk, trunk_geometry, spine_in_trunk, neck_base_z) = if s.trunk.enabled {
             let d = TrunkDiameters {
                 bisacromial_mm: s.trunk.bisacromial_mm,
                 bitrochanteric_mm: s.trunk.bitrochanteric_mm,
@@ -162,9 +178,9 @@ impl Scene {
             if let Some(lower) = &lower_trunk {
                 bodies.add(lower.mass)?;
             }
-            (Some(body), Some(g), anatomy.spine_axis)
+            (Some(body), Some(g), anatomy.spine_axis, anatomy.neck_base_z_m())
         } else {
-            (None, None, DVec3::NEG_Z)
+            (None, None, DVec3::NEG_Z, 0.0)
         };
 
         let law = ContactLaw {
@@ -179,6 +195,10 @@ impl Scene {
             ..law
         };
         trunk_law.validate()?;
+        let head_trunk = match &trunk {
+            Some(body) if s.contact.head_trunk => Some(HeadTrunkContact::new(&head, body, neck_base_z)?),
+            _ => None,
+        };
 
         let floor = if s.floor.enabled {
             Some(build_floor(scenario, &pelvis)?)
@@ -205,10 +225,12 @@ impl Scene {
             bodies,
             law,
             trunk_law,
+            head_trunk,
             floor,
             start: Vec::new(),
         };
         scene.start = scene.start_poses();
+        scene.check_head_clear_of_trunk()?;
         scene.neck_joint = scene.trunk.is_some().then(|| NeckGeometry {
             head: HEAD,
             trunk: TRUNK,
@@ -281,6 +303,43 @@ impl Scene {
             .collect()
     }
 
+    /// Refuses a start where the head already presses into the trunk below
+    /// its neck deeper than the bone law's design penetration (a strongly
+    /// flexed attitude puts the chin into the chest, a strongly extended one
+    /// the occiput into the back): the contact would throw the two apart at
+    /// the first step. Touching (the extended face presentation's occiput on
+    /// the back) is allowed.
+    fn check_head_clear_of_trunk(&self) -> Result<(), LabourError> {
+        let Some(pair) = &self.head_trunk else {
+            return Ok(());
+        };
+        let (head, trunk) = (self.start[HEAD], self.start[TRUNK]);
+        let deepest = pair
+            .trunk_samples
+            .points
+            .iter()
+            .filter_map(|p| {
+                let local = head.orientation.inverse() * (trunk.point(*p) - head.position_m);
+                pair.head.surface().closest_point(local, 0.1)
+            })
+            .map(|hit| -hit.signed_distance)
+            .fold(0.0, f64::max);
+        if deepest > DESIGN_PENETRATION_M {
+            return Err(crate::scenario::ScenarioError::Setting {
+                setting: format!("start.attitude_deg = {}", self.scenario.start.attitude_deg),
+                problem: format!(
+                    "the head starts {:.1} mm inside the trunk below the neck (the chin in \
+                     the chest when flexed, the occiput in the back when extended), more \
+                     than the 1 mm the contact allows at the start",
+                    deepest * 1e3
+                ),
+                hint: "bring start.attitude_deg nearer 0, or set contact.head_trunk = false".into(),
+            }
+            .into());
+        }
+        Ok(())
+    }
+
     /// How far `head_centre` lies from the pelvic axis (m), when it is
     /// farther than half the inlet's transverse diameter and its nearest
     /// axis point is above the outlet; `None` while it is in the canal. Inside the bony
@@ -333,6 +392,24 @@ impl Scene {
     /// The pivot of the neck in the pelvis frame at the start.
     pub fn start_pivot(&self) -> DVec3 {
         self.start[HEAD].point(self.pivot_in_head)
+    }
+}
+
+impl HeadTrunkContact {
+    /// The head's surface as the obstacle, and the samples of `trunk`
+    /// lower than `neck_base_z` (m, in the anatomy's trunk frame).
+    fn new(head: &FetalBody, trunk: &FetalBody, neck_base_z: f64) -> Result<Self, LabourError> {
+        let obstacle = RigidObstacle::new("head", &head.surface.vertices, &head.surface.triangles, None)?;
+        let below: Vec<usize> = (0..trunk.samples.len())
+            .filter(|&i| (trunk.samples.points[i] - trunk.frame_origin).z < neck_base_z)
+            .collect();
+        Ok(HeadTrunkContact {
+            head: obstacle,
+            trunk_samples: SurfaceSamples {
+                points: below.iter().map(|&i| trunk.samples.points[i]).collect(),
+                areas: below.iter().map(|&i| trunk.samples.areas[i]).collect(),
+            },
+        })
     }
 }
 
@@ -529,6 +606,56 @@ fn regions(pelvis: &Pelvis) -> (Vec<u16>, Vec<ContactSite>) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The head at the normal start touches the trunk nowhere below the
+    /// neck; turned about the pivot towards flexion, its chin enters the
+    /// chest, and the contact turns it back (a moment against flexion about
+    /// the pivot) and pushes the trunk away. Extended to the face
+    /// presentation's attitude, the occiput at most touches the back.
+    #[test]
+    fn the_chin_meets_the_chest_and_the_contact_resists_flexion() {
+        let mut s = Scenario::builtin("normal").unwrap();
+        s.numerics.head_subdivisions = 3;
+        let scene = Scene::build(&s).unwrap();
+        let pair = scene.head_trunk.as_ref().expect("on by default");
+        let frame = scene.canal.axis().frame(0.0);
+        let theta = s.start.position.theta_deg();
+        let orient = |phi: f64| carus_analysis::synthetic::head_orientation(frame.tangent, frame.anterior, frame.transverse, theta, phi);
+        let pivot = scene.start_pivot();
+        let still = |pose: RigidPose| carus_contact::BodyMotion { pose, linear_velocity: DVec3::ZERO, angular_velocity: DVec3::ZERO };
+        let trunk = still(scene.start[TRUNK]);
+        let contact_at = |phi: f64| {
+            let q = orient(phi);
+            let head = still(RigidPose::new(pivot - q * scene.pivot_in_head, q));
+            let mut memory = carus_contact::BodyContactState::new(&pair.trunk_samples);
+            let r = carus_contact::pair_contacts(&pair.head, &scene.trunk_law, &pair.trunk_samples, &trunk, &head, &mut memory).unwrap();
+            (r, head.pose.position_m)
+        };
+        assert_eq!(contact_at(s.start.attitude_deg).0.active, 0);
+        // The axis that turns the head towards flexion (phi up).
+        let (axis, _) = (orient(41.0) * orient(40.0).inverse()).to_axis_angle();
+        let (r, centre) = contact_at(30.0);
+        assert!(r.active > 10 && r.too_deep == 0, "{r:?}");
+        let about_pivot = r.on_obstacle.torque + (centre - pivot).cross(r.on_obstacle.force);
+        assert!(about_pivot.dot(axis) < -0.5, "{about_pivot} about {axis}");
+        assert!(r.on_sampled.force.dot(r.on_obstacle.force) < 0.0);
+        assert!(contact_at(-80.0).0.deepest_m < DESIGN_PENETRATION_M);
+    }
+
+    /// A start with the chin already in the chest is refused, naming the
+    /// key and both ways out; off, the same start builds.
+    #[test]
+    fn a_start_with_the_chin_in_the_chest_is_refused() {
+        let mut s = Scenario::builtin("normal").unwrap();
+        s.numerics.head_subdivisions = 3;
+        s.start.attitude_deg = 60.0;
+        let e = Scene::build(&s).expect_err("refused").to_string();
+        for part in ["start.attitude_deg = 60", "inside the trunk", "contact.head_trunk = false"] {
+            assert!(e.contains(part), "{e}");
+        }
+        s.contact.head_trunk = false;
+        assert!(Scene::build(&s).unwrap().head_trunk.is_none());
+    }
 
     /// A floor that cannot be built names its table, its key and a fix.
     #[test]

@@ -12,7 +12,7 @@
 
 use carus_analysis::{ContactSite, PoseSample};
 use carus_contact::{
-    pelvis_contacts, BodyContactState, BodyMotion, ContactReport, Neck, NeckAngles, NeckGeometry,
+    obstacle_contacts, pair_contacts, BodyContactState, BodyMotion, ContactReport, Neck, NeckAngles, NeckGeometry,
     NeckLoad, RigidBodyState, RigidPose, TissueContact, TriangleCollider, Wrench,
 };
 use carus_fem::{SolverSnapshot, StepControl, TledSolver};
@@ -62,6 +62,10 @@ pub struct SimState {
     #[serde(default)]
     pub spine: Option<Neck>,
     pub bone_contacts: Vec<BodyContactState>,
+    /// The trunk's samples below the neck against the head (friction
+    /// anchors on the head), when that contact is on.
+    #[serde(default)]
+    pub head_trunk: Option<BodyContactState>,
     pub floor: Option<FloorState>,
     /// The floor's force on each body from the last coupling, applied at the next step.
     pub floor_wrench: Vec<Wrench>,
@@ -96,6 +100,8 @@ struct StepForces {
     /// Per site, on recorded steps only.
     sites: Vec<SiteLoad>,
     head_axial: AxialMoments,
+    /// The trunk's contact on the head, about the head's centre of mass.
+    head_trunk: Wrench,
     neck: Option<NeckAngles>,
     spine: Option<NeckAngles>,
 }
@@ -155,12 +161,14 @@ impl<'a> Simulation<'a> {
             None => None,
         };
         let body_count = scene.bodies.len();
+        let head_trunk = scene.head_trunk.as_ref().map(|pair| BodyContactState::new(&pair.trunk_samples));
         let state = SimState {
             step: 0,
             bodies,
             neck,
             spine,
             bone_contacts,
+            head_trunk,
             floor,
             floor_wrench: vec![Wrench::default(); body_count],
             samples: Vec::new(),
@@ -178,6 +186,7 @@ impl<'a> Simulation<'a> {
             dominant: None,
             sites: Vec::new(),
             head_axial: AxialMoments::default(),
+            head_trunk: Wrench::default(),
             neck,
             spine,
         });
@@ -186,6 +195,11 @@ impl<'a> Simulation<'a> {
 
     /// Continues from a saved state (a checkpoint).
     pub fn from_state(scene: &'a Scene, state: SimState) -> Result<Self, LabourError> {
+        if scene.head_trunk.is_some() != state.head_trunk.is_some() {
+            return Err(LabourError::Checkpoint(
+                "the checkpoint's head-trunk contact does not match the scenario's contact.head_trunk".into(),
+            ));
+        }
         let dt = scene.scenario.numerics.rigid_dt_s;
         let (mut solver, substeps) = match (&scene.floor, &state.floor) {
             (Some(f), Some(_)) => {
@@ -285,7 +299,7 @@ impl<'a> Simulation<'a> {
         let mut reports: Vec<ContactReport> = Vec::with_capacity(n);
         for (b, wrench) in wrenches.iter_mut().enumerate() {
             let motion = self.motion(b);
-            let report = pelvis_contacts(
+            let report = obstacle_contacts(
                 &scene.pelvis_collider,
                 scene.contact_law(b),
                 &scene.fetal_body(b).samples,
@@ -295,6 +309,17 @@ impl<'a> Simulation<'a> {
             )?;
             *wrench += report.wrench();
             reports.push(report);
+        }
+
+        // The head against the trunk below the neck (chin on chest).
+        let mut head_trunk = Wrench::default();
+        if let Some(pair) = &scene.head_trunk {
+            let (trunk, head) = (self.motion(TRUNK), self.motion(HEAD));
+            let memory = self.state.head_trunk.as_mut().expect("checked in from_state");
+            let r = pair_contacts(&pair.head, &scene.trunk_law, &pair.trunk_samples, &trunk, &head, memory)?;
+            wrenches[TRUNK] += r.on_sampled;
+            wrenches[HEAD] += r.on_obstacle;
+            head_trunk = r.on_obstacle;
         }
 
         // The neck, and the spine when it bends.
@@ -314,6 +339,7 @@ impl<'a> Simulation<'a> {
 
         let mut forces = self.classify(expulsion, &reports);
         forces.spine = spine_angles;
+        forces.head_trunk = head_trunk;
         if (self.state.step + 1) % self.sample_every == 0 {
             self.site_loads(&mut forces, &reports, neck_load.as_ref(), pivot);
         }
@@ -510,6 +536,7 @@ impl<'a> Simulation<'a> {
             dominant,
             sites: Vec::new(),
             head_axial: AxialMoments::default(),
+            head_trunk: Wrench::default(),
             neck: None,
             spine: None,
         }
@@ -545,6 +572,7 @@ impl<'a> Simulation<'a> {
             bone_nm: reports[HEAD].torque_about_com.dot(down),
             floor_nm: s.floor_wrench[HEAD].torque.dot(down),
             neck_nm: neck.map_or(0.0, |l| l.on_head.torque.dot(down)),
+            trunk_nm: forces.head_trunk.torque.dot(down),
             neck_push_nm: neck.map_or(0.0, |l| {
                 Wrench::at_point(l.on_head.force, pivot, s.bodies.position[HEAD]).torque.dot(down)
             }),
@@ -569,6 +597,7 @@ impl<'a> Simulation<'a> {
             time_s: self.time_s(),
             sites: forces.sites,
             head_axial: forces.head_axial,
+            head_trunk_force_n: forces.head_trunk.force,
             neck: forces.neck,
             spine: forces.spine,
         });

@@ -99,6 +99,8 @@ fn sections(d: &TrunkDiameters) -> [Section; 8] {
     ]
 }
 
+/// Index of the section at the base of the neck, where the shoulders begin.
+const NECK_BASE: usize = 1;
 /// Index of the shoulder (acromion) and hip (trochanter) sections.
 const SHOULDER: usize = 2;
 const HIP: usize = 5;
@@ -236,6 +238,14 @@ impl Trunk {
         })
     }
 
+    /// Height of the base of the neck in the trunk frame, m (negative:
+    /// below the pivot; 0.2 S, 24 mm for the 120 mm shoulders). Above it the
+    /// surface is the neck itself, which the neck joint models; below it,
+    /// shoulders, chest and back, which the head can meet (chin on chest).
+    pub fn neck_base_z_m(&self) -> f64 {
+        sections(&self.diameters)[NECK_BASE].z
+    }
+
     /// The two segments of a spine that bends at the thoracolumbar junction.
     pub fn segments(&self) -> TrunkSegments {
         let sections = sections(&self.diameters);
@@ -306,6 +316,8 @@ mod tests {
             let (lower_bottom, lower_top) = parts.lower.bounds().unwrap();
             let l = trunk.landmarks;
             prop_assert!(l.acromion_left.z > parts.thoracolumbar.z && l.trochanter_left.z < parts.thoracolumbar.z);
+            // The neck ends above the shoulders.
+            prop_assert!(trunk.neck_base_z_m() < 0.0 && trunk.neck_base_z_m() > l.acromion_left.z);
             prop_assert!((lower_top.z - parts.thoracolumbar.z).abs() < 1e-12 && thorax_top.z <= 1e-12);
             prop_assert!((lower_bottom.z - l.breech.z).abs() < 1e-12);
         }

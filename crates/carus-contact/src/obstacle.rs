@@ -1,7 +1,8 @@
-//! Contact of a rigid fetal body with the rigid bony pelvis: the pelvis is a
-//! static collider in the pelvis frame (BVH built once); the body is a set
-//! of surface samples in its frame. Each step every sample is projected on
-//! the pelvis with a bounded search (broad phase: the BVH, pruned by the
+//! Contact of a rigid fetal body with a rigid obstacle: the bony pelvis,
+//! a static collider in the pelvis frame (BVH built once), or another fetal
+//! body, in its own frame (crate::pair). The body is a set of surface
+//! samples in its frame. Each step every sample is projected on the
+//! obstacle with a bounded search (broad phase: the BVH, pruned by the
 //! search depth; narrow phase: the exact closest point, signed by the
 //! pseudo-normal), and penetrating samples get the contact law's forces.
 
@@ -12,7 +13,7 @@ use serde::{Deserialize, Serialize};
 use crate::clearance::{Clearance, DEFAULT_SKIN_M};
 use crate::collider::{SurfacePoint, TriangleCollider};
 use crate::error::{check_non_negative, ContactError};
-use crate::law::{ContactLaw, DESIGN_PENETRATION_M};
+use crate::law::{ContactLaw, DESIGN_EXPULSION_FORCE_N, DESIGN_HEAD_RADIUS_M, DESIGN_PENETRATION_M};
 use crate::rigid::{RigidPose, Wrench};
 use crate::sampling::SurfaceSamples;
 
@@ -24,9 +25,11 @@ pub struct RegionTable {
     pub labels: Vec<u16>,
 }
 
-/// The bony pelvis as a contact obstacle, in the pelvis frame.
+/// A rigid surface that bodies' samples are pressed against, in its own
+/// frame: the bony pelvis (with its regions) in the pelvis frame, or the
+/// fetal head in its centre-of-mass frame for the trunk's samples.
 #[derive(Debug)]
-pub struct PelvisCollider {
+pub struct RigidObstacle {
     surface: TriangleCollider,
     regions: Option<RegionTable>,
     search_depth_m: f64,
@@ -38,19 +41,21 @@ pub struct PelvisCollider {
 /// loads the law is sized for, while the bounded search stays cheap.
 pub const DEFAULT_SEARCH_DEPTH_M: f64 = 5.0 * DESIGN_PENETRATION_M;
 
-impl PelvisCollider {
-    /// Builds the collider from the bony surface (metres, pelvis frame,
-    /// outward normals) and optionally a region label per triangle.
+impl RigidObstacle {
+    /// Builds the collider from a closed surface (metres, its own frame,
+    /// outward normals) named `what` in errors, and optionally a region
+    /// label per triangle.
     pub fn new(
+        what: &'static str,
         vertices: &[DVec3],
         triangles: &[[u32; 3]],
         regions: Option<RegionTable>,
     ) -> Result<Self, ContactError> {
-        let surface = TriangleCollider::new("pelvis", vertices, triangles)?;
+        let surface = TriangleCollider::new(what, vertices, triangles)?;
         if let Some(table) = &regions {
             if table.labels.len() != triangles.len() {
                 return Err(ContactError::RegionTableLength {
-                    what: "pelvis",
+                    what,
                     labels: table.labels.len(),
                     triangles: triangles.len(),
                 });
@@ -61,7 +66,7 @@ impl PelvisCollider {
                 return Err(ContactError::RegionLabelOutOfRange { triangle, label, names: table.names.len() });
             }
         }
-        Ok(PelvisCollider { surface, regions, search_depth_m: DEFAULT_SEARCH_DEPTH_M, skin_m: DEFAULT_SKIN_M })
+        Ok(RigidObstacle { surface, regions, search_depth_m: DEFAULT_SEARCH_DEPTH_M, skin_m: DEFAULT_SKIN_M })
     }
 
     /// Sets how deep below the bone surface a sample is still found, m.
@@ -139,8 +144,8 @@ pub struct Contact {
     pub sample: u32,
     /// The sample's world position (on the body), m.
     pub body_point: DVec3,
-    /// Closest point on the pelvis, m.
-    pub pelvis_point: DVec3,
+    /// Closest point on the obstacle, m.
+    pub obstacle_point: DVec3,
     /// Pelvis outward normal (from the bone towards the fetus).
     pub normal: DVec3,
     /// Penetration depth, m (positive).
@@ -230,13 +235,13 @@ impl ContactReport {
     }
 }
 
-/// Finds the contacts of a body's samples with the pelvis, applies the law
+/// Finds the contacts of a body's samples with the obstacle, applies the law
 /// (updating the body's friction anchors) and sums forces and moments.
 /// Samples that have not moved out of their clearance since their last
 /// query are skipped (see the clearance module: exact). Deterministic: the
 /// samples are queried in parallel but gathered and summed in sample order.
-pub fn pelvis_contacts(
-    pelvis: &PelvisCollider,
+pub fn obstacle_contacts(
+    obstacle: &RigidObstacle,
     law: &ContactLaw,
     samples: &SurfaceSamples,
     motion: &BodyMotion,
@@ -251,8 +256,12 @@ pub fn pelvis_contacts(
         });
     }
     let com = motion.pose.position_m;
-    let band = pelvis.search_depth_m;
-    let searched = band + pelvis.skin_m;
+    // A soft law (the trunk's cover) sinks deeper than the bone law the
+    // obstacle's depth is sized for: search down to twice its sink at the
+    // design load, so its samples keep their force.
+    let sink = law.design_penetration(DESIGN_HEAD_RADIUS_M, DESIGN_EXPULSION_FORCE_N);
+    let band = obstacle.search_depth_m.max(2.0 * sink);
+    let searched = band + obstacle.skin_m;
 
     let memory_in = &*memory;
     // The samples the clearance cannot skip, found serially (a few
@@ -269,7 +278,7 @@ pub fn pelvis_contacts(
         // Queries are ~1 us: hand rayon chunks big enough to pay for a split.
         .with_min_len(32)
         .map(|(i, p)| {
-            let found = pelvis.surface.closest_point(p, searched);
+            let found = obstacle.surface.closest_point(p, searched);
             let Some(hit) = found.filter(|h| h.signed_distance < 0.0 && -h.signed_distance <= band) else {
                 return (i, p, found, None);
             };
@@ -279,11 +288,11 @@ pub fn pelvis_contacts(
             let contact = Contact {
                 sample: i as u32,
                 body_point: p,
-                pelvis_point: hit.point,
+                obstacle_point: hit.point,
                 normal: hit.normal,
                 depth: -hit.signed_distance,
                 triangle: hit.triangle,
-                region: pelvis.region_of(hit.triangle),
+                region: obstacle.region_of(hit.triangle),
                 normal_force: f.normal,
                 friction_force: f.friction,
                 sliding: f.sliding,
@@ -333,18 +342,18 @@ mod tests {
 
     /// A 10 m square plane through the origin, tilted by `tilt` about x,
     /// outward normal up the tilted z, with two region labels.
-    fn plane(tilt: DQuat) -> PelvisCollider {
+    fn plane(tilt: DQuat) -> RigidObstacle {
         let v: Vec<DVec3> = [(-5.0, -5.0), (5.0, -5.0), (5.0, 5.0), (-5.0, 5.0)]
             .map(|(x, y)| tilt * DVec3::new(x, y, 0.0))
             .to_vec();
         let regions = RegionTable { names: vec!["sacrum".into(), "symphysis".into()], labels: vec![0, 1] };
-        PelvisCollider::new(&v, &[[0, 1, 2], [0, 2, 3]], Some(regions)).unwrap()
+        RigidObstacle::new("pelvis", &v, &[[0, 1, 2], [0, 2, 3]], Some(regions)).unwrap()
     }
 
     struct Slope {
         law: ContactLaw,
         tilt: DQuat,
-        pelvis: PelvisCollider,
+        pelvis: RigidObstacle,
         samples: SurfaceSamples,
         model: RigidBodyModel,
         state: RigidBodyState,
@@ -394,7 +403,7 @@ mod tests {
                     linear_velocity: self.state.linear_velocity[0],
                     angular_velocity: self.state.angular_velocity(&self.model, 0),
                 };
-                let report = pelvis_contacts(&self.pelvis, &self.law, &self.samples, &motion, motion.pose.position_m, &mut self.anchors).unwrap();
+                let report = obstacle_contacts(&self.pelvis, &self.law, &self.samples, &motion, motion.pose.position_m, &mut self.anchors).unwrap();
                 let ease = ((self.time + k as f64 * dt) / 0.1).min(1.0);
                 let weight = G * self.model.mass_kg[0] * ease * ease * (3.0 - 2.0 * ease);
                 let gravity = Wrench { force: DVec3::new(0.0, 0.0, -weight), torque: DVec3::ZERO };
@@ -540,7 +549,7 @@ mod tests {
         let e = 0.03;
         let pivot = DVec3::new(e, 0.0, 0.05);
         let mut anchors = BodyContactState::new(&samples);
-        let report = pelvis_contacts(&pelvis, &law, &samples, &motion, pivot, &mut anchors).unwrap();
+        let report = obstacle_contacts(&pelvis, &law, &samples, &motion, pivot, &mut anchors).unwrap();
         assert_eq!(report.contacts.len(), 4);
         assert!((report.deepest_m - 5e-4).abs() < 1e-15);
         let f = 4.0 * law.penalty_stiffness_pa_per_m * 1e-4 * 5e-4;
@@ -566,12 +575,12 @@ mod tests {
         let samples = SurfaceSamples { points: vec![DVec3::new(0.1, 0.0, -1e-3), DVec3::new(-0.1, 0.0, -3e-3)], areas: vec![1e-4; 2] };
         let still = |z: f64| BodyMotion { pose: RigidPose::new(DVec3::new(0.0, 0.0, z), DQuat::IDENTITY), linear_velocity: DVec3::ZERO, angular_velocity: DVec3::ZERO };
         let mut memory = BodyContactState::new(&samples);
-        let report = pelvis_contacts(&pelvis, &law, &samples, &still(0.0), DVec3::ZERO, &mut memory).unwrap();
+        let report = obstacle_contacts(&pelvis, &law, &samples, &still(0.0), DVec3::ZERO, &mut memory).unwrap();
         assert_eq!((report.contacts.len(), report.too_deep), (1, 1));
         // Still flagged while skipped; cleared once it is back within the band.
-        let report = pelvis_contacts(&pelvis, &law, &samples, &still(1e-4), DVec3::ZERO, &mut memory).unwrap();
+        let report = obstacle_contacts(&pelvis, &law, &samples, &still(1e-4), DVec3::ZERO, &mut memory).unwrap();
         assert_eq!(report.too_deep, 1);
-        let report = pelvis_contacts(&pelvis, &law, &samples, &still(1.5e-3), DVec3::ZERO, &mut memory).unwrap();
+        let report = obstacle_contacts(&pelvis, &law, &samples, &still(1.5e-3), DVec3::ZERO, &mut memory).unwrap();
         assert_eq!((report.contacts.len(), report.too_deep), (1, 0));
     }
 
@@ -586,7 +595,7 @@ mod tests {
         };
         let motion = BodyMotion { pose: RigidPose::new(DVec3::new(0.0, 0.0, -1e-4), DQuat::IDENTITY), linear_velocity: DVec3::ZERO, angular_velocity: DVec3::ZERO };
         let mut anchors = BodyContactState::new(&samples);
-        let report = pelvis_contacts(&pelvis, &law, &samples, &motion, DVec3::ZERO, &mut anchors).unwrap();
+        let report = obstacle_contacts(&pelvis, &law, &samples, &motion, DVec3::ZERO, &mut anchors).unwrap();
         assert_eq!(report.main_region(2), Some(1));
         let by_region = report.force_by_region(2);
         assert!(by_region[1].z > by_region[0].z && by_region[0].z > 0.0);
@@ -596,10 +605,10 @@ mod tests {
     fn bad_region_tables_are_refused() {
         let v = vec![DVec3::ZERO, DVec3::X, DVec3::Y];
         let short = RegionTable { names: vec!["sacrum".into()], labels: vec![] };
-        assert!(matches!(PelvisCollider::new(&v, &[[0, 1, 2]], Some(short)), Err(ContactError::RegionTableLength { .. })));
+        assert!(matches!(RigidObstacle::new("pelvis", &v, &[[0, 1, 2]], Some(short)), Err(ContactError::RegionTableLength { .. })));
         let unnamed = RegionTable { names: vec!["sacrum".into()], labels: vec![3] };
         assert!(matches!(
-            PelvisCollider::new(&v, &[[0, 1, 2]], Some(unnamed)),
+            RigidObstacle::new("pelvis", &v, &[[0, 1, 2]], Some(unnamed)),
             Err(ContactError::RegionLabelOutOfRange { triangle: 0, label: 3, names: 1 })
         ));
     }
