@@ -1,13 +1,13 @@
 //! The forward simulation: the mutable state of a run and the step
 //! pipeline, a short sequence of named stages:
-//! expulsion -> pelvis contacts (head, trunk) -> neck (and spine) -> floor reaction ->
+//! expulsion -> pelvis contacts (head, trunk) -> head on trunk -> neck (and spine) -> floor reaction ->
 //! passive resistance -> rigid integration -> floor coupling -> record
 //! (poses, and at the same instants the loads per site, crate::loads).
 //!
 //! Nothing here reads a way-point, a target rotation or any term that knows
 //! the expected outcome (CARDINAL_MOVEMENTS.md, "What the forward mode may
 //! use"): every force comes from the expulsion generator, contact with the
-//! bone and the floor (with friction), the neck's elasticity or the passive
+//! bone, the floor and the fetus's own trunk (with friction), the neck's elasticity or the passive
 //! resistance of the surroundings.
 
 use carus_analysis::{ContactSite, PoseSample};
