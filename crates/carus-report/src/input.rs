@@ -49,6 +49,10 @@ pub struct AxialMomentSample {
     /// neck's springs.
     #[serde(default)]
     pub neck_push_nm: f64,
+    /// The fetus's own trunk pressing on the head below the neck (chin on
+    /// chest, shoulders on the skull).
+    #[serde(default)]
+    pub trunk_nm: f64,
 }
 
 /// Figures of the run (not of the labour).

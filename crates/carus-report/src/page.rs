@@ -518,7 +518,7 @@ fn floor_plot(w: &mut String, input: &ReportInput, axis: &TimeAxis) -> Result<()
     Ok(())
 }
 
-/// What spun the head about the pelvic axis: bone, floor and neck, the
+/// What spun the head about the pelvic axis: bone, floor, neck and trunk, the
 /// causes a reader checks when internal rotation does or does not happen.
 fn axial_moment_plot(
     w: &mut String,
@@ -530,14 +530,15 @@ fn axial_moment_plot(
         return Ok(());
     }
     let column = |f: fn(&AxialMomentSample) -> f64| m.iter().map(f).collect::<Vec<f64>>();
-    let (time_s, bone, floor, neck, push) = (
+    let (time_s, bone, floor, neck, push, trunk) = (
         column(|s| s.time_s),
         column(|s| s.bone_nm),
         column(|s| s.floor_nm),
         column(|s| s.neck_nm),
         column(|s| s.neck_push_nm),
+        column(|s| s.trunk_nm),
     );
-    if let Some(&bad) = [&time_s, &bone, &floor, &neck, &push]
+    if let Some(&bad) = [&time_s, &bone, &floor, &neck, &push, &trunk]
         .iter()
         .flat_map(|c| c.iter())
         .find(|v| !v.is_finite())
@@ -547,11 +548,12 @@ fn axial_moment_plot(
             value: bad,
         });
     }
-    let (bone_colour, floor_colour, neck_colour, push_colour) = (
+    let (bone_colour, floor_colour, neck_colour, push_colour, trunk_colour) = (
         RGBColor(200, 82, 0),
         RGBColor(68, 1, 84),
         RGBColor(31, 87, 153),
         RGBColor(95, 170, 220),
+        RGBColor(53, 183, 121),
     );
     let spec = axis.spec(
         "axial-moments",
@@ -574,6 +576,10 @@ fn axial_moment_plot(
                 values: &push,
                 colour: push_colour,
             },
+            Curve {
+                values: &trunk,
+                colour: trunk_colour,
+            },
         ],
         vec![0.0],
     );
@@ -586,7 +592,8 @@ fn axial_moment_plot(
          <span style=\"color:#c85200\">&#9632; bone (friction included)</span> \
          <span style=\"color:#440154\">&#9632; pelvic floor</span> \
          <span style=\"color:#1f5799\">&#9632; neck</span>, of which \
-         <span style=\"color:#5faadc\">&#9632; the push through the pivot</span></small>\
+         <span style=\"color:#5faadc\">&#9632; the push through the pivot</span> \
+         <span style=\"color:#35b779\">&#9632; the trunk on the head (chin on chest)</span></small>\
          </figcaption>{svg}</figure>"
     );
     Ok(())

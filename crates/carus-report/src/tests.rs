@@ -178,11 +178,12 @@ fn the_moments_that_turn_the_head_are_plotted_when_known() {
             floor_nm: -0.2,
             neck_nm: 0.05,
             neck_push_nm: -0.1,
+            trunk_nm: 0.02,
         })
         .collect();
     let html = write_report_with(&input, None).unwrap().html;
     assert_eq!(html.matches("<svg").count(), 5, "four plots and the moments' (no floor)");
-    assert!(html.contains("id=\"plot-axial-moments\"") && html.contains("the push through the pivot"));
+    assert!(html.contains("id=\"plot-axial-moments\"") && html.contains("the push through the pivot") && html.contains("the trunk on the head"));
     input.head_axial_moments[2].neck_nm = f64::INFINITY;
     assert!(matches!(
         write_report_with(&input, None),

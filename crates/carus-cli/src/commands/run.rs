@@ -203,6 +203,7 @@ pub(super) fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result
                 floor_nm: l.head_axial.floor_nm,
                 neck_nm: l.head_axial.neck_nm,
                 neck_push_nm: l.head_axial.neck_push_nm,
+                trunk_nm: l.head_axial.trunk_nm,
             })
             .collect(),
         scene: Some(carus_report::ReportScene {
