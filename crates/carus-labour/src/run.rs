@@ -709,6 +709,18 @@ mod tests {
         }
     }
 
+    /// A checkpoint from before the head-trunk contact (or with it off)
+    /// does not resume a scenario with it on: the contact's friction
+    /// anchors would be missing, and the run would not be the one asked for.
+    #[test]
+    fn a_checkpoint_without_the_head_trunk_contact_is_refused() {
+        let scene = Scene::build(&coarse(0.01)).unwrap();
+        let mut state = Simulation::new(&scene).unwrap().state;
+        state.head_trunk = None;
+        let e = Simulation::from_state(&scene, state).err().expect("refused").to_string();
+        assert!(e.contains("contact.head_trunk"), "{e}");
+    }
+
     #[test]
     fn a_resumed_run_equals_an_uninterrupted_one_bit_for_bit() {
         assert_resumes_bit_for_bit(&coarse(2.0));
