@@ -1,9 +1,10 @@
 //! Cost of one contact pass at labour-loop sizes: a fetal head of ~3k
-//! samples against a ~50k-triangle bony surface, and the tissue coupling
-//! query for a 10k-node pelvic floor.
+//! samples against a ~50k-triangle bony surface, the trunk's samples
+//! against the moving head, and the tissue coupling query for a 10k-node
+//! pelvic floor.
 
 use carus_contact::{
-    obstacle_contacts, BodyMotion, ContactLaw, BodyContactState, RigidObstacle, RigidPose, SurfaceSamples, TissueContact,
+    obstacle_contacts, pair_contacts, BodyMotion, ContactLaw, BodyContactState, RigidObstacle, RigidPose, SurfaceSamples, TissueContact,
     TriangleCollider,
 };
 use criterion::{criterion_group, criterion_main, Criterion};
@@ -61,6 +62,29 @@ fn contact_pass(c: &mut Criterion) {
             };
             obstacle_contacts(&pelvis, &law, &samples, &moved, DVec3::ZERO, &mut anchors).unwrap()
         })
+    });
+
+    // Head on trunk: a 6 cm chest ball's 1k samples pressed 5 mm into the
+    // head ball, both moving, under the trunk's soft law (1e7 Pa/m).
+    let head_obstacle = RigidObstacle::new("head", &hv, &ht, None).unwrap();
+    let (cv, ct) = ball(0.06, 40, 20);
+    let chest = SurfaceSamples::from_vertices("chest", &cv, &ct).unwrap();
+    let soft = ContactLaw { penalty_stiffness_pa_per_m: 1.0e7, ..ContactLaw::default() };
+    let head_motion = BodyMotion {
+        pose: RigidPose::new(DVec3::new(0.1, 0.0, 0.0), DQuat::from_rotation_z(0.3)),
+        linear_velocity: DVec3::new(0.0, 0.0, -0.02),
+        angular_velocity: DVec3::new(0.0, 0.2, 0.0),
+    };
+    let chest_motion = BodyMotion {
+        pose: RigidPose::new(DVec3::new(0.1, 0.0, -0.1025), DQuat::IDENTITY),
+        linear_velocity: DVec3::new(0.0, 0.0, -0.018),
+        angular_velocity: DVec3::ZERO,
+    };
+    let mut chest_memory = BodyContactState::new(&chest);
+    let pair = pair_contacts(&head_obstacle, &soft, &chest, &chest_motion, &head_motion, &mut chest_memory).unwrap();
+    eprintln!("chest {} samples, {} on the head, force {:.1} N", chest.len(), pair.active, pair.on_obstacle.force.length());
+    c.bench_function("pair_contacts: chest 762 samples 5 mm into the head, repeated pass", |b| {
+        b.iter(|| pair_contacts(&head_obstacle, &soft, &chest, &chest_motion, &head_motion, &mut chest_memory).unwrap())
     });
 
     // Tissue: a 100 x 100 sheet of nodes, 1.5 mm apart, cut by the head.
