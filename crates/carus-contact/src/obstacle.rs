@@ -69,7 +69,9 @@ impl RigidObstacle {
         Ok(RigidObstacle { surface, regions, search_depth_m: DEFAULT_SEARCH_DEPTH_M, skin_m: DEFAULT_SKIN_M })
     }
 
-    /// Sets how deep below the bone surface a sample is still found, m.
+    /// Sets how deep below the surface a sample is still found, m, for a
+    /// law as stiff as bone's; a softer law searches down to twice its own
+    /// sink at the design load if that is deeper ([`obstacle_contacts`]).
     pub fn with_search_depth(mut self, depth_m: f64) -> Result<Self, ContactError> {
         self.search_depth_m = check_non_negative("search_depth_m", depth_m, false)?;
         Ok(self)
@@ -111,14 +113,14 @@ pub struct BodyMotion {
 }
 
 /// What one body's contact remembers between steps: per sample, the anchor
-/// of its friction stick spring on the pelvis (pelvis frame; none when the
-/// sample is not in contact), and how far it may move before it must be
-/// queried again.
+/// of its friction stick spring on the obstacle (the obstacle's frame: the
+/// pelvis frame for the pelvis; none when the sample is not in contact),
+/// and how far it may move before it must be queried again.
 /// Serializable, so a checkpoint can resume a run bit for bit.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct BodyContactState {
     anchors: Vec<Option<DVec3>>,
-    /// Samples last found inside the bone deeper than the search depth.
+    /// Samples last found inside the obstacle deeper than the search band.
     too_deep: Vec<bool>,
     clearance: Clearance,
 }
@@ -142,11 +144,12 @@ impl BodyContactState {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Contact {
     pub sample: u32,
-    /// The sample's world position (on the body), m.
+    /// The sample's position (on the body) in the obstacle's frame (the
+    /// pelvis frame for the pelvis), m.
     pub body_point: DVec3,
     /// Closest point on the obstacle, m.
     pub obstacle_point: DVec3,
-    /// Pelvis outward normal (from the bone towards the fetus).
+    /// The obstacle's outward normal, its frame (from the bone towards the fetus).
     pub normal: DVec3,
     /// Penetration depth, m (positive).
     pub depth: f64,
@@ -186,7 +189,8 @@ pub struct ContactReport {
     /// Summed normal spring stiffness of the active contacts, N/m: the K of
     /// [`ContactLaw::critical_time_step`].
     pub normal_stiffness_n_per_m: f64,
-    /// Samples inside the bone deeper than the search depth: they carry no
+    /// Samples inside the obstacle deeper than the search band (the
+    /// obstacle's search depth, or twice the law's sink if deeper): they carry no
     /// force. Nonzero means the body tunnelled into the bone (a rigid step
     /// too long, or a load far beyond the one the stiffness was sized for):
     /// the loop should stop or shorten its step.

@@ -122,12 +122,36 @@ impl SurfaceSamples {
     pub fn total_area(&self) -> f64 {
         self.areas.iter().sum()
     }
+
+    /// The samples that `keep` accepts (given each point), in their order.
+    pub fn filtered(&self, keep: impl Fn(DVec3) -> bool) -> SurfaceSamples {
+        let (points, areas) = self
+            .points
+            .iter()
+            .zip(&self.areas)
+            .filter(|(p, _)| keep(**p))
+            .map(|(p, a)| (*p, *a))
+            .unzip();
+        SurfaceSamples { points, areas }
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::collider::tests::uv_sphere;
+
+    /// A filtered set keeps the accepted points with their areas, in order.
+    #[test]
+    fn filtering_keeps_points_with_their_areas_in_order() {
+        let (v, t) = uv_sphere(1.0, 6, 12);
+        let all = SurfaceSamples::from_vertices("sphere", &v, &t).unwrap();
+        let upper = all.filtered(|p| p.z > 0.0);
+        let expected: Vec<(DVec3, f64)> =
+            all.points.iter().zip(&all.areas).filter(|(p, _)| p.z > 0.0).map(|(p, a)| (*p, *a)).collect();
+        assert!(!upper.is_empty() && upper.len() < all.len());
+        assert_eq!(upper.points.iter().copied().zip(upper.areas.iter().copied()).collect::<Vec<_>>(), expected);
+    }
 
     fn surface_area(v: &[DVec3], t: &[[u32; 3]]) -> f64 {
         t.iter()

@@ -597,19 +597,28 @@ mod tests {
 
     /// The trunk's push reaches the head through the chin on the chest as
     /// well as the neck: the contact's force is recorded, pushes the head
-    /// down the canal when it acts, and is written with its axial moment.
+    /// down the canal (along the expulsion at that instant) when it acts,
+    /// and is written to the pose history with its axial moment.
     #[test]
     fn the_head_trunk_contact_is_recorded() {
         let s = coarse(2.4);
         let (dir, record) = run_in(&s, &RunOptions::default());
-        let down = record.history.samples.last().unwrap().expulsion_force_n.normalize_or_zero();
-        let pushing: Vec<_> = record.loads.iter().filter(|l| l.head_trunk_force_n.length() > 1.0).collect();
-        assert!(!pushing.is_empty(), "the chin never met the chest");
-        for l in pushing {
-            assert!(l.head_trunk_force_n.dot(down) > 0.0, "t = {}: {:?}", l.time_s, l.head_trunk_force_n);
+        let mut pushing = 0;
+        for (l, p) in record.loads.iter().zip(&record.history.samples) {
+            if l.head_trunk_force_n.length() > 1.0 && p.expulsion_force_n.length() > 1.0 {
+                assert!(l.head_trunk_force_n.dot(p.expulsion_force_n) > 0.0, "t = {}: {:?}", l.time_s, l.head_trunk_force_n);
+                pushing += 1;
+            }
         }
+        assert!(pushing > 0, "the chin never met the chest");
         let csv = std::fs::read_to_string(dir.path().join(output::HISTORY_CSV)).unwrap();
-        assert!(csv.lines().next().unwrap().ends_with(",head_trunk_fx_n,head_trunk_fy_n,head_trunk_fz_n,head_axial_moment_trunk_nm"));
+        let mut lines = csv.lines();
+        assert!(lines.next().unwrap().ends_with(",head_trunk_fx_n,head_trunk_fy_n,head_trunk_fz_n,head_axial_moment_trunk_nm"));
+        for (line, l) in lines.zip(&record.loads) {
+            let values: Vec<f64> = line.rsplit(',').take(4).map(|v| v.parse().unwrap()).collect();
+            let f = l.head_trunk_force_n;
+            assert_eq!(values, vec![l.head_axial.trunk_nm, f.z, f.y, f.x], "t = {}", l.time_s);
+        }
     }
 
     /// The neck's joint angles are recorded from rest and written to the

@@ -340,7 +340,7 @@ pub struct ContactSection {
     /// soft cover on the head as on bone; the same friction). Without it
     /// the rigid bodies pass through each other wherever the neck spring
     /// lets them (up to 45 mm in the runs of docs/LABOUR.md, fifteenth
-    /// session); off reproduces the runs before it.
+    /// session); off, they do again (for comparison with those runs).
     pub head_trunk: bool,
 }
 

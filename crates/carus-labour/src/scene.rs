@@ -12,8 +12,8 @@ use carus_anatomy::fetus::{FetalHead, Trunk, TrunkDiameters};
 use carus_anatomy::floor::{pelvic_floor, ATTACHED};
 use carus_anatomy::{Pelvis, TriSurface};
 use carus_contact::{
-    ContactLaw, HeadAxes, MassProperties, NeckGeometry, RegionTable, RigidBodyModel, RigidObstacle, RigidPose,
-    SurfaceSamples, TriangleCollider, DESIGN_PENETRATION_M,
+    pair_contacts, BodyContactState, BodyMotion, ContactLaw, HeadAxes, MassProperties, NeckGeometry, RegionTable,
+    RigidBodyModel, RigidObstacle, RigidPose, SurfaceSamples, TriangleCollider, DESIGN_PENETRATION_M,
 };
 use carus_fem::{BoundaryConditions, Material, MaterialRegion, Mesh, ModelOptions, TledModel};
 use glam::{DMat3, DVec3};
@@ -313,25 +313,30 @@ impl Scene {
         let Some(pair) = &self.head_trunk else {
             return Ok(());
         };
-        let (head, trunk) = (self.start[HEAD], self.start[TRUNK]);
-        let deepest = pair
-            .trunk_samples
-            .points
-            .iter()
-            .filter_map(|p| {
-                let local = head.orientation.inverse() * (trunk.point(*p) - head.position_m);
-                pair.head.surface().closest_point(local, 0.1)
-            })
-            .map(|hit| -hit.signed_distance)
-            .fold(0.0, f64::max);
-        if deepest > DESIGN_PENETRATION_M {
+        // What the contact would find at the first step, both bodies at rest.
+        let still = |pose: RigidPose| BodyMotion { pose, linear_velocity: DVec3::ZERO, angular_velocity: DVec3::ZERO };
+        let mut fresh = BodyContactState::new(&pair.trunk_samples);
+        let found = pair_contacts(
+            &pair.head,
+            &self.trunk_law,
+            &pair.trunk_samples,
+            &still(self.start[TRUNK]),
+            &still(self.start[HEAD]),
+            &mut fresh,
+        )?;
+        if found.deepest_m > DESIGN_PENETRATION_M || found.too_deep > 0 {
+            let depth = if found.too_deep > 0 {
+                "deeper than the contact searches".to_string()
+            } else {
+                format!("{:.1} mm deep", found.deepest_m * 1e3)
+            };
             return Err(crate::scenario::ScenarioError::Setting {
                 setting: format!("start.attitude_deg = {}", self.scenario.start.attitude_deg),
                 problem: format!(
-                    "the head starts {:.1} mm inside the trunk below the neck (the chin in \
+                    "the head starts inside the trunk below the neck, {depth} (the chin in \
                      the chest when flexed, the occiput in the back when extended), more \
-                     than the 1 mm the contact allows at the start",
-                    deepest * 1e3
+                     than the {:.0} mm the contact allows at the start",
+                    DESIGN_PENETRATION_M * 1e3
                 ),
                 hint: "bring start.attitude_deg nearer 0, or set contact.head_trunk = false".into(),
             }
@@ -399,16 +404,9 @@ impl HeadTrunkContact {
     /// The head's surface as the obstacle, and the samples of `trunk`
     /// lower than `neck_base_z` (m, in the anatomy's trunk frame).
     fn new(head: &FetalBody, trunk: &FetalBody, neck_base_z: f64) -> Result<Self, LabourError> {
-        let obstacle = RigidObstacle::new("head", &head.surface.vertices, &head.surface.triangles, None)?;
-        let below: Vec<usize> = (0..trunk.samples.len())
-            .filter(|&i| (trunk.samples.points[i] - trunk.frame_origin).z < neck_base_z)
-            .collect();
         Ok(HeadTrunkContact {
-            head: obstacle,
-            trunk_samples: SurfaceSamples {
-                points: below.iter().map(|&i| trunk.samples.points[i]).collect(),
-                areas: below.iter().map(|&i| trunk.samples.areas[i]).collect(),
-            },
+            head: RigidObstacle::new("head", &head.surface.vertices, &head.surface.triangles, None)?,
+            trunk_samples: trunk.samples.filtered(|p| (p - trunk.frame_origin).z < neck_base_z),
         })
     }
 }
@@ -640,6 +638,19 @@ mod tests {
         assert!(about_pivot.dot(axis) < -0.5, "{about_pivot} about {axis}");
         assert!(r.on_sampled.force.dot(r.on_obstacle.force) < 0.0);
         assert!(contact_at(-80.0).0.deepest_m < DESIGN_PENETRATION_M);
+    }
+
+    /// Every built-in scenario starts with its head clear of its trunk
+    /// (the face presentation's occiput only touching the back).
+    #[test]
+    fn every_builtin_starts_with_the_head_clear_of_the_trunk() {
+        for (name, _) in crate::scenario::BUILTINS {
+            let mut s = Scenario::builtin(name).unwrap();
+            s.numerics.head_subdivisions = 3;
+            s.floor.enabled = false;
+            let scene = Scene::build(&s).unwrap_or_else(|e| panic!("{name}: {e}"));
+            assert!(scene.head_trunk.is_some(), "{name}");
+        }
     }
 
     /// A start with the chin already in the chest is refused, naming the

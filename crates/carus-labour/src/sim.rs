@@ -197,7 +197,10 @@ impl<'a> Simulation<'a> {
     pub fn from_state(scene: &'a Scene, state: SimState) -> Result<Self, LabourError> {
         if scene.head_trunk.is_some() != state.head_trunk.is_some() {
             return Err(LabourError::Checkpoint(
-                "the checkpoint's head-trunk contact does not match the scenario's contact.head_trunk".into(),
+                "the state has no head-trunk contact where the scenario's contact.head_trunk is on, \
+                 or the other way round; if an older version wrote the checkpoint, run the \
+                 scenario again from the start"
+                    .into(),
             ));
         }
         let dt = scene.scenario.numerics.rigid_dt_s;
@@ -315,7 +318,11 @@ impl<'a> Simulation<'a> {
         let mut head_trunk = Wrench::default();
         if let Some(pair) = &scene.head_trunk {
             let (trunk, head) = (self.motion(TRUNK), self.motion(HEAD));
-            let memory = self.state.head_trunk.as_mut().expect("checked in from_state");
+            let Some(memory) = self.state.head_trunk.as_mut() else {
+                return Err(LabourError::Checkpoint(
+                    "the state lost its head-trunk contact; start the run again".into(),
+                ));
+            };
             let r = pair_contacts(&pair.head, &scene.trunk_law, &pair.trunk_samples, &trunk, &head, memory)?;
             wrenches[TRUNK] += r.on_sampled;
             wrenches[HEAD] += r.on_obstacle;

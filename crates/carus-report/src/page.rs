@@ -591,9 +591,9 @@ fn axial_moment_plot(
          positive turns theta up (LOT towards OA): \
          <span style=\"color:#c85200\">&#9632; bone (friction included)</span> \
          <span style=\"color:#440154\">&#9632; pelvic floor</span> \
+         <span style=\"color:#35b779\">&#9632; the trunk on the head (chin on chest)</span> \
          <span style=\"color:#1f5799\">&#9632; neck</span>, of which \
-         <span style=\"color:#5faadc\">&#9632; the push through the pivot</span> \
-         <span style=\"color:#35b779\">&#9632; the trunk on the head (chin on chest)</span></small>\
+         <span style=\"color:#5faadc\">&#9632; the push through the pivot</span></small>\
          </figcaption>{svg}</figure>"
     );
     Ok(())
