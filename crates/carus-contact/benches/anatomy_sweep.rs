@@ -8,7 +8,7 @@ use carus_anatomy::pelvis::PelvisDiameters;
 use carus_anatomy::Pelvis;
 use carus_contact::{obstacle_contacts, BodyContactState, BodyMotion, ContactLaw, RigidObstacle, RigidPose, SurfaceSamples};
 use criterion::{criterion_group, criterion_main, Criterion};
-use glam::{DMat3, DQuat, DVec3};
+use glam::{DMat3, DQuat};
 
 fn sweep(c: &mut Criterion) {
     let pelvis = Pelvis::generate(&PelvisDiameters::default()).unwrap();
@@ -37,7 +37,7 @@ fn sweep(c: &mut Criterion) {
     let mut next_print = 100u32;
     let start = std::time::Instant::now();
     while sigma <= outlet {
-        let motion = BodyMotion { pose: pose_at(sigma), linear_velocity: DVec3::ZERO, angular_velocity: DVec3::ZERO };
+        let motion = BodyMotion::at_rest(pose_at(sigma));
         let report = obstacle_contacts(&collider, &law, &samples, &motion, motion.pose.position_m, &mut memory).unwrap();
         passes += 1;
         if first_contact.is_none() && !report.contacts.is_empty() {
@@ -69,7 +69,7 @@ fn sweep(c: &mut Criterion) {
     c.bench_function("obstacle_contacts cold: default head at the mid-pelvis", |b| {
         b.iter(|| {
             let mut fresh = BodyContactState::new(&samples);
-            let motion = BodyMotion { pose: mid, linear_velocity: DVec3::ZERO, angular_velocity: DVec3::ZERO };
+            let motion = BodyMotion::at_rest(mid);
             obstacle_contacts(&collider, &law, &samples, &motion, mid.position_m, &mut fresh).unwrap()
         })
     });

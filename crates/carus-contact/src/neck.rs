@@ -4,6 +4,7 @@
 //! Lapeer et al. 2019 / Sadulaev 2019).
 
 use glam::{DMat3, DQuat, DVec3};
+use parry3d_f64::glamx::DSymmetricEigen3;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{check_non_negative, ContactError};
@@ -101,19 +102,10 @@ fn damped_stable_step(k: f64, inverse_mass: f64, c: f64) -> f64 {
     semi_implicit_step_limit(omega, 0.5 * c * inverse_mass / omega)
 }
 
-/// Largest eigenvalue of a symmetric 3 x 3 matrix, in closed form (the
-/// trigonometric solution of the characteristic cubic).
+/// Largest eigenvalue of a symmetric 3 x 3 matrix (glamx's closed-form
+/// symmetric eigensolver, through parry's re-export).
 fn largest_eigenvalue(a: DMat3) -> f64 {
-    let m = a.to_cols_array_2d();
-    let off = m[0][1] * m[0][1] + m[0][2] * m[0][2] + m[1][2] * m[1][2];
-    if off == 0.0 {
-        return m[0][0].max(m[1][1]).max(m[2][2]);
-    }
-    let q = (m[0][0] + m[1][1] + m[2][2]) / 3.0;
-    let p = (((m[0][0] - q).powi(2) + (m[1][1] - q).powi(2) + (m[2][2] - q).powi(2) + 2.0 * off) / 6.0).sqrt();
-    let b = (a - DMat3::from_diagonal(DVec3::splat(q))) * (1.0 / p);
-    let half_det = (0.5 * b.determinant()).clamp(-1.0, 1.0);
-    q + 2.0 * p * (half_det.acos() / 3.0).cos()
+    DSymmetricEigen3::eigenvalues(a).max_element()
 }
 
 /// The longest stable rigid step of a joint ([`Neck::stable_step`]).

@@ -112,6 +112,13 @@ pub struct BodyMotion {
     pub angular_velocity: DVec3,
 }
 
+impl BodyMotion {
+    /// A body standing still at `pose`.
+    pub fn at_rest(pose: RigidPose) -> Self {
+        BodyMotion { pose, linear_velocity: DVec3::ZERO, angular_velocity: DVec3::ZERO }
+    }
+}
+
 /// What one body's contact remembers between steps: per sample, the anchor
 /// of its friction stick spring on the obstacle (the obstacle's frame: the
 /// pelvis frame for the pelvis; none when the sample is not in contact),
@@ -545,11 +552,7 @@ mod tests {
             points: vec![DVec3::new(-0.01, -0.01, 0.0), DVec3::new(0.01, -0.01, 0.0), DVec3::new(0.01, 0.01, 0.0), DVec3::new(-0.01, 0.01, 0.0)],
             areas: vec![1e-4; 4],
         };
-        let motion = BodyMotion {
-            pose: RigidPose::new(DVec3::new(0.0, 0.0, -5e-4), DQuat::IDENTITY),
-            linear_velocity: DVec3::ZERO,
-            angular_velocity: DVec3::ZERO,
-        };
+        let motion = BodyMotion::at_rest(RigidPose::new(DVec3::new(0.0, 0.0, -5e-4), DQuat::IDENTITY));
         let e = 0.03;
         let pivot = DVec3::new(e, 0.0, 0.05);
         let mut anchors = BodyContactState::new(&samples);
@@ -577,7 +580,7 @@ mod tests {
         let pelvis = plane(DQuat::IDENTITY).with_search_depth(2e-3).unwrap();
         let law = ContactLaw::default();
         let samples = SurfaceSamples { points: vec![DVec3::new(0.1, 0.0, -1e-3), DVec3::new(-0.1, 0.0, -3e-3)], areas: vec![1e-4; 2] };
-        let still = |z: f64| BodyMotion { pose: RigidPose::new(DVec3::new(0.0, 0.0, z), DQuat::IDENTITY), linear_velocity: DVec3::ZERO, angular_velocity: DVec3::ZERO };
+        let still = |z: f64| BodyMotion::at_rest(RigidPose::new(DVec3::new(0.0, 0.0, z), DQuat::IDENTITY));
         let mut memory = BodyContactState::new(&samples);
         let report = obstacle_contacts(&pelvis, &law, &samples, &still(0.0), DVec3::ZERO, &mut memory).unwrap();
         assert_eq!((report.contacts.len(), report.too_deep), (1, 1));
@@ -597,7 +600,7 @@ mod tests {
             points: vec![DVec3::new(0.02, -0.02, 0.0), DVec3::new(-0.02, 0.02, -5e-4)],
             areas: vec![1e-4; 2],
         };
-        let motion = BodyMotion { pose: RigidPose::new(DVec3::new(0.0, 0.0, -1e-4), DQuat::IDENTITY), linear_velocity: DVec3::ZERO, angular_velocity: DVec3::ZERO };
+        let motion = BodyMotion::at_rest(RigidPose::new(DVec3::new(0.0, 0.0, -1e-4), DQuat::IDENTITY));
         let mut anchors = BodyContactState::new(&samples);
         let report = obstacle_contacts(&pelvis, &law, &samples, &motion, DVec3::ZERO, &mut anchors).unwrap();
         assert_eq!(report.main_region(2), Some(1));

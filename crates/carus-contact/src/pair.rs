@@ -94,7 +94,7 @@ mod tests {
     }
 
     fn still(position: DVec3, orientation: DQuat) -> BodyMotion {
-        BodyMotion { pose: RigidPose::new(position, orientation), linear_velocity: DVec3::ZERO, angular_velocity: DVec3::ZERO }
+        BodyMotion::at_rest(RigidPose::new(position, orientation))
     }
 
     proptest! {

@@ -953,7 +953,7 @@ impl Scenario {
             ));
         }
         if let ExpulsionDirection::Fixed(v) = self.expulsion.direction {
-            let length = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+            let length = glam::DVec3::from_array(v).length();
             if !(length.is_finite() && length > 1e-9) {
                 return Err(ScenarioError::Value {
                     path: path.to_path_buf(),

@@ -314,14 +314,13 @@ impl Scene {
             return Ok(());
         };
         // What the contact would find at the first step, both bodies at rest.
-        let still = |pose: RigidPose| BodyMotion { pose, linear_velocity: DVec3::ZERO, angular_velocity: DVec3::ZERO };
         let mut fresh = BodyContactState::new(&pair.trunk_samples);
         let found = pair_contacts(
             &pair.head,
             &self.trunk_law,
             &pair.trunk_samples,
-            &still(self.start[TRUNK]),
-            &still(self.start[HEAD]),
+            &BodyMotion::at_rest(self.start[TRUNK]),
+            &BodyMotion::at_rest(self.start[HEAD]),
             &mut fresh,
         )?;
         if found.deepest_m > DESIGN_PENETRATION_M || found.too_deep > 0 {
@@ -620,7 +619,7 @@ mod tests {
         let theta = s.start.position.theta_deg();
         let orient = |phi: f64| carus_analysis::synthetic::head_orientation(frame.tangent, frame.anterior, frame.transverse, theta, phi);
         let pivot = scene.start_pivot();
-        let still = |pose: RigidPose| carus_contact::BodyMotion { pose, linear_velocity: DVec3::ZERO, angular_velocity: DVec3::ZERO };
+        let still = carus_contact::BodyMotion::at_rest;
         let trunk = still(scene.start[TRUNK]);
         let contact_at = |phi: f64| {
             let q = orient(phi);
