@@ -67,6 +67,26 @@ pub struct NeckStiffness {
     /// head on that spring (I ~ 1.5e-3 kg m^2 about the pivot) turns at
     /// omega ~ 200 rad/s, omega dt = 0.2 at the 1 ms rigid step.
     pub end_range_stiffness_nm_per_deg: f64,
+    /// Shortening at which the neck's column bottoms out, mm: the
+    /// compression spring is the lax first part of a stiffening response
+    /// (the spine's neutral zone, Panjabi 1992, J. Spinal Disord. 5:383),
+    /// and on its own it lets the push of REFERENCE_DATA.md shorten the
+    /// neck by more than its length (120 N over 1064.5 N/m is 113 mm; the
+    /// neck is 24 mm, 0.2 S, from the pivot to T1 in carus-anatomy's trunk).
+    /// Engineering estimate: a quarter of that length, 6 mm, well short of
+    /// the 70 % strain at which developing cervical spines failed in
+    /// compression (Nuckley et al. 2007, Spine 32(6), baboon). No neonatal
+    /// figure was found; the outcome turns on it (docs/LABOUR.md,
+    /// sixteenth session).
+    pub compression_limit_mm: f64,
+    /// Axial stiffness added beyond `compression_limit_mm`, N/m. Numerical,
+    /// like `end_range_stiffness_nm_per_deg` (the limit is what is
+    /// estimated; this only enforces it): the largest push of
+    /// REFERENCE_DATA.md, 140 N, carries the neck 4.3 mm past it. A stop
+    /// five times stiffer rings at the 0.5 ms rigid step: halving the step
+    /// moved the normal head 1.2 mm in 10 s, against 0.04 mm with this one
+    /// (docs/LABOUR.md, sixteenth session).
+    pub end_range_compression_n_per_m: f64,
 }
 
 
@@ -87,6 +107,8 @@ impl Default for NeckStiffness {
             lateral_bending_limit_deg: 70.0,
             axial_rotation_limit_deg: 110.0,
             end_range_stiffness_nm_per_deg: 1.0,
+            compression_limit_mm: 6.0,
+            end_range_compression_n_per_m: 3.0e4,
         }
     }
 }
@@ -285,6 +307,8 @@ impl Neck {
             ("lateral_bending_limit_deg", stiffness.lateral_bending_limit_deg),
             ("axial_rotation_limit_deg", stiffness.axial_rotation_limit_deg),
             ("end_range_stiffness_nm_per_deg", stiffness.end_range_stiffness_nm_per_deg),
+            ("compression_limit_mm", stiffness.compression_limit_mm),
+            ("end_range_compression_n_per_m", stiffness.end_range_compression_n_per_m),
         ] {
             check_non_negative(name, value, true)?;
         }
@@ -362,7 +386,16 @@ impl Neck {
         let across_inverse_mass = largest_eigenvalue(across * w * across);
         let c = s.linear_damping_n_s_per_m;
         let linear = [
-            ("compression_n_per_m", s.compression_n_per_m, along_inverse_mass),
+            // Past its limit the column's stop adds to the spring.
+            (
+                if s.end_range_compression_n_per_m > s.compression_n_per_m {
+                    "end_range_compression_n_per_m"
+                } else {
+                    "compression_n_per_m"
+                },
+                s.compression_n_per_m + s.end_range_compression_n_per_m,
+                along_inverse_mass,
+            ),
             ("tension_n_per_m", s.tension_n_per_m, along_inverse_mass),
             ("shear_n_per_m", s.shear_n_per_m, across_inverse_mass),
         ]
@@ -436,9 +469,11 @@ impl Neck {
         let gap = on_trunk_point - on_head_point;
         let compression = gap.dot(axis);
         let k_axial = if compression >= 0.0 { s.compression_n_per_m } else { s.tension_n_per_m };
+        let bottomed = (compression - 1e-3 * s.compression_limit_mm).max(0.0);
+        let axial = k_axial * compression + s.end_range_compression_n_per_m * bottomed;
         let shear = gap - compression * axis;
         let relative_velocity = state.point_velocity(model, t, on_trunk_point) - state.point_velocity(model, h, on_head_point);
-        let on_trunk = -k_axial * compression * axis - s.shear_n_per_m * shear - s.linear_damping_n_s_per_m * relative_velocity;
+        let on_trunk = -axial * axis - s.shear_n_per_m * shear - s.linear_damping_n_s_per_m * relative_velocity;
 
         let head_wrench = Wrench::at_point(-on_trunk, on_head_point, state.position[h])
             + Wrench { force: DVec3::ZERO, torque: moment_on_head };
@@ -705,6 +740,33 @@ mod tests {
             assert!((load.on_trunk.force.z + k * dz).abs() < 1e-9, "{:?}", load.on_trunk.force);
             assert!((load.on_head.force + load.on_trunk.force).length() < 1e-12);
         }
+    }
+
+    #[test]
+    fn the_neck_bottoms_out_past_its_compression_limit() {
+        let (model, mut state, neck) = setup();
+        let s = neck.stiffness;
+        let limit = 1e-3 * s.compression_limit_mm;
+        // 2 mm past the limit: the spring over the whole shortening, the
+        // stop over the 2 mm.
+        state.position[1].z += limit + 2e-3;
+        let load = neck.load(&model, &state);
+        let expected = s.compression_n_per_m * (limit + 2e-3) + s.end_range_compression_n_per_m * 2e-3;
+        assert!((load.on_trunk.force.z + expected).abs() < 1e-9, "{:?}", load.on_trunk.force);
+        // The stop holds the largest push within 5 mm of the limit, where
+        // the spring alone would let it through by 13 cm.
+        let push = 140.0;
+        let past = (push - s.compression_n_per_m * limit) / (s.compression_n_per_m + s.end_range_compression_n_per_m);
+        assert!(past > 0.0 && past < 5e-3, "{past}");
+        assert!(push / s.compression_n_per_m > 0.1);
+        // Past the limit it adds to the spring in the stable step along the
+        // neck (here with no stiffer spring across it or in turning).
+        let (model, state, mut axial_only) = setup();
+        axial_only.stiffness.shear_n_per_m = 0.0;
+        axial_only.stiffness.end_range_stiffness_nm_per_deg = 0.0;
+        let step = axial_only.stable_step(&model, &state);
+        assert_eq!(step.limited_by, "end_range_compression_n_per_m");
+        assert_eq!(step.stiffness, s.compression_n_per_m + s.end_range_compression_n_per_m);
     }
 
     #[test]

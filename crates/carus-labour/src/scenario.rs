@@ -207,6 +207,9 @@ impl SpineSection {
             lateral_bending_limit_deg: self.bending_limit_deg,
             axial_rotation_limit_deg: self.axial_rotation_limit_deg,
             end_range_stiffness_nm_per_deg: self.end_range_stiffness_nm_per_deg,
+            // No stop: the joint spring alone keeps the segments together.
+            compression_limit_mm: 0.0,
+            end_range_compression_n_per_m: 0.0,
         }
     }
 
@@ -837,6 +840,11 @@ impl Scenario {
                 self.neck.axial_rotation_nm_per_deg,
             ),
             ("neck.compression_n_per_m", self.neck.compression_n_per_m),
+            ("neck.compression_limit_mm", self.neck.compression_limit_mm),
+            (
+                "neck.end_range_compression_n_per_m",
+                self.neck.end_range_compression_n_per_m,
+            ),
             ("neck.tension_n_per_m", self.neck.tension_n_per_m),
             ("neck.shear_n_per_m", self.neck.shear_n_per_m),
             ("neck.flexion_limit_deg", self.neck.flexion_limit_deg),

@@ -11,6 +11,7 @@
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
+use crate::axis::Plane;
 use crate::surface::TriSurface;
 
 /// Shoulder and hip widths of the fetus, millimetres, canonical names of
@@ -238,12 +239,25 @@ impl Trunk {
         })
     }
 
-    /// Height of the base of the neck in the trunk frame, m (negative:
-    /// below the pivot; 0.2 S, 24 mm for the 120 mm shoulders). Above it the
-    /// surface is the neck itself, which the neck joint models; below it,
-    /// shoulders, chest and back, which the head can meet (chin on chest).
-    pub fn neck_base_z_m(&self) -> f64 {
-        sections(&self.diameters)[NECK_BASE].z
+    /// The superior thoracic aperture, the plane where the neck ends and
+    /// the chest begins, positive below (towards the chest). Gray's
+    /// Anatomy (the thorax): the aperture is bounded by the first thoracic
+    /// vertebra behind and the manubrium's jugular notch in front, and
+    /// slopes down and forwards. Here it runs through the back of the neck
+    /// base (0.2 S below the pivot, at T1) and the front of the shoulder
+    /// section (0.32 S), the clavicles lying almost level from the notch to
+    /// the acromions (engineering reading for the fetus), across the
+    /// shoulders from side to side. Below it bone lies under the skin;
+    /// above it the front of the neck is throat, which the jaw presses in
+    /// flexion and the neck joint models.
+    pub fn thoracic_inlet(&self) -> Plane {
+        let sections = sections(&self.diameters);
+        let (base, shoulder) = (&sections[NECK_BASE], &sections[SHOULDER]);
+        let first_thoracic = DVec3::new(base.centre_x - base.half_depth, 0.0, base.z);
+        let jugular_notch = DVec3::new(shoulder.centre_x + shoulder.half_depth, 0.0, shoulder.z);
+        // Normal in the midline, perpendicular to the notch-T1 line, pointing caudally.
+        let n = (jugular_notch - first_thoracic).cross(DVec3::Y).normalize();
+        Plane { centre: first_thoracic, normal: if n.z < 0.0 { n } else { -n } }
     }
 
     /// The two segments of a spine that bends at the thoracolumbar junction.
@@ -316,8 +330,13 @@ mod tests {
             let (lower_bottom, lower_top) = parts.lower.bounds().unwrap();
             let l = trunk.landmarks;
             prop_assert!(l.acromion_left.z > parts.thoracolumbar.z && l.trochanter_left.z < parts.thoracolumbar.z);
-            // The neck ends above the shoulders.
-            prop_assert!(trunk.neck_base_z_m() < 0.0 && trunk.neck_base_z_m() > l.acromion_left.z);
+            // The chest begins below the pivot, lower in front than behind,
+            // with the acromions and the hips below it.
+            let inlet = trunk.thoracic_inlet();
+            prop_assert!(inlet.signed_distance(l.neck) < 0.0);
+            prop_assert!(inlet.normal.x < 0.0 && inlet.normal.y == 0.0);
+            prop_assert!(inlet.signed_distance(l.acromion_left) > 0.0 && inlet.signed_distance(l.acromion_right) > 0.0);
+            prop_assert!(inlet.signed_distance(l.trochanter_left) > 0.0);
             prop_assert!((lower_top.z - parts.thoracolumbar.z).abs() < 1e-12 && thorax_top.z <= 1e-12);
             prop_assert!((lower_bottom.z - l.breech.z).abs() < 1e-12);
         }
