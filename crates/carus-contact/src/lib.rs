@@ -1,8 +1,9 @@
 //! Contact mechanics of Carus: collision detection between the rigid fetus
-//! and the rigid bony pelvis, and between the fetus's own head and trunk, the penalty contact law with Coulomb friction
-//! and per-contact moments, the rigid-body dynamics that contact drives, the
-//! six-degree-of-freedom fetal neck, and the rigid-soft coupling helpers the
-//! labour loop uses with the TLED pelvic floor. Method, parameters and
+//! and the rigid bony pelvis, and between the fetus's own head and trunk,
+//! the penalty contact law with Coulomb friction and per-contact moments,
+//! the rigid-body dynamics that contact drives, the six-degree-of-freedom
+//! fetal neck, and the rigid-soft coupling helpers the labour loop uses
+//! with the TLED pelvic floor. Method, parameters and
 //! measured validation (C1, C3): docs/CONTACT.md.
 //!
 //! Frames: everything is in the pelvis frame (CONVENTIONS.md) unless a name

@@ -188,7 +188,7 @@ mod tests {
         let r = pair_contacts(&obstacle, &law, &samples, &moving(common, DVec3::new(0.0, 0.0, 0.2)), &other, &mut memory).unwrap();
         let f = r.on_sampled.force;
         assert!(f.z > 0.0 && f.truncate().length() < 1e-9 * f.z, "{f}");
-        // Sliding along +x relative to the ball: friction along -x, at most mu N.
+        // Sliding along +x relative to the slab: friction along -x, at most mu N.
         let mut memory = BodyContactState::new(&samples);
         let slide = common + DVec3::new(0.5, 0.0, 0.0);
         let r = pair_contacts(&obstacle, &law, &samples, &moving(slide, DVec3::new(0.0, 0.0, 0.2)), &other, &mut memory).unwrap();

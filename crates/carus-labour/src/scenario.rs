@@ -338,7 +338,7 @@ pub struct ContactSection {
     pub trunk_penalty_stiffness_pa_per_m: f64,
     /// Spacing of the contact samples on the fetal surface, mm (numerical).
     pub sample_spacing_mm: f64,
-    /// Contact of the head with the trunk below the neck: the chin meets
+    /// Contact of the head with the trunk below its thoracic inlet: the chin meets
     /// the chest and the shoulders meet the skull (the trunk's law, its
     /// soft cover on the head as on bone; the same friction). Without it
     /// the rigid bodies pass through each other wherever the neck spring

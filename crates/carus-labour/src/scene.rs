@@ -41,10 +41,10 @@ pub struct FetalBody {
     pub frame_origin: DVec3,
 }
 
-/// The head as an obstacle to the trunk below its neck: the chin meets the
-/// chest, and the shoulders meet the skull instead of sliding into it.
-/// The neck itself (the trunk's surface above the base of the neck, which
-/// overlaps the skull base at rest) is the neck joint's, not this contact's.
+/// The head as an obstacle to the trunk below its thoracic inlet: the chin
+/// meets the chest, and the shoulders meet the skull instead of sliding
+/// into it. The neck and throat above the inlet (whose top overlaps the
+/// skull base at rest) are the neck joint's, not this contact's.
 #[derive(Debug)]
 pub struct HeadTrunkContact {
     /// The head's surface in its centre-of-mass frame.
@@ -304,7 +304,7 @@ impl Scene {
     }
 
     /// Refuses a start where the head already presses into the trunk below
-    /// its neck deeper than the bone law's design penetration (a strongly
+    /// its thoracic inlet deeper than the bone law's design penetration (a strongly
     /// flexed attitude puts the chin into the chest, a strongly extended one
     /// the occiput into the back): the contact would throw the two apart at
     /// the first step. Touching (the extended face presentation's occiput on
@@ -332,7 +332,7 @@ impl Scene {
             return Err(crate::scenario::ScenarioError::Setting {
                 setting: format!("start.attitude_deg = {}", self.scenario.start.attitude_deg),
                 problem: format!(
-                    "the head starts inside the trunk below the neck, {depth} (the chin in \
+                    "the head starts inside the trunk below its thoracic inlet, {depth} (the chin in \
                      the chest when flexed, the occiput in the back when extended), more \
                      than the {:.0} mm the contact allows at the start",
                     DESIGN_PENETRATION_M * 1e3

@@ -62,7 +62,7 @@ pub struct SimState {
     #[serde(default)]
     pub spine: Option<Neck>,
     pub bone_contacts: Vec<BodyContactState>,
-    /// The trunk's samples below the neck against the head (friction
+    /// The trunk's samples below its thoracic inlet against the head (friction
     /// anchors on the head), when that contact is on.
     #[serde(default)]
     pub head_trunk: Option<BodyContactState>,
@@ -314,7 +314,7 @@ impl<'a> Simulation<'a> {
             reports.push(report);
         }
 
-        // The head against the trunk below the neck (chin on chest).
+        // The head against the trunk below its thoracic inlet (chin on chest).
         let mut head_trunk = Wrench::default();
         if let Some(pair) = &scene.head_trunk {
             let (trunk, head) = (self.motion(TRUNK), self.motion(HEAD));

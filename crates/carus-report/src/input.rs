@@ -49,7 +49,7 @@ pub struct AxialMomentSample {
     /// neck's springs.
     #[serde(default)]
     pub neck_push_nm: f64,
-    /// The fetus's own trunk pressing on the head below the neck (chin on
+    /// The fetus's own trunk pressing on the head below its thoracic inlet (chin on
     /// chest, shoulders on the skull).
     #[serde(default)]
     pub trunk_nm: f64,

@@ -255,9 +255,10 @@ impl Trunk {
         let (base, shoulder) = (&sections[NECK_BASE], &sections[SHOULDER]);
         let first_thoracic = DVec3::new(base.centre_x - base.half_depth, 0.0, base.z);
         let jugular_notch = DVec3::new(shoulder.centre_x + shoulder.half_depth, 0.0, shoulder.z);
-        // Normal in the midline, perpendicular to the notch-T1 line, pointing caudally.
-        let n = (jugular_notch - first_thoracic).cross(DVec3::Y).normalize();
-        Plane { centre: first_thoracic, normal: if n.z < 0.0 { n } else { -n } }
+        // In the midline, perpendicular to the T1-notch line; the notch
+        // lies ventral of T1, so y x (notch - T1) points caudally.
+        let normal = DVec3::Y.cross(jugular_notch - first_thoracic).normalize();
+        Plane { centre: first_thoracic, normal }
     }
 
     /// The two segments of a spine that bends at the thoracolumbar junction.
