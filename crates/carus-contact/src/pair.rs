@@ -29,8 +29,6 @@ pub struct PairReport {
     pub deepest_m: f64,
     /// Samples deeper than the obstacle's search depth (no force).
     pub too_deep: usize,
-    /// Summed normal spring stiffness of the active contacts, N/m.
-    pub normal_stiffness_n_per_m: f64,
 }
 
 /// Motion of `body` seen from the frame of `frame` (both in the pelvis
@@ -67,7 +65,6 @@ pub fn pair_contacts(
         active: local.contacts.len(),
         deepest_m: local.deepest_m,
         too_deep: local.too_deep,
-        normal_stiffness_n_per_m: local.normal_stiffness_n_per_m,
         ..PairReport::default()
     };
     for c in &local.contacts {

@@ -94,7 +94,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
                 );
             }
             let record = carus_labour::run(&scenario, &out_dir, &options, &mut observer)
-                .with_context(|| format!("scenario {}", args.scenario.as_deref().unwrap_or("normal")));
+                .with_context(|| format!("scenario {}", args.scenario.as_deref().unwrap_or(DEFAULT_SCENARIO)));
             (out_dir, record)
         }
     };
@@ -220,8 +220,11 @@ pub(super) fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result
     )?)
 }
 
+/// The built-in scenario `carus run` runs when given none.
+const DEFAULT_SCENARIO: &str = "normal";
+
 pub(super) fn load(name: Option<&str>) -> anyhow::Result<Scenario> {
-    let name = name.unwrap_or("normal");
+    let name = name.unwrap_or(DEFAULT_SCENARIO);
     if BUILTINS.iter().any(|(n, _)| *n == name) {
         return Ok(Scenario::builtin(name)?);
     }
