@@ -23,6 +23,18 @@ pub const STEP_BYTES: u64 = 240;
 /// Storage buffers the widest kernels (element, node) bind.
 pub const STORAGE_BUFFERS_PER_KERNEL: u32 = 8;
 
+/// wgpu's checks on the kernels, all but the forced loop bound: naga wraps
+/// every loop in an iteration counter, which keeps the driver from
+/// unrolling the loops over an element's nodes, so their arrays (u, dh,
+/// the nodal forces) live in local memory instead of registers. With it
+/// the H8 step took 2.4 times as long on an H100 (docs/PERFORMANCE.md).
+/// Bounds checks on buffers and arrays stay on.
+const RUNTIME_CHECKS: wgpu::ShaderRuntimeChecks = {
+    let mut checks = wgpu::ShaderRuntimeChecks::checked();
+    checks.force_loop_bounding = false;
+    checks
+};
+
 /// How a kernel uses one binding.
 #[derive(Clone, Copy)]
 enum Access {
@@ -129,13 +141,20 @@ impl Kernels {
         use Access::{Read, ReadWrite};
         Ok(gpu.scoped("compiling the TLED kernels", || {
             let module = |label: &str, body: &str| {
-                gpu.device()
-                    .create_shader_module(wgpu::ShaderModuleDescriptor {
-                        label: Some(label),
-                        source: wgpu::ShaderSource::Wgsl(
-                            source(body, nodes_per_element, hourglass, anp).into(),
-                        ),
-                    })
+                let descriptor = wgpu::ShaderModuleDescriptor {
+                    label: Some(label),
+                    source: wgpu::ShaderSource::Wgsl(
+                        source(body, nodes_per_element, hourglass, anp).into(),
+                    ),
+                };
+                // SAFETY: RUNTIME_CHECKS drops only the loop bound that wgpu
+                // adds against infinite loops, and every loop in these
+                // kernels ends: each runs to NPE, 4 or 3, or over a range
+                // read from the model's own tables, and its counter only grows.
+                unsafe {
+                    gpu.device()
+                        .create_shader_module_trusted(descriptor, RUNTIME_CHECKS)
+                }
             };
             // The element and node kernels bind the same arrays 2-9 and write the last two.
             let step_bindings = [

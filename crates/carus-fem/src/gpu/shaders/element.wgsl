@@ -96,14 +96,17 @@ fn element_forces(
     if (HOURGLASS) {
         // q_g = sum_a s_g,a u_a; f_a += sum_g s_g,a q_g (stiffness form).
         // Layout [((block * 4 + g) * 8 + a) * LANES + lane] (kernel::blocks).
+        // Each s_g,a is loaded once and kept for the second sum.
         for (var g = 0u; g < 4u; g++) {
             let base = (e / LANES * 4u + g) * NPE * LANES + lane;
+            var s_g: array<f32, NPE>;
             var q = vec3<f32>(0.0);
             for (var a = 0u; a < NPE; a++) {
-                q += extra[base + a * LANES] * u[a];
+                s_g[a] = extra[base + a * LANES];
+                q += s_g[a] * u[a];
             }
             for (var a = 0u; a < NPE; a++) {
-                out[a] += extra[base + a * LANES] * q;
+                out[a] += s_g[a] * q;
             }
         }
     }
