@@ -4,6 +4,13 @@
 //! surface (imposed displacements: the Dirichlet part); the tissue's
 //! reactions on those nodes act back on the body (the Neumann part).
 //!
+//! A [`TissueContact::sliding`] contact is frictionless: its nodes are held
+//! only along the body's normal and slide freely on the tangent plane
+//! (carus-fem's `impose_sliding`), and the body takes only the normal part
+//! of their reactions, since a frictionless interface carries no
+//! tangential traction. Otherwise a node is held in all three directions
+//! where it was put, and the body takes its whole reaction.
+//!
 //! Works on plain node arrays so it serves any solver: the labour loop
 //! calls [`TissueContact::update`] with the node positions, imposes the
 //! targets through the solver (carus-fem's `impose_displacements`, target
@@ -79,6 +86,9 @@ pub struct TissueContact {
     /// surface; none before its first).
     #[serde(default)]
     last_distance: Vec<Option<f64>>,
+    /// Frictionless: nodes held along the normal only, normal reactions only.
+    #[serde(default)]
+    sliding: bool,
 }
 
 impl TissueContact {
@@ -96,7 +106,22 @@ impl TissueContact {
             kept: Vec::new(),
             catch_crossings: false,
             last_distance: Vec::new(),
+            sliding: false,
         })
+    }
+
+    /// Makes the contact frictionless: the caller holds its nodes along the
+    /// normal only (carus-fem's `impose_sliding`, with [`HeldNode::normal`]),
+    /// and [`Self::reaction`] passes on only the normal part of each
+    /// node's force.
+    pub fn sliding(mut self) -> Self {
+        self.sliding = true;
+        self
+    }
+
+    /// Whether the contact is frictionless ([`Self::sliding`]).
+    pub fn slides(&self) -> bool {
+        self.sliding
     }
 
     /// Also holds nodes that crossed the surface since their last query,
@@ -229,6 +254,7 @@ impl TissueContact {
                 out.released += 1;
                 continue;
             }
+            let f = if self.sliding { h.normal * f.dot(h.normal) } else { f };
             out.force += f;
             out.torque_about_com += (h.target - com).cross(f);
             out.moment_about_pivot += (h.target - pivot).cross(f);
@@ -406,6 +432,29 @@ mod tests {
         let again: Vec<u32> = follow.update(&body, &moved, &positions).iter().map(|h| h.node).collect();
         assert!(!again.contains(&held[0].node), "pulling node kept");
         assert_eq!(again.len(), n - 1);
+    }
+
+    /// A frictionless contact takes only the normal part of each node's
+    /// force: a tangential drag of the tissue along the surface moves no body.
+    #[test]
+    fn a_sliding_contact_takes_normal_forces_only() {
+        let body = ball();
+        let pose = RigidPose::new(DVec3::new(0.0, 0.0, 0.03), DQuat::IDENTITY);
+        let nodes = sheet(0.0);
+        let mut contact = TissueContact::new(0.03).unwrap().sliding();
+        assert!(contact.slides());
+        let held = contact.update(&body, &pose, &nodes).to_vec();
+        assert!(held.len() > 10);
+        let along = |h: &HeldNode| h.normal.any_orthonormal_vector();
+        let forces: Vec<DVec3> = held.iter().map(|h| -0.1 * h.normal + 0.05 * along(h)).collect();
+        let r = contact.reaction(&forces, pose.position_m, pose.position_m).unwrap();
+        let normal_only: DVec3 = held.iter().map(|h| -0.1 * h.normal).sum();
+        assert!((r.force - normal_only).length() < 1e-12);
+        let mut whole = TissueContact::new(0.03).unwrap();
+        whole.update(&body, &pose, &nodes);
+        let all: DVec3 = forces.iter().sum();
+        let r = whole.reaction(&forces, pose.position_m, pose.position_m).unwrap();
+        assert!((r.force - all).length() < 1e-12);
     }
 
     #[test]

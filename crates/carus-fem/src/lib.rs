@@ -9,6 +9,7 @@
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod baseline;
+pub mod coupling;
 pub mod error;
 pub mod fields;
 #[cfg(feature = "gpu")]
@@ -23,6 +24,7 @@ pub mod quality;
 pub mod solver;
 pub mod validation;
 
+pub use coupling::CoupledNodes;
 pub use error::FemError;
 pub use fields::{ElementFields, Energies};
 pub use loads::{BoundaryConditions, FixedDofs, ImposedDisplacement, LoadShape, NodalForce, SurfacePressure};

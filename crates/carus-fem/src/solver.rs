@@ -5,7 +5,8 @@
 //! 2. `element_forces`: per-element internal forces into force copies
 //!    (T4ANP first averages the dilatation per node);
 //! 3. `advance_nodes`: gather per node + central difference with damping;
-//! 4. `enforce_constraints`: fixed, imposed and coupled displacements at t_{n+1};
+//! 4. `enforce_constraints`: fixed, imposed and coupled displacements at t_{n+1}
+//!    (a sliding coupled node only along its normal);
 //! 5. `commit`: rotate the displacement buffers, advance time.
 //!
 //! A failing stage returns before the commit, so the state stays the last
@@ -15,6 +16,7 @@ use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
+use crate::coupling::{check_node, CoupledNodes};
 use crate::error::FemError;
 use crate::fields::{self, ElementFields, Energies};
 use crate::kernel::blocks::KernelData;
@@ -45,6 +47,19 @@ pub struct SolverSnapshot {
     pub previous_displacements_m: Vec<[f64; 3]>,
     /// Displacements held through the coupling API, by node.
     pub coupled: Vec<(u32, [f64; 3])>,
+    /// The normals of the held nodes that slide (absent in snapshots
+    /// written before sliding holds existed).
+    #[serde(default)]
+    pub sliding: Vec<(u32, [f64; 3])>,
+}
+
+impl SolverSnapshot {
+    pub(crate) fn coupling(&self) -> CoupledNodes {
+        CoupledNodes {
+            held: self.coupled.clone(),
+            sliding: self.sliding.clone(),
+        }
+    }
 }
 
 /// Boundary conditions resolved to degree-of-freedom lists.
@@ -95,51 +110,6 @@ pub(crate) fn substeps_for(
     }
 }
 
-/// Merges displacements held through the coupling API into `coupled`
-/// (sorted by node; a node given again takes its new value), after checking
-/// every node and value (shared with the GPU backend).
-pub(crate) fn merge_imposed(
-    coupled: &mut Vec<(u32, [f64; 3])>,
-    nodes: &[u32],
-    displacements_m: &[[f64; 3]],
-    node_count: usize,
-) -> Result<(), FemError> {
-    if nodes.len() != displacements_m.len() {
-        return Err(FemError::InvalidBoundaryCondition {
-            reason: format!(
-                "{} nodes but {} displacements given to impose_displacements",
-                nodes.len(),
-                displacements_m.len()
-            ),
-        });
-    }
-    for (&n, d) in nodes.iter().zip(displacements_m) {
-        check_node("impose_displacements", n, node_count)?;
-        if !d.iter().all(|v| v.is_finite()) {
-            return Err(FemError::InvalidBoundaryCondition {
-                reason: format!("imposed displacement of node {n} is not finite"),
-            });
-        }
-        match coupled.binary_search_by_key(&n, |&(m, _)| m) {
-            Ok(i) => coupled[i].1 = *d,
-            Err(i) => coupled.insert(i, (n, *d)),
-        }
-    }
-    Ok(())
-}
-
-/// A boundary condition's node must exist (shared with the GPU backend).
-pub(crate) fn check_node(what: &'static str, n: u32, nn: usize) -> Result<(), FemError> {
-    if (n as usize) < nn {
-        Ok(())
-    } else {
-        Err(FemError::BoundaryNodeOutOfRange {
-            what,
-            node: n,
-            node_count: nn,
-        })
-    }
-}
 
 impl CompiledLoads {
     fn new(bc: &BoundaryConditions, nn: usize) -> Result<Self, FemError> {
@@ -359,7 +329,7 @@ impl<T: Real> State<T> {
     fn enforce_constraints(
         &mut self,
         loads: &CompiledLoads,
-        coupled: &[(u32, [f64; 3])],
+        coupled: &CoupledNodes,
         t_next: f64,
     ) {
         for &d in &loads.fixed_dofs {
@@ -371,9 +341,12 @@ impl<T: Real> State<T> {
                 self.u_next[d as usize] = T::from_f64(s * v);
             }
         }
-        for (n, u) in coupled {
+        for &(n, target) in &coupled.held {
+            let b = 3 * n as usize;
+            let free = [0, 1, 2].map(|c| self.u_next[b + c].to_f64());
+            let u = CoupledNodes::constrain(target, coupled.normal_of(n), free);
             for c in 0..3 {
-                self.u_next[3 * *n as usize + c] = T::from_f64(u[c]);
+                self.u_next[b + c] = T::from_f64(u[c]);
             }
         }
     }
@@ -396,7 +369,7 @@ impl<T: Real> State<T> {
         k: &KernelData<T>,
         anp: bool,
         loads: &CompiledLoads,
-        coupled: &[(u32, [f64; 3])],
+        coupled: &CoupledNodes,
         reference: &[[f64; 3]],
         t: f64,
         t_next: f64,
@@ -458,7 +431,7 @@ pub struct TledSolver {
     time_s: f64,
     steps: u64,
     substeps: u64,
-    coupled: Vec<(u32, [f64; 3])>,
+    coupled: CoupledNodes,
     /// Whether the buffers still hold the state before the last commit.
     can_roll_back: bool,
     state: StateData,
@@ -498,7 +471,7 @@ impl TledSolver {
             time_s: 0.0,
             steps: 0,
             substeps: 0,
-            coupled: Vec::new(),
+            coupled: CoupledNodes::default(),
             can_roll_back: false,
             state,
         })
@@ -630,16 +603,31 @@ impl TledSolver {
         nodes: &[u32],
         displacements_m: &[[f64; 3]],
     ) -> Result<(), FemError> {
-        merge_imposed(&mut self.coupled, nodes, displacements_m, self.model.node_count())
+        self.coupled.hold(nodes, displacements_m, self.model.node_count())
     }
 
-    /// Frees every node held by [`Self::impose_displacements`].
+    /// Holds the given nodes on the planes through the given displacements
+    /// square to `normals`, free to slide along them (frictionless contact:
+    /// [`crate::coupling`]), from the next step on, until
+    /// [`Self::release_imposed`].
+    pub fn impose_sliding(
+        &mut self,
+        nodes: &[u32],
+        displacements_m: &[[f64; 3]],
+        normals: &[[f64; 3]],
+    ) -> Result<(), FemError> {
+        self.coupled
+            .hold_sliding(nodes, displacements_m, normals, self.model.node_count())
+    }
+
+    /// Frees every node held by [`Self::impose_displacements`] or
+    /// [`Self::impose_sliding`].
     pub fn release_imposed(&mut self) {
         self.coupled.clear();
     }
 
     /// Nodes currently held through the coupling API.
-    pub fn imposed(&self) -> &[(u32, [f64; 3])] {
+    pub fn imposed(&self) -> &CoupledNodes {
         &self.coupled
     }
 
@@ -721,7 +709,8 @@ impl TledSolver {
             substeps: self.substeps,
             displacements_m,
             previous_displacements_m,
-            coupled: self.coupled.clone(),
+            coupled: self.coupled.held.clone(),
+            sliding: self.coupled.sliding.clone(),
         }
     }
 
@@ -747,9 +736,8 @@ impl TledSolver {
                 });
             }
         }
-        for &(n, _) in &snap.coupled {
-            check_node("a snapshot's coupled displacement", n, nn)?;
-        }
+        let coupled = snap.coupling();
+        coupled.check_restored(nn)?;
         with_state!(self, |_k, s| {
             State::from_vec3(&mut s.u_curr, &snap.displacements_m);
             State::from_vec3(&mut s.u_prev, &snap.previous_displacements_m);
@@ -757,7 +745,7 @@ impl TledSolver {
         self.time_s = snap.time_s;
         self.steps = snap.steps;
         self.substeps = snap.substeps;
-        self.coupled = snap.coupled.clone();
+        self.coupled = coupled;
         self.can_roll_back = false;
         Ok(())
     }
@@ -1157,8 +1145,8 @@ mod run_tests {
         }
     }
 
-    #[test]
-    fn coupling_holds_and_releases_nodes() {
+    /// A damped 2^3 cube fixed on its x = 0 face, for the coupling tests.
+    fn damped_cube_fixed_at_x0() -> (crate::mesh::Mesh, Arc<TledModel>, BoundaryConditions) {
         let (mesh, m) = model(
             2,
             ModelOptions {
@@ -1168,6 +1156,12 @@ mod run_tests {
         );
         let mut bc = BoundaryConditions::default();
         bc.fix_nodes(&mesh.node_sets["x0"]);
+        (mesh, m, bc)
+    }
+
+    #[test]
+    fn coupling_holds_and_releases_nodes() {
+        let (mesh, m, bc) = damped_cube_fixed_at_x0();
         let mut s = TledSolver::new(
             m.clone(),
             &bc,
@@ -1194,6 +1188,61 @@ mod run_tests {
         s.advance_to(3.0).unwrap();
         let back = s.displacement(held[0]).unwrap();
         assert!(back[0].abs() < 1e-4, "{back:?}");
+    }
+
+    /// A face pressed onto a frictionless wall (x = 1 cm) and pulled along
+    /// it: held sliding, it slides and keeps to the wall, and the wall
+    /// carries no tangential load at rest; held in full, it does not move.
+    #[test]
+    fn a_sliding_hold_keeps_the_node_on_its_plane_and_lets_it_slide() {
+        let (mesh, m, mut bc) = damped_cube_fixed_at_x0();
+        let wall = mesh.node_sets["x1"].clone();
+        let pull = [0.0, 0.05, 0.0];
+        bc.forces.push(crate::loads::NodalForce {
+            nodes: wall.clone(),
+            force_n: pull,
+            shape: LoadShape::Step,
+        });
+        let run = |sliding: bool| {
+            let mut s = TledSolver::new(
+                m.clone(),
+                &bc,
+                0.9 * m.critical_time_step(),
+                StepControl::Refuse,
+            )
+            .unwrap();
+            let at = vec![[0.01, 0.0, 0.0]; wall.len()];
+            if sliding {
+                let normals = vec![[-2.0, 0.0, 0.0]; wall.len()];
+                assert!(s.impose_sliding(&wall, &at, &normals[1..]).is_err());
+                s.impose_sliding(&wall, &at, &normals).unwrap();
+            } else {
+                s.impose_displacements(&wall, &at).unwrap();
+            }
+            s.advance_to(3.0).unwrap();
+            s.update_internal_forces().unwrap();
+            (s.clone(), wall.iter().map(|&n| s.displacement(n).unwrap()).collect::<Vec<_>>())
+        };
+        let (s, slid) = run(true);
+        for u in &slid {
+            assert!((u[0] - 0.01).abs() < 1e-15, "{u:?}");
+            assert!(u[1] > 1e-4, "{u:?}");
+        }
+        // At rest the tissue's own force balances the pull along the wall.
+        let f = s.internal_forces(&wall).unwrap();
+        for v in &f {
+            assert!((v[1] - pull[1]).abs() < 1e-3 * pull[1], "{v:?}");
+        }
+        let snapshot = s.snapshot();
+        assert_eq!(snapshot.sliding.len(), wall.len());
+        let mut resumed = TledSolver::new(m.clone(), &bc, 0.9 * m.critical_time_step(), StepControl::Refuse)
+            .unwrap();
+        resumed.restore(&snapshot).unwrap();
+        assert_eq!(resumed.imposed(), s.imposed());
+        let (_, held) = run(false);
+        for u in &held {
+            assert_eq!(*u, [0.01, 0.0, 0.0]);
+        }
     }
 
     #[test]

@@ -242,6 +242,43 @@ fn coupling_hooks_agree_with_the_cpu_backend() {
     assert!(max_distance(&ua, &ub) < 1e-4 * EDGE_M);
 }
 
+/// Nodes pressed onto a frictionless wall and pulled along it (sliding
+/// holds): both backends keep them on the wall and let them slide alike.
+#[test]
+fn sliding_holds_agree_with_the_cpu_backend() {
+    let gpu = device();
+    let mesh = box_h8([EDGE_M; 3], [3, 3, 3]);
+    let m = model(&mesh, TetFormulation::T4, Precision::F64);
+    let wall = mesh.node_sets["x1"].clone();
+    let mut bcs = BoundaryConditions::default();
+    bcs.fix_nodes(&mesh.node_sets["x0"]);
+    bcs.forces.push(NodalForce {
+        nodes: wall.clone(),
+        force_n: [0.0, 0.02, 0.0],
+        shape: LoadShape::Step,
+    });
+    let dt = 0.5 * m.critical_time_step();
+    let mut cpu = BackendSolver::Cpu(Box::new(
+        TledSolver::new(Arc::clone(&m), &bcs, dt, StepControl::Refuse).unwrap(),
+    ));
+    let mut g = BackendSolver::Gpu(Box::new(
+        GpuSolver::new(&gpu, m, &bcs, dt, StepControl::Refuse, GpuOptions::default()).unwrap(),
+    ));
+    let at = vec![[-0.002, 0.0, 0.0]; wall.len()];
+    let normals = vec![[1.0, 0.0, 0.0]; wall.len()];
+    for s in [&mut cpu, &mut g] {
+        s.impose_sliding(&wall, &at, &normals).unwrap();
+        s.advance_steps(400).unwrap();
+    }
+    let (ua, ub) = (cpu.displacements().unwrap(), g.displacements().unwrap());
+    for &n in &wall {
+        let u = ub[n as usize];
+        assert!((u[0] + 0.002).abs() < 1e-7, "node {n} off the wall: {u:?}");
+        assert!(u[1] > 1e-4, "node {n} did not slide: {u:?}");
+    }
+    assert!(max_distance(&ua, &ub) < 1e-4 * EDGE_M);
+}
+
 /// A loaded 3^3 H8 cube in f32 on `gpu` at half the critical step.
 fn loaded_cube(gpu: &GpuDevice, options: GpuOptions) -> GpuSolver {
     let mesh = box_h8([EDGE_M; 3], [3, 3, 3]);

@@ -22,7 +22,7 @@ pub mod sim;
 
 pub use record::{KeyMoment, RunRecord, RunSummary};
 pub use run::{resume, run, Observer, RunOptions, SilentObserver};
-pub use scenario::{Scenario, ScenarioError, BUILTINS};
+pub use scenario::{FloorCoupling, Scenario, ScenarioError, BUILTINS};
 pub use scene::Scene;
 pub use sim::{SimState, Simulation};
 

@@ -435,6 +435,16 @@ pub struct FloorSection {
     /// element through its thickness (the inverted elements of
     /// docs/LABOUR.md). Such a node is left free until it comes out.
     pub coupling_reach_mm: f64,
+    /// How the floor's nodes are held where the fetus or the bone meets
+    /// them. `sliding` (the default): frictionless contact, a node held only
+    /// along the surface's normal and free to slide along it, and only the
+    /// normal part of its reaction acting on the fetus (a frictionless
+    /// interface carries normal traction only, Johnson 1985, "Contact
+    /// Mechanics", ch. 1; the fetal scalp on the amniotic-fluid-wetted
+    /// vaginal wall and levator, docs/LABOUR.md). `held`: a node held in
+    /// all three directions where it was put and its whole reaction acting
+    /// on the fetus, as every run before the nineteenth session was.
+    pub coupling: FloorCoupling,
     /// Volume ratio J below which a floor element counts as crushed, and the
     /// fetus lets go of its nodes (0 never lets go); an element with a
     /// corner turned inside out (scaled Jacobian below 0) counts as crushed
@@ -472,6 +482,7 @@ impl Default for FloorSection {
             density_kg_per_m3: 1060.0,
             damping_per_s: 400.0,
             coupling_reach_mm: 1.0,
+            coupling: FloorCoupling::Sliding,
             crushed_volume_ratio: 0.5,
             hourglass_coefficient: 0.075,
             hourglass_modulus: carus_fem::HourglassModulus::Dilatational,
@@ -483,6 +494,16 @@ impl Default for FloorSection {
             },
         }
     }
+}
+
+/// `[floor] coupling`: how floor nodes are held on the fetus and the bone.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FloorCoupling {
+    /// Along the normal only, sliding freely (frictionless).
+    Sliding,
+    /// In all three directions where the node was put.
+    Held,
 }
 
 /// `[numerics]`: numerical settings (none should shape the outcome beyond accuracy).
@@ -1182,6 +1203,13 @@ mod tests {
         assert!(e.contains("hourglass_modulus") && e.contains("shear"), "{e}");
         let s = parse("name = \"x\"\n[floor]\nhourglass_modulus = \"shear\"\n").unwrap();
         assert_eq!(s.floor.hourglass_modulus, carus_fem::HourglassModulus::Shear);
+        assert_eq!(s.floor.coupling, FloorCoupling::Sliding);
+        let e = parse("name = \"x\"\n[floor]\ncoupling = \"glued\"\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("coupling") && e.contains("sliding") && e.contains("held"), "{e}");
+        let s = parse("name = \"x\"\n[floor]\ncoupling = \"held\"\n").unwrap();
+        assert_eq!(s.floor.coupling, FloorCoupling::Held);
         let e = parse("name = \"x\"\n[spine]\nenabled = true\n[trunk]\nenabled = false\n")
             .unwrap_err()
             .to_string();

@@ -21,6 +21,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::expulsion::Expulsion;
 use crate::loads::{self, AxialMoments, Body, LoadSample, SiteLoad};
+use crate::scenario::FloorCoupling;
 use crate::scene::{Scene, HEAD, LOWER_TRUNK, TRUNK};
 use crate::LabourError;
 
@@ -147,15 +148,20 @@ impl<'a> Simulation<'a> {
         let floor = match solver.as_ref() {
             Some((s, _)) => {
                 let reach = scene.scenario.floor.coupling_reach_mm * 1e-3;
+                let contact = || -> Result<TissueContact, LabourError> {
+                    let c = TissueContact::new(reach)?;
+                    Ok(match scene.scenario.floor.coupling {
+                        FloorCoupling::Sliding => c.sliding(),
+                        FloorCoupling::Held => c,
+                    })
+                };
                 let n = scene.bodies.len();
                 Some(FloorState {
                     solver: s.snapshot(),
-                    contacts: (0..n)
-                        .map(|_| TissueContact::new(reach))
-                        .collect::<Result<_, _>>()?,
+                    contacts: (0..n).map(|_| contact()).collect::<Result<_, _>>()?,
                     // Tissue never passes into bone: a node the floor
                     // throws through the wall within a step is caught too.
-                    bone: TissueContact::new(reach)?.catching_crossings(),
+                    bone: contact()?.catching_crossings(),
                 })
             }
             None => None,
@@ -450,6 +456,7 @@ impl<'a> Simulation<'a> {
                         pose: &RigidPose,
                         prescribed: &mut Vec<bool>|
          -> Result<Vec<u32>, LabourError> {
+            let slides = contact.slides();
             let held = contact.update_except(collider, pose, &nodes, prescribed);
             let ids: Vec<u32> = held.iter().map(|h| h.node).collect();
             for &i in &ids {
@@ -459,7 +466,12 @@ impl<'a> Simulation<'a> {
                 .iter()
                 .map(|h| (h.target - floor.reference[h.node as usize]).to_array())
                 .collect();
-            solver.impose_displacements(&ids, &targets)?;
+            if slides {
+                let normals: Vec<[f64; 3]> = held.iter().map(|h| h.normal.to_array()).collect();
+                solver.impose_sliding(&ids, &targets, &normals)?;
+            } else {
+                solver.impose_displacements(&ids, &targets)?;
+            }
             Ok(ids)
         };
         let poses = &self.state.bodies;

@@ -195,6 +195,18 @@ impl BackendSolver {
         }
     }
 
+    pub fn impose_sliding(
+        &mut self,
+        nodes: &[u32],
+        displacements_m: &[[f64; 3]],
+        normals: &[[f64; 3]],
+    ) -> Result<(), GpuError> {
+        match self {
+            BackendSolver::Cpu(s) => Ok(s.impose_sliding(nodes, displacements_m, normals)?),
+            BackendSolver::Gpu(g) => g.impose_sliding(nodes, displacements_m, normals),
+        }
+    }
+
     pub fn release_imposed(&mut self) {
         match self {
             BackendSolver::Cpu(s) => s.release_imposed(),

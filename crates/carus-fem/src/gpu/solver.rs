@@ -26,7 +26,8 @@ use crate::kernel::blocks::KernelData;
 use crate::kernel::lanes::Real;
 use crate::loads::BoundaryConditions;
 use crate::model::{KernelModel, TledModel};
-use crate::solver::{merge_imposed, substeps_for, SolverSnapshot, StepControl};
+use crate::coupling::CoupledNodes;
+use crate::solver::{substeps_for, SolverSnapshot, StepControl};
 
 use super::buffers::{check_limits, storage, ModelArrays, ModelBuffers, Planned};
 use super::device::GpuDevice;
@@ -129,7 +130,7 @@ pub struct GpuSolver {
     time_s: f64,
     steps: u64,
     substeps: u64,
-    coupled: Vec<(u32, [f64; 3])>,
+    coupled: CoupledNodes,
     coupled_uploaded: bool,
     probe_nodes: Vec<u32>,
     /// Measured wall time of one sub-step (submit to finish), s.
@@ -263,7 +264,7 @@ impl GpuSolver {
             time_s: 0.0,
             steps: 0,
             substeps: 0,
-            coupled: Vec::new(),
+            coupled: CoupledNodes::default(),
             coupled_uploaded: true,
             probe_nodes: Vec::new(),
             substep_wall_s: None,
@@ -414,7 +415,7 @@ impl GpuSolver {
             self.element_count,
             self.node_count,
             self.loads.triangle_count() as u32,
-            self.coupled.len() as u32,
+            self.coupled.held.len() as u32,
             self.probe_nodes.len() as u32,
             self.slots_at,
             self.triangle_forces_at,
@@ -526,7 +527,7 @@ impl GpuSolver {
                     &self.kernels.coupled,
                     &self.groups.coupled[r],
                     offset,
-                    self.coupled.len() as u32,
+                    self.coupled.held.len() as u32,
                 );
             }
         }
@@ -542,15 +543,23 @@ impl GpuSolver {
         if self.coupled_uploaded {
             return Ok(());
         }
+        // [node, target xyz, normal xyz (zero: held in every direction), unused].
         let records: Vec<u32> = self
             .coupled
+            .held
             .iter()
-            .flat_map(|(n, u)| {
+            .flat_map(|&(n, u)| {
+                let normal = self.coupled.normal_of(n).unwrap_or([0.0; 3]);
+                let bits = |v: f64| (v as f32).to_bits();
                 [
-                    *n,
-                    (u[0] as f32).to_bits(),
-                    (u[1] as f32).to_bits(),
-                    (u[2] as f32).to_bits(),
+                    n,
+                    bits(u[0]),
+                    bits(u[1]),
+                    bits(u[2]),
+                    bits(normal[0]),
+                    bits(normal[1]),
+                    bits(normal[2]),
+                    0,
                 ]
             })
             .collect();
@@ -834,7 +843,23 @@ impl GpuSolver {
         nodes: &[u32],
         displacements_m: &[[f64; 3]],
     ) -> Result<(), GpuError> {
-        merge_imposed(&mut self.coupled, nodes, displacements_m, self.node_count as usize)?;
+        self.coupled
+            .hold(nodes, displacements_m, self.node_count as usize)?;
+        self.coupled_uploaded = false;
+        Ok(())
+    }
+
+    /// Holds the given nodes on the planes through the given displacements
+    /// square to `normals`, free to slide along them (as
+    /// [`crate::TledSolver::impose_sliding`]); only these nodes are uploaded.
+    pub fn impose_sliding(
+        &mut self,
+        nodes: &[u32],
+        displacements_m: &[[f64; 3]],
+        normals: &[[f64; 3]],
+    ) -> Result<(), GpuError> {
+        self.coupled
+            .hold_sliding(nodes, displacements_m, normals, self.node_count as usize)?;
         self.coupled_uploaded = false;
         Ok(())
     }
@@ -846,7 +871,7 @@ impl GpuSolver {
     }
 
     /// Nodes currently held through the coupling API.
-    pub fn imposed(&self) -> &[(u32, [f64; 3])] {
+    pub fn imposed(&self) -> &CoupledNodes {
         &self.coupled
     }
 
@@ -1016,7 +1041,8 @@ impl GpuSolver {
             substeps: self.substeps,
             displacements_m: vec3s(&self.read_slot(curr, "reading the state back")?),
             previous_displacements_m: vec3s(&self.read_slot(prev, "reading the state back")?),
-            coupled: self.coupled.clone(),
+            coupled: self.coupled.held.clone(),
+            sliding: self.coupled.sliding.clone(),
         })
     }
 
@@ -1035,14 +1061,8 @@ impl GpuSolver {
                 .into());
             }
         }
-        if let Some(&(n, _)) = snap.coupled.iter().find(|(n, _)| *n as usize >= nn) {
-            return Err(FemError::BoundaryNodeOutOfRange {
-                what: "a snapshot's coupled displacement",
-                node: n,
-                node_count: nn,
-            }
-            .into());
-        }
+        let coupled = snap.coupling();
+        coupled.check_restored(nn)?;
         let (curr, prev) = Self::current_slots(snap.substeps);
         let flat =
             |v: &[[f64; 3]]| -> Vec<f32> { v.iter().flat_map(|p| p.map(|c| c as f32)).collect() };
@@ -1061,7 +1081,7 @@ impl GpuSolver {
         self.time_s = snap.time_s;
         self.steps = snap.steps;
         self.substeps = snap.substeps;
-        self.coupled = snap.coupled.clone();
+        self.coupled = coupled;
         self.coupled_uploaded = false;
         Ok(())
     }

@@ -3,7 +3,8 @@
 // and the internal forces of a few probed nodes (read back for coupling).
 
 // Pressure: per triangle [n0, n1, n2, shape, pressure (f32 bits)].
-// Coupled: per node [node, ux, uy, uz (f32 bits)]. Probe: node indices.
+// Coupled: per node [node, target ux, uy, uz, normal nx, ny, nz (f32 bits),
+// unused]; a zero normal holds the node in every direction. Probe: node indices.
 @group(0) @binding(2) var<storage, read> records: array<u32>;
 @group(0) @binding(3) var<storage, read> reference: array<f32>;
 @group(0) @binding(4) var<storage, read> displacement: array<f32>;
@@ -42,7 +43,9 @@ fn surface_pressure(
     }
 }
 
-// Displacements imposed through the coupling API win over every other condition.
+// Displacements imposed through the coupling API win over every other
+// condition; a sliding node keeps its free update along its plane and takes
+// its target only along the normal (coupling.rs, CoupledNodes::constrain).
 @compute @workgroup_size(WORKGROUP)
 fn hold_coupled(
     @builtin(workgroup_id) wg: vec3<u32>,
@@ -53,11 +56,18 @@ fn hold_coupled(
     if (i >= params.coupled_count) {
         return;
     }
-    let r = 4u * i;
+    let r = 8u * i;
     let base = 3u * records[r];
-    target_displacement[base] = bitcast<f32>(records[r + 1u]);
-    target_displacement[base + 1u] = bitcast<f32>(records[r + 2u]);
-    target_displacement[base + 2u] = bitcast<f32>(records[r + 3u]);
+    let held = vec3<f32>(bitcast<f32>(records[r + 1u]), bitcast<f32>(records[r + 2u]), bitcast<f32>(records[r + 3u]));
+    let normal = vec3<f32>(bitcast<f32>(records[r + 4u]), bitcast<f32>(records[r + 5u]), bitcast<f32>(records[r + 6u]));
+    var u = held;
+    if (any(normal != vec3<f32>(0.0))) {
+        let free = vec3<f32>(target_displacement[base], target_displacement[base + 1u], target_displacement[base + 2u]);
+        u = free - dot(free - held, normal) * normal;
+    }
+    target_displacement[base] = u.x;
+    target_displacement[base + 1u] = u.y;
+    target_displacement[base + 2u] = u.z;
 }
 
 // Internal forces F(u) at the probed nodes (the gather of the node kernel).
