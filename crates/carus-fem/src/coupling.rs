@@ -103,11 +103,13 @@ impl CoupledNodes {
         Ok(())
     }
 
+    /// Frees every node.
     pub fn clear(&mut self) {
         self.held.clear();
         self.sliding.clear();
     }
 
+    /// Whether no node is held.
     pub fn is_empty(&self) -> bool {
         self.held.is_empty()
     }
@@ -133,7 +135,8 @@ impl CoupledNodes {
         }
     }
 
-    /// Every node in range and every value finite (`what` names the list).
+    /// Every node of a restored snapshot's lists in range, and every
+    /// sliding node also held.
     pub(crate) fn check_restored(&self, node_count: usize) -> Result<(), FemError> {
         for &(n, _) in self.held.iter().chain(&self.sliding) {
             check_node("a snapshot's coupled displacement", n, node_count)?;
