@@ -13,6 +13,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::error::FemError;
+use crate::solver::check_node;
 
 /// The held nodes, sorted by node.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
@@ -22,18 +23,6 @@ pub struct CoupledNodes {
     /// Unit normal of the nodes that slide on their plane (a subset of `held`).
     #[serde(default)]
     pub sliding: Vec<(u32, [f64; 3])>,
-}
-
-pub(crate) fn check_node(what: &'static str, n: u32, nn: usize) -> Result<(), FemError> {
-    if (n as usize) < nn {
-        Ok(())
-    } else {
-        Err(FemError::BoundaryNodeOutOfRange {
-            what,
-            node: n,
-            node_count: nn,
-        })
-    }
 }
 
 /// Sets `value` for `node` in a list sorted by node.
@@ -54,6 +43,20 @@ fn check_lengths(what: &str, nodes: usize, values: usize) -> Result<(), FemError
     }
 }
 
+/// Every node exists and every target displacement is finite.
+fn check_targets(nodes: &[u32], displacements_m: &[[f64; 3]], node_count: usize) -> Result<(), FemError> {
+    check_lengths("displacements", nodes.len(), displacements_m.len())?;
+    for (&n, d) in nodes.iter().zip(displacements_m) {
+        check_node("impose_displacements", n, node_count)?;
+        if !d.iter().all(|v| v.is_finite()) {
+            return Err(FemError::InvalidBoundaryCondition {
+                reason: format!("imposed displacement of node {n} is not finite"),
+            });
+        }
+    }
+    Ok(())
+}
+
 impl CoupledNodes {
     /// Holds `nodes` at `displacements_m` in every direction (a node given
     /// again takes its new value and stops sliding).
@@ -63,7 +66,7 @@ impl CoupledNodes {
         displacements_m: &[[f64; 3]],
         node_count: usize,
     ) -> Result<(), FemError> {
-        self.check(nodes, displacements_m, node_count)?;
+        check_targets(nodes, displacements_m, node_count)?;
         for (&n, d) in nodes.iter().zip(displacements_m) {
             upsert(&mut self.held, n, *d);
             if let Ok(i) = self.sliding.binary_search_by_key(&n, |&(m, _)| m) {
@@ -82,7 +85,7 @@ impl CoupledNodes {
         normals: &[[f64; 3]],
         node_count: usize,
     ) -> Result<(), FemError> {
-        self.check(nodes, displacements_m, node_count)?;
+        check_targets(nodes, displacements_m, node_count)?;
         check_lengths("normals", nodes.len(), normals.len())?;
         let mut units = Vec::with_capacity(normals.len());
         for (&n, v) in nodes.iter().zip(normals) {
@@ -153,18 +156,6 @@ impl CoupledNodes {
         Ok(())
     }
 
-    fn check(&self, nodes: &[u32], displacements_m: &[[f64; 3]], node_count: usize) -> Result<(), FemError> {
-        check_lengths("displacements", nodes.len(), displacements_m.len())?;
-        for (&n, d) in nodes.iter().zip(displacements_m) {
-            check_node("impose_displacements", n, node_count)?;
-            if !d.iter().all(|v| v.is_finite()) {
-                return Err(FemError::InvalidBoundaryCondition {
-                    reason: format!("imposed displacement of node {n} is not finite"),
-                });
-            }
-        }
-        Ok(())
-    }
 }
 
 #[cfg(test)]

@@ -16,7 +16,7 @@ use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
-use crate::coupling::{check_node, CoupledNodes};
+use crate::coupling::CoupledNodes;
 use crate::error::FemError;
 use crate::fields::{self, ElementFields, Energies};
 use crate::kernel::blocks::KernelData;
@@ -110,6 +110,19 @@ pub(crate) fn substeps_for(
     }
 }
 
+
+/// A boundary condition's node must exist (shared with the GPU backend).
+pub(crate) fn check_node(what: &'static str, n: u32, nn: usize) -> Result<(), FemError> {
+    if (n as usize) < nn {
+        Ok(())
+    } else {
+        Err(FemError::BoundaryNodeOutOfRange {
+            what,
+            node: n,
+            node_count: nn,
+        })
+    }
+}
 
 impl CompiledLoads {
     fn new(bc: &BoundaryConditions, nn: usize) -> Result<Self, FemError> {
@@ -1203,14 +1216,9 @@ mod run_tests {
             force_n: pull,
             shape: LoadShape::Step,
         });
+        let solver = || TledSolver::new(m.clone(), &bc, 0.9 * m.critical_time_step(), StepControl::Refuse).unwrap();
         let run = |sliding: bool| {
-            let mut s = TledSolver::new(
-                m.clone(),
-                &bc,
-                0.9 * m.critical_time_step(),
-                StepControl::Refuse,
-            )
-            .unwrap();
+            let mut s = solver();
             let at = vec![[0.01, 0.0, 0.0]; wall.len()];
             if sliding {
                 let normals = vec![[-2.0, 0.0, 0.0]; wall.len()];
@@ -1235,8 +1243,7 @@ mod run_tests {
         }
         let snapshot = s.snapshot();
         assert_eq!(snapshot.sliding.len(), wall.len());
-        let mut resumed = TledSolver::new(m.clone(), &bc, 0.9 * m.critical_time_step(), StepControl::Refuse)
-            .unwrap();
+        let mut resumed = solver();
         resumed.restore(&snapshot).unwrap();
         assert_eq!(resumed.imposed(), s.imposed());
         let (_, held) = run(false);

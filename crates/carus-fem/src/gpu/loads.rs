@@ -17,7 +17,7 @@
 
 use crate::error::FemError;
 use crate::loads::{BoundaryConditions, LoadShape};
-use crate::coupling::check_node;
+use crate::solver::check_node;
 
 use super::error::GpuError;
 
