@@ -202,6 +202,15 @@ pub struct ContactReport {
     /// too long, or a load far beyond the one the stiffness was sized for):
     /// the loop should stop or shorten its step.
     pub too_deep: usize,
+    /// Samples that were in contact at the last query and are now deeper
+    /// than the search band: pressed through the contact's reach while it
+    /// pushed back, so the body is passing into the obstacle. Unlike
+    /// `too_deep`, it ignores samples that appear deep without having been
+    /// in contact, which an open sheet's edge gives (a point beside the
+    /// edge, behind the sheet's plane, reads as inside it).
+    pub pushed_through: usize,
+    /// The first of them: (sample, its depth in m, its obstacle region).
+    pub first_pushed_through: Option<(u32, f64, Option<u16>)>,
     /// Deepest penetration among the contacts, m: keep it well below half
     /// the bone's thickness, or the closest point flips to the far side.
     pub deepest_m: f64,
@@ -320,6 +329,8 @@ pub fn obstacle_contacts(
         moment_about_pivot: DVec3::ZERO,
         normal_stiffness_n_per_m: 0.0,
         too_deep: 0,
+        pushed_through: 0,
+        first_pushed_through: None,
         deepest_m: 0.0,
     };
     // A skipped sample was clear at its last query, so it has no anchor
@@ -328,6 +339,11 @@ pub fn obstacle_contacts(
     for (i, p, found, contact) in queried {
         memory.clearance.record(i, p, found.as_ref(), band, searched);
         memory.too_deep[i] = found.is_some_and(|h| -h.signed_distance > band);
+        if let Some(h) = found.filter(|_| memory.too_deep[i] && memory.anchors[i].is_some()) {
+            report.pushed_through += 1;
+            report.first_pushed_through
+                .get_or_insert((i as u32, -h.signed_distance, obstacle.region_of(h.triangle)));
+        }
         memory.anchors[i] = contact.as_ref().map(|(_, anchor)| *anchor);
         if let Some((c, _)) = contact {
             report.force += c.force();
@@ -589,6 +605,29 @@ mod tests {
         assert_eq!(report.too_deep, 1);
         let report = obstacle_contacts(&pelvis, &law, &samples, &still(1.5e-3), DVec3::ZERO, &mut memory).unwrap();
         assert_eq!((report.contacts.len(), report.too_deep), (1, 0));
+        // Found deep without having been in contact: not pushed through.
+        assert_eq!(report.pushed_through, 0);
+    }
+
+    /// A sample in contact that is then carried past the search band has
+    /// been pushed through the obstacle, and is reported as such, once.
+    #[test]
+    fn a_sample_carried_from_contact_past_the_band_is_pushed_through() {
+        let pelvis = plane(DQuat::IDENTITY).with_search_depth(2e-3).unwrap();
+        let law = ContactLaw::default();
+        let samples = SurfaceSamples { points: vec![DVec3::new(0.1, 0.0, -1e-3)], areas: vec![1e-4] };
+        let still = |z: f64| BodyMotion::at_rest(RigidPose::new(DVec3::new(0.0, 0.0, z), DQuat::IDENTITY));
+        let mut memory = BodyContactState::new(&samples);
+        let report = obstacle_contacts(&pelvis, &law, &samples, &still(0.0), DVec3::ZERO, &mut memory).unwrap();
+        assert_eq!((report.contacts.len(), report.pushed_through), (1, 0));
+        let report = obstacle_contacts(&pelvis, &law, &samples, &still(-1.5e-3), DVec3::ZERO, &mut memory).unwrap();
+        assert_eq!((report.contacts.len(), report.too_deep, report.pushed_through), (0, 1, 1));
+        let (sample, depth, region) = report.first_pushed_through.unwrap();
+        assert_eq!((sample, region), (0, Some(0)));
+        assert!((depth - 2.5e-3).abs() < 1e-12);
+        // Deep and no longer in contact: not counted again.
+        let report = obstacle_contacts(&pelvis, &law, &samples, &still(-1.6e-3), DVec3::ZERO, &mut memory).unwrap();
+        assert_eq!((report.too_deep, report.pushed_through), (1, 0));
     }
 
     #[test]

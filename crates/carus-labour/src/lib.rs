@@ -57,6 +57,25 @@ pub enum LabourError {
     Checkpoint(String),
     #[error("{0}")]
     LeftCanal(String),
+    /// A fetal body pressed through the bone contact's reach: the penalty
+    /// could not hold the load, and what followed would be the body passing
+    /// through bone.
+    #[error(
+        "the fetal {body} was pushed into the bony canal at t = {time_s:.3} s: a contact point \
+         on the {site} went {depth_mm:.1} mm deep, past the contact's reach, where the bone no \
+         longer pushes it out and the {body} would pass through bone; the run stops here \
+         (everything simulated so far is written). The bone's whole push on the {body} then: \
+         {force_n:.0} N\n  hint: a stiffer contact.penalty_stiffness_pa_per_m (for the trunk, \
+         contact.trunk_penalty_stiffness_pa_per_m) keeps it out; shorten numerics.rigid_dt_s \
+         if the run then refuses the stiffness"
+    )]
+    PushedThrough {
+        time_s: f64,
+        body: &'static str,
+        site: &'static str,
+        depth_mm: f64,
+        force_n: f64,
+    },
     /// A joint stiffer than the rigid step can integrate: the run would
     /// blow up within its first steps.
     #[error("`{section}.{key}` = {stiffness}: its spring is unstable at the rigid step numerics.rigid_dt_s = {dt_s} s; the step must be below {limit_s:.3e} s for it\n  hint: set numerics.rigid_dt_s below {limit_s:.3e}, or lower {section}.{key}")]

@@ -588,7 +588,9 @@ pub struct Scenario {
     #[serde(default)]
     /// `[neck]`: the six-degree-of-freedom spring at the atlanto-occipital
     /// pivot, REFERENCE_DATA.md (Lapeer et al. 2019 / Sadulaev 2019), with
-    /// its range of motion (Lynch-Caris et al. 2008); docs/CONTACT.md.
+    /// its range of motion (flexion: Ferrandini et al. 2025, MRI in labour;
+    /// the other axes: Lynch-Caris et al. 2008, Öhman & Beckung 2008);
+    /// docs/CONTACT.md.
     pub neck: carus_contact::NeckStiffness,
     #[serde(default)]
     pub fetus: FetusSection,
@@ -981,6 +983,21 @@ impl Scenario {
                 "degrees, -90 to 90 (positive flexed)",
             ));
         }
+        // A start past the neck's range would load its end stop before the
+        // first step (1 N m per degree) and fling the head.
+        let (flexion, extension) = (self.neck.flexion_limit_deg, self.neck.extension_limit_deg);
+        if self.start.attitude_deg > flexion || self.start.attitude_deg < -extension {
+            return Err(ScenarioError::Value {
+                path: path.to_path_buf(),
+                key: "start.attitude_deg",
+                value: self.start.attitude_deg.to_string(),
+                problem: format!(
+                    "lies outside the neck's range of motion, {extension} deg of extension to \
+                     {flexion} deg of flexion (neck.extension_limit_deg, neck.flexion_limit_deg)"
+                ),
+                hint: format!("an attitude from {} to {flexion}, or widen the neck's range", -extension),
+            });
+        }
         if let ExpulsionDirection::Fixed(v) = self.expulsion.direction {
             let length = glam::DVec3::from_array(v).length();
             if !(length.is_finite() && length > 1e-9) {
@@ -1226,6 +1243,16 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("inlet_ap_m"), "{e}");
+        // A start past the neck's range of motion, either way.
+        let e = parse("name = \"x\"\n[start]\nattitude_deg = 30.0\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("start.attitude_deg") && e.contains("neck.flexion_limit_deg"), "{e}");
+        let e = parse("name = \"x\"\n[start]\nattitude_deg = -60.0\n[neck]\nextension_limit_deg = 50.0\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("start.attitude_deg") && e.contains("-50 to 19"), "{e}");
+        assert!(parse("name = \"x\"\n[start]\nattitude_deg = 30.0\n[neck]\nflexion_limit_deg = 30.0\n").is_ok());
     }
 
     #[test]

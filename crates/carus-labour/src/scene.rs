@@ -12,7 +12,7 @@ use carus_anatomy::fetus::{FetalHead, Trunk, TrunkDiameters};
 use carus_anatomy::floor::{pelvic_floor, ATTACHED};
 use carus_anatomy::{Pelvis, Plane, TriSurface};
 use carus_contact::{
-    pair_contacts, BodyContactState, BodyMotion, ContactLaw, HeadAxes, MassProperties, NeckGeometry, RegionTable,
+    obstacle_contacts, pair_contacts, BodyContactState, BodyMotion, ContactLaw, HeadAxes, MassProperties, NeckGeometry, RegionTable,
     RigidBodyModel, RigidObstacle, RigidPose, SurfaceSamples, TriangleCollider, DESIGN_PENETRATION_M,
 };
 use carus_fem::{BoundaryConditions, Material, MaterialRegion, Mesh, ModelOptions, TledModel};
@@ -230,6 +230,7 @@ impl Scene {
             start: Vec::new(),
         };
         scene.start = scene.start_poses();
+        scene.check_head_clear_of_bone()?;
         scene.check_head_clear_of_trunk()?;
         scene.neck_joint = scene.trunk.is_some().then(|| NeckGeometry {
             head: HEAD,
@@ -301,6 +302,46 @@ impl Scene {
         std::iter::once(head)
             .chain(self.trunk.iter().chain(&self.lower_trunk).map(segment))
             .collect()
+    }
+
+    /// Refuses a start where the head already presses into the bony canal
+    /// deeper than the bone law's design penetration (started low in the
+    /// canal in an attitude that does not fit there): the contact would
+    /// throw it out, or let it through, at the first steps.
+    fn check_head_clear_of_bone(&self) -> Result<(), LabourError> {
+        let samples = &self.fetal_body(HEAD).samples;
+        let mut fresh = BodyContactState::new(samples);
+        let found = obstacle_contacts(
+            &self.pelvis_collider,
+            self.contact_law(HEAD),
+            samples,
+            &BodyMotion::at_rest(self.start[HEAD]),
+            self.start[HEAD].position_m,
+            &mut fresh,
+        )?;
+        if found.deepest_m <= DESIGN_PENETRATION_M {
+            return Ok(());
+        }
+        let site = found
+            .main_region(self.sites.len())
+            .and_then(|r| self.sites.get(r as usize))
+            .map_or("bone", |s| s.name());
+        let start = &self.scenario.start;
+        Err(crate::scenario::ScenarioError::Setting {
+            setting: format!("start.station_mm = {}", start.station_mm),
+            problem: format!(
+                "the head starts inside the bony canal, {:.1} mm deep at the {site}, more than the \
+                 {:.0} mm the contact allows at the start: at this station the canal is narrower \
+                 than the head in its starting attitude ({} deg) and position",
+                found.deepest_m * 1e3,
+                DESIGN_PENETRATION_M * 1e3,
+                start.attitude_deg
+            ),
+            hint: "start the head higher (the built-in scenarios start above the inlet, at -55 mm), \
+                   or in an attitude that fits there (start.attitude_deg)"
+                .into(),
+        }
+        .into())
     }
 
     /// Refuses a start where the head already presses into the trunk below
@@ -666,6 +707,25 @@ mod tests {
         }
         s.contact.head_trunk = false;
         assert!(Scene::build(&s).unwrap().head_trunk.is_none());
+    }
+
+    /// A start with the head already pressed into the bone is refused,
+    /// naming the key, the site and the way out; a few mm higher it builds.
+    #[test]
+    fn a_start_with_the_head_in_the_bone_is_refused() {
+        let mut s = Scenario::builtin("normal").unwrap();
+        s.numerics.head_subdivisions = 3;
+        s.floor.enabled = false;
+        s.contact.head_trunk = false;
+        s.neck.flexion_limit_deg = 66.0;
+        s.start.attitude_deg = 60.0;
+        s.start.station_mm = 50.0;
+        let e = Scene::build(&s).expect_err("refused").to_string();
+        for part in ["start.station_mm = 50", "the head starts inside the bony canal", "pubic_arch", "start the head higher"] {
+            assert!(e.contains(part), "{e}");
+        }
+        s.start.station_mm = 45.0;
+        assert!(Scene::build(&s).is_ok());
     }
 
     /// A floor that cannot be built names its table, its key and a fix.

@@ -317,6 +317,15 @@ impl<'a> Simulation<'a> {
                 &mut self.state.bone_contacts[b],
             )?;
             *wrench += report.wrench();
+            if let Some((_, depth, region)) = report.first_pushed_through {
+                return Err(LabourError::PushedThrough {
+                    time_s: t,
+                    body: Body::of(b).name(),
+                    site: region.and_then(|r| scene.sites.get(r as usize)).map_or("bone", |s| s.name()),
+                    depth_mm: depth * 1e3,
+                    force_n: report.force.length(),
+                });
+            }
             reports.push(report);
         }
 
