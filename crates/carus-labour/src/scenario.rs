@@ -546,7 +546,12 @@ impl Default for NumericsSection {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct OutputSection {
-    /// Pose-history sample interval, s.
+    /// Pose-history sample interval, s. Fine enough for the detector to
+    /// place the fastest movement within its station windows: in these
+    /// time-compressed runs the head can pass the outlet, turning and
+    /// extending, in 0.2-0.3 s, its station moving 8 mm in 0.1 s, and at
+    /// 0.1 s the verdict on internal rotation (by +50 mm) turned on where
+    /// the samples fell (docs/LABOUR.md, twentieth session).
     pub every_s: f64,
     /// Write ParaView series (VTU/PVD).
     pub vtu: bool,
@@ -557,7 +562,7 @@ pub struct OutputSection {
 impl Default for OutputSection {
     fn default() -> Self {
         OutputSection {
-            every_s: 0.1,
+            every_s: 0.01,
             vtu: true,
             vtu_every_s: 1.0,
         }
@@ -606,8 +611,12 @@ pub struct Scenario {
 }
 
 /// The built-in scenarios, embedded in the binary: (name, TOML text).
-pub const BUILTINS: [(&str, &str); 6] = [
+pub const BUILTINS: [(&str, &str); 7] = [
     ("normal", include_str!("../../../scenarios/normal.toml")),
+    (
+        "normal-lubricated",
+        include_str!("../../../scenarios/normal-lubricated.toml"),
+    ),
     (
         "real-pelvis",
         include_str!("../../../scenarios/real-pelvis.toml"),
@@ -1263,5 +1272,18 @@ mod tests {
         assert_eq!(s.neck.extension_nm_per_deg, 0.04);
         let frictionless = parse("name = \"x\"\n[contact]\nfriction = 0.0\n").unwrap();
         assert_eq!(frictionless.contact.friction, 0.0);
+    }
+
+    /// The lubricated normal case is the normal case with the wetted
+    /// canal's friction, and nothing else changed.
+    #[test]
+    fn the_lubricated_normal_case_differs_from_normal_in_its_friction_alone() {
+        let normal = Scenario::builtin("normal").unwrap();
+        let mut wet = Scenario::builtin("normal-lubricated").unwrap();
+        assert_eq!((normal.contact.friction, wet.contact.friction), (0.35, 0.009));
+        wet.contact.friction = normal.contact.friction;
+        wet.name = normal.name.clone();
+        wet.description = normal.description.clone();
+        assert_eq!(wet, normal);
     }
 }

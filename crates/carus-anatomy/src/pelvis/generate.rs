@@ -576,6 +576,26 @@ fn fill_pinches(bone: &mut [bool], cell_rows: usize, columns: usize) {
     }
 }
 
+/// The two triangles of the quad `a b c d` (counter-clockwise as seen
+/// from the side its normal points to) along the diagonal whose triangles
+/// both face the quad's way (the cross product of its diagonals). Where
+/// the mask's corner cuts leave a quad bent over one diagonal, splitting
+/// along the other would turn a triangle round, and a canal point beside
+/// it would read as inside the bone.
+fn split_quad(at: &[DVec3], [a, b, c, d]: [u32; 4]) -> [[u32; 3]; 2] {
+    let p = |k: u32| at[k as usize];
+    let facing = (p(c) - p(a)).cross(p(d) - p(b));
+    let agreement = |t: [u32; 3]| (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0])).normalize_or_zero().dot(facing);
+    let along_ac = [[a, b, c], [a, c, d]];
+    let along_bd = [[a, b, d], [b, c, d]];
+    let worst = |pair: [[u32; 3]; 2]| agreement(pair[0]).min(agreement(pair[1]));
+    if worst(along_bd) > worst(along_ac) {
+        along_bd
+    } else {
+        along_ac
+    }
+}
+
 /// Triangulates the bone cells: inner wall facing the canal, outer wall
 /// facing away, and side walls along every edge between bone and void.
 fn assemble(inner: &[DVec3], outer: &[DVec3], bone: &[bool], rows: usize, columns: usize) -> TriSurface {
@@ -590,10 +610,12 @@ fn assemble(inner: &[DVec3], outer: &[DVec3], bone: &[bool], rows: usize, column
             }
             let (a, b, c, d) = (index(r, i), index(r, i + 1), index(r + 1, i + 1), index(r + 1, i));
             let off = n as u32;
-            triangles.push([a, b, c]);
-            triangles.push([a, c, d]);
-            triangles.push([a + off, c + off, b + off]);
-            triangles.push([a + off, d + off, c + off]);
+            let [t1, t2] = split_quad(inner, [a, b, c, d]);
+            triangles.push(t1);
+            triangles.push(t2);
+            let [t1, t2] = split_quad(outer, [a, b, c, d]);
+            triangles.push([t1[0] + off, t1[2] + off, t1[1] + off]);
+            triangles.push([t2[0] + off, t2[2] + off, t2[1] + off]);
             let ri = r as isize;
             let edges = [
                 (a, b, is_bone(ri - 1, i)),
@@ -630,6 +652,25 @@ mod tests {
     use super::*;
     use crate::pelvis::layout::layout;
     use crate::pelvis::PelvisDiameters;
+
+    /// A quad bent over its a-c diagonal (b pushed past it, as a corner cut
+    /// can leave one) is split along b-d, where both triangles face the
+    /// quad's way; a flat quad keeps the a-c split.
+    #[test]
+    fn a_bent_quad_is_split_where_neither_triangle_turns_round() {
+        let normal = |at: &[DVec3], t: [u32; 3]| {
+            let p = |k: u32| at[k as usize];
+            (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0]))
+        };
+        let flat = [DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y];
+        assert_eq!(split_quad(&flat, [0, 1, 2, 3]), [[0, 1, 2], [0, 2, 3]]);
+        // b pulled across the a-c diagonal: the a-b-c triangle would face -z.
+        let bent = [DVec3::ZERO, DVec3::new(0.3, 0.7, 0.0), DVec3::new(1.0, 1.0, 0.0), DVec3::Y];
+        assert!(normal(&bent, [0, 1, 2]).z < 0.0);
+        let split = split_quad(&bent, [0, 1, 2, 3]);
+        assert_eq!(split, [[0, 1, 3], [1, 2, 3]]);
+        assert!(split.iter().all(|&t| normal(&bent, t).z > 0.0));
+    }
 
     /// Every column of the iliac blade, from the anterior to the posterior
     /// superior iliac spine, bows out and down from the brim-to-crest chord:
