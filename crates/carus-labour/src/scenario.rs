@@ -996,16 +996,15 @@ impl Scenario {
         // first step (1 N m per degree) and fling the head.
         let (flexion, extension) = (self.neck.flexion_limit_deg, self.neck.extension_limit_deg);
         if self.start.attitude_deg > flexion || self.start.attitude_deg < -extension {
-            return Err(ScenarioError::Value {
-                path: path.to_path_buf(),
-                key: "start.attitude_deg",
-                value: self.start.attitude_deg.to_string(),
-                problem: format!(
+            return Err(err(
+                "start.attitude_deg",
+                self.start.attitude_deg,
+                &format!(
                     "lies outside the neck's range of motion, {extension} deg of extension to \
                      {flexion} deg of flexion (neck.extension_limit_deg, neck.flexion_limit_deg)"
                 ),
-                hint: format!("an attitude from {} to {flexion}, or widen the neck's range", -extension),
-            });
+                &format!("an attitude from {} to {flexion}, or widen the neck's range", -extension),
+            ));
         }
         if let ExpulsionDirection::Fixed(v) = self.expulsion.direction {
             let length = glam::DVec3::from_array(v).length();

@@ -322,10 +322,7 @@ impl Scene {
         if found.deepest_m <= DESIGN_PENETRATION_M {
             return Ok(());
         }
-        let site = found
-            .main_region(self.sites.len())
-            .and_then(|r| self.sites.get(r as usize))
-            .map_or("bone", |s| s.name());
+        let site = self.site_name(found.main_region(self.sites.len()));
         let start = &self.scenario.start;
         Err(crate::scenario::ScenarioError::Setting {
             setting: format!("start.station_mm = {}", start.station_mm),
@@ -413,6 +410,12 @@ impl Scene {
             TRUNK => self.trunk.as_ref().expect("a trunk body"),
             _ => self.lower_trunk.as_ref().expect("a lower trunk body"),
         }
+    }
+
+    /// The name of the canal site a contact's region label stands for
+    /// ("bone" where the label is missing).
+    pub fn site_name(&self, region: Option<u16>) -> &'static str {
+        region.and_then(|r| self.sites.get(r as usize)).map_or("bone", |s| s.name())
     }
 
     /// The contact law of body `b` on bone.

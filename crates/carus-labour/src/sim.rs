@@ -321,7 +321,7 @@ impl<'a> Simulation<'a> {
                 return Err(LabourError::PushedThrough {
                     time_s: t,
                     body: Body::of(b).name(),
-                    site: region.and_then(|r| scene.sites.get(r as usize)).map_or("bone", |s| s.name()),
+                    site: scene.site_name(region),
                     depth_mm: depth * 1e3,
                     force_n: report.force.length(),
                 });
