@@ -43,6 +43,25 @@ pub struct TrunkGeometry {
     pub spine: DVec3,
 }
 
+/// The fetal body that carried the largest contact force at a sample.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FetalPart {
+    Head,
+    /// The trunk (thorax and, when the spine bends, the lower trunk).
+    Trunk,
+}
+
+impl FetalPart {
+    /// The name used in JSON and reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            FetalPart::Head => "head",
+            FetalPart::Trunk => "trunk",
+        }
+    }
+}
+
 /// The part of the mother that carried the largest contact force on the
 /// fetus at a sample (the labour crate classifies its contacts into these).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -99,6 +118,9 @@ pub struct PoseSample {
     /// Which part carried the largest contact force, when the run knows.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub dominant_contact: Option<ContactSite>,
+    /// The fetal body that bore most of that site's force.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dominant_part: Option<FetalPart>,
 }
 
 /// A whole recorded run: constant geometry plus the samples in time order.

@@ -22,7 +22,7 @@ pub mod synthetic;
 pub use canal::{BirthCanal, CanalPlanes};
 pub use detector::{detect, DetectorReport};
 pub use history::{
-    ContactSite, HeadGeometry, HistoryError, PoseHistory, PoseSample, RigidPose, TrunkGeometry,
+    ContactSite, FetalPart, HeadGeometry, HistoryError, PoseHistory, PoseSample, RigidPose, TrunkGeometry,
 };
 pub use measures::{Series, THETA_ILL_CONDITIONED_TILT_DEG};
 pub use movements::{Movement, Movements, Unit};

@@ -439,6 +439,7 @@ mod tests {
             bone_contact_force_n: DVec3::ZERO,
             floor_contact_force_n: DVec3::ZERO,
             dominant_contact: None,
+            dominant_part: None,
         };
         PoseHistory {
             head: ellipsoid_head(),

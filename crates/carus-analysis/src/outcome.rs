@@ -49,6 +49,14 @@ pub struct Arrest {
     /// The part that carried the largest contact force in the final window
     /// (at its sample of greatest total contact force), or "unknown".
     pub against: String,
+    /// The fetal body held there ("head" or "trunk": the shoulders held
+    /// while the head has not passed the outlet), or "unknown".
+    #[serde(default = "unknown")]
+    pub part: String,
+}
+
+fn unknown() -> String {
+    "unknown".to_string()
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -158,12 +166,17 @@ pub fn outcome(history: &PoseHistory, series: &Series, spines_sigma_mm: f64) -> 
         .dominant_contact
         .map_or("unknown", |site| site.name())
         .to_string();
+    let part = history.samples[hardest]
+        .dominant_part
+        .map_or("unknown", |part| part.name())
+        .to_string();
     Outcome {
         delivered,
         arrest: Some(Arrest {
             stage,
             station_mm: reached,
             against,
+            part,
         }),
     }
 }

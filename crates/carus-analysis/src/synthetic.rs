@@ -11,7 +11,7 @@
 
 use crate::canal::{BirthCanal, CanalPlanes};
 use crate::history::{
-    ContactSite, HeadGeometry, PoseHistory, PoseSample, RigidPose, TrunkGeometry,
+    ContactSite, FetalPart, HeadGeometry, PoseHistory, PoseSample, RigidPose, TrunkGeometry,
 };
 use carus_anatomy::axis::Plane;
 use glam::{DMat3, DQuat, DVec3};
@@ -239,6 +239,7 @@ impl Plan {
             bone_contact_force_n: -0.6 * pressing * frame.tangent,
             floor_contact_force_n: -0.3 * pressing * frame.tangent,
             dominant_contact: self.contact,
+            dominant_part: self.contact.map(|_| FetalPart::Head),
         }
     }
 }
@@ -390,6 +391,7 @@ pub fn straight_push(canal: &BirthCanal) -> PoseHistory {
             bone_contact_force_n: 0.5 * plan.force_n(t).max(0.0) * DVec3::Z,
             floor_contact_force_n: DVec3::ZERO,
             dominant_contact: None,
+            dominant_part: None,
         });
         if depth_mm >= plan.end_sigma_mm {
             break;

@@ -3,7 +3,7 @@
 //! only engagement and descent), plus the arrest and posterior cases.
 
 use carus_analysis::synthetic::{self, reference_canal};
-use carus_analysis::{detect, ArrestStage, DetectorReport, Movement, PoseHistory, Unit};
+use carus_analysis::{detect, ArrestStage, DetectorReport, FetalPart, Movement, PoseHistory, Unit};
 use std::sync::OnceLock;
 
 fn textbook() -> &'static (PoseHistory, DetectorReport) {
@@ -135,7 +135,7 @@ fn a_head_held_above_the_inlet_is_an_inlet_arrest() {
     assert!(!r.outcome.delivered);
     let arrest = r.outcome.arrest.as_ref().expect("arrest");
     assert_eq!(arrest.stage, ArrestStage::Inlet);
-    assert_eq!(arrest.against, "symphysis");
+    assert_eq!((arrest.against.as_str(), arrest.part.as_str()), ("symphysis", "head"));
     // The deepest station of the final window, not the last sample's.
     let max = r
         .series
@@ -362,6 +362,22 @@ fn an_undelivered_head_without_a_contact_record_is_against_unknown() {
     }
     let r = detect(&history).unwrap();
     assert_eq!(r.outcome.arrest.unwrap().against, "unknown");
+}
+
+/// The arrest names the fetal body that bore the hardest contact: the
+/// trunk when the shoulders are what holds the fetus back.
+#[test]
+fn an_arrest_names_the_fetal_part_held() {
+    let mut history = synthetic::inlet_arrest(&reference_canal());
+    for s in &mut history.samples {
+        s.dominant_part = Some(FetalPart::Trunk);
+    }
+    let arrest = detect(&history).unwrap().outcome.arrest.unwrap();
+    assert_eq!((arrest.against.as_str(), arrest.part.as_str()), ("symphysis", "trunk"));
+    for s in &mut history.samples {
+        s.dominant_part = None;
+    }
+    assert_eq!(detect(&history).unwrap().outcome.arrest.unwrap().part, "unknown");
 }
 
 /// The textbook plan run through the generated gynecoid pelvis with the

@@ -28,7 +28,7 @@ pub use collider::{SurfacePoint, TriangleCollider};
 pub use coupling::{HeldNode, TissueContact, TissueReaction};
 pub use error::ContactError;
 pub use law::{
-    default_penalty_stiffness, ContactForce, ContactLaw, DESIGN_EXPULSION_FORCE_N, DESIGN_HEAD_RADIUS_M,
+    default_penalty_stiffness, ContactForce, ContactLaw, SoftCover, DESIGN_EXPULSION_FORCE_N, DESIGN_HEAD_RADIUS_M,
     DESIGN_PENETRATION_M,
 };
 pub use neck::{HeadAxes, Neck, NeckAngles, NeckGeometry, NeckLoad, NeckStiffness, StableStep};

@@ -349,7 +349,7 @@ pub fn obstacle_contacts(
             report.force += c.force();
             report.torque_about_com += (c.body_point - com).cross(c.force());
             report.moment_about_pivot += c.moment_about(pivot);
-            report.normal_stiffness_n_per_m += law.penalty_stiffness_pa_per_m * samples.areas[i];
+            report.normal_stiffness_n_per_m += law.stiffness_at(c.depth) * samples.areas[i];
             report.deepest_m = report.deepest_m.max(c.depth);
             report.contacts.push(c);
         }

@@ -66,7 +66,7 @@ pub enum LabourError {
          longer pushes it out and the {body} would pass through bone; the run stops here \
          (everything simulated so far is written). The bone's whole push on the {body} then: \
          {force_n:.0} N\n  hint: a stiffer contact.penalty_stiffness_pa_per_m (for the trunk, \
-         contact.trunk_penalty_stiffness_pa_per_m) keeps it out; shorten numerics.rigid_dt_s \
+         also a thinner contact.trunk_cover_depth_mm) keeps it out; shorten numerics.rigid_dt_s \
          if the run then refuses the stiffness"
     )]
     PushedThrough {

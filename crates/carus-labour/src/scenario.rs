@@ -336,6 +336,12 @@ pub struct ContactSection {
     /// engineering estimate, no measured neonatal value is cited
     /// (docs/LABOUR.md records the outcome at this and at 9.4e7).
     pub trunk_penalty_stiffness_pa_per_m: f64,
+    /// Depth of that cover, mm: pressed through it, the shoulder girdle
+    /// and ribs meet the bone, and the bone law's penalty
+    /// (`penalty_stiffness_pa_per_m`) adds on, so the cover is not
+    /// squeezed far past its own depth (docs/CONTACT.md, "The trunk's
+    /// cover"). The same h as the stiffness above (engineering estimate).
+    pub trunk_cover_depth_mm: f64,
     /// Spacing of the contact samples on the fetal surface, mm (numerical).
     pub sample_spacing_mm: f64,
     /// Contact of the head with the trunk below its thoracic inlet: the chin meets
@@ -346,6 +352,15 @@ pub struct ContactSection {
     /// session); off, they do again (for comparison with those runs).
     pub head_trunk: bool,
 }
+
+/// Friction of the wetted canal, the built-in scenarios' `contact.friction`:
+/// the scalp slides on the vaginal wall and the muscle lining the pelvis in
+/// amniotic fluid, whose surfactant lubricates at 0.009 (Hills 1995, Aust N Z
+/// J Obstet Gynaecol, "Remarkable lubricating capabilities of amniotic
+/// surfactant"; fluid-lubricated soft tissues 0.007-0.054, docs/LABOUR.md).
+/// The contact default stays the seed's 0.35 (muscle on bone,
+/// REFERENCE_DATA.md), which `normal-dry` runs.
+pub const WETTED_CANAL_FRICTION: f64 = 0.009;
 
 /// Young's modulus of the trunk's soft-tissue cover, Pa: 3 x 20 kPa, a
 /// round passive-muscle shear modulus, nearly incompressible (engineering
@@ -364,6 +379,7 @@ impl Default for ContactSection {
             damping_time_s: law.damping_time_s,
             trunk_penalty_stiffness_pa_per_m: TRUNK_SOFT_TISSUE_MODULUS_PA
                 / TRUNK_SOFT_TISSUE_DEPTH_M,
+            trunk_cover_depth_mm: TRUNK_SOFT_TISSUE_DEPTH_M * 1e3,
             sample_spacing_mm: 4.0,
             head_trunk: true,
         }
@@ -614,8 +630,8 @@ pub struct Scenario {
 pub const BUILTINS: [(&str, &str); 7] = [
     ("normal", include_str!("../../../scenarios/normal.toml")),
     (
-        "normal-lubricated",
-        include_str!("../../../scenarios/normal-lubricated.toml"),
+        "normal-dry",
+        include_str!("../../../scenarios/normal-dry.toml"),
     ),
     (
         "real-pelvis",
@@ -738,7 +754,7 @@ impl Scenario {
             problem: problem.into(),
             hint: hint.into(),
         };
-        let positive: [(&'static str, f64, &str); 20] = [
+        let positive: [(&'static str, f64, &str); 21] = [
             (
                 "trunk.bisacromial_mm",
                 self.trunk.bisacromial_mm,
@@ -768,6 +784,11 @@ impl Scenario {
                 "contact.trunk_penalty_stiffness_pa_per_m",
                 self.contact.trunk_penalty_stiffness_pa_per_m,
                 "Pa/m, e.g. 9.4e7",
+            ),
+            (
+                "contact.trunk_cover_depth_mm",
+                self.contact.trunk_cover_depth_mm,
+                "mm of soft tissue over the trunk's skeleton, e.g. 6.0",
             ),
             (
                 "fetus.density_kg_per_m3",
@@ -1273,16 +1294,21 @@ mod tests {
         assert_eq!(frictionless.contact.friction, 0.0);
     }
 
-    /// The lubricated normal case is the normal case with the wetted
-    /// canal's friction, and nothing else changed.
+    /// The dry normal case is the normal case with the seed's friction,
+    /// and nothing else changed; every other built-in runs in the wetted
+    /// canal.
     #[test]
-    fn the_lubricated_normal_case_differs_from_normal_in_its_friction_alone() {
+    fn the_dry_normal_case_differs_from_normal_in_its_friction_alone() {
         let normal = Scenario::builtin("normal").unwrap();
-        let mut wet = Scenario::builtin("normal-lubricated").unwrap();
-        assert_eq!((normal.contact.friction, wet.contact.friction), (0.35, 0.009));
-        wet.contact.friction = normal.contact.friction;
-        wet.name = normal.name.clone();
-        wet.description = normal.description.clone();
-        assert_eq!(wet, normal);
+        let mut dry = Scenario::builtin("normal-dry").unwrap();
+        assert_eq!((normal.contact.friction, dry.contact.friction), (WETTED_CANAL_FRICTION, 0.35));
+        assert_eq!(dry.contact.friction, ContactSection::default().friction);
+        dry.contact.friction = normal.contact.friction;
+        dry.name = normal.name.clone();
+        dry.description = normal.description.clone();
+        assert_eq!(dry, normal);
+        for (name, _) in BUILTINS.iter().filter(|(n, _)| *n != "normal-dry") {
+            assert_eq!(Scenario::builtin(name).unwrap().contact.friction, WETTED_CANAL_FRICTION, "{name}");
+        }
     }
 }

@@ -12,7 +12,7 @@ use carus_anatomy::fetus::{FetalHead, Trunk, TrunkDiameters};
 use carus_anatomy::floor::{pelvic_floor, ATTACHED};
 use carus_anatomy::{Pelvis, Plane, TriSurface};
 use carus_contact::{
-    obstacle_contacts, pair_contacts, BodyContactState, BodyMotion, ContactLaw, HeadAxes, MassProperties, NeckGeometry, RegionTable,
+    obstacle_contacts, pair_contacts, BodyContactState, BodyMotion, ContactLaw, HeadAxes, SoftCover, MassProperties, NeckGeometry, RegionTable,
     RigidBodyModel, RigidObstacle, RigidPose, SurfaceSamples, TriangleCollider, DESIGN_PENETRATION_M,
 };
 use carus_fem::{BoundaryConditions, Material, MaterialRegion, Mesh, ModelOptions, TledModel};
@@ -192,6 +192,10 @@ impl Scene {
         law.validate()?;
         let trunk_law = ContactLaw {
             penalty_stiffness_pa_per_m: s.contact.trunk_penalty_stiffness_pa_per_m,
+            cover: Some(SoftCover {
+                depth_m: s.contact.trunk_cover_depth_mm * 1e-3,
+                core_stiffness_pa_per_m: s.contact.penalty_stiffness_pa_per_m,
+            }),
             ..law
         };
         trunk_law.validate()?;

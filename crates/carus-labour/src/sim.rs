@@ -10,7 +10,7 @@
 //! bone, the floor and the fetus's own trunk (with friction), the neck's elasticity or the passive
 //! resistance of the surroundings.
 
-use carus_analysis::{ContactSite, PoseSample};
+use carus_analysis::{ContactSite, FetalPart, PoseSample};
 use carus_contact::{
     obstacle_contacts, pair_contacts, BodyContactState, BodyMotion, ContactReport, Neck, NeckAngles, NeckGeometry,
     NeckLoad, RigidBodyState, RigidPose, TissueContact, TriangleCollider, Wrench,
@@ -98,6 +98,8 @@ struct StepForces {
     bone: DVec3,
     floor: DVec3,
     dominant: Option<ContactSite>,
+    /// The fetal body that bore most of the dominant site's force.
+    dominant_part: Option<FetalPart>,
     /// Per site, on recorded steps only.
     sites: Vec<SiteLoad>,
     head_axial: AxialMoments,
@@ -190,6 +192,7 @@ impl<'a> Simulation<'a> {
             bone: DVec3::ZERO,
             floor: DVec3::ZERO,
             dominant: None,
+            dominant_part: None,
             sites: Vec::new(),
             head_axial: AxialMoments::default(),
             head_trunk: Wrench::default(),
@@ -534,34 +537,40 @@ impl<'a> Simulation<'a> {
         Ok(())
     }
 
-    /// Totals and the part that carried the largest force.
+    /// Totals, the part of the mother that carried the largest force, and
+    /// the fetal body that bore most of it.
     fn classify(&self, expulsion: DVec3, reports: &[ContactReport]) -> StepForces {
         let sites = &self.scene.sites;
-        let mut by_site = vec![DVec3::ZERO; sites.len()];
-        let mut bone = DVec3::ZERO;
-        for r in reports {
-            bone += r.force;
-            for (k, f) in r.force_by_region(sites.len()).into_iter().enumerate() {
-                by_site[k] += f;
-            }
-        }
-        let floor: DVec3 = self.state.floor_wrench.iter().map(|w| w.force).sum();
+        let per_body: Vec<Vec<DVec3>> = reports.iter().map(|r| r.force_by_region(sites.len())).collect();
+        let by_site: Vec<DVec3> = (0..sites.len()).map(|k| per_body.iter().map(|f| f[k]).sum()).collect();
+        let bone: DVec3 = reports.iter().map(|r| r.force).sum();
+        let floor_by_body: Vec<DVec3> = self.state.floor_wrench.iter().map(|w| w.force).collect();
+        let floor: DVec3 = floor_by_body.iter().sum();
+        // The body bearing the largest of these forces.
+        let bearer = |forces: &mut dyn Iterator<Item = DVec3>| {
+            let b = forces.enumerate().max_by(|(_, f), (_, g)| f.length().total_cmp(&g.length())).map_or(HEAD, |(b, _)| b);
+            if b == HEAD { FetalPart::Head } else { FetalPart::Trunk }
+        };
         let mut dominant = None;
+        let mut dominant_part = None;
         let mut largest = 1e-6;
         for (k, f) in by_site.iter().enumerate() {
             if f.length() > largest {
                 largest = f.length();
                 dominant = Some(sites[k]);
+                dominant_part = Some(bearer(&mut per_body.iter().map(|f| f[k])));
             }
         }
         if floor.length() > largest {
             dominant = Some(ContactSite::PelvicFloor);
+            dominant_part = Some(bearer(&mut floor_by_body.iter().copied()));
         }
         StepForces {
             expulsion,
             bone,
             floor,
             dominant,
+            dominant_part,
             sites: Vec::new(),
             head_axial: AxialMoments::default(),
             head_trunk: Wrench::default(),
@@ -620,6 +629,7 @@ impl<'a> Simulation<'a> {
             bone_contact_force_n: forces.bone,
             floor_contact_force_n: forces.floor,
             dominant_contact: forces.dominant,
+            dominant_part: forces.dominant_part,
         });
         self.state.loads.push(LoadSample {
             time_s: self.time_s(),

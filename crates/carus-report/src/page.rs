@@ -48,6 +48,10 @@ pub fn headline(outcome: &Outcome) -> (&'static str, String) {
             } else {
                 format!("the {}", arrest.against.replace('_', " "))
             };
+            let held = match arrest.part.as_str() {
+                "unknown" => String::new(),
+                part => format!("the {part} held "),
+            };
             let station = match arrest.stage {
                 ArrestStage::Shoulders => "shoulders at",
                 _ => "station",
@@ -55,7 +59,7 @@ pub fn headline(outcome: &Outcome) -> (&'static str, String) {
             (
                 "arrested",
                 format!(
-                    "Arrested {place}, {station} {:+.0} mm, against {against}",
+                    "Arrested {place}, {station} {:+.0} mm, {held}against {against}",
                     arrest.station_mm
                 ),
             )
@@ -711,24 +715,21 @@ mod tests {
 
     #[test]
     fn an_arrest_says_where_and_against_what() {
-        let outcome = Outcome {
+        let arrest = |part: &str| Outcome {
             delivered: false,
             arrest: Some(Arrest {
                 stage: ArrestStage::Inlet,
                 station_mm: -42.4,
                 against: "sacral_promontory".into(),
+                part: part.into(),
             }),
         };
-        let (class, text) = headline(&outcome);
+        let (class, text) = headline(&arrest("unknown"));
         assert_eq!(class, "arrested");
-        assert_eq!(
-            text,
-            "Arrested at the pelvic inlet, station -42 mm, against the sacral promontory"
-        );
-        let open = Outcome {
-            delivered: false,
-            arrest: None,
-        };
+        assert_eq!(text, "Arrested at the pelvic inlet, station -42 mm, against the sacral promontory");
+        let (_, text) = headline(&arrest("trunk"));
+        assert_eq!(text, "Arrested at the pelvic inlet, station -42 mm, the trunk held against the sacral promontory");
+        let open = Outcome { delivered: false, arrest: None };
         assert!(headline(&open).1.contains("still progressing"));
     }
 }

@@ -302,9 +302,10 @@ fn print_summary(record: &RunRecord, out_dir: &Path) {
     } else {
         match &s.outcome.arrest {
             Some(a) => format!(
-                "arrested at the {} stage, station {:+.0} mm, against {}",
+                "arrested at the {} stage, station {:+.0} mm, the {} against {}",
                 serde_name(&a.stage),
                 a.station_mm,
+                a.part,
                 a.against
             ),
             None => "neither delivered nor arrested (the run ended too soon to tell)".to_string(),

@@ -301,6 +301,7 @@ fn header(keys: &[&str]) -> Vec<String> {
             "wall_s",
             "completed",
             "failure",
+            "arrest_part",
         ]
         .map(String::from),
     );
@@ -337,6 +338,7 @@ fn table_row(
     row.push(number(Some(s.wall_s)));
     row.push(s.completed.to_string());
     row.push(s.failure.clone().unwrap_or_default());
+    row.push(arrest.map_or(String::new(), |a| a.part.clone()));
     row
 }
 
@@ -384,9 +386,10 @@ fn print_table(keys: &[&str], rows: &[Option<Finished>]) {
             "delivered".to_string()
         } else if let Some(a) = r["outcome"]["arrest"].as_object() {
             format!(
-                "arrest at the {} ({:+.1} mm) against {}",
+                "arrest at the {} ({:+.1} mm), the {} against {}",
                 a["stage"].as_str().unwrap_or(""),
                 a["station_mm"].as_f64().unwrap_or(f64::NAN),
+                a["part"].as_str().unwrap_or("unknown"),
                 a["against"].as_str().unwrap_or("")
             )
         } else {
