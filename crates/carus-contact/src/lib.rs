@@ -32,7 +32,7 @@ pub use law::{
     DESIGN_PENETRATION_M,
 };
 pub use neck::{HeadAxes, Neck, NeckAngles, NeckGeometry, NeckLoad, NeckStiffness, StableStep};
-pub use overlap::overlapping_triangles;
+pub use overlap::{overlapping_triangles, self_intersections};
 pub use pair::{pair_contacts, PairReport};
 pub use obstacle::{
     obstacle_contacts, BodyContactState, BodyMotion, Contact, ContactReport, RigidObstacle, RegionTable,

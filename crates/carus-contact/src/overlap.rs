@@ -1,9 +1,9 @@
 //! Mesh overlap: the pairs of triangles of two posed surfaces that
 //! intersect (for example a fetal head placed into a pelvis at the start of
-//! a run, which must not begin inside the bone). Broad phase: each triangle
-//! of the second surface, moved into the first one's frame, queries the
-//! first one's BVH with its bounding box; narrow phase: the exact
-//! triangle-triangle test.
+//! a run, which must not begin inside the bone), and the pairs of one
+//! surface that cross each other (a surface folded on itself, which the
+//! contact's inside test misreads). Broad phase: each triangle's bounding
+//! box queries the BVH; narrow phase: the exact triangle-triangle test.
 
 use glam::DVec3;
 
@@ -27,6 +27,28 @@ pub fn overlapping_triangles(
         for ta in a.triangles_near(lo, hi) {
             if triangles_intersect(a.corners(ta), corners) {
                 pairs.push([ta, tb]);
+            }
+        }
+    }
+    pairs.sort_unstable();
+    pairs
+}
+
+/// Pairs `[t, u]` (t < u, sorted) of triangles of one surface that
+/// intersect without sharing a corner: where the surface crosses itself.
+/// Neighbours that share a corner touch by construction and are left out
+/// (a fold through a shared corner alone is not found).
+pub fn self_intersections(surface: &TriangleCollider) -> Vec<[u32; 2]> {
+    let mut pairs = Vec::new();
+    for t in 0..surface.triangle_count() as u32 {
+        let corners = surface.corners(t);
+        let lo = corners[0].min(corners[1]).min(corners[2]);
+        let hi = corners[0].max(corners[1]).max(corners[2]);
+        for u in surface.triangles_near(lo, hi).into_iter().filter(|&u| u > t) {
+            let other = surface.corners(u);
+            let neighbours = corners.iter().any(|p| other.contains(p));
+            if !neighbours && triangles_intersect(corners, other) {
+                pairs.push([t, u]);
             }
         }
     }
@@ -66,6 +88,19 @@ mod tests {
             }
             prop_assert_eq!(overlapping_triangles(&a, &a_pose, &b, &b_pose), brute);
         }
+    }
+
+    /// A closed sphere does not cross itself; with one vertex pushed
+    /// through the far side, the triangles round it cross the far wall.
+    #[test]
+    fn a_sphere_pushed_through_itself_crosses_itself() {
+        let (mut v, t) = uv_sphere(0.05, 10, 20);
+        assert!(self_intersections(&TriangleCollider::new("sphere", &v, &t).unwrap()).is_empty());
+        let top = (0..v.len()).max_by(|&a, &b| v[a].x.total_cmp(&v[b].x)).unwrap();
+        v[top].x = -0.08;
+        let folded = self_intersections(&TriangleCollider::new("folded", &v, &t).unwrap());
+        assert!(!folded.is_empty());
+        assert!(folded.iter().all(|&[a, b]| a < b));
     }
 
     #[test]

@@ -1,6 +1,8 @@
 //! `carus mesh pelvis|head|floor [FILE.toml] --out DIR`: writes the anatomy
 //! for inspection in ParaView: surfaces as binary STL, the pelvic floor as
 //! VTU, landmarks as CSV and JSON beside them (mm, in each part's frame).
+//! Each surface is checked for places where it crosses itself, which a
+//! mesher or the contact's inside test would trip on.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -48,10 +50,12 @@ pub fn run(args: &MeshArgs) -> anyhow::Result<Status> {
     let file = AnatomyFile::load(args.file.as_deref())?;
     std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create the folder {}", args.out.display()))?;
     let mut written = Vec::new();
+    let mut crossings = Vec::new();
     match args.part {
         MeshPart::Pelvis | MeshPart::Floor => {
             let pelvis = file.pelvis()?;
             written.push(write_stl(&args.out.join("pelvis.stl"), &pelvis.surface)?);
+            crossings.push(("pelvis", self_crossings("pelvis", &pelvis.surface)?));
             let landmarks: Vec<(String, [f64; 3])> =
                 pelvis.landmarks.named().iter().map(|(n, p)| (n.to_string(), p.to_array())).collect();
             written.extend(write_landmarks(&args.out, "pelvis_landmarks", &landmarks)?);
@@ -90,6 +94,7 @@ pub fn run(args: &MeshArgs) -> anyhow::Result<Status> {
         MeshPart::Head => {
             let head = FetalHead::new(&file.head).context("the [head] diameters cannot be built")?;
             written.push(write_stl(&args.out.join("head.stl"), &head.surface)?);
+            crossings.push(("head", self_crossings("head", &head.surface)?));
             let landmarks: Vec<(String, [f64; 3])> =
                 head.landmarks.named().iter().map(|(n, p)| (n.to_string(), p.to_array())).collect();
             written.extend(write_landmarks(&args.out, "head_landmarks", &landmarks)?);
@@ -97,13 +102,33 @@ pub fn run(args: &MeshArgs) -> anyhow::Result<Status> {
     }
     if args.json {
         let files: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
-        print_json(&serde_json::json!({ "out_dir": args.out.display().to_string(), "files": files }))?;
+        let crossings: serde_json::Map<String, serde_json::Value> =
+            crossings.iter().map(|(name, n)| (name.to_string(), (*n).into())).collect();
+        print_json(&serde_json::json!({
+            "out_dir": args.out.display().to_string(),
+            "files": files,
+            "self_intersecting_pairs": crossings,
+        }))?;
     } else {
         for p in &written {
             println!("wrote {}", p.display());
         }
     }
     Ok(Status::Success)
+}
+
+/// How many pairs of the surface's triangles cross each other (not
+/// counting neighbours); a note on standard error when any do.
+fn self_crossings(name: &'static str, surface: &TriSurface) -> anyhow::Result<usize> {
+    let collider = carus_contact::TriangleCollider::new(name, &surface.vertices, &surface.triangles)?;
+    let pairs = carus_contact::self_intersections(&collider).len();
+    if pairs > 0 {
+        eprintln!(
+            "note: the {name} surface crosses itself: {pairs} pairs of triangles intersect \
+             (docs/ANATOMY.md, \"Self-intersections\"); a mesher that needs a clean shell will refuse it"
+        );
+    }
+    Ok(pairs)
 }
 
 /// Binary STL, coordinates in millimetres (what ParaView and slicers expect of STL).
