@@ -179,3 +179,23 @@ fn write_axis(path: &Path, samples: &[(f64, [f64; 3])]) -> anyhow::Result<PathBu
     std::fs::write(path, csv).with_context(|| format!("cannot write {}", path.display()))?;
     Ok(path.to_path_buf())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use carus_anatomy::fetus::HeadDiameters;
+
+    /// The generated head is a clean shell; a copy of it moved half its
+    /// width into itself is not.
+    #[test]
+    fn a_clean_shell_has_no_crossings_and_an_overlapping_one_has() {
+        let head = FetalHead::new(&HeadDiameters::default()).unwrap();
+        assert_eq!(self_crossings("head", &head.surface).unwrap(), 0);
+        let n = head.surface.vertices.len() as u32;
+        let shift = glam::DVec3::new(0.03, 0.0, 0.0);
+        let mut twice = head.surface.clone();
+        twice.vertices.extend(head.surface.vertices.iter().map(|&v| v + shift));
+        twice.triangles.extend(head.surface.triangles.iter().map(|t| t.map(|k| k + n)));
+        assert!(self_crossings("head", &twice).unwrap() > 0);
+    }
+}
