@@ -103,6 +103,22 @@ mod tests {
         assert!(folded.iter().all(|&[a, b]| a < b));
     }
 
+    /// The generated pelvis is a clean shell: its outer wall, pushed out
+    /// from the canal wall by the bone's thickness, no longer folds through
+    /// itself at the brim (286 crossing pairs in the default pelvis before
+    /// carus-anatomy relaxed it), for the default and a contracted inlet.
+    #[test]
+    fn generated_pelves_do_not_cross_themselves() {
+        use carus_anatomy::pelvis::PelvisDiameters;
+        let contracted = PelvisDiameters { inlet_ap_mm: 85.0, inlet_oblique_mm: 112.0, ..PelvisDiameters::default() };
+        for d in [PelvisDiameters::default(), contracted] {
+            let pelvis = carus_anatomy::Pelvis::generate(&d).unwrap();
+            let s = &pelvis.surface;
+            let pairs = self_intersections(&TriangleCollider::new("pelvis", &s.vertices, &s.triangles).unwrap());
+            assert!(pairs.is_empty(), "{} crossing pairs for {d:?}", pairs.len());
+        }
+    }
+
     #[test]
     fn nested_spheres_do_not_overlap_and_crossing_ones_do() {
         let (v, t) = uv_sphere(0.05, 10, 20);

@@ -324,6 +324,42 @@ fn thickness(da: f64, kappa: f64) -> f64 {
     blade + body + sacrum + tuberosity
 }
 
+/// Passes of [`relax_outer`] (numerical: twice the 20 the default pelvis
+/// needs to be free of crossings, more than the contracted inlet's 25; 47
+/// random clinical diameter sets all clean: docs/ANATOMY.md,
+/// "Self-intersections").
+const OUTER_RELAX_PASSES: usize = 40;
+/// The relaxed outer wall stays at least this share of the bone's
+/// thickness from the canal wall (numerical).
+const OUTER_THICKNESS_KEPT: f64 = 0.7;
+
+/// Relaxes the outer wall towards its neighbours' average, pass by pass.
+/// Pushed straight out by the bone's thickness, the outer wall folds
+/// through itself wherever the canal wall bends towards it more tightly
+/// than that (the ridge of the brim, between the iliac fossa and the
+/// canal); averaging unties such folds as it smooths an offset curve's
+/// loops. The canal wall does not move, the sacrum's plate (whose dorsal
+/// border carries the sacral landmarks) moves as little as it is a plate,
+/// and no vertex comes nearer the canal wall than `OUTER_THICKNESS_KEPT`
+/// of its thickness.
+fn relax_outer(inner: &[DVec3], outer: &mut [DVec3], depth: &[f64], plate: &[f64], rows: usize, columns: usize) {
+    for _ in 0..OUTER_RELAX_PASSES {
+        let before = outer.to_vec();
+        let at = |r: usize, i: isize| before[r * columns + i.rem_euclid(columns as isize) as usize];
+        for r in 1..rows - 1 {
+            for i in 0..columns {
+                let (ii, k) = (i as isize, r * columns + i);
+                let average = (at(r - 1, ii) + at(r + 1, ii) + at(r, ii - 1) + at(r, ii + 1)) / 4.0;
+                let moved = before[k].lerp(average, 0.5 * (1.0 - plate[k]));
+                // Not nearer the canal wall than the kept share of the thickness.
+                let out = (before[k] - inner[k]).normalize_or_zero();
+                let short = OUTER_THICKNESS_KEPT * depth[k] - (moved - inner[k]).dot(out);
+                outer[k] = if short > 0.0 { moved + short * out } else { moved };
+            }
+        }
+    }
+}
+
 /// Builds the closed, outward-facing bone surface of a laid-out pelvis and
 /// places the sacral borders on it so the outlet oblique is
 /// `outlet_oblique_mm`; returns the surface and the final landmarks.
@@ -382,19 +418,23 @@ pub(crate) fn canal_surface(layout: &Layout, outlet_oblique_mm: f64) -> Result<(
     let behind = point(0.0, layout.sacrum_behind);
     let at = |i: isize, r: usize| inner[r * columns + i.rem_euclid(columns as isize) as usize];
     let mut outer = vec![DVec3::ZERO; rows * columns];
+    let mut depth = vec![0.0; rows * columns];
+    let mut plate = vec![0.0; rows * columns];
     for r in 0..rows {
         for i in 0..columns {
-            let ii = i as isize;
+            let (ii, k) = (i as isize, r * columns + i);
             let around = at(ii + 1, r) - at(ii - 1, r);
             let down = at(ii, (r + 1).min(rows - 1)) - at(ii, r.saturating_sub(1));
             let normal = down.cross(around).normalize_or_zero();
             // The sacrum and coccyx are a plate: their dorsal surface stands
             // straight behind the ventral one (square to the sacral chord).
-            let plate = smooth(20.0, 24.0, da(i as f64)) * smooth(2.0, 2.6, kappa[r]);
-            let away = normal.lerp(behind, plate).normalize_or_zero();
-            outer[r * columns + i] = inner[r * columns + i] + thickness(da(i as f64), kappa[r]) * away;
+            plate[k] = smooth(20.0, 24.0, da(i as f64)) * smooth(2.0, 2.6, kappa[r]);
+            let away = normal.lerp(behind, plate[k]).normalize_or_zero();
+            depth[k] = thickness(da(i as f64), kappa[r]);
+            outer[k] = inner[k] + depth[k] * away;
         }
     }
+    relax_outer(&inner, &mut outer, &depth, &plate, rows, columns);
     let landmark_vertices: Vec<usize> =
         landmark_sites(&layout.landmarks).iter().map(|&(s, ring, _)| key_row(ring) * columns + column(s)).collect();
     let (inner, mut outer) = cut_corners(&inner, &outer, &bone, rows, columns, &landmark_vertices);
