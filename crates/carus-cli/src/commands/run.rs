@@ -173,6 +173,11 @@ pub(super) fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result
             steps: Some(summary.rigid_steps),
             extra: vec![
                 (
+                    // The outcome turns on it (docs/LABOUR.md), so it heads the figures.
+                    "contact friction (0.009: the wetted canal; 0.35: muscle on bone)".into(),
+                    format!("{}", record.scenario.contact.friction),
+                ),
+                (
                     "rigid step".into(),
                     format!("{:.3} ms", summary.rigid_dt_s * 1e3),
                 ),
