@@ -49,8 +49,9 @@ pub struct Arrest {
     /// The part that carried the largest contact force in the final window
     /// (at its sample of greatest total contact force), or "unknown".
     pub against: String,
-    /// The fetal body held there ("head" or "trunk": the shoulders held
-    /// while the head has not passed the outlet), or "unknown".
+    /// The fetal body that bore most of `against`'s force at that sample
+    /// ("head" or "trunk"; "trunk" with the head short of the outlet is the
+    /// head held back by its shoulders), or "unknown".
     #[serde(default = "unknown")]
     pub part: String,
 }

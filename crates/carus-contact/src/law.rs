@@ -131,7 +131,9 @@ impl ContactLaw {
     pub fn evaluate(&self, area: f64, depth: f64, normal: DVec3, velocity: DVec3, stretch: DVec3) -> ContactForce {
         let k = self.penalty_stiffness_pa_per_m * area;
         let depth_rate = -velocity.dot(normal);
-        // No adhesion: a separating dashpot never pulls the body in.
+        // No adhesion: a separating dashpot never pulls the body in. The
+        // dashpot follows the local stiffness, so it steps up where the
+        // core takes over, as the bone law's own dashpot would.
         let dashpot = self.damping_time_s * self.stiffness_at(depth) * depth_rate;
         let f_n = (area * (self.pressure(depth) + dashpot)).max(0.0);
 
@@ -309,11 +311,17 @@ mod tests {
         }
     }
 
-    /// The cap's force F(d) = integral of p(s) 2 pi R ds, summed on rings.
+    /// The cap's force F(d) = integral of p(s) 2 pi R ds, summed on rings
+    /// by the midpoint rule on each side of the cover's depth, where p is
+    /// linear, so the sum is exact but for rounding.
     fn sphere_force(law: &ContactLaw, radius: f64, depth: f64) -> f64 {
-        let n = 20_000;
-        let ds = depth / n as f64;
-        (0..n).map(|i| law.pressure((i as f64 + 0.5) * ds) * 2.0 * std::f64::consts::PI * radius * ds).sum()
+        let corner = law.cover.map_or(depth, |c| c.depth_m.min(depth));
+        let rings = |from: f64, to: f64| {
+            let n = 1000;
+            let ds = (to - from) / n as f64;
+            (0..n).map(|i| law.pressure(from + (i as f64 + 0.5) * ds) * 2.0 * std::f64::consts::PI * radius * ds).sum::<f64>()
+        };
+        rings(0.0, corner) + rings(corner, depth)
     }
 
     #[test]
@@ -346,7 +354,7 @@ mod tests {
                 let h = 1e-6 * d;
                 let slope = (sphere_force(&law, radius, d + h) - sphere_force(&law, radius, d - h)) / (2.0 * h);
                 let k = law.design_normal_stiffness(radius, force);
-                proptest::prop_assert!((slope - k).abs() < 1e-3 * k, "{slope} {k}");
+                proptest::prop_assert!((slope - k).abs() < 1e-4 * k, "{slope} {k}");
             }
         }
     }

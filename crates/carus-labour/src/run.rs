@@ -71,6 +71,16 @@ pub fn resume(
         &checkpoint.scenario_toml,
         checkpoint.base_dir.clone(),
     )?;
+    let missing = keys_missing(&checkpoint.scenario_toml, &scenario.to_toml()?);
+    if !missing.is_empty() {
+        return Err(LabourError::Checkpoint(format!(
+            "the checkpoint was written by an older carus, before {} existed; the rest of the run \
+             would take {} default and so a model its start did not have; run the scenario again \
+             from the start",
+            missing.join(", "),
+            if missing.len() == 1 { "its" } else { "their" }
+        )));
+    }
     let scene = Scene::build(&scenario)?;
     let sim = Simulation::from_state(&scene, checkpoint.state)?;
     drive(
@@ -81,6 +91,30 @@ pub fn resume(
         checkpoint.frame_times,
         started,
     )
+}
+
+/// The dotted keys `current` writes that `saved` lacks. Both are complete
+/// scenario files (`Scenario::to_toml` writes every key), so a key missing
+/// from a checkpoint's is one added to the model since it was written.
+fn keys_missing(saved: &str, current: &str) -> Vec<String> {
+    fn keys(prefix: &str, table: &toml::Table, out: &mut Vec<String>) {
+        for (key, value) in table {
+            let path = if prefix.is_empty() { key.clone() } else { format!("{prefix}.{key}") };
+            match value {
+                toml::Value::Table(inner) => keys(&path, inner, out),
+                _ => out.push(path),
+            }
+        }
+    }
+    let listed = |text: &str| {
+        let mut out = Vec::new();
+        if let Ok(table) = text.parse::<toml::Table>() {
+            keys("", &table, &mut out);
+        }
+        out
+    };
+    let saved = listed(saved);
+    listed(current).into_iter().filter(|k| !saved.contains(k)).collect()
 }
 
 fn drive(
@@ -900,6 +934,24 @@ mod tests {
             .map(|a| a.flexion_deg.hypot(a.lateral_bending_deg))
             .fold(0.0, f64::max);
         assert!(largest > 2.0, "the spine bent at most {largest} deg");
+    }
+
+    /// A checkpoint written before a key existed is refused on resume,
+    /// naming the key: the key's default would run the rest of the run on
+    /// a model its start did not have (as the trunk's cover depth would).
+    #[test]
+    fn a_checkpoint_from_before_a_key_existed_is_refused_naming_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let options = RunOptions { stop_at_s: Some(0.05), ..RunOptions::default() };
+        run(&coarse(0.2), dir.path(), &options, &mut SilentObserver).unwrap();
+        let path = dir.path().join(output::CHECKPOINT_FILE);
+        let mut json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+        let toml = json["scenario_toml"].as_str().unwrap();
+        let older: String = toml.lines().filter(|l| !l.starts_with("trunk_cover_depth_mm")).map(|l| format!("{l}\n")).collect();
+        json["scenario_toml"] = older.into();
+        std::fs::write(&path, json.to_string()).unwrap();
+        let e = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).err().expect("refused").to_string();
+        assert!(e.contains("before contact.trunk_cover_depth_mm existed") && e.contains("from the start"), "{e}");
     }
 
     #[test]

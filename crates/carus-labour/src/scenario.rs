@@ -331,10 +331,11 @@ pub struct ContactSection {
     /// (3 x a round 20 kPa shear modulus for passive muscle, nearly
     /// incompressible; resting adult levator ani measures 16-17 kPa,
     /// Gachon et al. 2019, see `FloorSection`) over h = 6 mm
-    /// of skin, fat and muscle, 1.0e7 Pa/m, so the chest pressed with the
-    /// full 120 N sinks about 9 mm (F = k pi R d^2, R = 50 mm). An
-    /// engineering estimate, no measured neonatal value is cited
-    /// (docs/LABOUR.md records the outcome at this and at 9.4e7).
+    /// of skin, fat and muscle, 1.0e7 Pa/m: alone, the chest pressed with
+    /// the full 120 N would sink about 9 mm (F = k pi R d^2, R = 50 mm);
+    /// with the skeleton under the cover (`trunk_cover_depth_mm`) it sinks
+    /// about 6.6. An engineering estimate, no measured neonatal value is
+    /// cited (docs/LABOUR.md records the outcome at this and at 9.4e7).
     pub trunk_penalty_stiffness_pa_per_m: f64,
     /// Depth of that cover, mm: pressed through it, the shoulder girdle
     /// and ribs meet the bone, and the bone law's penalty

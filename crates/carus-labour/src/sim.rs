@@ -546,11 +546,6 @@ impl<'a> Simulation<'a> {
         let bone: DVec3 = reports.iter().map(|r| r.force).sum();
         let floor_by_body: Vec<DVec3> = self.state.floor_wrench.iter().map(|w| w.force).collect();
         let floor: DVec3 = floor_by_body.iter().sum();
-        // The body bearing the largest of these forces.
-        let bearer = |forces: &mut dyn Iterator<Item = DVec3>| {
-            let b = forces.enumerate().max_by(|(_, f), (_, g)| f.length().total_cmp(&g.length())).map_or(HEAD, |(b, _)| b);
-            if b == HEAD { FetalPart::Head } else { FetalPart::Trunk }
-        };
         let mut dominant = None;
         let mut dominant_part = None;
         let mut largest = 1e-6;
@@ -558,12 +553,12 @@ impl<'a> Simulation<'a> {
             if f.length() > largest {
                 largest = f.length();
                 dominant = Some(sites[k]);
-                dominant_part = Some(bearer(&mut per_body.iter().map(|f| f[k])));
+                dominant_part = Some(bearer(per_body.iter().map(|f| f[k])));
             }
         }
         if floor.length() > largest {
             dominant = Some(ContactSite::PelvicFloor);
-            dominant_part = Some(bearer(&mut floor_by_body.iter().copied()));
+            dominant_part = Some(bearer(floor_by_body.iter().copied()));
         }
         StepForces {
             expulsion,
@@ -778,6 +773,17 @@ fn new_solver(
     Ok((solver, substeps))
 }
 
+/// The fetal part of the body (indexed as the scene's bodies) that bears
+/// the largest of `forces`.
+fn bearer(forces: impl Iterator<Item = DVec3>) -> FetalPart {
+    let body = forces.enumerate().max_by(|(_, f), (_, g)| f.length().total_cmp(&g.length())).map_or(HEAD, |(b, _)| b);
+    if body == HEAD {
+        FetalPart::Head
+    } else {
+        FetalPart::Trunk
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -838,3 +844,4 @@ mod tests {
         assert_eq!(inverted_corner_elements(&mesh, &nodes), 1);
     }
 }
+
