@@ -12,8 +12,8 @@ use carus_anatomy::fetus::{FetalHead, Trunk, TrunkDiameters};
 use carus_anatomy::floor::{pelvic_floor, ATTACHED};
 use carus_anatomy::{Pelvis, Plane, TriSurface};
 use carus_contact::{
-    obstacle_contacts, pair_contacts, BodyContactState, BodyMotion, ContactLaw, HeadAxes, SoftCover, MassProperties, NeckGeometry, RegionTable,
-    RigidBodyModel, RigidObstacle, RigidPose, SurfaceSamples, TriangleCollider, DESIGN_PENETRATION_M,
+    obstacle_contacts, pair_contacts, BodyContactState, BodyMotion, ContactLaw, HeadAxes, MassProperties, NeckGeometry, RegionTable,
+    RigidBodyModel, RigidObstacle, RigidPose, SoftCover, SurfaceSamples, TriangleCollider, DESIGN_PENETRATION_M,
 };
 use carus_fem::{BoundaryConditions, Material, MaterialRegion, Mesh, ModelOptions, TledModel};
 use glam::{DMat3, DVec3};

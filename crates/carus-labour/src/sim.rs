@@ -544,8 +544,7 @@ impl<'a> Simulation<'a> {
         let per_body: Vec<Vec<DVec3>> = reports.iter().map(|r| r.force_by_region(sites.len())).collect();
         let by_site: Vec<DVec3> = (0..sites.len()).map(|k| per_body.iter().map(|f| f[k]).sum()).collect();
         let bone: DVec3 = reports.iter().map(|r| r.force).sum();
-        let floor_by_body: Vec<DVec3> = self.state.floor_wrench.iter().map(|w| w.force).collect();
-        let floor: DVec3 = floor_by_body.iter().sum();
+        let floor: DVec3 = self.state.floor_wrench.iter().map(|w| w.force).sum();
         let mut dominant = None;
         let mut dominant_part = None;
         let mut largest = 1e-6;
@@ -558,7 +557,7 @@ impl<'a> Simulation<'a> {
         }
         if floor.length() > largest {
             dominant = Some(ContactSite::PelvicFloor);
-            dominant_part = Some(bearer(floor_by_body.iter().copied()));
+            dominant_part = Some(bearer(self.state.floor_wrench.iter().map(|w| w.force)));
         }
         StepForces {
             expulsion,
@@ -773,14 +772,13 @@ fn new_solver(
     Ok((solver, substeps))
 }
 
-/// The fetal part of the body (indexed as the scene's bodies) that bears
-/// the largest of `forces`.
+/// The fetal part bearing the largest of `forces`, one per body in the
+/// scene's body order.
 fn bearer(forces: impl Iterator<Item = DVec3>) -> FetalPart {
     let body = forces.enumerate().max_by(|(_, f), (_, g)| f.length().total_cmp(&g.length())).map_or(HEAD, |(b, _)| b);
-    if body == HEAD {
-        FetalPart::Head
-    } else {
-        FetalPart::Trunk
+    match Body::of(body) {
+        Body::Head => FetalPart::Head,
+        Body::Trunk | Body::LowerTrunk => FetalPart::Trunk,
     }
 }
 
@@ -844,4 +842,3 @@ mod tests {
         assert_eq!(inverted_corner_elements(&mesh, &nodes), 1);
     }
 }
-
