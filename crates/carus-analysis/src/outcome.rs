@@ -105,8 +105,7 @@ pub fn contraction_period_s(series: &Series) -> Option<f64> {
 /// Judges the outcome of the run that `series` was measured from.
 pub fn outcome(history: &PoseHistory, series: &Series, spines_sigma_mm: f64) -> Outcome {
     let last = series.len() - 1;
-    let head_out = series.head_delivered[last];
-    let delivered = head_out
+    let delivered = series.head_delivered[last]
         && series
             .trunk_below_outlet_mm
             .as_ref()
@@ -117,11 +116,6 @@ pub fn outcome(history: &PoseHistory, series: &Series, spines_sigma_mm: f64) -> 
             arrest: None,
         };
     }
-    // The part whose progress counts: the shoulders once the head is out.
-    let progress: Vec<f64> = match (head_out, &series.shoulders_sigma_mm) {
-        (true, Some(shoulders)) => shoulders.iter().map(|s| s - spines_sigma_mm).collect(),
-        _ => series.station_mm.clone(),
-    };
     let duration = series.time_s[last] - series.time_s[0];
     let span = (ARREST_WINDOW_FRACTION * duration)
         .max(contraction_period_s(series).map_or(0.0, |p| ARREST_WINDOW_PERIODS * p));
@@ -130,17 +124,28 @@ pub fn outcome(history: &PoseHistory, series: &Series, spines_sigma_mm: f64) -> 
         .iter()
         .position(|&t| t >= series.time_s[last] - span)
         .unwrap_or(0);
-    let max_of = |range: std::ops::Range<usize>| {
-        progress[range]
-            .iter()
-            .copied()
-            .fold(f64::NEG_INFINITY, f64::max)
+    // A head born at the height of each contraction that slips back between
+    // them (the turtle sign of shoulder dystocia) is out: the last sample's
+    // phase of the contraction must not decide it.
+    let head_out = series.head_delivered[window_start..=last].iter().any(|&h| h);
+    // The part whose progress counts: the shoulders once the head is out.
+    let progress: Vec<f64> = match (head_out, &series.shoulders_sigma_mm) {
+        (true, Some(shoulders)) => shoulders.iter().map(|s| s - spines_sigma_mm).collect(),
+        _ => series.station_mm.clone(),
     };
-    let reached = max_of(window_start..last + 1);
+    let deepest = |range: std::ops::RangeInclusive<usize>| {
+        range
+            .max_by(|&a, &b| progress[a].total_cmp(&progress[b]))
+            .unwrap_or(last)
+    };
+    // Where the fetus got stuck: the window's deepest sample, which both the
+    // station and the stage describe.
+    let stuck_at = deepest(window_start..=last);
+    let reached = progress[stuck_at];
     let before = if window_start == 0 {
         progress[0]
     } else {
-        max_of(0..window_start)
+        progress[deepest(0..=window_start - 1)]
     };
     if reached - before >= ARREST_PROGRESS_MM {
         return Outcome {
@@ -150,12 +155,12 @@ pub fn outcome(history: &PoseHistory, series: &Series, spines_sigma_mm: f64) -> 
     }
     let stage = if head_out {
         ArrestStage::Shoulders
-    } else if series.left_parietal_below_inlet_mm[last]
-        .min(series.right_parietal_below_inlet_mm[last])
+    } else if series.left_parietal_below_inlet_mm[stuck_at]
+        .min(series.right_parietal_below_inlet_mm[stuck_at])
         <= 0.0
     {
         ArrestStage::Inlet
-    } else if series.head_sigma_mm[last] < spines_sigma_mm {
+    } else if series.head_sigma_mm[stuck_at] < spines_sigma_mm {
         ArrestStage::MidPelvis
     } else {
         ArrestStage::Outlet

@@ -354,6 +354,34 @@ fn large_shoulders_deliver_the_head_then_arrest() {
     absent(&r.movements.expulsion);
 }
 
+/// The turtle sign: a head born at the height of each contraction that
+/// slips back inside between them is out, whatever phase of the contraction
+/// the run ends in; the stage and the station describe the same moment.
+#[test]
+fn a_head_that_slips_back_between_contractions_is_a_shoulder_arrest() {
+    let canal = reference_canal();
+    let mut plan = synthetic::textbook_plan(&canal);
+    plan.hold_sigma_mm = canal.outlet_sigma() * 1000.0 + 3.0;
+    plan.contact = Some(carus_analysis::ContactSite::Symphysis);
+    let reach_s = (plan.hold_sigma_mm - plan.start_sigma_mm) / plan.advance_mm_per_s;
+    let mut ends_out_and_in = (false, false);
+    for quarter in 0..4 {
+        plan.duration_s = (reach_s / plan.period_s).ceil() * plan.period_s
+            + 4.0 * plan.period_s
+            + 0.25 * f64::from(quarter) * plan.period_s;
+        let r = detect(&plan.history(&canal)).unwrap();
+        let out_at_end = r.series.head_delivered.last().copied().unwrap();
+        ends_out_and_in.0 |= out_at_end;
+        ends_out_and_in.1 |= !out_at_end;
+        assert!(!r.outcome.delivered);
+        let arrest = r.outcome.arrest.as_ref().expect("arrest");
+        assert_eq!(arrest.stage, ArrestStage::Shoulders, "ending at quarter {quarter}");
+        assert_eq!(arrest.against, "symphysis");
+    }
+    // The runs end both with the head out and with it slipped back.
+    assert_eq!(ends_out_and_in, (true, true));
+}
+
 #[test]
 fn an_undelivered_head_without_a_contact_record_is_against_unknown() {
     let mut history = synthetic::inlet_arrest(&reference_canal());
