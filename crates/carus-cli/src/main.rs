@@ -39,6 +39,8 @@ enum Command {
     Scenarios(commands::scenarios::ScenariosArgs),
     /// Run a scenario at every combination of the values given, and tabulate the outcomes.
     Sweep(commands::sweep::SweepArgs),
+    /// Detect the cardinal movements and the outcome in a recorded pose history.
+    Detect(commands::detect::DetectArgs),
 }
 
 fn main() -> ExitCode {
@@ -58,6 +60,7 @@ fn main() -> ExitCode {
         Command::Run(args) => commands::run::run(args),
         Command::Scenarios(args) => commands::scenarios::run(args),
         Command::Sweep(args) => commands::sweep::run(args),
+        Command::Detect(args) => commands::detect::run(args),
     };
     match result {
         Ok(Status::Success) => ExitCode::SUCCESS,

@@ -1,6 +1,7 @@
 //! One module per subcommand; each owns its clap arguments and its `run`.
 
 pub mod bench;
+pub mod detect;
 pub mod measure;
 pub mod mesh;
 pub mod render;

@@ -10,7 +10,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 use anyhow::{bail, Context};
-use carus_analysis::{Movement, Movements};
+use carus_analysis::{ArrestStage, Movement, Movements, Outcome};
 use carus_labour::{Observer, RunOptions, RunRecord, Scenario, BUILTINS};
 use serde_json::json;
 
@@ -273,13 +273,9 @@ pub(super) fn prepare_out_dir(out: Option<&Path>, name: &str, force: bool) -> an
 }
 
 pub(super) fn json_summary(record: &RunRecord, out_dir: &Path) -> serde_json::Value {
-    let movements: serde_json::Map<String, serde_json::Value> = movements(record)
-        .into_iter()
-        .map(|(k, v)| (k.to_string(), serde_json::to_value(v).expect("plain data")))
-        .collect();
     json!({
         "outcome": record.summary.outcome,
-        "movements": movements,
+        "movements": movements_json(&movements(record)),
         "simulated_s": record.summary.simulated_s,
         "wall_s": record.summary.wall_s,
         "out_dir": out_dir.display().to_string(),
@@ -290,6 +286,16 @@ pub(super) fn json_summary(record: &RunRecord, out_dir: &Path) -> serde_json::Va
     })
 }
 
+/// The seven movements as one JSON object under their canonical keys
+/// (CONVENTIONS.md).
+pub(super) fn movements_json(movements: &[(&'static str, Movement)]) -> serde_json::Value {
+    let map: serde_json::Map<String, serde_json::Value> = movements
+        .iter()
+        .map(|(k, v)| (k.to_string(), serde_json::to_value(v).expect("plain data")))
+        .collect();
+    serde_json::Value::Object(map)
+}
+
 /// The seven movements under their canonical keys; all unobserved when the
 /// run stopped before there was anything to detect.
 pub(super) fn movements(record: &RunRecord) -> Vec<(&'static str, Movement)> {
@@ -297,31 +303,50 @@ pub(super) fn movements(record: &RunRecord) -> Vec<(&'static str, Movement)> {
         .detector
         .as_ref()
         .map_or_else(Movements::none, |d| d.movements);
+    movement_list(&all)
+}
+
+/// The seven movements in canonical order, under their canonical keys.
+pub(super) fn movement_list(all: &Movements) -> Vec<(&'static str, Movement)> {
     all.by_key().iter().map(|(k, m)| (*k, **m)).collect()
 }
 
 fn print_summary(record: &RunRecord, out_dir: &Path) {
     let s = &record.summary;
-    let outcome = if s.outcome.delivered {
-        "delivered".to_string()
-    } else {
-        match &s.outcome.arrest {
-            Some(a) => format!(
-                "arrested at the {} stage, station {:+.0} mm, the {} against {}",
-                serde_name(&a.stage),
-                a.station_mm,
-                a.part,
-                a.against
-            ),
-            None => "neither delivered nor arrested (the run ended too soon to tell)".to_string(),
-        }
-    };
-    println!("scenario {}: {outcome}", s.scenario);
+    println!("scenario {}: {}", s.scenario, outcome_line(&s.outcome));
     println!(
         "simulated {:.1} s in {:.1} s wall time ({} rigid steps)",
         s.simulated_s, s.wall_s, s.rigid_steps
     );
-    for (key, m) in movements(record) {
+    print_movements(&movements(record));
+    println!(
+        "results in {} (report.html, run.json, movements.json, pose_history.csv, *.pvd)",
+        out_dir.display()
+    );
+}
+
+/// The outcome in words: delivered, or where, what and against what it arrested.
+pub(super) fn outcome_line(outcome: &Outcome) -> String {
+    if outcome.delivered {
+        return "delivered".to_string();
+    }
+    match &outcome.arrest {
+        Some(a) => format!(
+            "arrested at the {} stage, {} {:+.0} mm, the {} against {}",
+            serde_name(&a.stage),
+            // A shoulder arrest's station is the bisacromial midpoint's.
+            if a.stage == ArrestStage::Shoulders { "shoulders at station" } else { "station" },
+            a.station_mm,
+            a.part,
+            a.against
+        ),
+        None => "neither delivered nor arrested (the run ended too soon to tell)".to_string(),
+    }
+}
+
+/// One line per movement: observed with its span and size, or not.
+pub(super) fn print_movements(movements: &[(&'static str, Movement)]) {
+    for (key, m) in movements {
         let unit = serde_name(&m.unit);
         match (m.observed, m.start_s, m.end_s, m.size) {
             (true, Some(a), Some(b), Some(size)) => {
@@ -330,10 +355,6 @@ fn print_summary(record: &RunRecord, out_dir: &Path) {
             _ => println!("  {key:18} not observed"),
         }
     }
-    println!(
-        "results in {} (report.html, run.json, movements.json, pose_history.csv, *.pvd)",
-        out_dir.display()
-    );
 }
 
 /// The name an enum value has in the JSON output (e.g. `mid-pelvis`), so
