@@ -86,19 +86,14 @@ impl CsvWriter {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::temp;
     use proptest::prelude::*;
-
-    fn temp(name: &str) -> PathBuf {
-        let dir = std::env::temp_dir().join(format!("carus-io-csv-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        dir.join(name)
-    }
 
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(32))]
         #[test]
         fn rows_read_back_bit_for_bit(rows in proptest::collection::vec(proptest::array::uniform3(any::<f64>()), 0..20)) {
-            let path = temp("history.csv");
+            let (_dir, path) = temp("history.csv");
             let mut csv = CsvWriter::create(&path, &["time_s", "reaction_x_n", "kinetic_j"]).unwrap();
             for row in &rows {
                 csv.row(row).unwrap();
@@ -119,7 +114,7 @@ mod tests {
 
     #[test]
     fn ragged_rows_and_bad_names_are_refused() {
-        let path = temp("ragged.csv");
+        let (_dir, path) = temp("ragged.csv");
         let mut csv = CsvWriter::create(&path, &["a", "b"]).unwrap();
         let err = csv.row(&[1.0]).unwrap_err().to_string();
         assert!(

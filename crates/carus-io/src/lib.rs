@@ -46,3 +46,12 @@ pub fn read_mesh(path: &Path) -> Result<MeshFile, ReadError> {
         }),
     }
 }
+
+/// A path in a fresh folder that is removed with the returned guard (the
+/// tests' scratch files leave nothing behind).
+#[cfg(test)]
+fn temp(name: &str) -> (tempfile::TempDir, std::path::PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join(name);
+    (dir, path)
+}

@@ -515,19 +515,15 @@ pub fn write_vtu(path: &Path, mesh: &Mesh, frame: &FrameFields) -> Result<(), Wr
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::temp;
 
-    fn temp(name: &str) -> std::path::PathBuf {
-        let dir = std::env::temp_dir().join(format!("carus-io-vtk-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        dir.join(name)
-    }
 
     const ASCII_VTU: &str = include_str!("../tests/data/tet_ascii.vtu");
     const LEGACY_VTK: &str = include_str!("../tests/data/tet_surface.vtk");
 
     #[test]
     fn reads_an_ascii_vtu_with_sets() {
-        let path = temp("tet_ascii.vtu");
+        let (_dir, path) = temp("tet_ascii.vtu");
         std::fs::write(&path, ASCII_VTU).unwrap();
         let file = read_vtk(&path).unwrap();
         assert_eq!(file.mesh.kind, ElementKind::T4);
@@ -539,7 +535,7 @@ mod tests {
 
     #[test]
     fn reads_a_legacy_vtk_and_skips_lines() {
-        let path = temp("tet_surface.vtk");
+        let (_dir, path) = temp("tet_surface.vtk");
         std::fs::write(&path, LEGACY_VTK).unwrap();
         let file = read_vtk(&path).unwrap();
         assert_eq!(file.mesh.kind, ElementKind::T4);
@@ -638,7 +634,7 @@ mod tests {
     #[test]
     fn reads_appended_raw_vtu_plain_and_zlib_compressed() {
         for compress in [false, true] {
-            let path = temp(&format!("appended_{compress}.vtu"));
+            let (_dir, path) = temp(&format!("appended_{compress}.vtu"));
             std::fs::write(&path, appended_raw_vtu(compress)).unwrap();
             let file = read_vtk(&path).unwrap();
             assert_eq!(file.mesh.kind, ElementKind::T4);
@@ -649,7 +645,7 @@ mod tests {
     #[test]
     fn truncated_raw_appended_data_is_an_error() {
         let bytes = appended_raw_vtu(true);
-        let path = temp("appended_cut.vtu");
+        let (_dir, path) = temp("appended_cut.vtu");
         let stride = (bytes.len() / 60).max(1);
         for cut in (0..bytes.len() - 30).step_by(stride) {
             std::fs::write(&path, &bytes[..cut]).unwrap();
@@ -682,7 +678,7 @@ mod tests {
         };
         let mut bytes = Vec::new();
         vtk.write_legacy(&mut bytes).unwrap();
-        let path = temp("binary.vtk");
+        let (_dir, path) = temp("binary.vtk");
         std::fs::write(&path, &bytes).unwrap();
         let back = read_vtk(&path).unwrap().mesh;
         assert_eq!(back.nodes, mesh.nodes);
@@ -707,7 +703,7 @@ mod tests {
             max_principal_stretch: &stretch,
             jacobian: &jacobian,
         };
-        let path = temp("frame.vtu");
+        let (_dir, path) = temp("frame.vtu");
         write_vtu(&path, &mesh, &frame).unwrap();
         let back = read_vtk(&path).unwrap().mesh;
         assert_eq!(back.nodes, mesh.nodes);
@@ -737,7 +733,8 @@ mod tests {
             max_principal_stretch: &[],
             jacobian: &[],
         };
-        let err = write_vtu(&temp("bad.vtu"), &mesh, &frame)
+        let (_dir, bad) = temp("bad.vtu");
+        let err = write_vtu(&bad, &mesh, &frame)
             .unwrap_err()
             .to_string();
         assert!(err.contains("2 displacements for 8 nodes"), "{err}");
@@ -747,7 +744,7 @@ mod tests {
     fn truncated_and_corrupted_files_give_errors_not_panics() {
         let mesh = carus_fem::generate::box_t4([1.0, 1.0, 1.0], [1, 1, 1]);
         let zeros = vec![0.0; mesh.element_count()];
-        let frame_path = temp("binary_frame.vtu");
+        let (_dir, frame_path) = temp("binary_frame.vtu");
         let frame = FrameFields {
             displacement_m: &vec![[0.0; 3]; mesh.node_count()],
             von_mises_pa: &zeros,
@@ -761,7 +758,7 @@ mod tests {
             ("t.vtk", LEGACY_VTK),
             ("b.vtu", binary.as_str()),
         ] {
-            let path = temp(name);
+            let (_dir, path) = temp(name);
             let stride = (text.len() / 60).max(1);
             for cut in (0..text.len()).step_by(stride) {
                 std::fs::write(&path, &text.as_bytes()[..cut]).unwrap();
@@ -782,7 +779,7 @@ mod tests {
 
     #[test]
     fn other_data_sets_are_refused_with_the_fix() {
-        let path = temp("poly.vtk");
+        let (_dir, path) = temp("poly.vtk");
         std::fs::write(&path, "# vtk DataFile Version 2.0\nt\nASCII\nDATASET POLYDATA\nPOINTS 3 float\n0 0 0 1 0 0 0 1 0\nPOLYGONS 1 4\n3 0 1 2\n").unwrap();
         let err = read_vtk(&path).unwrap_err().to_string();
         assert!(
