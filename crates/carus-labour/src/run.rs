@@ -950,7 +950,7 @@ mod tests {
         let older: String = toml.lines().filter(|l| !l.starts_with("trunk_cover_depth_mm")).map(|l| format!("{l}\n")).collect();
         json["scenario_toml"] = older.into();
         std::fs::write(&path, json.to_string()).unwrap();
-        let e = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).err().expect("refused").to_string();
+        let e = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).expect_err("refused").to_string();
         assert!(e.contains("before contact.trunk_cover_depth_mm existed") && e.contains("from the start"), "{e}");
     }
 

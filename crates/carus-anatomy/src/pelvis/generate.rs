@@ -420,7 +420,7 @@ pub(crate) fn canal_surface(layout: &Layout, outlet_oblique_mm: f64) -> Result<(
     let mut outer = vec![DVec3::ZERO; rows * columns];
     let mut depth = vec![0.0; rows * columns];
     let mut plate = vec![0.0; rows * columns];
-    for r in 0..rows {
+    for (r, &kappa) in kappa.iter().enumerate().take(rows) {
         for i in 0..columns {
             let (ii, k) = (i as isize, r * columns + i);
             let around = at(ii + 1, r) - at(ii - 1, r);
@@ -428,9 +428,9 @@ pub(crate) fn canal_surface(layout: &Layout, outlet_oblique_mm: f64) -> Result<(
             let normal = down.cross(around).normalize_or_zero();
             // The sacrum and coccyx are a plate: their dorsal surface stands
             // straight behind the ventral one (square to the sacral chord).
-            plate[k] = smooth(20.0, 24.0, da(i as f64)) * smooth(2.0, 2.6, kappa[r]);
+            plate[k] = smooth(20.0, 24.0, da(i as f64)) * smooth(2.0, 2.6, kappa);
             let away = normal.lerp(behind, plate[k]).normalize_or_zero();
-            depth[k] = thickness(da(i as f64), kappa[r]);
+            depth[k] = thickness(da(i as f64), kappa);
             outer[k] = inner[k] + depth[k] * away;
         }
     }
