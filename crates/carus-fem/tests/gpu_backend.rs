@@ -449,7 +449,7 @@ fn auto_uses_a_real_gpu_or_falls_back_to_the_cpu_with_a_notice() {
 
 #[test]
 fn the_bench_reports_the_cpu_bench_figures_and_bandwidth() {
-    let r = carus_fem::gpu::bench_tled(&device(), carus_fem::ElementKind::H8, 4, 20, Some(100.0))
+    let r = carus_fem::gpu::bench_tled(&device(), carus_fem::ElementKind::H8, 4, 20, None, Some(100.0))
         .unwrap();
     assert_eq!(
         (r.elements, r.nodes, r.steps, r.threads, r.backend.as_str()),

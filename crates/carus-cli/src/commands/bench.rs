@@ -9,7 +9,7 @@
 use std::time::Instant;
 
 use anyhow::{bail, Context};
-use carus_fem::gpu::{bench_tled, AdapterChoice, DeviceError, GpuDevice, GpuError};
+use carus_fem::gpu::{bench_tled, AdapterChoice, DeviceError, GpuDevice, GpuError, MIN_TIMED_S};
 use carus_fem::validation::cube::{baseline_solver, CubeElement, CubeSetup, CubeVariant, RAMP_S};
 use carus_fem::validation::tissue_model;
 use carus_fem::{ElementKind, LoadShape, Precision, StepControl, TledSolver};
@@ -31,7 +31,7 @@ pub struct TledBenchArgs {
     /// Elements per edge (the cube has n^3 H8 or 6 n^3 T4).
     #[arg(long, default_value_t = 20)]
     pub n: usize,
-    /// Timed steps (default: about 2e7 element-steps, at least 10).
+    /// Timed steps (default: about 2e7 element-steps, at least 10; on a GPU, more until a run lasts a second).
     #[arg(long)]
     pub steps: Option<u64>,
     /// Worker threads of the CPU solver (default: all cores).
@@ -169,7 +169,9 @@ fn gpu_bench(args: &TledBenchArgs, kind: ElementKind, steps: u64) -> anyhow::Res
         Err(DeviceError::NoAdapter { .. }) if args.backend == BackendArg::Auto => return Ok(None),
         Err(error) => return Err(GpuError::from(error).into()),
     };
-    let report = bench_tled(&device, kind, args.n, steps, args.peak_gbs)?;
+    // Without --steps, a GPU run times at least MIN_TIMED_S (submission latency).
+    let min_wall_s = args.steps.is_none().then_some(MIN_TIMED_S);
+    let report = bench_tled(&device, kind, args.n, steps, min_wall_s, args.peak_gbs)?;
     if args.json {
         print_json(&report)?;
     } else {

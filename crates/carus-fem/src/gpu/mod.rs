@@ -32,7 +32,7 @@ mod solver;
 mod traffic;
 
 pub use backend::{open_solver, Backend, BackendSolver, OpenedSolver};
-pub use bench::{bench_tled, GpuBenchReport};
+pub use bench::{bench_tled, GpuBenchReport, MIN_TIMED_S};
 pub use device::{AdapterChoice, DeviceError, GpuDevice};
 pub use error::{GpuError, LAVAPIPE_HINT};
 pub use loads::MAX_LOAD_SHAPES;
