@@ -21,7 +21,7 @@ pub mod scene;
 pub mod sim;
 
 pub use record::{KeyMoment, RunRecord, RunSummary};
-pub use run::{resume, run, Observer, RunOptions, SilentObserver};
+pub use run::{resume, run, run_from_start, Observer, RunOptions, SilentObserver};
 pub use scenario::{FloorCoupling, Scenario, ScenarioError, BUILTINS};
 pub use scene::Scene;
 pub use sim::{SimState, Simulation};

@@ -52,9 +52,24 @@ pub fn run(
 ) -> Result<RunRecord, LabourError> {
     let started = Instant::now();
     let scene = Scene::build(scenario)?;
-    output::write_text(&out_dir.join(output::SCENARIO_FILE), &scenario.to_toml()?)?;
-    write_static(&scene, out_dir)?;
     let sim = Simulation::new(&scene)?;
+    run_from_start(sim, out_dir, options, observer, started)
+}
+
+/// Runs a simulation fresh from [`Simulation::new`], writing into `out_dir`
+/// (which must exist). A caller that builds the scene and the simulation
+/// itself learns of a scenario that cannot start before it makes or clears
+/// an out dir; `started` is when it began, for the run's wall time.
+pub fn run_from_start(
+    sim: Simulation<'_>,
+    out_dir: &Path,
+    options: &RunOptions,
+    observer: &mut dyn Observer,
+    started: Instant,
+) -> Result<RunRecord, LabourError> {
+    let scene = sim.scene;
+    output::write_text(&out_dir.join(output::SCENARIO_FILE), &scene.scenario.to_toml()?)?;
+    write_static(scene, out_dir)?;
     drive(sim, out_dir, options, observer, Vec::new(), started)
 }
 

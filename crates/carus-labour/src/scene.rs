@@ -128,7 +128,7 @@ impl Scene {
 
         let s = scenario;
         let head_anatomy = FetalHead::with_subdivisions(&s.head, s.numerics.head_subdivisions)
-            .map_err(|e| LabourError::Anatomy(format!("fetal head: {e}")))?;
+            .map_err(|e| unbuildable("head", e))?;
         let spacing = s.contact.sample_spacing_mm * 1e-3;
         let head = FetalBody::new(
             "head",
@@ -536,7 +536,17 @@ pub fn solid_properties(surface: &TriSurface, density: f64) -> (f64, DVec3, DMat
 fn build_pelvis(s: &Scenario) -> Result<Pelvis, LabourError> {
     s.pelvis
         .build(&s.base_dir)
-        .map_err(|e| LabourError::Anatomy(format!("pelvis: {e}")))
+        .map_err(|e| unbuildable("pelvis", e))
+}
+
+/// A scenario's `[pelvis]` or `[head]` table that cannot be built, with the
+/// command that builds and measures it without a run.
+fn unbuildable(table: &str, e: impl std::fmt::Display) -> LabourError {
+    LabourError::Anatomy(format!(
+        "[{table}]: {e}\n  hint: `carus measure {table} FILE` builds the {table} of a scenario \
+         file and prints every diameter without running; `carus scenarios show normal` gives a \
+         set that builds"
+    ))
 }
 
 fn build_floor(s: &Scenario, pelvis: &Pelvis) -> Result<FloorScene, LabourError> {

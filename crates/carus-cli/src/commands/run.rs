@@ -8,10 +8,11 @@ use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
+use std::time::Instant;
 
 use anyhow::{bail, Context};
 use carus_analysis::{ArrestStage, Movement, Movements, Outcome};
-use carus_labour::{Observer, RunOptions, RunRecord, Scenario, BUILTINS};
+use carus_labour::{Observer, RunOptions, RunRecord, Scenario, Scene, Simulation, BUILTINS};
 use serde_json::json;
 
 use super::{print_json, Status};
@@ -85,6 +86,12 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
         }
         None => {
             let scenario = load(args.scenario.as_deref())?;
+            let context = || format!("scenario {}", args.scenario.as_deref().unwrap_or(DEFAULT_SCENARIO));
+            // A scenario that cannot start is refused before the out dir is
+            // made, or an earlier run in it cleared by --force.
+            let started = Instant::now();
+            let scene = Scene::build(&scenario).with_context(context)?;
+            let sim = Simulation::new(&scene).with_context(context)?;
             let out_dir = prepare_out_dir(args.output.out.as_deref(), &scenario.name, args.output.force)?;
             if !args.output.quiet {
                 eprintln!(
@@ -93,8 +100,8 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
                     out_dir.display()
                 );
             }
-            let record = carus_labour::run(&scenario, &out_dir, &options, &mut observer)
-                .with_context(|| format!("scenario {}", args.scenario.as_deref().unwrap_or(DEFAULT_SCENARIO)));
+            let record = carus_labour::run_from_start(sim, &out_dir, &options, &mut observer, started)
+                .with_context(context);
             (out_dir, record)
         }
     };
@@ -384,5 +391,31 @@ mod tests {
         record.floor[2].inverted_corner_elements = 5;
         let t = record.floor[1].time_s;
         assert_eq!(inverted_corners(&record), format!("up to 5 of 48, from t = {t:.1} s"));
+    }
+
+    /// A scenario whose pelvis cannot be built is refused with the table,
+    /// the diameters and a hint, before any out dir is made, and an earlier
+    /// run is kept even under --force.
+    #[test]
+    fn a_scenario_that_cannot_start_touches_no_out_dir() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("narrow.toml");
+        std::fs::write(&file, "name = \"narrow\"\n[pelvis]\ninlet_ap_mm = 20.0\n").unwrap();
+        let args = |out: PathBuf, force: bool| RunArgs {
+            scenario: Some(file.display().to_string()),
+            output: OutputArgs { out: Some(out), json: true, force, quiet: true },
+            resume: None,
+        };
+        let fresh = dir.path().join("fresh");
+        let e = format!("{:#}", run(&args(fresh.clone(), false)).err().unwrap());
+        assert!(e.contains("narrow.toml") && e.contains("[pelvis]") && e.contains("inlet_ap_mm = 20"), "{e}");
+        assert!(e.contains("hint: `carus measure pelvis FILE`"), "{e}");
+        assert!(!fresh.exists());
+
+        let earlier = dir.path().join("earlier");
+        std::fs::create_dir(&earlier).unwrap();
+        std::fs::write(earlier.join("run.json"), "{}").unwrap();
+        assert!(run(&args(earlier.clone(), true)).is_err());
+        assert!(earlier.join("run.json").exists());
     }
 }
