@@ -38,7 +38,7 @@ pub struct Series {
     #[serde(default)]
     pub occiput_tilt_deg: Vec<f64>,
     /// The head's turn about the canal axis on theta's scale, read so that
-    /// it stays well conditioned whatever the tilt ([`head_twist_deg`]);
+    /// it stays well conditioned whatever the tilt (`head_twist_deg`);
     /// equals theta for an untilted head. Unwrapped.
     #[serde(default)]
     pub head_twist_deg: Vec<f64>,

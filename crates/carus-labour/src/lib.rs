@@ -9,7 +9,7 @@
 //! - [`loads`]: the contact loads per site and the moments they cause;
 //! - [`record`]: the run record (everything a report needs);
 //! - [`output`]: the files of a run (the only module that writes);
-//! - [`run`]: the driver: progress, stop flag, checkpoints, resume.
+//! - [`run`](mod@run): the driver: progress, stop flag, checkpoints, resume.
 
 pub mod expulsion;
 pub mod loads;

@@ -3,7 +3,7 @@
 //! spine bends) as rigid bodies (surfaces,
 //! contact samples, mass properties from their volumes), the neck geometry,
 //! the TLED pelvic floor, and the starting pose. All constant: the mutable
-//! state lives in [`crate::state::SimState`].
+//! state lives in [`crate::sim::SimState`].
 
 use std::sync::Arc;
 

@@ -6,7 +6,7 @@
 //! the fetal left), z = v (foramen magnum towards the vertex). The frame is
 //! right-handed with b = v x o as CONVENTIONS.md defines it.
 //!
-//! Shape: the midline is the convex profile of [`super::profile`]; away from
+//! Shape: the midline is the convex profile of the `profile` module; away from
 //! it the head is the body g(o, v)^2 + (b / (BPD/2))^2 <= 1, where g is the
 //! gauge of the profile about the head centre (0 at the centre, 1 on the
 //! profile). It is convex, its midline section is the profile, its widest

@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 /// Diameters of a maternal pelvis, millimetres and degrees as clinicians
 /// quote them (converted to metres and radians inside the generator).
 /// Definitions as measured are in docs/ANATOMY.md and
-/// [`crate::pelvis::measure`]. Keys left out of a file take the defaults.
+/// [`crate::pelvis::measure()`]. Keys left out of a file take the defaults.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PelvisDiameters {

@@ -20,7 +20,7 @@ use super::{print_json, Status};
 /// Where a labour command writes and what it prints (`carus run`, `carus sweep`).
 #[derive(clap::Args)]
 pub struct OutputArgs {
-    /// Output folder; default runs/<scenario>-<n> (a sweep's runs/sweep-<scenario>-<n>), the first free n.
+    /// Output folder; default `runs/<scenario>-<n>` (a sweep's `runs/sweep-<scenario>-<n>`), the first free n.
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Print one JSON object on standard output and nothing else there.
@@ -251,7 +251,7 @@ pub(super) fn load(name: Option<&str>) -> anyhow::Result<Scenario> {
     Ok(Scenario::from_file(path)?)
 }
 
-/// The out dir: as given, or runs/<name>-<n> with the first free n. An
+/// The out dir: as given, or `runs/<name>-<n>` with the first free n. An
 /// existing run is never overwritten without `--force`.
 pub(super) fn prepare_out_dir(out: Option<&Path>, name: &str, force: bool) -> anyhow::Result<PathBuf> {
     let dir = match out {

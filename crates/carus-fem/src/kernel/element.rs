@@ -89,7 +89,7 @@ impl Coefficients<f64> {
     }
 }
 
-/// F = I + sum_a u_a (dh_a/dX)^T: F[i][j] = delta_ij + sum_a u_a[i] dh_a[j].
+/// F = I + sum_a u_a (dh_a/dX)^T: `F[i][j] = delta_ij + sum_a u_a[i] dh_a[j]`.
 #[inline(always)]
 pub fn deformation_gradient<S: Num, const N: usize>(
     u: &[[S; 3]; N],
