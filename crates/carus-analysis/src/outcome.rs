@@ -54,6 +54,23 @@ pub struct Arrest {
     /// head held back by its shoulders), or "unknown".
     #[serde(default = "unknown")]
     pub part: String,
+    /// Station of the bisacromial midpoint at the same sample as
+    /// `station_mm` (its sigma minus the spines'), when a trunk is
+    /// modelled: where the shoulders stood, which says how high a trunk
+    /// that holds the head back is caught.
+    #[serde(default)]
+    pub shoulders_station_mm: Option<f64>,
+}
+
+impl Arrest {
+    /// Where the shoulders stood, station mm, when the trunk held the head
+    /// short of being born (a shoulder-stage arrest's station is theirs
+    /// already).
+    pub fn shoulders_holding_head(&self) -> Option<f64> {
+        (self.part == "trunk" && self.stage != ArrestStage::Shoulders)
+            .then_some(self.shoulders_station_mm)
+            .flatten()
+    }
 }
 
 fn unknown() -> String {
@@ -183,6 +200,10 @@ pub fn outcome(history: &PoseHistory, series: &Series, spines_sigma_mm: f64) -> 
             station_mm: reached,
             against,
             part,
+            shoulders_station_mm: series
+                .shoulders_sigma_mm
+                .as_ref()
+                .map(|shoulders| shoulders[stuck_at] - spines_sigma_mm),
         }),
     }
 }

@@ -352,6 +352,46 @@ fn large_shoulders_deliver_the_head_then_arrest() {
     );
     observed(&r.movements.extension);
     absent(&r.movements.expulsion);
+    // A shoulder arrest's station is already the shoulders'.
+    assert_eq!(arrest.shoulders_station_mm, Some(arrest.station_mm));
+    assert_eq!(arrest.shoulders_holding_head(), None);
+}
+
+/// A head held short of the outlet by its trunk: the arrest says where the
+/// shoulders stood at the moment it reads the station, behind the head by
+/// its own length and the neck's; without a trunk it cannot say.
+#[test]
+fn a_trunk_that_holds_the_head_back_says_where_its_shoulders_stood() {
+    let canal = reference_canal();
+    let mut plan = synthetic::textbook_plan(&canal);
+    plan.hold_sigma_mm = canal.outlet_sigma() * 1000.0 - 10.0;
+    plan.contact = Some(carus_analysis::ContactSite::PelvicSidewall);
+    let reach_s = (plan.hold_sigma_mm - plan.start_sigma_mm) / plan.advance_mm_per_s;
+    plan.duration_s = reach_s + 5.0 * plan.period_s;
+    let mut history = plan.history(&canal);
+    for s in &mut history.samples {
+        s.dominant_part = Some(FetalPart::Trunk);
+    }
+    let r = detect(&history).unwrap();
+    let arrest = r.outcome.arrest.as_ref().expect("arrest");
+    assert_eq!((arrest.stage, arrest.part.as_str()), (ArrestStage::Outlet, "trunk"));
+    let shoulders = arrest.shoulders_station_mm.expect("a trunk is modelled");
+    assert_eq!(arrest.shoulders_holding_head(), Some(shoulders));
+    // Read at the same sample as the head's station, behind the leading
+    // point by the head's length and the neck's.
+    let spines = canal.spines_sigma() * 1000.0;
+    let same_sample = r
+        .series
+        .station_mm
+        .iter()
+        .zip(r.series.shoulders_sigma_mm.as_ref().unwrap())
+        .any(|(&station, &s)| station == arrest.station_mm && s - spines == shoulders);
+    assert!(same_sample, "{arrest:?}");
+    assert!(arrest.station_mm - shoulders > 60.0, "{arrest:?}");
+
+    // The inlet arrest's history has no trunk.
+    let headless = synthetic::inlet_arrest(&canal);
+    assert_eq!(detect(&headless).unwrap().outcome.arrest.unwrap().shoulders_station_mm, None);
 }
 
 /// The turtle sign: a head born at the height of each contraction that

@@ -59,8 +59,11 @@ pub fn headline(outcome: &Outcome) -> (&'static str, String) {
             (
                 "arrested",
                 format!(
-                    "Arrested {place}, {station} {:+.0} mm, {held}against {against}",
-                    arrest.station_mm
+                    "Arrested {place}, {station} {:+.0} mm, {held}against {against}{}",
+                    arrest.station_mm,
+                    arrest.shoulders_holding_head().map_or(String::new(), |s| format!(
+                        ", its shoulders at station {s:+.0} mm"
+                    ))
                 ),
             )
         }
@@ -722,13 +725,17 @@ mod tests {
                 station_mm: -42.4,
                 against: "sacral_promontory".into(),
                 part: part.into(),
+                shoulders_station_mm: Some(-95.3),
             }),
         };
         let (class, text) = headline(&arrest("unknown"));
         assert_eq!(class, "arrested");
         assert_eq!(text, "Arrested at the pelvic inlet, station -42 mm, against the sacral promontory");
         let (_, text) = headline(&arrest("trunk"));
-        assert_eq!(text, "Arrested at the pelvic inlet, station -42 mm, the trunk held against the sacral promontory");
+        assert_eq!(
+            text,
+            "Arrested at the pelvic inlet, station -42 mm, the trunk held against the sacral promontory, its shoulders at station -95 mm"
+        );
         let open = Outcome { delivered: false, arrest: None };
         assert!(headline(&open).1.contains("still progressing"));
     }

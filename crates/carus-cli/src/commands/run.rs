@@ -339,12 +339,14 @@ pub(super) fn outcome_line(outcome: &Outcome) -> String {
     }
     match &outcome.arrest {
         Some(a) => format!(
-            "arrested at the {} stage, {} {:+.0} mm, the {} against {}",
+            "arrested at the {} stage, {} {:+.0} mm, the {}{} against {}",
             serde_name(&a.stage),
             // A shoulder arrest's station is the bisacromial midpoint's.
             if a.stage == ArrestStage::Shoulders { "shoulders at station" } else { "station" },
             a.station_mm,
             a.part,
+            a.shoulders_holding_head()
+                .map_or(String::new(), |s| format!(" (shoulders at station {s:+.0} mm)")),
             a.against
         ),
         None => "neither delivered nor arrested (the run ended too soon to tell)".to_string(),

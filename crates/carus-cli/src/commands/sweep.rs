@@ -236,14 +236,17 @@ fn set_json(combination: &[(String, String)]) -> serde_json::Value {
 /// writable, say): the settings and why.
 fn unmade(dir: &Path, combination: &[(String, String)], keys: &[&str], error: &anyhow::Error) -> Finished {
     let why = format!("{error:#}");
-    let mut row = vec![String::new(); header(keys).len()];
+    let columns = header(keys);
+    let mut row = vec![String::new(); columns.len()];
     row[0] = dir.file_name().map_or(String::new(), |n| n.to_string_lossy().into_owned());
     for (k, (_, v)) in combination.iter().enumerate() {
         row[k + 1] = v.clone();
     }
-    let last = row.len() - 1;
-    row[last - 1] = "false".into();
-    row[last] = why.clone();
+    for (column, value) in [("completed", "false"), ("failure", why.as_str())] {
+        if let Some(i) = columns.iter().position(|c| c == column) {
+            row[i] = value.to_string();
+        }
+    }
     Finished {
         summary: json!({
             "set": set_json(combination),
@@ -302,6 +305,7 @@ fn header(keys: &[&str]) -> Vec<String> {
             "completed",
             "failure",
             "arrest_part",
+            "arrest_shoulders_station_mm",
         ]
         .map(String::from),
     );
@@ -339,6 +343,7 @@ fn table_row(
     row.push(s.completed.to_string());
     row.push(s.failure.clone().unwrap_or_default());
     row.push(arrest.map_or(String::new(), |a| a.part.clone()));
+    row.push(number(arrest.and_then(|a| a.shoulders_station_mm)));
     row
 }
 
@@ -463,8 +468,10 @@ mod tests {
         assert_eq!(r.row.len(), header.len());
         assert_eq!(r.row[0], "01-contact.friction=0.1");
         assert_eq!(r.row[1], "0.1");
-        assert_eq!(r.row[header.len() - 2], "false");
-        assert_eq!(r.row[header.len() - 1], "cannot create runs/x");
+        let at = |column: &str| &r.row[header.iter().position(|c| c == column).unwrap()];
+        assert_eq!(at("completed"), "false");
+        assert_eq!(at("failure"), "cannot create runs/x");
+        assert_eq!(at("arrest_part"), "");
         assert_eq!(r.summary["set"]["contact.friction"], "0.1");
         assert_eq!(r.summary["failure"], "cannot create runs/x");
     }
