@@ -87,12 +87,16 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
         None => {
             let scenario = load(args.scenario.as_deref())?;
             let context = || format!("scenario {}", args.scenario.as_deref().unwrap_or(DEFAULT_SCENARIO));
+            let out_dir = choose_out_dir(args.output.out.as_deref(), &scenario.name, args.output.force)?;
             // A scenario that cannot start is refused before the out dir is
             // made, or an earlier run in it cleared by --force.
-            let started = Instant::now();
+            let building = Instant::now();
             let scene = Scene::build(&scenario).with_context(context)?;
             let sim = Simulation::new(&scene).with_context(context)?;
-            let out_dir = prepare_out_dir(args.output.out.as_deref(), &scenario.name, args.output.force)?;
+            let built = building.elapsed();
+            make_out_dir(&out_dir)?;
+            // The run's wall time counts the build, not the clearing.
+            let started = Instant::now().checked_sub(built).unwrap_or(building);
             if !args.output.quiet {
                 eprintln!(
                     "running scenario `{}` into {}",
@@ -251,9 +255,10 @@ pub(super) fn load(name: Option<&str>) -> anyhow::Result<Scenario> {
     Ok(Scenario::from_file(path)?)
 }
 
-/// The out dir: as given, or `runs/<name>-<n>` with the first free n. An
-/// existing run is never overwritten without `--force`.
-pub(super) fn prepare_out_dir(out: Option<&Path>, name: &str, force: bool) -> anyhow::Result<PathBuf> {
+/// The out dir: as given, or `runs/<name>-<n>` with the first free n. One
+/// that holds files is refused unless `force`; nothing is made or cleared
+/// yet ([`make_out_dir`]), so a run that cannot start leaves it as it was.
+pub(super) fn choose_out_dir(out: Option<&Path>, name: &str, force: bool) -> anyhow::Result<PathBuf> {
     let dir = match out {
         Some(d) => d.to_path_buf(),
         None => (1..)
@@ -261,22 +266,29 @@ pub(super) fn prepare_out_dir(out: Option<&Path>, name: &str, force: bool) -> an
             .find(|d| !d.exists())
             .expect("a free name"),
     };
-    if dir.exists()
-        && std::fs::read_dir(&dir)
+    if !force && holds_files(&dir)? {
+        bail!(
+            "{} already holds files; choose another --out, or add --force to replace them",
+            dir.display()
+        );
+    }
+    Ok(dir)
+}
+
+/// Makes the out dir `choose_out_dir` chose, clearing what it holds.
+pub(super) fn make_out_dir(dir: &Path) -> anyhow::Result<()> {
+    if holds_files(dir)? {
+        std::fs::remove_dir_all(dir).with_context(|| format!("cannot clear {}", dir.display()))?;
+    }
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))
+}
+
+fn holds_files(dir: &Path) -> anyhow::Result<bool> {
+    Ok(dir.exists()
+        && std::fs::read_dir(dir)
             .with_context(|| format!("{}", dir.display()))?
             .next()
-            .is_some()
-    {
-        if !force {
-            bail!(
-                "{} already holds files; choose another --out, or add --force to replace them",
-                dir.display()
-            );
-        }
-        std::fs::remove_dir_all(&dir).with_context(|| format!("cannot clear {}", dir.display()))?;
-    }
-    std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    Ok(dir)
+            .is_some())
 }
 
 pub(super) fn json_summary(record: &RunRecord, out_dir: &Path) -> serde_json::Value {
@@ -419,5 +431,8 @@ mod tests {
         std::fs::write(earlier.join("run.json"), "{}").unwrap();
         assert!(run(&args(earlier.clone(), true)).is_err());
         assert!(earlier.join("run.json").exists());
+        // Without --force an occupied out dir is named first.
+        let e = format!("{:#}", run(&args(earlier.clone(), false)).err().unwrap());
+        assert!(e.contains("already holds files"), "{e}");
     }
 }

@@ -12,12 +12,12 @@ use std::sync::{Arc, Mutex};
 
 use anyhow::{bail, Context};
 use carus_analysis::movements::ROTATION_STATION_MAX_MM;
-use carus_analysis::Movements;
+use carus_analysis::{Movements, Outcome};
 use carus_labour::{RunOptions, RunRecord, Scenario, SilentObserver};
 use rayon::prelude::*;
 use serde_json::json;
 
-use super::run::{json_summary, load, movements, prepare_out_dir, serde_name, write_report, OutputArgs};
+use super::run::{json_summary, load, choose_out_dir, make_out_dir, movements, outcome_line, serde_name, write_report, OutputArgs};
 use super::{print_json, Status};
 
 #[derive(clap::Args)]
@@ -121,11 +121,12 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
                 .map_err(anyhow::Error::from)
         })
         .collect::<anyhow::Result<Vec<Scenario>>>()?;
-    let out_dir = prepare_out_dir(
+    let out_dir = choose_out_dir(
         args.output.out.as_deref(),
         &format!("sweep-{}", base.name),
         args.output.force,
     )?;
+    make_out_dir(&out_dir)?;
     let stop = Arc::new(AtomicBool::new(false));
     {
         let stop = stop.clone();
@@ -385,21 +386,8 @@ fn print_table(keys: &[&str], rows: &[Option<Finished>]) {
     for finished in rows.iter().flatten() {
         let r = &finished.summary;
         let set: Vec<String> = keys.iter().map(|k| format!("{k}={}", r["set"][*k].as_str().unwrap_or(""))).collect();
-        let outcome = if r["outcome"].is_null() {
-            "not run".to_string()
-        } else if r["outcome"]["delivered"] == json!(true) {
-            "delivered".to_string()
-        } else if let Some(a) = r["outcome"]["arrest"].as_object() {
-            format!(
-                "arrest at the {} ({:+.1} mm), the {} against {}",
-                a["stage"].as_str().unwrap_or(""),
-                a["station_mm"].as_f64().unwrap_or(f64::NAN),
-                a["part"].as_str().unwrap_or("unknown"),
-                a["against"].as_str().unwrap_or("")
-            )
-        } else {
-            "neither delivered nor arrested".to_string()
-        };
+        let outcome = serde_json::from_value::<Outcome>(r["outcome"].clone())
+            .map_or("not run".to_string(), |o| outcome_line(&o));
         let observed: Vec<&str> = r["movements"]
             .as_object()
             .map(|m| {
