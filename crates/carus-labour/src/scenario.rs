@@ -387,6 +387,16 @@ impl Default for ContactSection {
     }
 }
 
+/// The densities a scenario may give its soft tissue, kg/m^3: a wide band
+/// around fat (about 900) and muscle (1040-1060, ICRP 23 reference man),
+/// which refuses values in g/cm^3.
+pub const SOFT_TISSUE_DENSITY_KG_PER_M3: (f64, f64) = (500.0, 2000.0);
+
+/// The softest floor a scenario may give, Pa: a tenth of the softest soft
+/// tissue's shear modulus (brain, about 1 kPa: Budday et al. 2017, Acta
+/// Biomater 48:319), so that a modulus given in kPa is refused.
+pub const SOFTEST_TISSUE_SHEAR_MODULUS_PA: f64 = 100.0;
+
 /// `[fetus]`: mass and the resistance of the surroundings.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -966,6 +976,29 @@ impl Scenario {
                 "newtons (not mN): REFERENCE_DATA.md gives 70-140 N",
             ));
         }
+        // Soft tissue is about as dense as water: a value near 1 is in
+        // g/cm^3, and would give a fetus too light for its neck's springs.
+        for (key, density) in [
+            ("fetus.density_kg_per_m3", self.fetus.density_kg_per_m3),
+            ("floor.density_kg_per_m3", self.floor.density_kg_per_m3),
+        ] {
+            if !(SOFT_TISSUE_DENSITY_KG_PER_M3.0..=SOFT_TISSUE_DENSITY_KG_PER_M3.1).contains(&density) {
+                return Err(err(
+                    key,
+                    density,
+                    "is not the density of soft tissue",
+                    "kg/m^3 (not g/cm^3): soft tissue is about 1050",
+                ));
+            }
+        }
+        if self.floor.shear_modulus_pa < SOFTEST_TISSUE_SHEAR_MODULUS_PA {
+            return Err(err(
+                "floor.shear_modulus_pa",
+                self.floor.shear_modulus_pa,
+                "is softer than any soft tissue",
+                "Pa (not kPa): the levator ani at rest measures 16.5 kPa, 16500.0",
+            ));
+        }
         if self.floor.bulk_modulus_pa <= self.floor.shear_modulus_pa {
             return Err(err(
                 "floor.bulk_modulus_pa",
@@ -1283,6 +1316,17 @@ mod tests {
             .to_string();
         assert!(e.contains("start.attitude_deg") && e.contains("-50 to 19"), "{e}");
         assert!(parse("name = \"x\"\n[start]\nattitude_deg = 30.0\n[neck]\nflexion_limit_deg = 30.0\n").is_ok());
+        let e = parse("name = \"x\"\n[floor]\nshear_modulus_pa = 16.5\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("floor.shear_modulus_pa") && e.contains("not kPa"), "{e}");
+        // A density in g/cm^3.
+        for table in ["fetus", "floor"] {
+            let e = parse(&format!("name = \"x\"\n[{table}]\ndensity_kg_per_m3 = 1.05\n"))
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains(&format!("{table}.density_kg_per_m3")) && e.contains("g/cm^3"), "{e}");
+        }
     }
 
     #[test]
