@@ -387,6 +387,11 @@ impl Default for ContactSection {
     }
 }
 
+/// The trunk widths a scenario may give, mm: well around the newborn's
+/// bisacromial, 124 +- 10 mm (REFERENCE_DATA.md), from a preterm trunk to
+/// twice the mean, so that a width given in cm is refused.
+pub const FETAL_TRUNK_WIDTH_MM: (f64, f64) = (50.0, 250.0);
+
 /// The densities a scenario may give its soft tissue, kg/m^3: a wide band
 /// around fat (about 900) and muscle (1040-1060, ICRP 23 reference man),
 /// which refuses values in g/cm^3.
@@ -976,6 +981,19 @@ impl Scenario {
                 "newtons (not mN): REFERENCE_DATA.md gives 70-140 N",
             ));
         }
+        for (key, width) in [
+            ("trunk.bisacromial_mm", self.trunk.bisacromial_mm),
+            ("trunk.bitrochanteric_mm", self.trunk.bitrochanteric_mm),
+        ] {
+            if !(FETAL_TRUNK_WIDTH_MM.0..=FETAL_TRUNK_WIDTH_MM.1).contains(&width) {
+                return Err(err(
+                    key,
+                    width,
+                    "is not the width of a fetal trunk",
+                    "mm (not cm): the newborn's bisacromial is 124 +- 10 mm",
+                ));
+            }
+        }
         // Soft tissue is about as dense as water: a value near 1 is in
         // g/cm^3, and would give a fetus too light for its neck's springs.
         for (key, density) in [
@@ -1320,6 +1338,10 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("floor.shear_modulus_pa") && e.contains("not kPa"), "{e}");
+        let e = parse("name = \"x\"\n[trunk]\nbisacromial_mm = 12.0\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("trunk.bisacromial_mm") && e.contains("not cm"), "{e}");
         // A density in g/cm^3.
         for table in ["fetus", "floor"] {
             let e = parse(&format!("name = \"x\"\n[{table}]\ndensity_kg_per_m3 = 1.05\n"))
