@@ -336,11 +336,34 @@ fn plots_section(
     let blue = RGBColor(31, 87, 153);
     let spec =
         |id, y_label, curves, references| axis.spec(id, y_label, &s.time_s, curves, references);
-    let station = vec![Curve {
+    let orange = RGBColor(200, 82, 0);
+    let spines_mm = input.history.canal.spines_sigma() * 1000.0;
+    // The shoulders beside the head, where a trunk is modelled: a trunk
+    // held on the brim while the head is born shows here.
+    let shoulders_station: Option<Vec<f64>> = s
+        .shoulders_sigma_mm
+        .as_ref()
+        .map(|sigma| sigma.iter().map(|s| s - spines_mm).collect());
+    let mut station = vec![Curve {
         values: &s.station_mm,
         colour: blue,
     }];
-    let orange = RGBColor(200, 82, 0);
+    if let Some(shoulders) = &shoulders_station {
+        station.push(Curve {
+            values: shoulders,
+            colour: orange,
+        });
+    }
+    let inlet_station = format!("{:.0}", -spines_mm);
+    let station_caption = if shoulders_station.is_some() {
+        format!(
+            "<span style=\"color:#1f5799\">&#9632; the head's leading point</span> \
+             <span style=\"color:#c85200\">&#9632; the bisacromial midpoint (shoulders)</span>; mm \
+             below the ischial spines (line at 0), the inlet plane at {inlet_station}; up = deeper"
+        )
+    } else {
+        format!("mm below the ischial spines (line at 0), the inlet plane at {inlet_station}; up = deeper")
+    };
     let mut theta = vec![Curve {
         values: &s.theta_deg,
         colour: blue,
@@ -378,9 +401,9 @@ fn plots_section(
     let figures = [
         (
             "station",
-            "Station of the leading point",
-            "mm below the ischial spines; 0 = spines, line at 0; up = deeper",
-            plots::svg(&spec("station", "station (mm)", station, vec![0.0]))?,
+            "Station",
+            station_caption.as_str(),
+            plots::svg(&spec("station", "station (mm)", station, vec![0.0, -spines_mm]))?,
         ),
         (
             "theta",

@@ -66,6 +66,10 @@ fn the_textbook_report_shows_everything_on_one_page() {
     let theta_plot = &theta_plot[..theta_plot.find("</figure>").unwrap()];
     assert!(theta_plot.contains("twist about"));
     assert!(!html.contains("data-caveat"));
+    // The shoulders' station beside the head's, with the inlet marked.
+    let station_plot = &html[html.find("id=\"plot-station\"").unwrap()..];
+    let station_plot = &station_plot[..station_plot.find("</figure>").unwrap()];
+    assert!(station_plot.contains("bisacromial midpoint") && station_plot.contains("the inlet plane at -"));
 }
 
 #[test]
@@ -94,6 +98,8 @@ fn a_straight_push_reports_the_movements_it_lacks() {
     }
     assert!(html.contains("2 of 7 cardinal movements observed"));
     assert!(!html.contains("data-delivered=\"true\""));
+    // No trunk in this history: the head's station alone.
+    assert!(!html.contains("bisacromial midpoint"));
     assert!(
         html.contains("Not reached: full internal rotation (internal rotation was not observed)")
     );
