@@ -2,7 +2,7 @@
 
 use crate::history::{HistoryError, PoseHistory};
 use crate::measures::Series;
-use crate::movements::{detect_movements, Movement, Movements};
+use crate::movements::{detect_movements, Movement, Movements, RotationOutsideWindow};
 use crate::outcome::{contraction_period_s, outcome, Outcome};
 use serde::{Deserialize, Serialize};
 
@@ -14,6 +14,10 @@ use serde::{Deserialize, Serialize};
 pub struct DetectorReport {
     pub movements: Movements,
     pub posterior_rotation: Movement,
+    /// Where the head turned to occiput anterior outside internal
+    /// rotation's station window, when the rule saw no internal rotation.
+    #[serde(default)]
+    pub internal_rotation_outside_window: Option<RotationOutsideWindow>,
     pub outcome: Outcome,
     pub contraction_period_s: Option<f64>,
     pub series: Series,
@@ -29,6 +33,7 @@ pub fn detect(history: &PoseHistory) -> Result<DetectorReport, HistoryError> {
     Ok(DetectorReport {
         movements: detected.movements,
         posterior_rotation: detected.posterior_rotation,
+        internal_rotation_outside_window: detected.rotation_outside_window,
         outcome: outcome(history, &series, spines_sigma_mm),
         contraction_period_s: contraction_period_s(&series),
         series,

@@ -146,6 +146,20 @@ struct Span {
 pub struct Detected {
     pub movements: Movements,
     pub posterior_rotation: Movement,
+    pub rotation_outside_window: Option<RotationOutsideWindow>,
+}
+
+/// A turn to within 20 degrees of occiput anterior (from at least 45, as
+/// internal rotation's rule asks) that the rule does not count because the
+/// leading point was outside its station window, before the head was born.
+/// Reported beside an unobserved internal rotation, so that a reader does
+/// not take a rotation completed a few millimetres too deep for none.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RotationOutsideWindow {
+    /// When abs(theta) first reached 20 degrees.
+    pub time_s: f64,
+    /// The leading point's station then, mm.
+    pub station_mm: f64,
 }
 
 /// Applies every rule to the series. `spines_sigma_mm` is the arc length of
@@ -178,6 +192,24 @@ pub fn detect_movements(series: &Series, spines_sigma_mm: f64) -> Detected {
         -POSTERIOR_TO_DEG,
         ONSET_DEG,
     );
+    // Only where the rule saw none: the first sample before the head was
+    // born at which abs(theta) is down to 20 after having been 45.
+    let rotation_outside_window = internal
+        .is_none()
+        .then(|| {
+            let born = delivery(series).unwrap_or(series.len());
+            let mut turned_from = false;
+            (0..born).find(|&i| {
+                let reached = turned_from && abs_theta[i] <= ROTATION_TO_DEG;
+                turned_from |= abs_theta[i] >= ROTATION_FROM_DEG;
+                reached
+            })
+        })
+        .flatten()
+        .map(|i| RotationOutsideWindow {
+            time_s: series.time_s[i],
+            station_mm: series.station_mm[i],
+        });
     let rotation = |span: Option<Span>| {
         span.map_or(Movement::absent(Unit::Deg), |s| {
             Movement::between(series, s, &series.theta_deg, Unit::Deg)
@@ -196,6 +228,7 @@ pub fn detect_movements(series: &Series, spines_sigma_mm: f64) -> Detected {
             expulsion: expulsion(series),
         },
         posterior_rotation: rotation(posterior),
+        rotation_outside_window,
     }
 }
 

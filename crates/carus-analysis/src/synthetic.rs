@@ -267,7 +267,7 @@ pub fn head_orientation(
 /// Head-centre sigma (mm) at which the leading point of a head in a
 /// neutral attitude (vertex leading) is at `station_mm`: plans use it to
 /// place their ramps at the stations the rules look at.
-fn centre_sigma_at_station(canal: &BirthCanal, station_mm: f64) -> f64 {
+pub fn centre_sigma_at_station(canal: &BirthCanal, station_mm: f64) -> f64 {
     station_mm + canal.spines_sigma() / M_PER_MM - HEAD_SEMI_AXES_M.z / M_PER_MM
 }
 

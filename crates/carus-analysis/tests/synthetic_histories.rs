@@ -394,6 +394,32 @@ fn a_trunk_that_holds_the_head_back_says_where_its_shoulders_stood() {
     assert_eq!(detect(&headless).unwrap().outcome.arrest.unwrap().shoulders_station_mm, None);
 }
 
+/// A head that turns to occiput anterior only below station +50 mm: the
+/// rule does not count it, and the report says where it happened; the
+/// textbook's turn, inside the window, needs no such note.
+#[test]
+fn a_rotation_past_the_window_is_not_counted_but_said() {
+    let canal = reference_canal();
+    let mut plan = synthetic::textbook_plan(&canal);
+    // No extension, which would move the leading point off the vertex and
+    // the stations with it.
+    plan.phi_ramps.truncate(1);
+    plan.theta_ramps[0] = synthetic::Ramp {
+        from_mm: synthetic::centre_sigma_at_station(&canal, 52.0),
+        to_mm: synthetic::centre_sigma_at_station(&canal, 64.0),
+        by: 90.0,
+    };
+    let r = detect(&plan.history(&canal)).unwrap();
+    absent(&r.movements.internal_rotation);
+    let late = r.internal_rotation_outside_window.expect("the late turn is reported");
+    assert!(late.station_mm > 52.0 && late.station_mm < 64.0, "{late:?}");
+    // The first sample at 20 degrees or less of OA, before the head is born.
+    let first = r.series.time_s.iter().position(|&t| t == late.time_s).unwrap();
+    assert!(r.series.theta_deg[first].abs() <= 20.0 && r.series.theta_deg[first - 1].abs() > 20.0);
+    assert!(!r.series.head_delivered[first]);
+    assert_eq!(textbook().1.internal_rotation_outside_window, None);
+}
+
 /// The turtle sign: a head born at the height of each contraction that
 /// slips back inside between them is out, whatever phase of the contraction
 /// the run ends in; the stage and the station describe the same moment.

@@ -4,7 +4,10 @@
 
 use std::fmt::Write as _;
 
-use carus_analysis::{ArrestStage, DetectorReport, Outcome, Series, THETA_ILL_CONDITIONED_TILT_DEG};
+use carus_analysis::movements::{ROTATION_STATION_MAX_MM, ROTATION_STATION_MIN_MM, ROTATION_TO_DEG};
+use carus_analysis::{
+    ArrestStage, DetectorReport, Outcome, RotationOutsideWindow, Series, THETA_ILL_CONDITIONED_TILT_DEG,
+};
 use plotters::style::RGBColor;
 
 use crate::error::ReportError;
@@ -130,7 +133,7 @@ pub fn page(input: &ReportInput, parts: &Parts) -> Result<String, ReportError> {
     }
     let _ = writeln!(w, "</p></header>");
 
-    timeline(w, &rows, series, parts, time_range);
+    timeline(w, &rows, series, d.internal_rotation_outside_window, parts, time_range);
     pictures(w, parts);
     plots_section(w, input, &rows, parts, time_range)?;
     figures(w, input);
@@ -143,7 +146,14 @@ fn percent(t: f64, (t0, t1): (f64, f64)) -> f64 {
     (100.0 * (t - t0) / (t1 - t0)).clamp(0.0, 100.0)
 }
 
-fn timeline(w: &mut String, rows: &[Shown], series: &Series, parts: &Parts, range: (f64, f64)) {
+fn timeline(
+    w: &mut String,
+    rows: &[Shown],
+    series: &Series,
+    rotation_outside_window: Option<RotationOutsideWindow>,
+    parts: &Parts,
+    range: (f64, f64),
+) {
     let _ = write!(
         w,
         "<section id=\"movements\"><h2>Cardinal movements</h2>\
@@ -208,6 +218,16 @@ fn timeline(w: &mut String, rows: &[Shown], series: &Series, parts: &Parts, rang
              pointed up to {tilt:.0}&deg; out of the canal's cross-section (theta, the occiput's \
              direction projected onto it, is ill-conditioned past {THETA_ILL_CONDITIONED_TILT_DEG:.0}&deg;): \
              a turn of the head about another axis can read as this rotation.</p>"
+        );
+    }
+    if let Some(r) = rotation_outside_window {
+        let _ = write!(
+            w,
+            "<p class=\"note\" data-note=\"rotation-outside-window\">Internal rotation not counted: \
+             the head turned to within {ROTATION_TO_DEG:.0}&deg; of occiput anterior at {:.1} s with \
+             its leading point at station {:+.0} mm, outside the rule's {ROTATION_STATION_MIN_MM:+.0} \
+             to {ROTATION_STATION_MAX_MM:+.0} mm (CARDINAL_MOVEMENTS.md).</p>",
+            r.time_s, r.station_mm
         );
     }
     let _ = writeln!(w, "</section>");

@@ -72,6 +72,21 @@ fn the_textbook_report_shows_everything_on_one_page() {
     assert!(station_plot.contains("bisacromial midpoint") && station_plot.contains("the inlet plane at -"));
 }
 
+/// A rotation the rule did not count for its station is said under the
+/// timeline, with where and when it happened.
+#[test]
+fn a_rotation_outside_the_window_is_noted() {
+    let mut demo = Demo::textbook().unwrap();
+    assert!(!write_report_with(&demo.input("in the window"), None).unwrap().html.contains("rotation-outside-window"));
+    demo.detector.internal_rotation_outside_window =
+        Some(carus_analysis::RotationOutsideWindow { time_s: 6.14, station_mm: 63.8 });
+    let html = write_report_with(&demo.input("late"), None).unwrap().html;
+    let at = html.find("data-note=\"rotation-outside-window\"").expect("the note");
+    assert!(at < html.find("id=\"plots\"").unwrap(), "under the timeline");
+    let note = &html[at..at + html[at..].find("</p>").unwrap()];
+    assert!(note.contains("at 6.1 s") && note.contains("station +64 mm") && note.contains("-20 to +50 mm"), "{note}");
+}
+
 #[test]
 fn a_straight_push_reports_the_movements_it_lacks() {
     let demo = Demo::straight_push().unwrap();

@@ -31,11 +31,12 @@ pub fn run(args: &DetectArgs) -> anyhow::Result<Status> {
             "outcome": report.outcome,
             "movements": movements_json(&movements),
             "posterior_rotation": report.posterior_rotation,
+            "internal_rotation_outside_window": report.internal_rotation_outside_window,
             "contraction_period_s": report.contraction_period_s,
         }))?;
     } else {
         println!("{}: {}", path.display(), outcome_line(&report.outcome));
-        print_movements(&movements);
+        print_movements(&movements, report.internal_rotation_outside_window);
     }
     Ok(Status::Success)
 }

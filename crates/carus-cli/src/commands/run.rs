@@ -11,7 +11,8 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{bail, Context};
-use carus_analysis::{ArrestStage, Movement, Movements, Outcome};
+use carus_analysis::movements::{ROTATION_STATION_MAX_MM, ROTATION_STATION_MIN_MM, ROTATION_TO_DEG};
+use carus_analysis::{ArrestStage, Movement, Movements, Outcome, RotationOutsideWindow};
 use carus_labour::{Observer, RunOptions, RunRecord, Scenario, Scene, Simulation, BUILTINS};
 use serde_json::json;
 
@@ -301,6 +302,10 @@ pub(super) fn json_summary(record: &RunRecord, out_dir: &Path) -> serde_json::Va
         "completed": record.summary.completed,
         "failure": record.summary.failure,
         "posterior_rotation": record.detector.as_ref().map(|d| d.posterior_rotation),
+        "internal_rotation_outside_window": record
+            .detector
+            .as_ref()
+            .and_then(|d| d.internal_rotation_outside_window),
         "scenario": record.summary.scenario,
     })
 }
@@ -337,7 +342,10 @@ fn print_summary(record: &RunRecord, out_dir: &Path) {
         "simulated {:.1} s in {:.1} s wall time ({} rigid steps)",
         s.simulated_s, s.wall_s, s.rigid_steps
     );
-    print_movements(&movements(record));
+    print_movements(
+        &movements(record),
+        record.detector.as_ref().and_then(|d| d.internal_rotation_outside_window),
+    );
     println!(
         "results in {} (report.html, run.json, movements.json, pose_history.csv, *.pvd)",
         out_dir.display()
@@ -365,17 +373,34 @@ pub(super) fn outcome_line(outcome: &Outcome) -> String {
     }
 }
 
-/// One line per movement: observed with its span and size, or not.
-pub(super) fn print_movements(movements: &[(&'static str, Movement)]) {
+/// One line per movement: observed with its span and size, or not; an
+/// internal rotation the rule did not count for where it happened says so.
+pub(super) fn print_movements(
+    movements: &[(&'static str, Movement)],
+    rotation_outside_window: Option<RotationOutsideWindow>,
+) {
     for (key, m) in movements {
         let unit = serde_name(&m.unit);
         match (m.observed, m.start_s, m.end_s, m.size) {
             (true, Some(a), Some(b), Some(size)) => {
                 println!("  {key:18} observed  {a:6.1}-{b:6.1} s  {size:6.1} {unit}")
             }
-            _ => println!("  {key:18} not observed"),
+            _ => match rotation_outside_window.filter(|_| *key == "internal_rotation") {
+                Some(r) => println!("  {key:18} not observed ({})", outside_window_note(&r)),
+                None => println!("  {key:18} not observed"),
+            },
         }
     }
+}
+
+/// "to within 20 deg of OA at 6.2 s, station +64 mm, outside the rule's
+/// -20 to +50 mm".
+pub(super) fn outside_window_note(r: &RotationOutsideWindow) -> String {
+    format!(
+        "to within {ROTATION_TO_DEG:.0} deg of OA at {:.1} s, station {:+.0} mm, outside the rule's \
+         {ROTATION_STATION_MIN_MM:+.0} to {ROTATION_STATION_MAX_MM:+.0} mm",
+        r.time_s, r.station_mm
+    )
 }
 
 /// The name an enum value has in the JSON output (e.g. `mid-pelvis`), so

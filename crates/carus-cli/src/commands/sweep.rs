@@ -307,6 +307,7 @@ fn header(keys: &[&str]) -> Vec<String> {
             "failure",
             "arrest_part",
             "arrest_shoulders_station_mm",
+            "internal_rotation_outside_window_station_mm",
         ]
         .map(String::from),
     );
@@ -345,6 +346,8 @@ fn table_row(
     row.push(s.failure.clone().unwrap_or_default());
     row.push(arrest.map_or(String::new(), |a| a.part.clone()));
     row.push(number(arrest.and_then(|a| a.shoulders_station_mm)));
+    let outside = record.detector.as_ref().and_then(|d| d.internal_rotation_outside_window);
+    row.push(number(outside.map(|r| r.station_mm)));
     row
 }
 
