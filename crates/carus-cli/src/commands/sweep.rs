@@ -1,7 +1,8 @@
-//! `carus sweep [NAME|FILE] --set KEY=V1,V2,... [--set ...] [--out DIR]
-//! [--jobs N] [--json] [--force] [--quiet]`: one labour run per combination
-//! of the values given (every combination of every `--set`), each a whole
-//! run in its own folder, and a table of their outcomes and movements
+//! `carus sweep [NAME|FILE] --set KEY=V1,V2,... [--set ...] [--one-at-a-time]
+//! [--out DIR] [--jobs N] [--json] [--force] [--quiet]`: one labour run per
+//! combination of the values given (every combination of every `--set`, or
+//! with `--one-at-a-time` the scenario as it is and then each value of each
+//! key alone), each a whole run in its own folder, and a table of their outcomes and movements
 //! (sweep.csv, sweep.json) rewritten as each run ends, so Ctrl-C or a
 //! failed run loses none that finished. The parameter studies of
 //! docs/LABOUR.md are sweeps.
@@ -29,6 +30,11 @@ pub struct SweepArgs {
     /// combination runs).
     #[arg(long = "set", value_name = "KEY=VALUES", required = true)]
     pub settings: Vec<String>,
+    /// Run the scenario as it is, then each value of each key alone with the
+    /// other keys as the scenario has them (a one-at-a-time sensitivity
+    /// study), instead of every combination.
+    #[arg(long)]
+    pub one_at_a_time: bool,
     /// Runs at a time; default one per core.
     #[arg(long)]
     pub jobs: Option<usize>,
@@ -86,9 +92,24 @@ fn combinations(settings: &[Setting]) -> Vec<Vec<(String, String)>> {
     })
 }
 
-/// A variant's folder name: its number and settings, in characters any
-/// file system takes.
+/// The scenario unchanged (no setting), then every value of every setting
+/// alone, in the order given.
+fn one_at_a_time(settings: &[Setting]) -> Vec<Vec<(String, String)>> {
+    std::iter::once(Vec::new())
+        .chain(
+            settings
+                .iter()
+                .flat_map(|s| s.values.iter().map(|v| vec![(s.key.clone(), v.clone())])),
+        )
+        .collect()
+}
+
+/// A variant's folder name: its number and settings (`base` for none), in
+/// characters any file system takes.
 fn folder_name(index: usize, combination: &[(String, String)]) -> String {
+    if combination.is_empty() {
+        return format!("{:02}-base", index + 1);
+    }
     let settings: Vec<String> = combination.iter().map(|(k, v)| format!("{k}={v}")).collect();
     let name: String = settings
         .join("_")
@@ -111,7 +132,11 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
         .map(|s| parse_setting(s))
         .collect::<anyhow::Result<Vec<_>>>()?;
     let base = load(args.scenario.as_deref())?;
-    let combinations = combinations(&settings);
+    let combinations = if args.one_at_a_time {
+        one_at_a_time(&settings)
+    } else {
+        combinations(&settings)
+    };
     // Every variant is checked before any runs, so a typo costs nothing.
     let scenarios = combinations
         .iter()
@@ -159,7 +184,7 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
                 }
                 let dir = out_dir.join(folder_name(i, &combinations[i]));
                 // A run that cannot be made is a row of the table, not the end of the sweep.
-                let finished = run_variant(&scenarios[i], &dir, &combinations[i], &stop, args.output.quiet)
+                let finished = run_variant(&scenarios[i], &dir, &keys, &combinations[i], &stop, args.output.quiet)
                     .unwrap_or_else(|error| unmade(&dir, &combinations[i], &keys, &error));
                 let failed = finished.summary["failure"].is_string();
                 let mut rows = table.lock().expect("no run panics while holding the table");
@@ -199,6 +224,7 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
 fn run_variant(
     scenario: &Scenario,
     dir: &Path,
+    keys: &[&str],
     combination: &[(String, String)],
     stop: &Arc<AtomicBool>,
     quiet: bool,
@@ -220,7 +246,7 @@ fn run_variant(
         let verb = if record.summary.completed { "finished" } else { "stopped" };
         eprintln!("{verb} {} in {:.0} s{note}", dir.display(), record.summary.wall_s);
     }
-    let row = table_row(&record, dir, combination, &summary);
+    let row = table_row(&record, dir, keys, combination, &summary);
     Ok(Finished { summary, row })
 }
 
@@ -233,6 +259,19 @@ fn set_json(combination: &[(String, String)]) -> serde_json::Value {
         .into()
 }
 
+/// Each key's value in a variant, in the keys' order; empty where the
+/// variant leaves the key as the scenario has it (one at a time).
+fn set_values(keys: &[&str], combination: &[(String, String)]) -> Vec<String> {
+    keys.iter()
+        .map(|k| {
+            combination
+                .iter()
+                .find(|(key, _)| key == k)
+                .map_or(String::new(), |(_, v)| v.clone())
+        })
+        .collect()
+}
+
 /// The row of a variant whose run could not be made (its folder not
 /// writable, say): the settings and why.
 fn unmade(dir: &Path, combination: &[(String, String)], keys: &[&str], error: &anyhow::Error) -> Finished {
@@ -240,8 +279,8 @@ fn unmade(dir: &Path, combination: &[(String, String)], keys: &[&str], error: &a
     let columns = header(keys);
     let mut row = vec![String::new(); columns.len()];
     row[0] = dir.file_name().map_or(String::new(), |n| n.to_string_lossy().into_owned());
-    for (k, (_, v)) in combination.iter().enumerate() {
-        row[k + 1] = v.clone();
+    for (k, v) in set_values(keys, combination).into_iter().enumerate() {
+        row[k + 1] = v;
     }
     for (column, value) in [("completed", "false"), ("failure", why.as_str())] {
         if let Some(i) = columns.iter().position(|c| c == column) {
@@ -317,13 +356,14 @@ fn header(keys: &[&str]) -> Vec<String> {
 fn table_row(
     record: &RunRecord,
     dir: &Path,
+    keys: &[&str],
     combination: &[(String, String)],
     summary: &serde_json::Value,
 ) -> Vec<String> {
     let number = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v}"));
     let s = &record.summary;
     let mut row = vec![dir.file_name().map_or(String::new(), |n| n.to_string_lossy().into_owned())];
-    row.extend(combination.iter().map(|(_, v)| v.clone()));
+    row.extend(set_values(keys, combination));
     row.push(s.outcome.delivered.to_string());
     let arrest = s.outcome.arrest.as_ref();
     row.push(arrest.map_or(String::new(), |a| serde_name(&a.stage)));
@@ -388,7 +428,11 @@ fn sweep_json(out_dir: &Path, keys: &[&str], rows: &[Option<Finished>]) -> serde
 fn print_table(keys: &[&str], rows: &[Option<Finished>]) {
     for finished in rows.iter().flatten() {
         let r = &finished.summary;
-        let set: Vec<String> = keys.iter().map(|k| format!("{k}={}", r["set"][*k].as_str().unwrap_or(""))).collect();
+        let set: Vec<String> = keys
+            .iter()
+            .filter_map(|k| r["set"][*k].as_str().map(|v| format!("{k}={v}")))
+            .collect();
+        let set = if set.is_empty() { "as the scenario is".to_string() } else { set.join(" ") };
         let outcome = serde_json::from_value::<Outcome>(r["outcome"].clone())
             .map_or("not run".to_string(), |o| outcome_line(&o));
         let observed: Vec<&str> = r["movements"]
@@ -410,7 +454,7 @@ fn print_table(keys: &[&str], rows: &[Option<Finished>]) {
         } else {
             observed.join(", ")
         };
-        println!("{}: {outcome}; {observed}{failure}", set.join(" "));
+        println!("{set}: {outcome}; {observed}{failure}");
     }
 }
 
@@ -450,6 +494,27 @@ mod tests {
         assert_eq!(folder_name(0, &[("start.position".into(), "\"LOT\"".into())]), "01-start.position=-LOT-");
     }
 
+    /// One at a time: the scenario as it is, then each value alone, with
+    /// the other keys' cells left empty in the table.
+    #[test]
+    fn one_at_a_time_runs_the_base_then_each_value_alone() {
+        let settings = [
+            parse_setting("a=1,2").unwrap(),
+            parse_setting("b=x,y,z").unwrap(),
+        ];
+        let c = one_at_a_time(&settings);
+        assert_eq!(c.len(), 1 + 2 + 3);
+        assert!(c[0].is_empty());
+        assert_eq!(c[2], vec![("a".into(), "2".into())]);
+        assert_eq!(c[5], vec![("b".into(), "z".into())]);
+        assert_eq!(folder_name(0, &c[0]), "01-base");
+        assert_eq!(folder_name(3, &c[3]), "04-b=x");
+        assert_eq!(set_values(&["a", "b"], &c[3]), ["", "x"]);
+        assert_eq!(set_values(&["a", "b"], &c[0]), ["", ""]);
+        let r = unmade(Path::new("runs/x/04-b=x"), &c[3], &["a", "b"], &anyhow::anyhow!("no"));
+        assert_eq!(&r.row[..3], ["04-b=x", "", "x"]);
+    }
+
     #[test]
     fn a_run_that_cannot_be_made_is_a_row_with_its_reason() {
         let combination = [("contact.friction".to_string(), "0.1".to_string())];
@@ -465,6 +530,39 @@ mod tests {
         assert_eq!(at("arrest_part"), "");
         assert_eq!(r.summary["set"]["contact.friction"], "0.1");
         assert_eq!(r.summary["failure"], "cannot create runs/x");
+    }
+
+    /// One at a time through the command: the base run and each value
+    /// alone, each row with only its own key's cell filled.
+    #[test]
+    fn a_one_at_a_time_sweep_tabulates_the_base_and_each_change() {
+        let s = crate::commands::coarse_normal(0.2);
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("coarse.toml");
+        std::fs::write(&file, s.to_toml().unwrap()).unwrap();
+        let out = dir.path().join("oat");
+        let args = SweepArgs {
+            scenario: Some(file.display().to_string()),
+            settings: vec!["expulsion.force_max_n=60".into(), "contact.friction=0.1".into()],
+            one_at_a_time: true,
+            jobs: Some(2),
+            output: OutputArgs {
+                out: Some(out.clone()),
+                json: true,
+                force: false,
+                quiet: true,
+            },
+        };
+        assert!(matches!(run(&args).unwrap(), Status::Success));
+        let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
+        let lines: Vec<&str> = csv.lines().collect();
+        assert_eq!(lines.len(), 4, "{csv}");
+        assert!(lines[0].starts_with("run,expulsion.force_max_n,contact.friction,delivered"), "{}", lines[0]);
+        assert!(lines[1].starts_with("01-base,,,"), "{}", lines[1]);
+        assert!(lines[2].starts_with("02-expulsion.force_max_n=60,60,,"), "{}", lines[2]);
+        assert!(lines[3].starts_with("03-contact.friction=0.1,,0.1,"), "{}", lines[3]);
+        let base = std::fs::read_to_string(out.join("01-base/scenario.toml")).unwrap();
+        assert_eq!(base, s.to_toml().unwrap());
     }
 
     #[test]
@@ -486,6 +584,7 @@ mod tests {
         let args = SweepArgs {
             scenario: Some(file.display().to_string()),
             settings: vec!["expulsion.force_max_n=60,120".into()],
+            one_at_a_time: false,
             jobs: Some(2),
             output: OutputArgs {
                 out: Some(out.clone()),
