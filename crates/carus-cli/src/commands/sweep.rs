@@ -532,19 +532,16 @@ mod tests {
         assert_eq!(r.summary["failure"], "cannot create runs/x");
     }
 
-    /// One at a time through the command: the base run and each value
-    /// alone, each row with only its own key's cell filled.
-    #[test]
-    fn a_one_at_a_time_sweep_tabulates_the_base_and_each_change() {
-        let s = crate::commands::coarse_normal(0.2);
-        let dir = tempfile::tempdir().unwrap();
-        let file = dir.path().join("coarse.toml");
-        std::fs::write(&file, s.to_toml().unwrap()).unwrap();
-        let out = dir.path().join("oat");
+    /// A sweep of `scenario`, written as a file in `dir`, over `settings`,
+    /// two runs at a time, quiet, into `dir/sweep` (the second of the pair).
+    fn coarse_sweep(scenario: &Scenario, dir: &Path, settings: &[&str]) -> (SweepArgs, std::path::PathBuf) {
+        let file = dir.join("coarse.toml");
+        std::fs::write(&file, scenario.to_toml().unwrap()).unwrap();
+        let out = dir.join("sweep");
         let args = SweepArgs {
             scenario: Some(file.display().to_string()),
-            settings: vec!["expulsion.force_max_n=60".into(), "contact.friction=0.1".into()],
-            one_at_a_time: true,
+            settings: settings.iter().map(|s| s.to_string()).collect(),
+            one_at_a_time: false,
             jobs: Some(2),
             output: OutputArgs {
                 out: Some(out.clone()),
@@ -553,6 +550,17 @@ mod tests {
                 quiet: true,
             },
         };
+        (args, out)
+    }
+
+    /// One at a time through the command: the base run and each value
+    /// alone, each row with only its own key's cell filled.
+    #[test]
+    fn a_one_at_a_time_sweep_tabulates_the_base_and_each_change() {
+        let s = crate::commands::coarse_normal(0.2);
+        let dir = tempfile::tempdir().unwrap();
+        let (args, out) = coarse_sweep(&s, dir.path(), &["expulsion.force_max_n=60", "contact.friction=0.1"]);
+        let args = SweepArgs { one_at_a_time: true, ..args };
         assert!(matches!(run(&args).unwrap(), Status::Success));
         let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
         let lines: Vec<&str> = csv.lines().collect();
@@ -578,21 +586,7 @@ mod tests {
     fn a_sweep_runs_every_variant_as_carus_run_would() {
         let mut s = crate::commands::coarse_normal(0.3);
         let dir = tempfile::tempdir().unwrap();
-        let file = dir.path().join("coarse.toml");
-        std::fs::write(&file, s.to_toml().unwrap()).unwrap();
-        let out = dir.path().join("sweep");
-        let args = SweepArgs {
-            scenario: Some(file.display().to_string()),
-            settings: vec!["expulsion.force_max_n=60,120".into()],
-            one_at_a_time: false,
-            jobs: Some(2),
-            output: OutputArgs {
-                out: Some(out.clone()),
-                json: true,
-                force: false,
-                quiet: true,
-            },
-        };
+        let (args, out) = coarse_sweep(&s, dir.path(), &["expulsion.force_max_n=60,120"]);
         assert!(matches!(run(&args).unwrap(), Status::Success));
 
         let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
