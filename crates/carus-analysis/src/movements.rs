@@ -162,6 +162,21 @@ pub struct RotationOutsideWindow {
     pub station_mm: f64,
 }
 
+/// "the head turned to within 20 deg of occiput anterior at 6.1 s, station
+/// +64 mm, outside the rule's window of stations -20 to +50 mm": the words
+/// `carus run`, `carus detect` and the report share.
+impl std::fmt::Display for RotationOutsideWindow {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "the head turned to within {ROTATION_TO_DEG:.0} deg of occiput anterior at {:.1} s, \
+             station {:+.0} mm, outside the rule's window of stations {ROTATION_STATION_MIN_MM:+.0} \
+             to {ROTATION_STATION_MAX_MM:+.0} mm",
+            self.time_s, self.station_mm
+        )
+    }
+}
+
 /// Applies every rule to the series. `spines_sigma_mm` is the arc length of
 /// the ischial-spine plane, to turn stations back into sigma.
 pub fn detect_movements(series: &Series, spines_sigma_mm: f64) -> Detected {
@@ -193,19 +208,16 @@ pub fn detect_movements(series: &Series, spines_sigma_mm: f64) -> Detected {
         ONSET_DEG,
     );
     // Only where the rule saw none: the first sample before the head was
-    // born at which abs(theta) is down to 20 after having been 45.
+    // born at which abs(theta) is down to 20 after having been 45, when
+    // that sample lies outside the window.
     let rotation_outside_window = internal
         .is_none()
         .then(|| {
-            let born = delivery(series).unwrap_or(series.len());
-            let mut turned_from = false;
-            (0..born).find(|&i| {
-                let reached = turned_from && abs_theta[i] <= ROTATION_TO_DEG;
-                turned_from |= abs_theta[i] >= ROTATION_FROM_DEG;
-                reached
-            })
+            let before_birth: Vec<usize> = (0..delivery(series).unwrap_or(series.len())).collect();
+            first_fall_to(&abs_theta, &before_birth, ROTATION_FROM_DEG, ROTATION_TO_DEG)
         })
         .flatten()
+        .filter(|&i| !(ROTATION_STATION_MIN_MM..=ROTATION_STATION_MAX_MM).contains(&series.station_mm[i]))
         .map(|i| RotationOutsideWindow {
             time_s: series.time_s[i],
             station_mm: series.station_mm[i],
@@ -407,12 +419,7 @@ fn expulsion(series: &Series) -> Movement {
 /// earlier value; end: the first sample of the stretch at or below `to`
 /// within `tolerance` of that stretch's lowest value.
 fn fall(q: &[f64], window: &[usize], from: f64, to: f64, tolerance: f64) -> Option<Span> {
-    let mut seen_from = false;
-    let reach = window.iter().position(|&i| {
-        let hit = seen_from && q[i] <= to;
-        seen_from |= q[i] >= from;
-        hit
-    })?;
+    let reach = first_fall_to(q, window, from, to)?;
     let before = &window[..reach];
     let high = before
         .iter()
@@ -427,6 +434,17 @@ fn fall(q: &[f64], window: &[usize], from: f64, to: f64, tolerance: f64) -> Opti
     let low = stretch.iter().map(|&i| q[i]).fold(f64::INFINITY, f64::min);
     let end = *stretch.iter().find(|&&i| q[i] <= low + tolerance)?;
     Some(Span { start, end })
+}
+
+/// Where in `window` (time order) `q` is first at most `to` after an earlier
+/// sample at least `from`.
+fn first_fall_to(q: &[f64], window: &[usize], from: f64, to: f64) -> Option<usize> {
+    let mut seen_from = false;
+    window.iter().position(|&i| {
+        let hit = seen_from && q[i] <= to;
+        seen_from |= q[i] >= from;
+        hit
+    })
 }
 
 /// The largest rise of `q` from an earlier to a later sample of `window`

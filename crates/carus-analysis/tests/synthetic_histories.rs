@@ -418,6 +418,17 @@ fn a_rotation_past_the_window_is_not_counted_but_said() {
     assert!(r.series.theta_deg[first].abs() <= 20.0 && r.series.theta_deg[first - 1].abs() > 20.0);
     assert!(!r.series.head_delivered[first]);
     assert_eq!(textbook().1.internal_rotation_outside_window, None);
+
+    // A turn begun above the window and ended inside it is not counted
+    // either, but it did not happen outside the window: no note.
+    plan.theta_ramps[0] = synthetic::Ramp {
+        from_mm: synthetic::centre_sigma_at_station(&canal, -50.0),
+        to_mm: synthetic::centre_sigma_at_station(&canal, 0.0),
+        by: 90.0,
+    };
+    let r = detect(&plan.history(&canal)).unwrap();
+    absent(&r.movements.internal_rotation);
+    assert_eq!(r.internal_rotation_outside_window, None);
 }
 
 /// The turtle sign: a head born at the height of each contraction that

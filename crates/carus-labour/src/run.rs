@@ -67,7 +67,7 @@ pub fn run_from_start(
     observer: &mut dyn Observer,
     started: Instant,
 ) -> Result<RunRecord, LabourError> {
-    assert_eq!(sim.state.step, 0, "run_from_start takes a simulation at its start; resume continues one");
+    debug_assert_eq!(sim.state.step, 0, "run_from_start takes a simulation at its start; resume continues one");
     let scene = sim.scene;
     output::write_text(&out_dir.join(output::SCENARIO_FILE), &scene.scenario.to_toml()?)?;
     write_static(scene, out_dir)?;

@@ -400,7 +400,7 @@ pub const SOFT_TISSUE_DENSITY_KG_PER_M3: (f64, f64) = (500.0, 2000.0);
 /// The softest floor a scenario may give, Pa: a tenth of the softest soft
 /// tissue's shear modulus (brain, about 1 kPa: Budday et al. 2017, Acta
 /// Biomater 48:319), so that a modulus given in kPa is refused.
-pub const SOFTEST_TISSUE_SHEAR_MODULUS_PA: f64 = 100.0;
+pub const FLOOR_SHEAR_MODULUS_MIN_PA: f64 = 100.0;
 
 /// `[fetus]`: mass and the resistance of the surroundings.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -1009,7 +1009,7 @@ impl Scenario {
                 ));
             }
         }
-        if self.floor.shear_modulus_pa < SOFTEST_TISSUE_SHEAR_MODULUS_PA {
+        if self.floor.shear_modulus_pa < FLOOR_SHEAR_MODULUS_MIN_PA {
             return Err(err(
                 "floor.shear_modulus_pa",
                 self.floor.shear_modulus_pa,

@@ -4,7 +4,6 @@
 
 use std::fmt::Write as _;
 
-use carus_analysis::movements::{ROTATION_STATION_MAX_MM, ROTATION_STATION_MIN_MM, ROTATION_TO_DEG};
 use carus_analysis::{
     ArrestStage, DetectorReport, Outcome, RotationOutsideWindow, Series, THETA_ILL_CONDITIONED_TILT_DEG,
 };
@@ -224,10 +223,8 @@ fn timeline(
         let _ = write!(
             w,
             "<p class=\"note\" data-note=\"rotation-outside-window\">Internal rotation not counted: \
-             the head turned to within {ROTATION_TO_DEG:.0}&deg; of occiput anterior at {:.1} s with \
-             its leading point at station {:+.0} mm, outside the rule's {ROTATION_STATION_MIN_MM:+.0} \
-             to {ROTATION_STATION_MAX_MM:+.0} mm (CARDINAL_MOVEMENTS.md).</p>",
-            r.time_s, r.station_mm
+             {} (CARDINAL_MOVEMENTS.md).</p>",
+            escape(&r.to_string())
         );
     }
     let _ = writeln!(w, "</section>");

@@ -84,7 +84,7 @@ fn a_rotation_outside_the_window_is_noted() {
     let at = html.find("data-note=\"rotation-outside-window\"").expect("the note");
     assert!(at < html.find("id=\"plots\"").unwrap(), "under the timeline");
     let note = &html[at..at + html[at..].find("</p>").unwrap()];
-    assert!(note.contains("at 6.1 s") && note.contains("station +64 mm") && note.contains("-20 to +50 mm"), "{note}");
+    assert!(note.contains("at 6.1 s, station +64 mm") && note.contains("-20 to +50 mm"), "{note}");
 }
 
 #[test]

@@ -11,7 +11,6 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{bail, Context};
-use carus_analysis::movements::{ROTATION_STATION_MAX_MM, ROTATION_STATION_MIN_MM, ROTATION_TO_DEG};
 use carus_analysis::{ArrestStage, Movement, Movements, Outcome, RotationOutsideWindow};
 use carus_labour::{Observer, RunOptions, RunRecord, Scenario, Scene, Simulation, BUILTINS};
 use serde_json::json;
@@ -88,14 +87,14 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
         None => {
             let scenario = load(args.scenario.as_deref())?;
             let context = || format!("scenario {}", args.scenario.as_deref().unwrap_or(DEFAULT_SCENARIO));
-            let out_dir = choose_out_dir(args.output.out.as_deref(), &scenario.name, args.output.force)?;
+            let chosen = choose_out_dir(args.output.out.as_deref(), &scenario.name, args.output.force)?;
             // A scenario that cannot start is refused before the out dir is
             // made, or an earlier run in it cleared by --force.
             let building = Instant::now();
             let scene = Scene::build(&scenario).with_context(context)?;
             let sim = Simulation::new(&scene).with_context(context)?;
             let built = building.elapsed();
-            make_out_dir(&out_dir)?;
+            let out_dir = chosen.make()?;
             // The run's wall time counts the build, not the clearing.
             let started = Instant::now().checked_sub(built).unwrap_or(building);
             if !args.output.quiet {
@@ -256,32 +255,72 @@ pub(super) fn load(name: Option<&str>) -> anyhow::Result<Scenario> {
     Ok(Scenario::from_file(path)?)
 }
 
-/// The out dir: as given, or `runs/<name>-<n>` with the first free n. One
-/// that holds files is refused unless `force`; nothing is made or cleared
-/// yet ([`make_out_dir`]), so a run that cannot start leaves it as it was.
-pub(super) fn choose_out_dir(out: Option<&Path>, name: &str, force: bool) -> anyhow::Result<PathBuf> {
-    let dir = match out {
-        Some(d) => d.to_path_buf(),
-        None => (1..)
-            .map(|n| PathBuf::from("runs").join(format!("{name}-{n}")))
-            .find(|d| !d.exists())
-            .expect("a free name"),
-    };
-    if !force && holds_files(&dir)? {
-        bail!(
-            "{} already holds files; choose another --out, or add --force to replace them",
-            dir.display()
-        );
-    }
-    Ok(dir)
+/// Where a run will write, chosen before anything is built.
+pub(super) struct OutDir {
+    path: PathBuf,
+    /// The scenario's name when the path is the default `runs/<name>-<n>`.
+    numbered: Option<String>,
+    force: bool,
 }
 
-/// Makes the out dir `choose_out_dir` chose, clearing what it holds.
-pub(super) fn make_out_dir(dir: &Path) -> anyhow::Result<()> {
-    if holds_files(dir)? {
-        std::fs::remove_dir_all(dir).with_context(|| format!("cannot clear {}", dir.display()))?;
+/// The out dir: as given, or `runs/<name>-<n>` with the first free n. One
+/// that holds files is refused unless `force`; nothing is made or cleared
+/// yet ([`OutDir::make`]), so a run that cannot start leaves it as it was.
+pub(super) fn choose_out_dir(out: Option<&Path>, name: &str, force: bool) -> anyhow::Result<OutDir> {
+    let (path, numbered) = match out {
+        Some(d) => (d.to_path_buf(), None),
+        None => (numbered_dir(name, 1), Some(name.to_string())),
+    };
+    if !force && holds_files(&path)? {
+        bail!(
+            "{} already holds files; choose another --out, or add --force to replace them",
+            path.display()
+        );
     }
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))
+    Ok(OutDir { path, numbered, force })
+}
+
+/// `runs/<name>-<n>` with the first free n from `from` on.
+fn numbered_dir(name: &str, from: usize) -> PathBuf {
+    (from..)
+        .map(|n| PathBuf::from("runs").join(format!("{name}-{n}")))
+        .find(|d| !d.exists())
+        .expect("a free name")
+}
+
+impl OutDir {
+    /// Makes the folder and says where it is. Only `--force` clears one
+    /// that holds files; a default folder taken meanwhile (another run
+    /// started at the same time) gives way to the next free number, and a
+    /// given one filled meanwhile is refused.
+    pub(super) fn make(self) -> anyhow::Result<PathBuf> {
+        let create = |dir: &Path| std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()));
+        if self.force {
+            if holds_files(&self.path)? {
+                std::fs::remove_dir_all(&self.path).with_context(|| format!("cannot clear {}", self.path.display()))?;
+            }
+            create(&self.path)?;
+            return Ok(self.path);
+        }
+        let Some(name) = self.numbered else {
+            if holds_files(&self.path)? {
+                bail!("{} was filled by another run meanwhile; choose another --out", self.path.display());
+            }
+            create(&self.path)?;
+            return Ok(self.path);
+        };
+        create(Path::new("runs"))?;
+        let mut n = 1;
+        loop {
+            let dir = numbered_dir(&name, n);
+            // create_dir, not create_dir_all: it fails if another run made the folder first.
+            match std::fs::create_dir(&dir) {
+                Ok(()) => return Ok(dir),
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => n += 1,
+                Err(e) => return Err(e).with_context(|| format!("cannot create {}", dir.display())),
+            }
+        }
+    }
 }
 
 fn holds_files(dir: &Path) -> anyhow::Result<bool> {
@@ -386,21 +425,11 @@ pub(super) fn print_movements(
                 println!("  {key:18} observed  {a:6.1}-{b:6.1} s  {size:6.1} {unit}")
             }
             _ => match rotation_outside_window.filter(|_| *key == "internal_rotation") {
-                Some(r) => println!("  {key:18} not observed ({})", outside_window_note(&r)),
+                Some(r) => println!("  {key:18} not observed: {r}"),
                 None => println!("  {key:18} not observed"),
             },
         }
     }
-}
-
-/// "to within 20 deg of OA at 6.2 s, station +64 mm, outside the rule's
-/// -20 to +50 mm".
-pub(super) fn outside_window_note(r: &RotationOutsideWindow) -> String {
-    format!(
-        "to within {ROTATION_TO_DEG:.0} deg of OA at {:.1} s, station {:+.0} mm, outside the rule's \
-         {ROTATION_STATION_MIN_MM:+.0} to {ROTATION_STATION_MAX_MM:+.0} mm",
-        r.time_s, r.station_mm
-    )
 }
 
 /// The name an enum value has in the JSON output (e.g. `mid-pelvis`), so
@@ -459,5 +488,22 @@ mod tests {
         // Without --force an occupied out dir is named first.
         let e = format!("{:#}", run(&args(earlier.clone(), false)).err().unwrap());
         assert!(e.contains("already holds files"), "{e}");
+    }
+
+    /// An out dir filled between its choice and its making (another run
+    /// started at the same time) is never cleared without --force.
+    #[test]
+    fn an_out_dir_filled_meanwhile_is_not_cleared() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("out");
+        let chosen = choose_out_dir(Some(&out), "x", false).unwrap();
+        std::fs::create_dir(&out).unwrap();
+        std::fs::write(out.join("run.json"), "{}").unwrap();
+        let e = format!("{:#}", chosen.make().err().unwrap());
+        assert!(e.contains("filled by another run meanwhile"), "{e}");
+        assert!(out.join("run.json").exists());
+        let forced = choose_out_dir(Some(&out), "x", true).unwrap().make().unwrap();
+        assert_eq!(forced, out);
+        assert!(!out.join("run.json").exists());
     }
 }

@@ -18,7 +18,9 @@ use carus_labour::{RunOptions, RunRecord, Scenario, SilentObserver};
 use rayon::prelude::*;
 use serde_json::json;
 
-use super::run::{json_summary, load, choose_out_dir, make_out_dir, movements, outcome_line, serde_name, write_report, OutputArgs};
+use super::run::{
+    choose_out_dir, json_summary, load, movements, outcome_line, serde_name, write_report, OutputArgs,
+};
 use super::{print_json, Status};
 
 #[derive(clap::Args)]
@@ -131,6 +133,15 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
         .iter()
         .map(|s| parse_setting(s))
         .collect::<anyhow::Result<Vec<_>>>()?;
+    for (i, setting) in settings.iter().enumerate() {
+        if settings[..i].iter().any(|earlier| earlier.key == setting.key) {
+            bail!(
+                "--set {} is given twice; list all its values in one --set, e.g. --set {}=1,2",
+                setting.key,
+                setting.key
+            );
+        }
+    }
     let base = load(args.scenario.as_deref())?;
     let combinations = if args.one_at_a_time {
         one_at_a_time(&settings)
@@ -150,8 +161,8 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
         args.output.out.as_deref(),
         &format!("sweep-{}", base.name),
         args.output.force,
-    )?;
-    make_out_dir(&out_dir)?;
+    )?
+    .make()?;
     let stop = Arc::new(AtomicBool::new(false));
     {
         let stop = stop.clone();
@@ -626,5 +637,15 @@ mod tests {
         let e = e.to_string();
         assert!(e.contains("expulsion.period = 8"), "{e}");
         assert!(!dir.path().join("bad").exists());
+        let twice = SweepArgs {
+            settings: vec!["contact.friction=0.1".into(), "contact.friction=0.2".into()],
+            output: OutputArgs {
+                out: Some(dir.path().join("twice")),
+                ..bad.output
+            },
+            ..bad
+        };
+        let e = run(&twice).err().expect("a key given twice is refused").to_string();
+        assert!(e.contains("contact.friction is given twice"), "{e}");
     }
 }
