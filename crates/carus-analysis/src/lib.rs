@@ -9,6 +9,7 @@
 //! - [`movements`]: the rules of "When a movement counts as observed";
 //! - [`outcome`]: delivered, or arrested where and against what;
 //! - [`detector`]: the entry point [`detect`] and [`DetectorReport`];
+//! - [`sanity`]: the clinical sanity cases and whether a report meets each;
 //! - [`synthetic`]: pose histories built by hand, for tests and demonstrations.
 
 pub mod canal;
@@ -17,6 +18,7 @@ pub mod history;
 pub mod measures;
 pub mod movements;
 pub mod outcome;
+pub mod sanity;
 pub mod synthetic;
 
 pub use canal::{BirthCanal, CanalPlanes};

@@ -41,6 +41,8 @@ enum Command {
     Sweep(commands::sweep::SweepArgs),
     /// Detect the cardinal movements and the outcome in a recorded pose history.
     Detect(commands::detect::DetectArgs),
+    /// Run the clinical sanity cases (normal, contracted inlet, face, large shoulders) and judge each against its expected outcome.
+    Sanity(commands::sanity::SanityArgs),
 }
 
 fn main() -> ExitCode {
@@ -61,6 +63,7 @@ fn main() -> ExitCode {
         Command::Scenarios(args) => commands::scenarios::run(args),
         Command::Sweep(args) => commands::sweep::run(args),
         Command::Detect(args) => commands::detect::run(args),
+        Command::Sanity(args) => commands::sanity::run(args),
     };
     match result {
         Ok(Status::Success) => ExitCode::SUCCESS,

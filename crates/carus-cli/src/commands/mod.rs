@@ -6,6 +6,7 @@ pub mod measure;
 pub mod mesh;
 pub mod render;
 pub mod run;
+pub mod sanity;
 pub mod scenarios;
 pub mod solve;
 pub mod sweep;
@@ -27,6 +28,29 @@ pub fn progress_bar() -> indicatif::ProgressBar {
             .expect("valid template"),
     );
     bar
+}
+
+/// A stop flag that Ctrl-C sets: a labour run polls it and stops cleanly
+/// with everything so far written.
+pub fn ctrl_c_flag() -> std::sync::Arc<std::sync::atomic::AtomicBool> {
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let flag = stop.clone();
+    // A second Ctrl-C is left to the default handler only if this fails to install.
+    let _ = ctrlc::set_handler(move || flag.store(true, std::sync::atomic::Ordering::Relaxed));
+    stop
+}
+
+/// The threads of a command that runs several labours at once: `jobs` of
+/// them, by default one per core; also says how many.
+pub fn labour_pool(jobs: Option<usize>) -> anyhow::Result<(rayon::ThreadPool, usize)> {
+    let jobs = jobs
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+        .max(1);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(jobs)
+        .build()
+        .map_err(|e| anyhow::anyhow!("cannot start {jobs} threads for the runs: {e}"))?;
+    Ok((pool, jobs))
 }
 
 /// Prints `value` as one JSON object on standard output (CONVENTIONS.md:

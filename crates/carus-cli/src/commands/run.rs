@@ -6,8 +6,6 @@
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{bail, Context};
@@ -17,10 +15,11 @@ use serde_json::json;
 
 use super::{print_json, Status};
 
-/// Where a labour command writes and what it prints (`carus run`, `carus sweep`).
+/// Where a labour command writes and what it prints (`carus run`, `carus sweep`, `carus sanity`).
 #[derive(clap::Args)]
 pub struct OutputArgs {
-    /// Output folder; default `runs/<scenario>-<n>` (a sweep's `runs/sweep-<scenario>-<n>`), the first free n.
+    /// Output folder; default `runs/<scenario>-<n>` (a sweep's `runs/sweep-<scenario>-<n>`, the sanity
+    /// cases' `runs/sanity-<n>`), the first free n.
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Print one JSON object on standard output and nothing else there.
@@ -59,12 +58,7 @@ impl Observer for Bar {
 }
 
 pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
-    let stop = Arc::new(AtomicBool::new(false));
-    {
-        let stop = stop.clone();
-        // A second Ctrl-C is left to the default handler only if this fails to install.
-        let _ = ctrlc::set_handler(move || stop.store(true, Ordering::Relaxed));
-    }
+    let stop = super::ctrl_c_flag();
     let options = RunOptions {
         stop: Some(stop.clone()),
         stop_at_s: None,

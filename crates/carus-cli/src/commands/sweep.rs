@@ -21,7 +21,7 @@ use serde_json::json;
 use super::run::{
     choose_out_dir, json_summary, load, movements, outcome_line, serde_name, write_report, OutputArgs,
 };
-use super::{print_json, Status};
+use super::{ctrl_c_flag, labour_pool, print_json, Status};
 
 #[derive(clap::Args)]
 pub struct SweepArgs {
@@ -46,12 +46,12 @@ pub struct SweepArgs {
 
 /// One key and the values it takes.
 #[derive(Debug, Clone, PartialEq)]
-struct Setting {
-    key: String,
-    values: Vec<String>,
+pub(super) struct Setting {
+    pub(super) key: String,
+    pub(super) values: Vec<String>,
 }
 
-fn parse_setting(text: &str) -> anyhow::Result<Setting> {
+pub(super) fn parse_setting(text: &str) -> anyhow::Result<Setting> {
     let Some((key, values)) = text.split_once('=') else {
         bail!("--set {text}: write KEY=V1,V2,..., e.g. --set expulsion.period_s=8,16,32");
     };
@@ -163,15 +163,8 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
         args.output.force,
     )?
     .make()?;
-    let stop = Arc::new(AtomicBool::new(false));
-    {
-        let stop = stop.clone();
-        let _ = ctrlc::set_handler(move || stop.store(true, Ordering::Relaxed));
-    }
-    let jobs = args
-        .jobs
-        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
-        .max(1);
+    let stop = ctrl_c_flag();
+    let (pool, jobs) = labour_pool(args.jobs)?;
     if !args.output.quiet {
         eprintln!(
             "sweeping `{}` over {} runs, {jobs} at a time, into {}",
@@ -182,10 +175,6 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
     }
     let keys: Vec<&str> = settings.iter().map(|s| s.key.as_str()).collect();
     let table = Mutex::new((0..scenarios.len()).map(|_| None).collect::<Vec<Option<Finished>>>());
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(jobs)
-        .build()
-        .context("cannot start the sweep's threads")?;
     let failures = pool.install(|| {
         (0..scenarios.len())
             .into_par_iter()

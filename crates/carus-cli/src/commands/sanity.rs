@@ -1,0 +1,204 @@
+//! `carus sanity [--set KEY=VALUE ...] [--out DIR] [--jobs N] [--json]
+//! [--force] [--quiet]`: the clinical sanity cases of CARDINAL_MOVEMENTS.md
+//! ("the same forces must give" delivery in the normal case, arrest in the
+//! contracted inlet and the face, shoulder arrest with large shoulders),
+//! each its built-in scenario run forward with the same changes, judged
+//! against its expected outcome (carus_analysis::sanity). Each run is a
+//! whole `carus run` in its own folder. Exit status 1 when a case is not met.
+
+use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+
+use anyhow::{bail, Context};
+use carus_analysis::sanity::{SanityCase, Verdict};
+use carus_labour::{RunOptions, Scenario};
+use rayon::prelude::*;
+use serde_json::json;
+
+use super::run::{choose_out_dir, outcome_line, write_report, OutputArgs};
+use super::sweep::parse_setting;
+use super::{ctrl_c_flag, labour_pool, print_json, Status};
+
+#[derive(clap::Args)]
+pub struct SanityArgs {
+    /// KEY=VALUE applied to every case, a dotted key as `carus scenarios
+    /// show` writes it (e.g. contact.friction=0.35: does the bar hold at
+    /// the seed's friction?); repeat for more keys.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub settings: Vec<String>,
+    /// Runs at a time; default one per core.
+    #[arg(long)]
+    pub jobs: Option<usize>,
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// One case run and judged.
+struct Judged {
+    case: SanityCase,
+    verdict: Verdict,
+    outcome: String,
+    out_dir: String,
+}
+
+pub fn run(args: &SanityArgs) -> anyhow::Result<Status> {
+    let mut changes = Vec::new();
+    for text in &args.settings {
+        let setting = parse_setting(text)?;
+        let [value] = setting.values.as_slice() else {
+            bail!("--set {text}: one value per key here (every case runs with it); `carus sweep` runs several");
+        };
+        changes.push((setting.key, value.clone()));
+    }
+    // Every case is built before any runs, so a misspelt key costs nothing.
+    let scenarios = SanityCase::ALL
+        .iter()
+        .map(|case| {
+            changes
+                .iter()
+                .try_fold(Scenario::builtin(case.scenario())?, |s, (k, v)| s.with_setting(k, v))
+                .map_err(anyhow::Error::from)
+        })
+        .collect::<anyhow::Result<Vec<Scenario>>>()?;
+    let out_dir = choose_out_dir(args.output.out.as_deref(), "sanity", args.output.force)?.make()?;
+    let stop = ctrl_c_flag();
+    let (pool, jobs) = labour_pool(args.jobs)?;
+    if !args.output.quiet {
+        eprintln!(
+            "running the {} sanity cases, {jobs} at a time, into {}",
+            scenarios.len(),
+            out_dir.display()
+        );
+    }
+    let judged = pool.install(|| {
+        SanityCase::ALL
+            .par_iter()
+            .zip(scenarios.par_iter())
+            .map(|(&case, scenario)| judge_case(case, scenario, &out_dir.join(case.scenario()), &stop))
+            .collect::<anyhow::Result<Vec<Judged>>>()
+    })?;
+    let met = judged.iter().filter(|j| j.verdict.met).count();
+    if args.output.json {
+        print_json(&json!({
+            "cases": judged.iter().map(|j| json!({
+                "case": j.case,
+                "scenario": j.case.scenario(),
+                "expected": j.case.expected(),
+                "met": j.verdict.met,
+                "why": j.verdict.why,
+                "outcome": j.outcome,
+                "out_dir": j.out_dir,
+            })).collect::<Vec<_>>(),
+            "met": met,
+            "of": judged.len(),
+            "set": changes.iter().map(|(k, v)| (k.clone(), json!(v))).collect::<serde_json::Map<_, _>>(),
+            "out_dir": out_dir.display().to_string(),
+        }))?;
+    } else {
+        for j in &judged {
+            println!(
+                "{:18} {:8} expected: {}\n{:27} found:    {}\n{:27} outcome:  {}",
+                j.case.scenario(),
+                if j.verdict.met { "met" } else { "NOT MET" },
+                j.case.expected(),
+                "",
+                j.verdict.why,
+                "",
+                j.outcome
+            );
+        }
+        println!("{met} of {} cases met; runs in {}", judged.len(), out_dir.display());
+    }
+    Ok(if met == judged.len() && !stop.load(Ordering::Relaxed) {
+        Status::Success
+    } else {
+        Status::Failed
+    })
+}
+
+/// Runs one case into `dir` with its report, as `carus run` would, and
+/// judges what emerged.
+fn judge_case(case: SanityCase, scenario: &Scenario, dir: &Path, stop: &Arc<AtomicBool>) -> anyhow::Result<Judged> {
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let options = RunOptions {
+        stop: Some(stop.clone()),
+        stop_at_s: None,
+    };
+    let record = carus_labour::run(scenario, dir, &options, &mut carus_labour::SilentObserver)
+        .with_context(|| format!("sanity case {}", case.scenario()))?;
+    if let Err(error) = write_report(&record, dir) {
+        eprintln!("warning: {}: report.html was not written: {error:#}", dir.display());
+    }
+    let canal = &record.history.canal;
+    let outlet_station_mm = (canal.outlet_sigma() - canal.spines_sigma()) * 1000.0;
+    let verdict = match &record.detector {
+        Some(report) => case.judge(report, outlet_station_mm),
+        None => Verdict {
+            met: false,
+            why: "the run stopped before anything could be detected".into(),
+        },
+    };
+    let mut outcome = outcome_line(&record.summary.outcome);
+    if let Some(failure) = &record.summary.failure {
+        outcome = format!("{outcome}; ended early: {failure}");
+    } else if !record.summary.completed {
+        outcome = format!("{outcome}; stopped at t = {:.1} s", record.summary.simulated_s);
+    }
+    Ok(Judged {
+        case,
+        verdict,
+        outcome,
+        out_dir: dir.display().to_string(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The four cases run (cut to a fifth of a second and made coarse
+    /// through --set, so nothing can deliver) into their own folders, and
+    /// none is met: the command reports failure rather than success.
+    #[test]
+    fn the_cases_run_in_their_folders_and_an_unmet_bar_fails() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("sanity");
+        let args = SanityArgs {
+            settings: [
+                "numerics.end_time_s=0.2",
+                "numerics.head_subdivisions=3",
+                "contact.sample_spacing_mm=8.0",
+                "floor.mesh.elements_around=16",
+                "floor.mesh.elements_across=3",
+                "output.vtu=false",
+            ]
+            .map(String::from)
+            .to_vec(),
+            jobs: Some(2),
+            output: OutputArgs {
+                out: Some(out.clone()),
+                json: true,
+                force: false,
+                quiet: true,
+            },
+        };
+        assert!(matches!(run(&args).unwrap(), Status::Failed));
+        for case in SanityCase::ALL {
+            let toml = std::fs::read_to_string(out.join(case.scenario()).join("scenario.toml")).unwrap();
+            assert!(toml.contains("end_time_s = 0.2"), "{}", case.scenario());
+        }
+        // Several values for one key belong to a sweep.
+        let several = SanityArgs {
+            settings: vec!["contact.friction=0.1,0.35".into()],
+            output: OutputArgs {
+                out: Some(dir.path().join("several")),
+                ..args.output
+            },
+            ..args
+        };
+        let e = run(&several).err().expect("refused").to_string();
+        assert!(e.contains("one value per key") && e.contains("carus sweep"), "{e}");
+        assert!(!dir.path().join("several").exists());
+    }
+}
