@@ -83,20 +83,31 @@ pub struct Outcome {
     pub arrest: Option<Arrest>,
 }
 
+/// Whether the expulsion force rises and falls at all: a constant force
+/// (or a single sample) has no contractions to time.
+fn force_varies(series: &Series) -> bool {
+    let (low, high) = series
+        .expulsion_force_n
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &f| {
+            (l.min(f), h.max(f))
+        });
+    high - low > 1e-9 * high.abs().max(1.0)
+}
+
 /// The contraction period, read off the expulsion force as the median time
 /// between the peaks of its excursions above the mid-level between its
 /// extremes; `None` for a force with fewer than three such peaks.
 pub fn contraction_period_s(series: &Series) -> Option<f64> {
     let force = &series.expulsion_force_n;
+    if !force_varies(series) {
+        return None;
+    }
     let (low, high) = force
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &f| {
             (l.min(f), h.max(f))
         });
-    // A constant force (or a single sample) has no contractions to time.
-    if high - low <= 1e-9 * high.abs().max(1.0) {
-        return None;
-    }
     let mid = 0.5 * (low + high);
     let mut peaks = Vec::new();
     let mut current: Option<usize> = None;
@@ -133,9 +144,18 @@ pub fn outcome(history: &PoseHistory, series: &Series, spines_sigma_mm: f64) -> 
             arrest: None,
         };
     }
+    let period = contraction_period_s(series);
+    // Contractions too few to time (a run stopped in its first ones): no
+    // window of two periods fits, and a pause between two pushes is not an
+    // arrest. Too soon to tell.
+    if period.is_none() && force_varies(series) {
+        return Outcome {
+            delivered,
+            arrest: None,
+        };
+    }
     let duration = series.time_s[last] - series.time_s[0];
-    let span = (ARREST_WINDOW_FRACTION * duration)
-        .max(contraction_period_s(series).map_or(0.0, |p| ARREST_WINDOW_PERIODS * p));
+    let span = (ARREST_WINDOW_FRACTION * duration).max(period.map_or(0.0, |p| ARREST_WINDOW_PERIODS * p));
     let window_start = series
         .time_s
         .iter()

@@ -88,17 +88,27 @@ impl SanityCase {
             SanityCase::ContractedInlet => {
                 let deepest = report.series.station_mm.iter().copied().fold(f64::NEG_INFINITY, f64::max);
                 let engaged = report.movements.engagement.observed;
-                let met = !outcome.delivered && (!engaged || deepest <= INLET_ARREST_STATION_MM);
+                let arrested = outcome.arrest.is_some();
+                let met = arrested && (!engaged || deepest <= INLET_ARREST_STATION_MM);
+                let state = match (outcome.delivered, arrested) {
+                    (true, _) => "delivered",
+                    (false, true) => "arrested",
+                    (false, false) => "neither delivered nor arrested",
+                };
                 verdict(
                     met,
                     format!(
-                        "{}; {}; deepest station {deepest:+.1} mm",
-                        if outcome.delivered { "delivered" } else { "not delivered" },
+                        "{state}; {}; deepest station {deepest:+.1} mm",
                         if engaged { "engaged" } else { "not engaged" },
                     ),
                 )
             }
             SanityCase::Face => match &outcome.arrest {
+                // A head born and held by its shoulders is no face arrest.
+                Some(arrest) if arrest.stage == ArrestStage::Shoulders => verdict(
+                    false,
+                    "the head was born; arrested at the shoulders stage".into(),
+                ),
                 Some(arrest) => {
                     let short = outlet_station_mm - arrest.station_mm;
                     let met = short <= NEAR_OUTLET_MM;

@@ -47,7 +47,9 @@ fn each_case_is_met_by_its_own_outcome_only() {
     assert_eq!(v.why, "not delivered");
 
     assert!(met(SanityCase::ContractedInlet, &inlet));
-    for other in [&textbook, &shoulders, &outlet] {
+    // The straight push is still descending when it ends: no arrest.
+    assert!(straight.outcome.arrest.is_none());
+    for other in [&textbook, &straight, &shoulders, &outlet] {
         assert!(!met(SanityCase::ContractedInlet, other));
     }
 
@@ -60,6 +62,8 @@ fn each_case_is_met_by_its_own_outcome_only() {
 
     assert!(!met(SanityCase::Face, &textbook), "a delivery is not an arrest");
     assert!(!met(SanityCase::Face, &inlet), "an inlet arrest is not near the outlet");
+    assert!(!met(SanityCase::Face, &straight), "no arrest");
+    assert!(!met(SanityCase::Face, &shoulders), "the head was born");
     assert!(met(SanityCase::Face, &outlet), "{:?}", SanityCase::Face.judge(&outlet, outlet_station_mm()));
 }
 

@@ -431,6 +431,25 @@ fn a_rotation_past_the_window_is_not_counted_but_said() {
     assert_eq!(r.internal_rotation_outside_window, None);
 }
 
+/// A run stopped within its first contractions (too few to time) is
+/// neither delivered nor arrested, even in a pause between two pushes:
+/// too soon to tell. The same head held for ten contractions is an arrest.
+#[test]
+fn a_run_stopped_in_its_first_contractions_is_not_an_arrest() {
+    let canal = reference_canal();
+    let mut plan = synthetic::textbook_plan(&canal);
+    plan.hold_sigma_mm = -35.0;
+    plan.drift_mm = 5.0;
+    plan.contact = Some(carus_analysis::ContactSite::Symphysis);
+    for periods in [0.1, 0.6, 1.5] {
+        plan.duration_s = periods * plan.period_s;
+        let r = detect(&plan.history(&canal)).unwrap();
+        assert!(!r.outcome.delivered && r.outcome.arrest.is_none(), "{periods} periods: {:?}", r.outcome);
+    }
+    plan.duration_s = 10.0 * plan.period_s;
+    assert_eq!(detect(&plan.history(&canal)).unwrap().outcome.arrest.unwrap().stage, ArrestStage::Inlet);
+}
+
 /// The turtle sign: a head born at the height of each contraction that
 /// slips back inside between them is out, whatever phase of the contraction
 /// the run ends in; the stage and the station describe the same moment.

@@ -31,13 +31,26 @@ pub fn progress_bar() -> indicatif::ProgressBar {
 }
 
 /// A stop flag that Ctrl-C sets: a labour run polls it and stops cleanly
-/// with everything so far written.
+/// with everything so far written; a second Ctrl-C quits at once (exit
+/// status 130). One handler per process, so the flag is shared and
+/// cleared for each command that asks for it.
 pub fn ctrl_c_flag() -> std::sync::Arc<std::sync::atomic::AtomicBool> {
-    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
-    let flag = stop.clone();
-    // A second Ctrl-C is left to the default handler only if this fails to install.
-    let _ = ctrlc::set_handler(move || flag.store(true, std::sync::atomic::Ordering::Relaxed));
-    stop
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::{Arc, OnceLock};
+    static FLAG: OnceLock<Arc<AtomicBool>> = OnceLock::new();
+    let flag = FLAG.get_or_init(|| {
+        let flag = Arc::new(AtomicBool::new(false));
+        let seen = flag.clone();
+        // Without a handler (it failed to install) Ctrl-C keeps its default: quit.
+        let _ = ctrlc::set_handler(move || {
+            if seen.swap(true, Ordering::Relaxed) {
+                std::process::exit(130);
+            }
+        });
+        flag
+    });
+    flag.store(false, Ordering::Relaxed);
+    flag.clone()
 }
 
 /// The threads of a command that runs several labours at once: `jobs` of

@@ -289,31 +289,28 @@ impl OutDir {
     /// given one filled meanwhile is refused.
     pub(super) fn make(self) -> anyhow::Result<PathBuf> {
         let create = |dir: &Path| std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()));
-        if self.force {
-            if holds_files(&self.path)? {
-                std::fs::remove_dir_all(&self.path).with_context(|| format!("cannot clear {}", self.path.display()))?;
+        // A numbered folder is always a new one, --force or not.
+        if let Some(name) = self.numbered {
+            create(Path::new("runs"))?;
+            let mut n = 1;
+            loop {
+                let dir = numbered_dir(&name, n);
+                // create_dir, not create_dir_all: it fails if another run made the folder first.
+                match std::fs::create_dir(&dir) {
+                    Ok(()) => return Ok(dir),
+                    Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => n += 1,
+                    Err(e) => return Err(e).with_context(|| format!("cannot create {}", dir.display())),
+                }
             }
-            create(&self.path)?;
-            return Ok(self.path);
         }
-        let Some(name) = self.numbered else {
-            if holds_files(&self.path)? {
+        if holds_files(&self.path)? {
+            if !self.force {
                 bail!("{} was filled by another run meanwhile; choose another --out", self.path.display());
             }
-            create(&self.path)?;
-            return Ok(self.path);
-        };
-        create(Path::new("runs"))?;
-        let mut n = 1;
-        loop {
-            let dir = numbered_dir(&name, n);
-            // create_dir, not create_dir_all: it fails if another run made the folder first.
-            match std::fs::create_dir(&dir) {
-                Ok(()) => return Ok(dir),
-                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => n += 1,
-                Err(e) => return Err(e).with_context(|| format!("cannot create {}", dir.display())),
-            }
+            std::fs::remove_dir_all(&self.path).with_context(|| format!("cannot clear {}", self.path.display()))?;
         }
+        create(&self.path)?;
+        Ok(self.path)
     }
 }
 

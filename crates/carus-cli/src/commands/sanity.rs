@@ -12,6 +12,7 @@ use std::sync::Arc;
 
 use anyhow::{bail, Context};
 use carus_analysis::sanity::{SanityCase, Verdict};
+use carus_analysis::Outcome;
 use carus_labour::{RunOptions, Scenario};
 use rayon::prelude::*;
 use serde_json::json;
@@ -38,7 +39,11 @@ pub struct SanityArgs {
 struct Judged {
     case: SanityCase,
     verdict: Verdict,
-    outcome: String,
+    outcome: Option<Outcome>,
+    /// `carus run`'s words for the outcome, and how the run ended.
+    outcome_line: String,
+    completed: bool,
+    failure: Option<String>,
     out_dir: String,
 }
 
@@ -75,7 +80,12 @@ pub fn run(args: &SanityArgs) -> anyhow::Result<Status> {
         SanityCase::ALL
             .par_iter()
             .zip(scenarios.par_iter())
-            .map(|(&case, scenario)| judge_case(case, scenario, &out_dir.join(case.scenario()), &stop))
+            .map(|(&case, scenario)| {
+                if stop.load(Ordering::Relaxed) {
+                    return Ok(not_run(case));
+                }
+                judge_case(case, scenario, &out_dir.join(case.scenario()), &stop)
+            })
             .collect::<anyhow::Result<Vec<Judged>>>()
     })?;
     let met = judged.iter().filter(|j| j.verdict.met).count();
@@ -88,6 +98,9 @@ pub fn run(args: &SanityArgs) -> anyhow::Result<Status> {
                 "met": j.verdict.met,
                 "why": j.verdict.why,
                 "outcome": j.outcome,
+                "outcome_line": j.outcome_line,
+                "completed": j.completed,
+                "failure": j.failure,
                 "out_dir": j.out_dir,
             })).collect::<Vec<_>>(),
             "met": met,
@@ -105,7 +118,7 @@ pub fn run(args: &SanityArgs) -> anyhow::Result<Status> {
                 "",
                 j.verdict.why,
                 "",
-                j.outcome
+                j.outcome_line
             );
         }
         println!("{met} of {} cases met; runs in {}", judged.len(), out_dir.display());
@@ -132,25 +145,54 @@ fn judge_case(case: SanityCase, scenario: &Scenario, dir: &Path, stop: &Arc<Atom
     }
     let canal = &record.history.canal;
     let outlet_station_mm = (canal.outlet_sigma() - canal.spines_sigma()) * 1000.0;
-    let verdict = match &record.detector {
-        Some(report) => case.judge(report, outlet_station_mm),
-        None => Verdict {
+    let summary = &record.summary;
+    // A run that failed or was stopped ended before its outcome did: it
+    // meets nothing, whatever its last samples show.
+    let ended_early = match (&summary.failure, summary.completed) {
+        (Some(failure), _) => Some(format!("ended early: {failure}")),
+        (None, false) => Some(format!("stopped at t = {:.1} s", summary.simulated_s)),
+        (None, true) => None,
+    };
+    let verdict = match (&record.detector, &ended_early) {
+        (_, Some(why)) => Verdict {
             met: false,
-            why: "the run stopped before anything could be detected".into(),
+            why: format!("the run {why}"),
+        },
+        (Some(report), None) => case.judge(report, outlet_station_mm),
+        (None, None) => Verdict {
+            met: false,
+            why: "nothing could be detected in the run".into(),
         },
     };
-    let mut outcome = outcome_line(&record.summary.outcome);
-    if let Some(failure) = &record.summary.failure {
-        outcome = format!("{outcome}; ended early: {failure}");
-    } else if !record.summary.completed {
-        outcome = format!("{outcome}; stopped at t = {:.1} s", record.summary.simulated_s);
-    }
+    let outcome_line = match &ended_early {
+        Some(why) => format!("{}; {why}", outcome_line(&summary.outcome)),
+        None => outcome_line(&summary.outcome),
+    };
     Ok(Judged {
         case,
         verdict,
-        outcome,
+        outcome: Some(summary.outcome.clone()),
+        outcome_line,
+        completed: summary.completed,
+        failure: summary.failure.clone(),
         out_dir: dir.display().to_string(),
     })
+}
+
+/// A case not started because the cases were stopped.
+fn not_run(case: SanityCase) -> Judged {
+    Judged {
+        case,
+        verdict: Verdict {
+            met: false,
+            why: "not run: stopped before it started".into(),
+        },
+        outcome: None,
+        outcome_line: "not run".into(),
+        completed: false,
+        failure: None,
+        out_dir: String::new(),
+    }
 }
 
 #[cfg(test)]
@@ -184,6 +226,14 @@ mod tests {
             },
         };
         assert!(matches!(run(&args).unwrap(), Status::Failed));
+        for case in SanityCase::ALL {
+            let dir = out.join(case.scenario());
+            let record: serde_json::Value =
+                serde_json::from_str(&std::fs::read_to_string(dir.join("movements.json")).unwrap()).unwrap();
+            // A fifth of a second delivers nothing and arrests nothing.
+            assert_eq!(record["outcome"]["delivered"], json!(false), "{}", case.scenario());
+            assert!(record["outcome"]["arrest"].is_null(), "{}", case.scenario());
+        }
         for case in SanityCase::ALL {
             let toml = std::fs::read_to_string(out.join(case.scenario()).join("scenario.toml")).unwrap();
             assert!(toml.contains("end_time_s = 0.2"), "{}", case.scenario());
