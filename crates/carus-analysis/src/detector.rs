@@ -30,12 +30,13 @@ pub fn detect(history: &PoseHistory) -> Result<DetectorReport, HistoryError> {
     let series = Series::from_history(history);
     let spines_sigma_mm = history.canal.spines_sigma() * 1000.0;
     let detected = detect_movements(&series, spines_sigma_mm);
+    let period_s = contraction_period_s(&series);
     Ok(DetectorReport {
         movements: detected.movements,
         posterior_rotation: detected.posterior_rotation,
         internal_rotation_outside_window: detected.rotation_outside_window,
-        outcome: outcome(history, &series, spines_sigma_mm),
-        contraction_period_s: contraction_period_s(&series),
+        outcome: outcome(history, &series, spines_sigma_mm, period_s),
+        contraction_period_s: period_s,
         series,
     })
 }

@@ -83,16 +83,16 @@ pub struct Outcome {
     pub arrest: Option<Arrest>,
 }
 
-/// Whether the expulsion force rises and falls at all: a constant force
-/// (or a single sample) has no contractions to time.
-fn force_varies(series: &Series) -> bool {
+/// The expulsion force's lowest and highest values, when it rises and falls
+/// at all: a constant force (or a single sample) has no contractions.
+fn force_extremes(series: &Series) -> Option<(f64, f64)> {
     let (low, high) = series
         .expulsion_force_n
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &f| {
             (l.min(f), h.max(f))
         });
-    high - low > 1e-9 * high.abs().max(1.0)
+    (high - low > 1e-9 * high.abs().max(1.0)).then_some((low, high))
 }
 
 /// The contraction period, read off the expulsion force as the median time
@@ -100,14 +100,7 @@ fn force_varies(series: &Series) -> bool {
 /// extremes; `None` for a force with fewer than three such peaks.
 pub fn contraction_period_s(series: &Series) -> Option<f64> {
     let force = &series.expulsion_force_n;
-    if !force_varies(series) {
-        return None;
-    }
-    let (low, high) = force
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &f| {
-            (l.min(f), h.max(f))
-        });
+    let (low, high) = force_extremes(series)?;
     let mid = 0.5 * (low + high);
     let mut peaks = Vec::new();
     let mut current: Option<usize> = None;
@@ -130,8 +123,9 @@ pub fn contraction_period_s(series: &Series) -> Option<f64> {
     Some(gaps[gaps.len() / 2])
 }
 
-/// Judges the outcome of the run that `series` was measured from.
-pub fn outcome(history: &PoseHistory, series: &Series, spines_sigma_mm: f64) -> Outcome {
+/// Judges the outcome of the run that `series` was measured from;
+/// `period_s` is its [`contraction_period_s`].
+pub fn outcome(history: &PoseHistory, series: &Series, spines_sigma_mm: f64, period_s: Option<f64>) -> Outcome {
     let last = series.len() - 1;
     let delivered = series.head_delivered[last]
         && series
@@ -144,18 +138,17 @@ pub fn outcome(history: &PoseHistory, series: &Series, spines_sigma_mm: f64) -> 
             arrest: None,
         };
     }
-    let period = contraction_period_s(series);
     // Contractions too few to time (a run stopped in its first ones): no
     // window of two periods fits, and a pause between two pushes is not an
     // arrest. Too soon to tell.
-    if period.is_none() && force_varies(series) {
+    if period_s.is_none() && force_extremes(series).is_some() {
         return Outcome {
             delivered,
             arrest: None,
         };
     }
     let duration = series.time_s[last] - series.time_s[0];
-    let span = (ARREST_WINDOW_FRACTION * duration).max(period.map_or(0.0, |p| ARREST_WINDOW_PERIODS * p));
+    let span = (ARREST_WINDOW_FRACTION * duration).max(period_s.map_or(0.0, |p| ARREST_WINDOW_PERIODS * p));
     let window_start = series
         .time_s
         .iter()

@@ -6,6 +6,8 @@
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{bail, Context};
@@ -250,67 +252,64 @@ pub(super) fn load(name: Option<&str>) -> anyhow::Result<Scenario> {
 }
 
 /// Where a run will write, chosen before anything is built.
-pub(super) struct OutDir {
-    path: PathBuf,
-    /// The scenario's name when the path is the default `runs/<name>-<n>`.
-    numbered: Option<String>,
-    force: bool,
+pub(super) enum OutDir {
+    /// `--out DIR`; `force`: clear what it holds.
+    Given { path: PathBuf, force: bool },
+    /// The default `runs/<name>-<n>`, the first n free when it is made.
+    Numbered(String),
 }
 
-/// The out dir: as given, or `runs/<name>-<n>` with the first free n. One
-/// that holds files is refused unless `force`; nothing is made or cleared
-/// yet ([`OutDir::make`]), so a run that cannot start leaves it as it was.
+/// The out dir: as given, or `runs/<name>-<n>`. A given one that holds
+/// files is refused unless `force`; nothing is made or cleared yet
+/// ([`OutDir::make`]), so a run that cannot start leaves it as it was.
 pub(super) fn choose_out_dir(out: Option<&Path>, name: &str, force: bool) -> anyhow::Result<OutDir> {
-    let (path, numbered) = match out {
-        Some(d) => (d.to_path_buf(), None),
-        None => (numbered_dir(name, 1), Some(name.to_string())),
+    let Some(path) = out else {
+        return Ok(OutDir::Numbered(name.to_string()));
     };
-    if !force && holds_files(&path)? {
+    if !force && holds_files(path)? {
         bail!(
             "{} already holds files; choose another --out, or add --force to replace them",
             path.display()
         );
     }
-    Ok(OutDir { path, numbered, force })
-}
-
-/// `runs/<name>-<n>` with the first free n from `from` on.
-fn numbered_dir(name: &str, from: usize) -> PathBuf {
-    (from..)
-        .map(|n| PathBuf::from("runs").join(format!("{name}-{n}")))
-        .find(|d| !d.exists())
-        .expect("a free name")
+    Ok(OutDir::Given {
+        path: path.to_path_buf(),
+        force,
+    })
 }
 
 impl OutDir {
-    /// Makes the folder and says where it is. Only `--force` clears one
-    /// that holds files; a default folder taken meanwhile (another run
-    /// started at the same time) gives way to the next free number, and a
-    /// given one filled meanwhile is refused.
+    /// Makes the folder and says where it is. A numbered folder is always a
+    /// new one (a number taken meanwhile, by another run started at the same
+    /// time, gives way to the next); a given one is cleared only with
+    /// `--force`, and refused if it was filled meanwhile.
     pub(super) fn make(self) -> anyhow::Result<PathBuf> {
         let create = |dir: &Path| std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()));
-        // A numbered folder is always a new one, --force or not.
-        if let Some(name) = self.numbered {
-            create(Path::new("runs"))?;
-            let mut n = 1;
-            loop {
-                let dir = numbered_dir(&name, n);
-                // create_dir, not create_dir_all: it fails if another run made the folder first.
-                match std::fs::create_dir(&dir) {
-                    Ok(()) => return Ok(dir),
-                    Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => n += 1,
-                    Err(e) => return Err(e).with_context(|| format!("cannot create {}", dir.display())),
+        match self {
+            OutDir::Numbered(name) => {
+                create(Path::new("runs"))?;
+                for n in 1.. {
+                    let dir = PathBuf::from("runs").join(format!("{name}-{n}"));
+                    // create_dir, not create_dir_all: it fails if the folder exists.
+                    match std::fs::create_dir(&dir) {
+                        Ok(()) => return Ok(dir),
+                        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {}
+                        Err(e) => return Err(e).with_context(|| format!("cannot create {}", dir.display())),
+                    }
                 }
+                unreachable!("a free number")
+            }
+            OutDir::Given { path, force } => {
+                if holds_files(&path)? {
+                    if !force {
+                        bail!("{} was filled by another run meanwhile; choose another --out", path.display());
+                    }
+                    std::fs::remove_dir_all(&path).with_context(|| format!("cannot clear {}", path.display()))?;
+                }
+                create(&path)?;
+                Ok(path)
             }
         }
-        if holds_files(&self.path)? {
-            if !self.force {
-                bail!("{} was filled by another run meanwhile; choose another --out", self.path.display());
-            }
-            std::fs::remove_dir_all(&self.path).with_context(|| format!("cannot clear {}", self.path.display()))?;
-        }
-        create(&self.path)?;
-        Ok(self.path)
     }
 }
 
@@ -320,6 +319,22 @@ fn holds_files(dir: &Path) -> anyhow::Result<bool> {
             .with_context(|| format!("{}", dir.display()))?
             .next()
             .is_some())
+}
+
+/// Runs `scenario` from its start into `dir` (made here) with its report,
+/// as `carus run` would, stopping cleanly when `stop` is set: one run of a
+/// command that runs several (`carus sweep`, `carus sanity`).
+pub(super) fn run_into(scenario: &Scenario, dir: &Path, stop: &Arc<AtomicBool>) -> anyhow::Result<RunRecord> {
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let options = RunOptions {
+        stop: Some(stop.clone()),
+        stop_at_s: None,
+    };
+    let record = carus_labour::run(scenario, dir, &options, &mut carus_labour::SilentObserver)?;
+    if let Err(error) = write_report(&record, dir) {
+        eprintln!("warning: {}: report.html was not written: {error:#}", dir.display());
+    }
+    Ok(record)
 }
 
 pub(super) fn json_summary(record: &RunRecord, out_dir: &Path) -> serde_json::Value {

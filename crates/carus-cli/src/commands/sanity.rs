@@ -13,11 +13,11 @@ use std::sync::Arc;
 use anyhow::{bail, Context};
 use carus_analysis::sanity::{SanityCase, Verdict};
 use carus_analysis::Outcome;
-use carus_labour::{RunOptions, Scenario};
+use carus_labour::Scenario;
 use rayon::prelude::*;
 use serde_json::json;
 
-use super::run::{choose_out_dir, outcome_line, write_report, OutputArgs};
+use super::run::{choose_out_dir, outcome_line, run_into, OutputArgs};
 use super::sweep::parse_setting;
 use super::{ctrl_c_flag, labour_pool, print_json, Status};
 
@@ -133,16 +133,7 @@ pub fn run(args: &SanityArgs) -> anyhow::Result<Status> {
 /// Runs one case into `dir` with its report, as `carus run` would, and
 /// judges what emerged.
 fn judge_case(case: SanityCase, scenario: &Scenario, dir: &Path, stop: &Arc<AtomicBool>) -> anyhow::Result<Judged> {
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    let options = RunOptions {
-        stop: Some(stop.clone()),
-        stop_at_s: None,
-    };
-    let record = carus_labour::run(scenario, dir, &options, &mut carus_labour::SilentObserver)
-        .with_context(|| format!("sanity case {}", case.scenario()))?;
-    if let Err(error) = write_report(&record, dir) {
-        eprintln!("warning: {}: report.html was not written: {error:#}", dir.display());
-    }
+    let record = run_into(scenario, dir, stop).with_context(|| format!("sanity case {}", case.scenario()))?;
     let canal = &record.history.canal;
     let outlet_station_mm = (canal.outlet_sigma() - canal.spines_sigma()) * 1000.0;
     let summary = &record.summary;

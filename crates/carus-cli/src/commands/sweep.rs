@@ -14,12 +14,12 @@ use std::sync::{Arc, Mutex};
 use anyhow::{bail, Context};
 use carus_analysis::movements::ROTATION_STATION_MAX_MM;
 use carus_analysis::{Movements, Outcome};
-use carus_labour::{RunOptions, RunRecord, Scenario, SilentObserver};
+use carus_labour::{RunRecord, Scenario};
 use rayon::prelude::*;
 use serde_json::json;
 
 use super::run::{
-    choose_out_dir, json_summary, load, movements, outcome_line, serde_name, write_report, OutputArgs,
+    choose_out_dir, json_summary, load, movements, outcome_line, run_into, serde_name, OutputArgs,
 };
 use super::{ctrl_c_flag, labour_pool, print_json, Status};
 
@@ -229,15 +229,7 @@ fn run_variant(
     stop: &Arc<AtomicBool>,
     quiet: bool,
 ) -> anyhow::Result<Finished> {
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    let options = RunOptions {
-        stop: Some(stop.clone()),
-        stop_at_s: None,
-    };
-    let record = carus_labour::run(scenario, dir, &options, &mut SilentObserver)?;
-    if let Err(error) = write_report(&record, dir) {
-        eprintln!("warning: {}: report.html was not written: {error:#}", dir.display());
-    }
+    let record = run_into(scenario, dir, stop)?;
     let mut summary = json_summary(&record, dir);
     summary["set"] = set_json(combination);
     summary["at_station_50mm"] = at_window_end(&record);
@@ -461,6 +453,7 @@ fn print_table(keys: &[&str], rows: &[Option<Finished>]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use carus_labour::{RunOptions, SilentObserver};
 
     #[test]
     fn settings_parse_into_keys_and_values() {
