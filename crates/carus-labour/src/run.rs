@@ -544,7 +544,7 @@ mod tests {
     }
 
     /// The same forces arrest the head above a contracted inlet (issue 4;
-    /// the full scenario arrests at -25 mm, docs/LABOUR.md). About 6 s.
+    /// the full scenario too, at the inlet: README, docs/LABOUR.md). About 6 s.
     #[test]
     fn a_contracted_inlet_arrests_the_head_at_the_inlet() {
         let s = coarse_builtin("contracted-inlet", 60.0);

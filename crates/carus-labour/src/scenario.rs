@@ -158,7 +158,7 @@ pub struct SpineSection {
     /// (4 mm under the 120 N expulsion). The joint's point moves with an
     /// effective mass of about 0.1 kg (the thorax, 0.72 kg and 9e-4 kg m^2,
     /// and the lower trunk, 0.54 kg, each turning about its centre), so it
-    /// rings at about 550 rad/s, 0.55 rad per 1 ms rigid step.
+    /// rings at about 550 rad/s, 0.28 rad per 0.5 ms rigid step.
     pub joint_stiffness_n_per_m: f64,
     /// Rotational dashpot, N m s/rad. Numerical: about half critical for
     /// the bending spring (2 sqrt(k I) = 0.18 with I about 1.4e-3 kg m^2,
@@ -460,8 +460,8 @@ pub struct FloorSection {
     /// How deep inside a fetal body a floor node is still caught and put
     /// back on its surface, mm (carus-contact's `TissueContact` reach).
     /// Numerical: the body approaches tissue by at most its speed times the
-    /// rigid step, about 0.12 mm (120 N against the head's 1000 N s/m drag,
-    /// 1 ms); 1 mm is eight times that. A node found deeper did not meet
+    /// rigid step, about 0.06 mm (120 N against the head's 1000 N s/m drag,
+    /// 0.5 ms); 1 mm is about sixteen times that. A node found deeper did not meet
     /// the surface: it got behind it when the thinned floor snapped round
     /// the head, and putting it on the near surface would flatten its
     /// element through its thickness (the inverted elements of
@@ -551,7 +551,8 @@ pub struct NumericsSection {
     pub rigid_dt_s: f64,
     /// Simulated time at which the run ends, s.
     pub end_time_s: f64,
-    /// Stop early once the trunk's centre has passed the outlet.
+    /// Stop early once the fetus is born: the trunk's centre 30 mm past the
+    /// outlet plane (without a trunk, the head's centre 80 mm past it).
     pub stop_when_delivered: bool,
     /// Geodesic subdivisions of the head surface (3-6).
     pub head_subdivisions: u32,
@@ -1092,27 +1093,31 @@ impl Scenario {
             }
         }
         if self.spine.enabled && !self.trunk.enabled {
-            return Err(err(
-                "spine.enabled",
-                1.0,
-                "a spine that bends needs the trunk it bends",
-                "set trunk.enabled = true, or spine.enabled = false",
-            ));
+            return Err(ScenarioError::Value {
+                path: path.to_path_buf(),
+                key: "spine.enabled",
+                value: "true".into(),
+                problem: "a spine that bends needs the trunk it bends".into(),
+                hint: "set trunk.enabled = true, or spine.enabled = false".into(),
+            });
         }
         let mentum = self.start.position.is_mentum();
+        let wrong_denominator = |problem: &str, hint: &str| ScenarioError::Value {
+            path: path.to_path_buf(),
+            key: "start.position",
+            value: format!("\"{:?}\"", self.start.position),
+            problem: problem.into(),
+            hint: hint.into(),
+        };
         match self.start.presentation {
             Presentation::Face if !mentum => {
-                return Err(err(
-                    "start.position",
-                    0.0,
+                return Err(wrong_denominator(
                     "a face presentation is named by the chin",
                     "use MA, MP, LMT or RMT with presentation = \"face\"",
                 ))
             }
             Presentation::Vertex if mentum => {
-                return Err(err(
-                    "start.position",
-                    0.0,
+                return Err(wrong_denominator(
                     "a vertex presentation is named by the occiput",
                     "use OA, LOA, LOT, LOP, OP, ROP, ROT or ROA, or set presentation = \"face\"",
                 ))
@@ -1286,7 +1291,10 @@ mod tests {
         let e = parse("name = \"x\"\n[start]\nposition = \"MP\"\n")
             .unwrap_err()
             .to_string();
-        assert!(e.contains("start.position") && e.contains("face"), "{e}");
+        assert!(
+            e.contains("`start.position` = \"MP\"") && e.contains("face"),
+            "the value written is shown: {e}"
+        );
         let e = parse("name = \"x\"\n[floor]\ncrushed_volume_ratio = 1.5\n")
             .unwrap_err()
             .to_string();
