@@ -90,7 +90,7 @@ fn load_unstructured(path: &Path) -> Result<UnstructuredGridPiece, ReadError> {
     };
     // vtkio 0.7.0-rc2 still slices and unwraps on some malformed input;
     // a panic there becomes this file's error instead of ending the program.
-    let parsed = std::panic::catch_unwind(|| {
+    let parsed = catch_quietly(|| {
         if extension == "vtk" {
             Vtk::parse_legacy_be(&bytes[..])
         } else {
@@ -512,6 +512,30 @@ pub fn write_vtu(path: &Path, mesh: &Mesh, frame: &FrameFields) -> Result<(), Wr
     file.write_all(&bytes).map_err(io_error)
 }
 
+thread_local! {
+    static QUIET_PANICS: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Runs `f`, turning a panic into `Err` without the panic's message and
+/// backtrace reaching the user: the caller reports the file's error
+/// instead. The process-wide hook is wrapped once and stays silent only
+/// on this thread, only while `f` runs; every other panic prints as before.
+fn catch_quietly<R>(f: impl FnOnce() -> R) -> std::thread::Result<R> {
+    static WRAP_HOOK: std::sync::Once = std::sync::Once::new();
+    WRAP_HOOK.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            if !QUIET_PANICS.with(std::cell::Cell::get) {
+                previous(info);
+            }
+        }));
+    });
+    QUIET_PANICS.with(|q| q.set(true));
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
+    QUIET_PANICS.with(|q| q.set(false));
+    result
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -531,6 +555,17 @@ mod tests {
         assert_eq!(file.mesh.element_sets["region_3"], vec![0]);
         assert_eq!(file.mesh.surfaces["region_5"].len(), 1);
         assert_eq!(file.mesh.node_sets["fixed"], vec![0, 1]);
+    }
+
+    /// vtkio panics on a binary array shorter than its header; that is the
+    /// file's error, and the program goes on.
+    #[test]
+    fn a_truncated_binary_array_is_the_files_error() {
+        let (_dir, path) = temp("short.vtu");
+        let vtu = r#"<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian" header_type="UInt64"><UnstructuredGrid><Piece NumberOfPoints="1" NumberOfCells="0"><Points><DataArray type="Float32" NumberOfComponents="3" format="binary">AAAA</DataArray></Points><Cells><DataArray type="Int64" Name="connectivity" format="ascii"></DataArray><DataArray type="Int64" Name="offsets" format="ascii"></DataArray><DataArray type="UInt8" Name="types" format="ascii"></DataArray></Cells></Piece></UnstructuredGrid></VTKFile>"#;
+        std::fs::write(&path, vtu).unwrap();
+        let e = read_vtk(&path).err().expect("refused").to_string();
+        assert!(e.contains("short.vtu") && e.contains("malformed data arrays"), "{e}");
     }
 
     #[test]

@@ -234,8 +234,39 @@ pub struct NamedPart {
 /// glTF 2.0 (`.gltf` JSON with embedded or neighbouring buffers, or `.glb`):
 /// every triangle primitive of every mesh reached from the default scene,
 /// each transformed by its node's world transform. Parts keep their names.
+/// Reads and validates a glTF or GLB file. gltf-json 1.4's validation
+/// indexes a primitive's POSITION accessor without a bounds check, so a
+/// file naming a missing accessor would panic there: that one reference is
+/// checked first and named.
+fn parse_gltf(path: &Path, bytes: &[u8]) -> Result<gltf::Gltf, ImportError> {
+    let unchecked = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| format_error(path, "glTF", e))?;
+    let root = unchecked.document.as_json();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let position = gltf::json::validation::Checked::Valid(gltf::json::mesh::Semantic::Positions);
+            if let Some(accessor) = primitive.attributes.get(&position) {
+                if accessor.value() >= root.accessors.len() {
+                    return Err(format_error(
+                        path,
+                        "glTF",
+                        format!(
+                            "primitive {p} of mesh {m}: POSITION names accessor {}, but the file has {} \
+                             accessors; export the mesh again",
+                            accessor.value(),
+                            root.accessors.len()
+                        ),
+                    ));
+                }
+            }
+        }
+    }
+    let blob = unchecked.blob;
+    let document = gltf::Document::from_json(unchecked.document.into_json()).map_err(|e| format_error(path, "glTF", e))?;
+    Ok(gltf::Gltf { document, blob })
+}
+
 pub fn parse_gltf_parts(path: &Path, bytes: &[u8]) -> Result<Vec<NamedPart>, ImportError> {
-    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| format_error(path, "glTF", e))?;
+    let gltf = parse_gltf(path, bytes)?;
     let mut buffers: Vec<Vec<u8>> = Vec::new();
     for buffer in gltf.document.buffers() {
         let data = match buffer.source() {

@@ -245,6 +245,18 @@ fn broken_meshes_say_what_and_where() {
     // The same surface is fine where an open one is allowed, with its openings counted.
     assert_eq!(read_surface(&open, Units::Millimetres).unwrap().report.open_edges, 3);
 
+    // gltf-json's own validation would index the missing accessor and panic.
+    let dangling = write(
+        &dir,
+        "dangling.gltf",
+        br#"{"asset":{"version":"2.0"},"meshes":[{"primitives":[{"attributes":{"POSITION":5}}]}],"nodes":[{"mesh":0}]}"#,
+    );
+    let err = read_surface(&dangling, Units::Metres).unwrap_err().to_string();
+    assert!(
+        err.contains("dangling.gltf") && err.contains("POSITION names accessor 5") && err.contains("0 accessors"),
+        "{err}"
+    );
+
     let unknown = write(&dir, "mesh.xyz", b"1 2 3");
     assert!(matches!(
         read_surface(&unknown, Units::Metres),

@@ -117,7 +117,9 @@ fn tled(args: &TledBenchArgs) -> anyhow::Result<Status> {
         ElementArg::H8 => ElementKind::H8,
         ElementArg::T4 => ElementKind::T4,
     };
-    let elements = args.n.pow(3) * if kind == ElementKind::H8 { 1 } else { 6 };
+    let per_cell = if kind == ElementKind::H8 { 1 } else { 6 };
+    super::check_cube_size(args.n, per_cell)?;
+    let elements = args.n.pow(3) * per_cell;
     let steps = args.steps.unwrap_or((2e7 as u64 / elements as u64).clamp(10, 5000));
     if args.backend != BackendArg::Cpu {
         match gpu_bench(args, kind, steps)? {

@@ -66,11 +66,37 @@ pub fn labour_pool(jobs: Option<usize>) -> anyhow::Result<(rayon::ThreadPool, us
     Ok((pool, jobs))
 }
 
-/// Prints `value` as one JSON object on standard output (CONVENTIONS.md:
-/// with `--json`, nothing else goes to standard output).
-pub fn print_json<T: serde::Serialize>(value: &T) -> anyhow::Result<()> {
-    println!("{}", serde_json::to_string_pretty(value)?);
+/// The largest test cube `carus validate cube` and `carus bench tled`
+/// build: 20 million elements (an H8 cube of 271 per edge, a T4 one of
+/// 149), several GB of model and state; beyond it the allocation itself
+/// would abort the program.
+const MOST_CUBE_ELEMENTS: usize = 20_000_000;
+
+/// Refuses a cube of `n` elements per edge, `per_cell` elements in each of
+/// its n^3 cells (1 for H8, 6 for T4), that is larger than the commands build.
+pub fn check_cube_size(n: usize, per_cell: usize) -> anyhow::Result<()> {
+    let elements = n.checked_pow(3).and_then(|c| c.checked_mul(per_cell));
+    if elements.is_none_or(|e| e > MOST_CUBE_ELEMENTS) {
+        let largest = (1..).take_while(|m: &usize| m.pow(3) * per_cell <= MOST_CUBE_ELEMENTS).last().unwrap_or(1);
+        anyhow::bail!(
+            "--n {n}: a cube of {n}^3 cells is more than the {MOST_CUBE_ELEMENTS} elements these commands build; \
+             use --n {largest} or less"
+        );
+    }
     Ok(())
+}
+
+/// Prints `value` as one JSON object on standard output (CONVENTIONS.md:
+/// with `--json`, nothing else goes to standard output). A reader that
+/// stops early (`carus run --json | head`) closes the pipe;
+/// that is not an error of the run, whose results are already on disk.
+pub fn print_json<T: serde::Serialize>(value: &T) -> anyhow::Result<()> {
+    use std::io::Write;
+    let text = serde_json::to_string_pretty(value)?;
+    match writeln!(std::io::stdout().lock(), "{text}") {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(e.into()),
+        _ => Ok(()),
+    }
 }
 
 /// The normal scenario made coarse for the commands' tests: a coarser
@@ -85,4 +111,20 @@ pub fn coarse_normal(end_s: f64) -> carus_labour::Scenario {
     s.numerics.end_time_s = end_s;
     s.output.vtu = false;
     s
+}
+
+#[cfg(test)]
+mod tests {
+    /// A cube too large to allocate is refused with the largest that is
+    /// built, before anything is allocated; the usual sizes pass.
+    #[test]
+    fn a_cube_too_large_is_refused_with_the_largest_size() {
+        super::check_cube_size(20, 6).unwrap();
+        super::check_cube_size(271, 1).unwrap();
+        let e = super::check_cube_size(272, 1).unwrap_err().to_string();
+        assert!(e.contains("--n 272") && e.contains("use --n 271 or less"), "{e}");
+        let e = super::check_cube_size(100_000, 6).unwrap_err().to_string();
+        assert!(e.contains("use --n 149 or less"), "{e}");
+        assert!(super::check_cube_size(usize::MAX, 1).is_err());
+    }
 }

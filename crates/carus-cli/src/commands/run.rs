@@ -266,11 +266,14 @@ pub(super) fn choose_out_dir(out: Option<&Path>, name: &str, force: bool) -> any
     let Some(path) = out else {
         return Ok(OutDir::Numbered(name.to_string()));
     };
-    if !force && holds_files(path)? {
-        bail!(
-            "{} already holds files; choose another --out, or add --force to replace them",
-            path.display()
-        );
+    if holds_files(path)? {
+        if !force {
+            bail!(
+                "{} already holds files; choose another --out, or add --force to replace them",
+                path.display()
+            );
+        }
+        check_replaceable(path)?;
     }
     Ok(OutDir::Given {
         path: path.to_path_buf(),
@@ -304,6 +307,7 @@ impl OutDir {
                     if !force {
                         bail!("{} was filled by another run meanwhile; choose another --out", path.display());
                     }
+                    check_replaceable(&path)?;
                     std::fs::remove_dir_all(&path).with_context(|| format!("cannot clear {}", path.display()))?;
                 }
                 create(&path)?;
@@ -311,6 +315,32 @@ impl OutDir {
             }
         }
     }
+}
+
+/// The files by which a folder is known as one that carus wrote: a run
+/// (finished, or stopped with its checkpoint), a sweep or a sanity check.
+const CARUS_OUTPUT_MARKS: [&str; 5] = ["run.json", "checkpoint.json", "sweep.json", "sweep.csv", "sanity.json"];
+
+/// `--force` replaces a folder that carus wrote, never any other: a
+/// mistyped `--out .` or `--out runs` must not delete a user's files or
+/// the earlier runs beside them.
+fn check_replaceable(dir: &Path) -> anyhow::Result<()> {
+    let canonical = dir.canonicalize().with_context(|| format!("{}", dir.display()))?;
+    if std::env::current_dir().is_ok_and(|cwd| cwd.starts_with(&canonical)) {
+        bail!(
+            "{} is the current folder or holds it, and --force does not clear that; choose a new --out",
+            dir.display()
+        );
+    }
+    if !CARUS_OUTPUT_MARKS.iter().any(|mark| dir.join(mark).is_file()) {
+        bail!(
+            "{} holds files that no carus run, sweep or sanity check wrote (it has none of {}), and --force \
+             replaces only such a folder; choose another --out, or empty it yourself",
+            dir.display(),
+            CARUS_OUTPUT_MARKS.join(", ")
+        );
+    }
+    Ok(())
 }
 
 fn holds_files(dir: &Path) -> anyhow::Result<bool> {
@@ -511,5 +541,32 @@ mod tests {
         let forced = choose_out_dir(Some(&out), "x", true).unwrap().make().unwrap();
         assert_eq!(forced, out);
         assert!(!out.join("run.json").exists());
+    }
+
+    /// `--force` replaces a folder that carus wrote and nothing else: not
+    /// a user's folder, not the folder that holds earlier runs.
+    #[test]
+    fn force_replaces_only_a_folder_that_carus_wrote() {
+        let dir = tempfile::tempdir().unwrap();
+        let mine = dir.path().join("thesis");
+        std::fs::create_dir(&mine).unwrap();
+        std::fs::write(mine.join("notes.txt"), "mine").unwrap();
+        let e = format!("{:#}", choose_out_dir(Some(&mine), "x", true).err().unwrap());
+        assert!(e.contains("no carus run, sweep or sanity check wrote") && e.contains("run.json"), "{e}");
+        assert!(mine.join("notes.txt").exists());
+
+        let runs = dir.path().join("runs");
+        std::fs::create_dir_all(runs.join("normal-1")).unwrap();
+        std::fs::write(runs.join("normal-1/run.json"), "{}").unwrap();
+        assert!(choose_out_dir(Some(&runs), "x", true).is_err());
+        assert!(runs.join("normal-1/run.json").exists());
+
+        for mark in CARUS_OUTPUT_MARKS {
+            let earlier = dir.path().join(format!("earlier-{mark}"));
+            std::fs::create_dir(&earlier).unwrap();
+            std::fs::write(earlier.join(mark), "{}").unwrap();
+            assert_eq!(choose_out_dir(Some(&earlier), "x", true).unwrap().make().unwrap(), earlier);
+            assert!(!earlier.join(mark).exists(), "{mark}");
+        }
     }
 }

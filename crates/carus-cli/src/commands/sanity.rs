@@ -89,25 +89,29 @@ pub fn run(args: &SanityArgs) -> anyhow::Result<Status> {
             .collect::<anyhow::Result<Vec<Judged>>>()
     })?;
     let met = judged.iter().filter(|j| j.verdict.met).count();
+    let verdicts = json!({
+        "cases": judged.iter().map(|j| json!({
+            "case": j.case,
+            "scenario": j.case.scenario(),
+            "expected": j.case.expected(),
+            "met": j.verdict.met,
+            "why": j.verdict.why,
+            "outcome": j.outcome,
+            "outcome_line": j.outcome_line,
+            "completed": j.completed,
+            "failure": j.failure,
+            "out_dir": j.out_dir,
+        })).collect::<Vec<_>>(),
+        "met": met,
+        "of": judged.len(),
+        "set": changes.iter().map(|(k, v)| (k.clone(), json!(v))).collect::<serde_json::Map<_, _>>(),
+        "out_dir": out_dir.display().to_string(),
+    });
+    let record = out_dir.join("sanity.json");
+    std::fs::write(&record, serde_json::to_string_pretty(&verdicts)?)
+        .with_context(|| format!("cannot write {}", record.display()))?;
     if args.output.json {
-        print_json(&json!({
-            "cases": judged.iter().map(|j| json!({
-                "case": j.case,
-                "scenario": j.case.scenario(),
-                "expected": j.case.expected(),
-                "met": j.verdict.met,
-                "why": j.verdict.why,
-                "outcome": j.outcome,
-                "outcome_line": j.outcome_line,
-                "completed": j.completed,
-                "failure": j.failure,
-                "out_dir": j.out_dir,
-            })).collect::<Vec<_>>(),
-            "met": met,
-            "of": judged.len(),
-            "set": changes.iter().map(|(k, v)| (k.clone(), json!(v))).collect::<serde_json::Map<_, _>>(),
-            "out_dir": out_dir.display().to_string(),
-        }))?;
+        print_json(&verdicts)?;
     } else {
         for j in &judged {
             println!(
@@ -225,6 +229,9 @@ mod tests {
             assert_eq!(record["outcome"]["delivered"], json!(false), "{}", case.scenario());
             assert!(record["outcome"]["arrest"].is_null(), "{}", case.scenario());
         }
+        let verdicts: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("sanity.json")).unwrap()).unwrap();
+        assert_eq!((verdicts["met"].clone(), verdicts["of"].clone()), (json!(0), json!(4)));
         for case in SanityCase::ALL {
             let toml = std::fs::read_to_string(out.join(case.scenario()).join("scenario.toml")).unwrap();
             assert!(toml.contains("end_time_s = 0.2"), "{}", case.scenario());

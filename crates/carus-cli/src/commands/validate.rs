@@ -117,6 +117,10 @@ fn run_cube(args: &ValidateArgs) -> anyhow::Result<Status> {
     let sizes = args.n.map_or(vec![10, 20], |n| vec![n]);
     let elements = args.element.map_or(CubeElement::ALL.to_vec(), |e| vec![element(e)]);
     let variants = args.variant.map_or(CubeVariant::ALL.to_vec(), |v| vec![variant(v)]);
+    for &n in &sizes {
+        let per_cell = if elements.iter().all(|&e| e == CubeElement::H8) { 1 } else { 6 };
+        super::check_cube_size(n, per_cell)?;
+    }
     let mut results: Vec<(String, CubeResult)> = Vec::new();
     for &n in &sizes {
         for &element in &elements {
