@@ -145,6 +145,13 @@ impl BodyContactState {
     pub fn active(&self) -> usize {
         self.anchors.iter().filter(|a| a.is_some()).count()
     }
+
+    /// Number of samples the state is kept for (that of the body's
+    /// [`SurfaceSamples`] it was made for): a saved state read back must
+    /// match its body.
+    pub fn sample_count(&self) -> usize {
+        self.anchors.len()
+    }
 }
 
 /// One penetrating sample and the forces on the body there.

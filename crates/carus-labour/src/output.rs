@@ -69,16 +69,20 @@ pub fn read_checkpoint(dir: &Path) -> Result<Checkpoint, LabourError> {
     let path = dir.join(CHECKPOINT_FILE);
     let text = std::fs::read_to_string(&path)
         .map_err(|e| output_error(&path, format!("{e}; is this the out dir of a `carus run`?")))?;
-    serde_json::from_str(&text)
-        .map_err(|e| {
-            output_error(
-                &path,
-                format!(
-                    "not a checkpoint this version of Carus can continue ({e}); if an older \
-                     version wrote it, run the scenario again from the start"
-                ),
+    serde_json::from_str(&text).map_err(|e| {
+        let problem = if e.is_eof() || e.is_syntax() {
+            format!(
+                "not a whole JSON file ({e}): it was cut short or damaged after carus wrote it \
+                 (carus writes it whole, then renames it); run the scenario again from the start"
             )
-        })
+        } else {
+            format!(
+                "not a checkpoint this version of Carus can continue ({e}); if an older \
+                 version wrote it, run the scenario again from the start"
+            )
+        };
+        output_error(&path, problem)
+    })
 }
 
 /// A triangle surface as a VTU file (ASCII), placed by `pose`.

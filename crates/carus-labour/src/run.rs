@@ -97,6 +97,7 @@ pub fn resume(
             if missing.len() == 1 { "its" } else { "their" }
         )));
     }
+    check_scenario_file_unchanged(out_dir, &scenario, &checkpoint.base_dir)?;
     let scene = Scene::build(&scenario)?;
     let sim = Simulation::from_state(&scene, checkpoint.state)?;
     drive(
@@ -107,6 +108,29 @@ pub fn resume(
         checkpoint.frame_times,
         started,
     )
+}
+
+/// A resumed run continues the scenario it started with, which its
+/// checkpoint keeps; an edit of the folder's scenario.toml since would be
+/// silently ignored, so it is refused instead.
+fn check_scenario_file_unchanged(out_dir: &Path, scenario: &Scenario, base_dir: &Path) -> Result<(), LabourError> {
+    let path = out_dir.join(output::SCENARIO_FILE);
+    let Ok(text) = std::fs::read_to_string(&path) else {
+        return Ok(());
+    };
+    let same = Scenario::parse(&path, &text, base_dir.to_path_buf())
+        .and_then(|on_file| Ok(on_file.to_toml()? == scenario.to_toml()?))
+        .unwrap_or(false);
+    if same {
+        return Ok(());
+    }
+    Err(LabourError::Checkpoint(format!(
+        "{} was changed since the run started, and --resume continues the run as it started (its \
+         checkpoint keeps that scenario); undo the change to resume, or run the changed scenario \
+         from the start: `carus run {} --out NEW_DIR`",
+        path.display(),
+        path.display()
+    )))
 }
 
 /// The dotted keys `current` writes that `saved` lacks. Both are complete
@@ -858,6 +882,52 @@ mod tests {
         state.head_trunk = None;
         let e = Simulation::from_state(&scene, state).err().expect("refused").to_string();
         assert!(e.contains("contact.head_trunk"), "{e}");
+    }
+
+    /// Every part of a saved state the scene has must be there, at its
+    /// body's size: without the neck the head would run on detached from
+    /// the trunk.
+    #[test]
+    fn a_saved_state_missing_a_part_is_refused_naming_it() {
+        let scene = Scene::build(&coarse(0.01)).unwrap();
+        let state = Simulation::new(&scene).unwrap().state;
+        let refused = |edit: fn(&mut crate::SimState)| {
+            let mut s = state.clone();
+            edit(&mut s);
+            Simulation::from_state(&scene, s).err().expect("refused").to_string()
+        };
+        assert!(refused(|s| s.neck = None).contains("state.neck"));
+        assert!(refused(|s| { s.bone_contacts.pop(); }).contains("state.bone_contacts"));
+        assert!(refused(|s| { s.floor_wrench.pop(); }).contains("state.floor_wrench"));
+        assert!(refused(|s| { s.bodies.position.pop(); }).contains("poses"));
+        let e = refused(|s| s.spine = s.neck.clone());
+        assert!(e.contains("state.spine") && e.contains("from the start"), "{e}");
+        assert!(Simulation::from_state(&scene, state.clone()).is_ok());
+    }
+
+    /// A checkpoint cut short, or a scenario.toml edited since the run
+    /// started, is refused on resume with what happened and what to do.
+    #[test]
+    fn a_damaged_checkpoint_or_an_edited_scenario_is_refused_on_resume() {
+        let dir = tempfile::tempdir().unwrap();
+        let options = RunOptions { stop_at_s: Some(0.05), ..RunOptions::default() };
+        run(&coarse(0.2), dir.path(), &options, &mut SilentObserver).unwrap();
+        let scenario = dir.path().join(output::SCENARIO_FILE);
+        let original = std::fs::read_to_string(&scenario).unwrap();
+        let edited = original.replace("friction = 0.009", "friction = 0.1");
+        assert_ne!(edited, original);
+        std::fs::write(&scenario, edited).unwrap();
+        let e = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).expect_err("refused").to_string();
+        assert!(e.contains("was changed since the run started") && e.contains("carus run"), "{e}");
+        std::fs::write(&scenario, &original).unwrap();
+
+        let path = dir.path().join(output::CHECKPOINT_FILE);
+        let text = std::fs::read_to_string(&path).unwrap();
+        std::fs::write(&path, &text[..text.len() / 2]).unwrap();
+        let e = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).expect_err("refused").to_string();
+        assert!(e.contains("cut short or damaged") && e.contains("checkpoint.json"), "{e}");
+        std::fs::write(&path, &text).unwrap();
+        assert!(resume(dir.path(), &RunOptions::default(), &mut SilentObserver).is_ok());
     }
 
     #[test]

@@ -203,14 +203,49 @@ impl<'a> Simulation<'a> {
     }
 
     /// Continues from a saved state (a checkpoint).
+    /// The state must have every part the scene has, each the size of
+    /// its body (an edited or foreign checkpoint would otherwise run on
+    /// with, say, the head detached from the trunk).
     pub fn from_state(scene: &'a Scene, state: SimState) -> Result<Self, LabourError> {
-        if scene.head_trunk.is_some() != state.head_trunk.is_some() {
-            return Err(LabourError::Checkpoint(
-                "the state has no head-trunk contact where the scenario's contact.head_trunk is on, \
-                 or the other way round; if an older version wrote the checkpoint, run the \
+        let n = scene.bodies.len();
+        let b = &state.bodies;
+        let samples_match = |contacts: &[BodyContactState]| {
+            contacts.len() == n
+                && contacts
+                    .iter()
+                    .enumerate()
+                    .all(|(i, c)| c.sample_count() == scene.fetal_body(i).samples.len())
+        };
+        let checks = [
+            (
+                [b.position.len(), b.orientation.len(), b.linear_velocity.len(), b.angular_momentum.len()]
+                    .iter()
+                    .all(|&len| len == n),
+                "the fetal bodies' poses and velocities",
+            ),
+            (scene.neck_joint.is_some() == state.neck.is_some(), "the neck (`state.neck`)"),
+            (scene.spine_joint.is_some() == state.spine.is_some(), "the spine (`state.spine`)"),
+            (samples_match(&state.bone_contacts), "the contacts with the bone (`state.bone_contacts`)"),
+            (
+                match (&scene.head_trunk, &state.head_trunk) {
+                    (Some(pair), Some(c)) => c.sample_count() == pair.trunk_samples.len(),
+                    (None, None) => true,
+                    _ => false,
+                },
+                "the trunk's contact with the head (`state.head_trunk`, contact.head_trunk)",
+            ),
+            (state.floor_wrench.len() == n, "the floor's reaction on each body (`state.floor_wrench`)"),
+            (
+                state.floor.as_ref().is_none_or(|f| f.contacts.len() == n),
+                "the floor's contact with each body (`state.floor.contacts`)",
+            ),
+        ];
+        if let Some((_, what)) = checks.iter().find(|(fits, _)| !fits) {
+            return Err(LabourError::Checkpoint(format!(
+                "the saved state does not fit its scenario: {what} is missing or of another size; \
+                 the checkpoint was edited or written by another version of carus: run the \
                  scenario again from the start"
-                    .into(),
-            ));
+            )));
         }
         let dt = scene.scenario.numerics.rigid_dt_s;
         let (mut solver, substeps) = match (&scene.floor, &state.floor) {
