@@ -69,8 +69,50 @@ fn main() -> ExitCode {
         Ok(Status::Success) => ExitCode::SUCCESS,
         Ok(Status::Failed) => ExitCode::from(1),
         Err(error) => {
-            eprintln!("error: {error:#}");
+            eprintln!("error: {}", error_text(&error));
             ExitCode::from(1)
         }
+    }
+}
+
+/// The error and its causes, each once: many of the crates' errors already
+/// print their cause (`cannot read F: No such file`), which `{:#}` would
+/// repeat after them.
+fn error_text(error: &anyhow::Error) -> String {
+    let mut text = error.to_string();
+    for cause in error.chain().skip(1) {
+        let cause = cause.to_string();
+        if !text.contains(&cause) {
+            text.push_str(": ");
+            text.push_str(&cause);
+        }
+    }
+    text
+}
+
+#[cfg(test)]
+mod tests {
+    /// A cause the message already quotes is not repeated; one it does not is added.
+    #[test]
+    fn each_cause_is_printed_once() {
+        #[derive(Debug)]
+        struct Read {
+            source: std::io::Error,
+        }
+        impl std::fmt::Display for Read {
+            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                write!(f, "cannot read x.stl: {}", self.source)
+            }
+        }
+        impl std::error::Error for Read {
+            fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+                Some(&self.source)
+            }
+        }
+        let missing = || std::io::Error::new(std::io::ErrorKind::NotFound, "No such file");
+        let e = anyhow::Error::from(Read { source: missing() }).context("[pelvis] import");
+        assert_eq!(super::error_text(&e), "[pelvis] import: cannot read x.stl: No such file");
+        let e = anyhow::Error::from(missing()).context("scenario my.toml");
+        assert_eq!(super::error_text(&e), "scenario my.toml: No such file");
     }
 }

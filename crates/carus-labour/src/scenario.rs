@@ -392,6 +392,17 @@ impl Default for ContactSection {
 /// twice the mean, so that a width given in cm is refused.
 pub const FETAL_TRUNK_WIDTH_MM: (f64, f64) = (50.0, 250.0);
 
+/// The head diameters a scenario may give, mm: a wide band around the
+/// term head's 81-137.5 mm (REFERENCE_DATA.md), so that a diameter in cm,
+/// or a slip of many digits, is refused before the head is shaped.
+pub const FETAL_HEAD_DIAMETER_MM: (f64, f64) = (40.0, 250.0);
+
+/// The canal diameters a generated pelvis may have, mm: a wide band around
+/// the gynecoid 100-135 mm (REFERENCE_DATA.md), below the contracted inlet
+/// of CARDINAL_MOVEMENTS.md (85 mm) and up to twice the gynecoid, so that a
+/// diameter in cm is refused.
+pub const PELVIC_CANAL_DIAMETER_MM: (f64, f64) = (50.0, 250.0);
+
 /// The densities a scenario may give its soft tissue, kg/m^3: a wide band
 /// around fat (about 900) and muscle (1040-1060, ICRP 23 reference man),
 /// which refuses values in g/cm^3.
@@ -982,6 +993,45 @@ impl Scenario {
                 "newtons (not mN): REFERENCE_DATA.md gives 70-140 N",
             ));
         }
+        let h = &self.head;
+        for (key, diameter) in [
+            ("head.biparietal_mm", h.biparietal_mm),
+            ("head.bitemporal_mm", h.bitemporal_mm),
+            ("head.occipitofrontal_mm", h.occipitofrontal_mm),
+            ("head.suboccipitobregmatic_mm", h.suboccipitobregmatic_mm),
+            ("head.mentovertical_mm", h.mentovertical_mm),
+            ("head.submentobregmatic_mm", h.submentobregmatic_mm),
+        ] {
+            if !(FETAL_HEAD_DIAMETER_MM.0..=FETAL_HEAD_DIAMETER_MM.1).contains(&diameter) {
+                return Err(err(
+                    key,
+                    diameter,
+                    "is not a diameter of a fetal head",
+                    "mm (not cm): the term head's biparietal is 95 mm, its mentovertical 135-140 mm",
+                ));
+            }
+        }
+        if let PelvisSpec::Generated(p) = &self.pelvis {
+            for (key, diameter) in [
+                ("pelvis.inlet_ap_mm", p.inlet_ap_mm),
+                ("pelvis.inlet_transverse_mm", p.inlet_transverse_mm),
+                ("pelvis.inlet_oblique_mm", p.inlet_oblique_mm),
+                ("pelvis.mid_ap_mm", p.mid_ap_mm),
+                ("pelvis.interspinous_mm", p.interspinous_mm),
+                ("pelvis.outlet_ap_mm", p.outlet_ap_mm),
+                ("pelvis.outlet_transverse_mm", p.outlet_transverse_mm),
+                ("pelvis.outlet_oblique_mm", p.outlet_oblique_mm),
+            ] {
+                if !(PELVIC_CANAL_DIAMETER_MM.0..=PELVIC_CANAL_DIAMETER_MM.1).contains(&diameter) {
+                    return Err(err(
+                        key,
+                        diameter,
+                        "is not a diameter of a pelvic canal",
+                        "mm (not cm): the gynecoid inlet is 110 mm front to back and 130-135 mm across",
+                    ));
+                }
+            }
+        }
         for (key, width) in [
             ("trunk.bisacromial_mm", self.trunk.bisacromial_mm),
             ("trunk.bitrochanteric_mm", self.trunk.bitrochanteric_mm),
@@ -1131,6 +1181,18 @@ impl Scenario {
                 value: "\"\"".into(),
                 problem: "must not be empty".into(),
                 hint: "a short name, used for the output folder".into(),
+            });
+        }
+        // The name becomes a folder under runs/: it must stay one folder there.
+        if self.name.starts_with('.') || self.name.chars().any(|c| matches!(c, '/' | '\\' | ':') || c.is_control()) {
+            return Err(ScenarioError::Value {
+                path: path.to_path_buf(),
+                key: "name",
+                value: format!("{:?}", self.name),
+                problem: "names the output folder runs/<name>-<n>, so it may not hold /, \\, : or control \
+                          characters, nor start with a dot"
+                    .into(),
+                hint: "letters, digits, - and _, e.g. \"narrow-inlet\"; --out DIR writes anywhere".into(),
             });
         }
         Ok(())
@@ -1288,6 +1350,16 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("force_min_n"), "{e}");
+        let e = parse("name = \"x\"\n[head]\nbiparietal_mm = 9.5\n").unwrap_err().to_string();
+        assert!(e.contains("`head.biparietal_mm` = 9.5") && e.contains("not cm"), "{e}");
+        let e = parse("name = \"x\"\n[head]\nmentovertical_mm = 1e300\n").unwrap_err().to_string();
+        assert!(e.contains("head.mentovertical_mm"), "{e}");
+        let e = parse("name = \"x\"\n[pelvis]\ninlet_ap_mm = 11.0\n").unwrap_err().to_string();
+        assert!(e.contains("`pelvis.inlet_ap_mm` = 11") && e.contains("not cm"), "{e}");
+        for name in ["../../etc", "a/b", ".hidden"] {
+            let e = parse(&format!("name = {name:?}\n")).unwrap_err().to_string();
+            assert!(e.contains("`name`") && e.contains("output folder"), "{e}");
+        }
         let e = parse("name = \"x\"\n[start]\nposition = \"MP\"\n")
             .unwrap_err()
             .to_string();

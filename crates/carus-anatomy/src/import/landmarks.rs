@@ -136,6 +136,15 @@ fn parse_axis(text: &str) -> Option<DVec3> {
 impl LandmarksFile {
     /// Reads and checks a landmarks file (names, not yet geometry).
     pub fn read(path: &Path) -> Result<Self, ImportError> {
+        let extension = path.extension().and_then(|e| e.to_str()).unwrap_or_default().to_ascii_lowercase();
+        if ["stl", "obj", "ply", "gltf", "glb"].contains(&extension.as_str()) {
+            return Err(file_error(
+                path,
+                "is a mesh; a pelvis is imported through a landmarks file (TOML) that names its mesh \
+                 (`mesh = \"...\"`), its units and axes, and where the landmarks lie on it \
+                 (docs/IMPORT.md, \"The landmarks file\")",
+            ));
+        }
         let text = std::fs::read_to_string(path).map_err(|source| ImportError::Io {
             path: path.to_path_buf(),
             source,

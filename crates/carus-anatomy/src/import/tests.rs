@@ -278,6 +278,10 @@ fn edited_landmarks(dir: &Path, edit: impl Fn(String) -> String) -> PathBuf {
 
 #[test]
 fn landmark_file_mistakes_are_named_with_their_fix() {
+    // A mesh given where the landmarks file belongs.
+    let err = import_pelvis(&anatomy_assets_dir().join("visible-human-female-pelvis.stl")).unwrap_err().to_string();
+    assert!(err.contains("is a mesh") && err.contains("landmarks file"), "{err}");
+
     let dir = scratch("landmarks");
     let missing = edited_landmarks(&dir, |t| {
         t.lines()

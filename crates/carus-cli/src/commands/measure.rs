@@ -155,8 +155,20 @@ impl AnatomyFile {
                     .with_context(|| format!("{}: in the [{key}] table (keys and units: docs/ANATOMY.md)", path.display())),
             }
         }
-        // A scenario (it has a `name`) keeps the floor's shape in
-        // [floor.mesh], beside the tissue and coupling keys of its [floor].
+        // A scenario (it has a `name`) is checked whole, as `carus run`
+        // would; an anatomy file has the three tables only, so that a
+        // misspelt one is not quietly replaced by the defaults.
+        if table.contains_key("name") {
+            carus_labour::Scenario::from_file(path)?;
+        } else if let Some(unknown) = table.keys().find(|k| !["pelvis", "head", "floor"].contains(&k.as_str())) {
+            anyhow::bail!(
+                "{}: `{unknown}` is not a table of an anatomy file, which has [pelvis], [head] and [floor] \
+                 (docs/ANATOMY.md); a scenario file starts with its `name`",
+                path.display()
+            );
+        }
+        // A scenario keeps the floor's shape in [floor.mesh], beside the
+        // tissue and coupling keys of its [floor].
         let floor = if table.contains_key("name") {
             part::<carus_labour::scenario::FloorSection>(path, &table, "floor")
                 .context("a scenario's [floor] table: keys in docs/SCENARIOS.md")?
@@ -213,6 +225,11 @@ mod tests {
         // A tissue key belongs to a scenario; in an anatomy file it is named.
         let error = format!("{:#}", load("[floor]\nshear_modulus_pa = 16500.0\n").err().unwrap());
         assert!(error.contains("[floor]") && error.contains("shear_modulus_pa"), "{error}");
+        // A misspelt table is named, in an anatomy file and in a scenario.
+        let error = format!("{:#}", load("[pelvsi]\ninlet_ap_mm = 100.0\n").err().unwrap());
+        assert!(error.contains("`pelvsi` is not a table"), "{error}");
+        let error = format!("{:#}", load(&text.replace("[head]", "[haed]")).err().unwrap());
+        assert!(error.contains("haed"), "{error}");
     }
 
     #[test]

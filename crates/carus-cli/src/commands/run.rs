@@ -504,7 +504,7 @@ mod tests {
     fn a_scenario_that_cannot_start_touches_no_out_dir() {
         let dir = tempfile::tempdir().unwrap();
         let file = dir.path().join("narrow.toml");
-        std::fs::write(&file, "name = \"narrow\"\n[pelvis]\ninlet_ap_mm = 20.0\n").unwrap();
+        std::fs::write(&file, "name = \"narrow\"\n[pelvis]\ninterspinous_mm = 140.0\n").unwrap();
         let args = |out: PathBuf, force: bool| RunArgs {
             scenario: Some(file.display().to_string()),
             output: OutputArgs { out: Some(out), json: true, force, quiet: true },
@@ -512,7 +512,7 @@ mod tests {
         };
         let fresh = dir.path().join("fresh");
         let e = format!("{:#}", run(&args(fresh.clone(), false)).err().unwrap());
-        assert!(e.contains("narrow.toml") && e.contains("[pelvis]") && e.contains("inlet_ap_mm = 20"), "{e}");
+        assert!(e.contains("narrow.toml") && e.contains("[pelvis]") && e.contains("interspinous_mm = 140"), "{e}");
         assert!(e.contains("hint: `carus measure pelvis FILE`"), "{e}");
         assert!(!fresh.exists());
 
