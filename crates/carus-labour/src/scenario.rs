@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use carus_anatomy::fetus::{HeadDiameters, TrunkDiameters};
 use carus_anatomy::floor::FloorParameters;
-use carus_anatomy::pelvis::PelvisSpec;
+use carus_anatomy::pelvis::{PelvisSpec, PELVIC_CANAL_DIAMETER_MM};
 use serde::{Deserialize, Serialize};
 
 /// Why a scenario cannot be used.
@@ -396,12 +396,6 @@ pub const FETAL_TRUNK_WIDTH_MM: (f64, f64) = (50.0, 250.0);
 /// term head's 81-137.5 mm (REFERENCE_DATA.md), so that a diameter in cm,
 /// or a slip of many digits, is refused before the head is shaped.
 pub const FETAL_HEAD_DIAMETER_MM: (f64, f64) = (40.0, 250.0);
-
-/// The canal diameters a generated pelvis may have, mm: a wide band around
-/// the gynecoid 100-135 mm (REFERENCE_DATA.md), below the contracted inlet
-/// of CARDINAL_MOVEMENTS.md (85 mm) and up to twice the gynecoid, so that a
-/// diameter in cm is refused.
-pub const PELVIC_CANAL_DIAMETER_MM: (f64, f64) = (50.0, 250.0);
 
 /// The densities a scenario may give its soft tissue, kg/m^3: a wide band
 /// around fat (about 900) and muscle (1040-1060, ICRP 23 reference man),

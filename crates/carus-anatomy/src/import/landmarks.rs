@@ -21,7 +21,7 @@ use serde::{Deserialize, Serialize};
 
 use super::formats::{read_raw, RawMesh};
 use super::{weld, ImportError, MeshReport, Units};
-use crate::pelvis::{Pelvis, PelvisLandmarks, LANDMARK_NAMES};
+use crate::pelvis::{Pelvis, PelvisLandmarks, LANDMARK_NAMES, PELVIC_CANAL_DIAMETER_MM};
 
 /// Where the mother's directions point in the mesh: each key takes a
 /// signed mesh axis (`"+x"`, `"-y"`, `"z"`). Give one of each pair.
@@ -258,6 +258,28 @@ pub fn import_pelvis(path: &Path) -> Result<ImportedPelvis, ImportError> {
     assemble_pelvis(path, &file, mesh_path, &raw)
 }
 
+/// The obstetric conjugate must measure as a pelvis's does: a mesh in mm
+/// declared in m (or the other way round) is a thousand times off.
+fn check_size(path: &Path, units: Units, landmarks: &PelvisLandmarks) -> Result<(), ImportError> {
+    let conjugate_mm = landmarks.sacral_promontory.distance(landmarks.symphysis_upper) * 1e3;
+    let (least, most) = PELVIC_CANAL_DIAMETER_MM;
+    if (least..=most).contains(&conjugate_mm) {
+        return Ok(());
+    }
+    let declared = match units {
+        Units::Millimetres => "mm",
+        Units::Metres => "m",
+    };
+    Err(file_error(
+        path,
+        format!(
+            "sacral_promontory to symphysis_upper (the obstetric conjugate) measures {conjugate_mm:.4} mm \
+             with `units = \"{declared}\"`, outside the {least}-{most} mm of any pelvis; check that `units` \
+             is the unit of the mesh and of the landmarks"
+        ),
+    ))
+}
+
 /// [`import_pelvis`] for a landmarks file already read and its mesh's
 /// triangles (e.g. embedded in the program); `path` names the landmarks
 /// file in errors, `mesh_path` the mesh.
@@ -271,6 +293,7 @@ pub fn assemble_pelvis(
     let scale = file.units.to_metres();
 
     let anatomical = file.landmarks_through(path, |p| to_anatomical * (p * scale))?;
+    check_size(path, file.units, &anatomical)?;
     check_orientation(path, &anatomical)?;
     let to_pelvis = anatomical.to_pelvis_frame().map_err(|source| ImportError::Pelvis {
         path: path.to_path_buf(),

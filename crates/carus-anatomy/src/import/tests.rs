@@ -283,6 +283,11 @@ fn landmark_file_mistakes_are_named_with_their_fix() {
     assert!(err.contains("is a mesh") && err.contains("landmarks file"), "{err}");
 
     let dir = scratch("landmarks");
+    // A mesh in mm declared in m: a pelvis a thousand times too large.
+    let metres = edited_landmarks(&dir, |t| t.replace("units = \"mm\"", "units = \"m\""));
+    let err = import_pelvis(&metres).unwrap_err().to_string();
+    assert!(err.contains("obstetric conjugate") && err.contains("units = \"m\""), "{err}");
+
     let missing = edited_landmarks(&dir, |t| {
         t.lines()
             .filter(|l| !l.starts_with("coccyx_tip") && !l.starts_with("sacral_apex"))

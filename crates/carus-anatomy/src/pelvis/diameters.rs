@@ -70,6 +70,12 @@ impl Default for PelvisDiameters {
     }
 }
 
+/// The canal diameters a pelvis may have, mm: a wide band around the
+/// gynecoid 100-135 mm (REFERENCE_DATA.md), below the contracted inlet of
+/// CARDINAL_MOVEMENTS.md (85 mm) and up to twice the gynecoid, so that a
+/// diameter in cm, or a mesh in mm declared in m, is refused.
+pub const PELVIC_CANAL_DIAMETER_MM: (f64, f64) = (50.0, 250.0);
+
 /// A diameter set that no pelvis can have, with the keys in conflict.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum DiameterError {

@@ -16,7 +16,7 @@ mod layout;
 pub mod measure;
 mod spec;
 
-pub use diameters::{DiameterError, PelvisDiameters};
+pub use diameters::{DiameterError, PelvisDiameters, PELVIC_CANAL_DIAMETER_MM};
 pub use landmarks::{PelvisLandmarks, LANDMARK_NAMES};
 pub use measure::{measure, PelvisMeasurement, PlaneMeasurement};
 pub use spec::{PelvisBuildError, PelvisSpec, VISIBLE_HUMAN_FEMALE};
