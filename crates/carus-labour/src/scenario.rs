@@ -692,7 +692,14 @@ impl Scenario {
     pub fn from_file(path: &Path) -> Result<Scenario, ScenarioError> {
         let text = std::fs::read_to_string(path).map_err(|source| ScenarioError::Io {
             path: path.to_path_buf(),
-            source,
+            source: match source.kind() {
+                std::io::ErrorKind::InvalidData => std::io::Error::new(
+                    source.kind(),
+                    "not a text file (UTF-8); a scenario is a TOML text file: `carus scenarios show normal \
+                     > mine.toml` writes one",
+                ),
+                _ => source,
+            },
         })?;
         let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
         Scenario::parse(path, &text, base)
@@ -1197,8 +1204,19 @@ fn syntax(path: &Path, text: &str, key: String, error: &toml::de::Error) -> Scen
     let line = error.span().map_or(0, |s| {
         text[..s.start.min(text.len())].matches('\n').count() + 1
     });
-    let message = error.message().trim().to_string();
-    let hint = if message.starts_with("unknown field") {
+    let mut message = error.message().trim().to_string();
+    // The parser names no key for a duplicate; its span covers the key written twice.
+    let twice = error
+        .span()
+        .and_then(|s| text.get(s))
+        .map(str::trim)
+        .filter(|k| message.starts_with("duplicate key") && !k.is_empty() && !k.contains('\n'));
+    if let Some(k) = twice {
+        message = format!("duplicate key `{k}`: given a second time in its table");
+    }
+    let hint = if twice.is_some() {
+        "keep one of the two lines".to_string()
+    } else if message.starts_with("unknown field") {
         "check the spelling against `carus scenarios show normal`, which lists every key"
             .to_string()
     } else if message.starts_with("unknown variant") {
@@ -1350,6 +1368,8 @@ mod tests {
         assert!(e.contains("head.mentovertical_mm"), "{e}");
         let e = parse("name = \"x\"\n[pelvis]\ninlet_ap_mm = 11.0\n").unwrap_err().to_string();
         assert!(e.contains("`pelvis.inlet_ap_mm` = 11") && e.contains("not cm"), "{e}");
+        let e = parse("name = \"x\"\n[contact]\nfriction = 0.1\nfriction = 0.2\n").unwrap_err().to_string();
+        assert!(e.contains("test.toml:4") && e.contains("duplicate key `friction`"), "{e}");
         for name in ["../../etc", "a/b", ".hidden"] {
             let e = parse(&format!("name = {name:?}\n")).unwrap_err().to_string();
             assert!(e.contains("`name`") && e.contains("output folder"), "{e}");

@@ -48,7 +48,7 @@ const AXIS_SAMPLES: usize = 60;
 
 pub fn run(args: &MeshArgs) -> anyhow::Result<Status> {
     let file = AnatomyFile::load(args.file.as_deref())?;
-    std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create the folder {}", args.out.display()))?;
+    super::create_out_folder(&args.out)?;
     let mut written = Vec::new();
     let mut crossings = Vec::new();
     match args.part {

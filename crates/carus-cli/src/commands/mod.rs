@@ -66,6 +66,15 @@ pub fn labour_pool(jobs: Option<usize>) -> anyhow::Result<(rayon::ThreadPool, us
     Ok((pool, jobs))
 }
 
+/// Makes the folder `dir` (and those above it) for a command's output; a
+/// file in its place is named, with the fix.
+pub fn create_out_folder(dir: &std::path::Path) -> anyhow::Result<()> {
+    if dir.exists() && !dir.is_dir() {
+        anyhow::bail!("{} is a file, not a folder; choose another --out", dir.display());
+    }
+    std::fs::create_dir_all(dir).map_err(|e| anyhow::anyhow!("cannot create the folder {}: {e}", dir.display()))
+}
+
 /// The largest test cube `carus validate cube` and `carus bench tled`
 /// build: 20 million elements (an H8 cube of 271 per edge, a T4 one of
 /// 149), several GB of model and state; beyond it the allocation itself
@@ -126,5 +135,21 @@ mod tests {
         let e = super::check_cube_size(100_000, 6).unwrap_err().to_string();
         assert!(e.contains("use --n 149 or less"), "{e}");
         assert!(super::check_cube_size(usize::MAX, 1).is_err());
+    }
+
+    /// A file where the out folder should be is named with the fix, by
+    /// every command that writes a folder.
+    #[test]
+    fn a_file_in_place_of_the_out_folder_is_named() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("afile");
+        std::fs::write(&file, "mine").unwrap();
+        let e = super::create_out_folder(&file).unwrap_err().to_string();
+        assert!(e.contains("afile is a file, not a folder") && e.contains("--out"), "{e}");
+        let e = super::run::choose_out_dir(Some(&file), "x", true).err().unwrap().to_string();
+        assert!(e.contains("is a file, not a folder"), "{e}");
+        assert_eq!(std::fs::read_to_string(&file).unwrap(), "mine");
+        super::create_out_folder(&dir.path().join("a/b")).unwrap();
+        assert!(dir.path().join("a/b").is_dir());
     }
 }

@@ -81,6 +81,9 @@ pub struct RenderArgs {
 }
 
 pub fn run(args: &RenderArgs) -> anyhow::Result<Status> {
+    if !args.out.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
+        anyhow::bail!("--out {}: carus render writes a PNG picture; name the file *.png", args.out.display());
+    }
     let meshes = match args.part {
         RenderPart::Pelvis => pelvis_meshes(
             &AnatomyFile::load(args.file.as_deref())?.pelvis()?,
@@ -129,8 +132,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<Status> {
     };
     let picture = renderer.contact_sheet(&Scene::new(meshes), &sheet)?;
     if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("cannot create the folder {}", dir.display()))?;
+        super::create_out_folder(dir)?;
     }
     picture
         .save_png(&args.out)

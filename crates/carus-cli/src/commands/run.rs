@@ -266,6 +266,9 @@ pub(super) fn choose_out_dir(out: Option<&Path>, name: &str, force: bool) -> any
     let Some(path) = out else {
         return Ok(OutDir::Numbered(name.to_string()));
     };
+    if path.exists() && !path.is_dir() {
+        bail!("{} is a file, not a folder; choose another --out", path.display());
+    }
     if holds_files(path)? {
         if !force {
             bail!(
@@ -287,7 +290,7 @@ impl OutDir {
     /// time, gives way to the next); a given one is cleared only with
     /// `--force`, and refused if it was filled meanwhile.
     pub(super) fn make(self) -> anyhow::Result<PathBuf> {
-        let create = |dir: &Path| std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()));
+        let create = super::create_out_folder;
         match self {
             OutDir::Numbered(name) => {
                 create(Path::new("runs"))?;
@@ -355,7 +358,7 @@ fn holds_files(dir: &Path) -> anyhow::Result<bool> {
 /// as `carus run` would, stopping cleanly when `stop` is set: one run of a
 /// command that runs several (`carus sweep`, `carus sanity`).
 pub(super) fn run_into(scenario: &Scenario, dir: &Path, stop: &Arc<AtomicBool>) -> anyhow::Result<RunRecord> {
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    super::create_out_folder(dir)?;
     let options = RunOptions {
         stop: Some(stop.clone()),
         stop_at_s: None,
