@@ -321,8 +321,11 @@ impl PoseHistory {
 
     /// Reads and validates a history from JSON text.
     pub fn from_json_str(text: &str) -> Result<Self, HistoryError> {
-        let history: PoseHistory =
-            serde_json::from_str(text).map_err(|e| HistoryError::Json(e.to_string()))?;
+        let mut json = serde_json::Deserializer::from_str(text);
+        let history: PoseHistory = serde_path_to_error::deserialize(&mut json).map_err(|e| {
+            let at = e.path().to_string();
+            HistoryError::Json(if at == "." { e.inner().to_string() } else { format!("at {at}: {}", e.inner()) })
+        })?;
         history.validate()?;
         Ok(history)
     }

@@ -118,6 +118,39 @@ pub fn parse_stl(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
     Ok(mesh)
 }
 
+/// The first line of an OBJ file whose vertex or face tobj would refuse,
+/// for its error, which names none: a coordinate that is not a number, or
+/// a face corner that names no vertex read so far (1-based, or negative
+/// counting back).
+fn obj_line_at_fault(bytes: &[u8]) -> Option<String> {
+    let mut vertices: i64 = 0;
+    for (number, line) in String::from_utf8_lossy(bytes).lines().enumerate() {
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("v") => {
+                if words.by_ref().take(3).filter(|w| w.parse::<f64>().is_ok()).count() < 3 {
+                    return Some(format!("line {}: a vertex needs three numbers: `{}`", number + 1, line.trim()));
+                }
+                vertices += 1;
+            }
+            Some("f") => {
+                for corner in words {
+                    let index = corner.split('/').next().and_then(|i| i.parse::<i64>().ok());
+                    let valid = index.is_some_and(|i| (1..=vertices).contains(&i) || (-vertices..0).contains(&i));
+                    if !valid {
+                        return Some(format!(
+                            "line {}: face corner `{corner}` names no vertex; {vertices} are defined above it",
+                            number + 1
+                        ));
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    None
+}
+
 /// Wavefront OBJ, polygons fan-triangulated by tobj; materials ignored.
 pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
     let options = tobj::LoadOptions {
@@ -128,7 +161,10 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
     let (models, _materials) = tobj::load_obj_buf(&mut BufReader::new(bytes), &options, |_| {
         Ok((Vec::new(), Default::default()))
     })
-    .map_err(|e| format_error(path, "OBJ", e))?;
+    .map_err(|e| match obj_line_at_fault(bytes) {
+        Some(at) => format_error(path, "OBJ", format!("{e} ({at})")),
+        None => format_error(path, "OBJ", e),
+    })?;
     let mut mesh = RawMesh::default();
     for model in models {
         let base = mesh.positions.len() as u32;
@@ -251,7 +287,7 @@ fn parse_gltf(path: &Path, bytes: &[u8]) -> Result<gltf::Gltf, ImportError> {
                         "glTF",
                         format!(
                             "primitive {p} of mesh {m}: POSITION names accessor {}, but the file has {} \
-                             accessors; export the mesh again",
+                             accessors",
                             accessor.value(),
                             root.accessors.len()
                         ),

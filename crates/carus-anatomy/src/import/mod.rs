@@ -58,7 +58,7 @@ pub enum ImportError {
         expected: usize,
         found: usize,
     },
-    #[error("{path}: not a readable {format} file: {message}")]
+    #[error("{path}: not a readable {format} file: {message}; export the mesh again from the tool that made it")]
     Format {
         path: PathBuf,
         format: &'static str,

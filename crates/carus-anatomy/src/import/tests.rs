@@ -257,6 +257,14 @@ fn broken_meshes_say_what_and_where() {
         "{err}"
     );
 
+    // tobj names no line; the line at fault is found and named.
+    let beyond = write(&dir, "beyond.obj", obj().replacen("f 1 3 2", "f 1 3 9", 1).as_bytes());
+    let err = read_surface(&beyond, Units::Metres).unwrap_err().to_string();
+    assert!(err.contains("beyond.obj") && err.contains("face corner `9` names no vertex"), "{err}");
+    let word = write(&dir, "word.obj", obj().replacen("v 0 1 0", "v 0 one 0", 1).as_bytes());
+    let err = read_surface(&word, Units::Metres).unwrap_err().to_string();
+    assert!(err.contains("a vertex needs three numbers: `v 0 one 0`"), "{err}");
+
     let unknown = write(&dir, "mesh.xyz", b"1 2 3");
     assert!(matches!(
         read_surface(&unknown, Units::Metres),

@@ -51,6 +51,12 @@ fn history_file(path: &Path) -> PathBuf {
 }
 
 fn detect_file(path: &Path) -> anyhow::Result<DetectorReport> {
+    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv")) {
+        anyhow::bail!(
+            "{}: the detector reads the pose history as JSON; give {HISTORY_JSON} beside it, or the run folder",
+            path.display()
+        );
+    }
     let text = std::fs::read_to_string(path).with_context(|| {
         format!(
             "cannot read {}: give a pose history (JSON) or a run folder that holds {HISTORY_JSON}",
@@ -100,5 +106,24 @@ mod tests {
         std::fs::write(&wrong, "{\"head\": 1}").unwrap();
         let text = format!("{:#}", detect_file(&wrong).unwrap_err());
         assert!(text.contains("not_a_history.json") && text.contains("pose history"), "{text}");
+
+        let csv = dir.path().join("pose_history.csv");
+        std::fs::write(&csv, "time_s,station_mm\n0,0\n").unwrap();
+        let text = format!("{:#}", detect_file(&csv).unwrap_err());
+        assert!(text.contains("as JSON") && text.contains(HISTORY_JSON), "{text}");
+    }
+
+    /// A sample that lacks a field is named by its index.
+    #[test]
+    fn a_broken_sample_is_named_by_its_index() {
+        let s = crate::commands::coarse_normal(0.05);
+        let dir = tempfile::tempdir().unwrap();
+        carus_labour::run(&s, dir.path(), &RunOptions::default(), &mut SilentObserver).unwrap();
+        let path = dir.path().join(HISTORY_JSON);
+        let mut json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+        json["samples"][2].as_object_mut().unwrap().remove("head");
+        std::fs::write(&path, json.to_string()).unwrap();
+        let text = format!("{:#}", detect_file(&path).unwrap_err());
+        assert!(text.contains("samples[2]") && text.contains("missing field `head`"), "{text}");
     }
 }
