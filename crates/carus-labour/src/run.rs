@@ -905,13 +905,19 @@ mod tests {
         assert!(Simulation::from_state(&scene, state.clone()).is_ok());
     }
 
+    /// A coarse run stopped at 0.05 s, its checkpoint written, to resume.
+    fn stopped_run() -> tempfile::TempDir {
+        let dir = tempfile::tempdir().unwrap();
+        let options = RunOptions { stop_at_s: Some(0.05), ..RunOptions::default() };
+        run(&coarse(0.2), dir.path(), &options, &mut SilentObserver).unwrap();
+        dir
+    }
+
     /// A checkpoint cut short, or a scenario.toml edited since the run
     /// started, is refused on resume with what happened and what to do.
     #[test]
     fn a_damaged_checkpoint_or_an_edited_scenario_is_refused_on_resume() {
-        let dir = tempfile::tempdir().unwrap();
-        let options = RunOptions { stop_at_s: Some(0.05), ..RunOptions::default() };
-        run(&coarse(0.2), dir.path(), &options, &mut SilentObserver).unwrap();
+        let dir = stopped_run();
         let scenario = dir.path().join(output::SCENARIO_FILE);
         let original = std::fs::read_to_string(&scenario).unwrap();
         let edited = original.replace("friction = 0.009", "friction = 0.1");
@@ -1027,9 +1033,7 @@ mod tests {
     /// a model its start did not have (as the trunk's cover depth would).
     #[test]
     fn a_checkpoint_from_before_a_key_existed_is_refused_naming_it() {
-        let dir = tempfile::tempdir().unwrap();
-        let options = RunOptions { stop_at_s: Some(0.05), ..RunOptions::default() };
-        run(&coarse(0.2), dir.path(), &options, &mut SilentObserver).unwrap();
+        let dir = stopped_run();
         let path = dir.path().join(output::CHECKPOINT_FILE);
         let mut json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
         let toml = json["scenario_toml"].as_str().unwrap();

@@ -994,73 +994,64 @@ impl Scenario {
                 "newtons (not mN): REFERENCE_DATA.md gives 70-140 N",
             ));
         }
+        // Plausibility bands: values that would run but are in another unit.
+        let in_band = |values: &[(&'static str, f64)], (least, most): (f64, f64), problem: &str, hint: &str| {
+            match values.iter().find(|(_, v)| !(least..=most).contains(v)) {
+                Some(&(key, value)) => Err(err(key, value, problem, hint)),
+                None => Ok(()),
+            }
+        };
         let h = &self.head;
-        for (key, diameter) in [
-            ("head.biparietal_mm", h.biparietal_mm),
-            ("head.bitemporal_mm", h.bitemporal_mm),
-            ("head.occipitofrontal_mm", h.occipitofrontal_mm),
-            ("head.suboccipitobregmatic_mm", h.suboccipitobregmatic_mm),
-            ("head.mentovertical_mm", h.mentovertical_mm),
-            ("head.submentobregmatic_mm", h.submentobregmatic_mm),
-        ] {
-            if !(FETAL_HEAD_DIAMETER_MM.0..=FETAL_HEAD_DIAMETER_MM.1).contains(&diameter) {
-                return Err(err(
-                    key,
-                    diameter,
-                    "is not a diameter of a fetal head",
-                    "mm (not cm): the term head's biparietal is 95 mm, its mentovertical 135-140 mm",
-                ));
-            }
-        }
+        in_band(
+            &[
+                ("head.biparietal_mm", h.biparietal_mm),
+                ("head.bitemporal_mm", h.bitemporal_mm),
+                ("head.occipitofrontal_mm", h.occipitofrontal_mm),
+                ("head.suboccipitobregmatic_mm", h.suboccipitobregmatic_mm),
+                ("head.mentovertical_mm", h.mentovertical_mm),
+                ("head.submentobregmatic_mm", h.submentobregmatic_mm),
+            ],
+            FETAL_HEAD_DIAMETER_MM,
+            "is not a diameter of a fetal head",
+            "mm (not cm): the term head's biparietal is 95 mm, its mentovertical 135-140 mm",
+        )?;
         if let PelvisSpec::Generated(p) = &self.pelvis {
-            for (key, diameter) in [
-                ("pelvis.inlet_ap_mm", p.inlet_ap_mm),
-                ("pelvis.inlet_transverse_mm", p.inlet_transverse_mm),
-                ("pelvis.inlet_oblique_mm", p.inlet_oblique_mm),
-                ("pelvis.mid_ap_mm", p.mid_ap_mm),
-                ("pelvis.interspinous_mm", p.interspinous_mm),
-                ("pelvis.outlet_ap_mm", p.outlet_ap_mm),
-                ("pelvis.outlet_transverse_mm", p.outlet_transverse_mm),
-                ("pelvis.outlet_oblique_mm", p.outlet_oblique_mm),
-            ] {
-                if !(PELVIC_CANAL_DIAMETER_MM.0..=PELVIC_CANAL_DIAMETER_MM.1).contains(&diameter) {
-                    return Err(err(
-                        key,
-                        diameter,
-                        "is not a diameter of a pelvic canal",
-                        "mm (not cm): the gynecoid inlet is 110 mm front to back and 130-135 mm across",
-                    ));
-                }
-            }
+            in_band(
+                &[
+                    ("pelvis.inlet_ap_mm", p.inlet_ap_mm),
+                    ("pelvis.inlet_transverse_mm", p.inlet_transverse_mm),
+                    ("pelvis.inlet_oblique_mm", p.inlet_oblique_mm),
+                    ("pelvis.mid_ap_mm", p.mid_ap_mm),
+                    ("pelvis.interspinous_mm", p.interspinous_mm),
+                    ("pelvis.outlet_ap_mm", p.outlet_ap_mm),
+                    ("pelvis.outlet_transverse_mm", p.outlet_transverse_mm),
+                    ("pelvis.outlet_oblique_mm", p.outlet_oblique_mm),
+                ],
+                PELVIC_CANAL_DIAMETER_MM,
+                "is not a diameter of a pelvic canal",
+                "mm (not cm): the gynecoid inlet is 110 mm front to back and 130-135 mm across",
+            )?;
         }
-        for (key, width) in [
-            ("trunk.bisacromial_mm", self.trunk.bisacromial_mm),
-            ("trunk.bitrochanteric_mm", self.trunk.bitrochanteric_mm),
-        ] {
-            if !(FETAL_TRUNK_WIDTH_MM.0..=FETAL_TRUNK_WIDTH_MM.1).contains(&width) {
-                return Err(err(
-                    key,
-                    width,
-                    "is not the width of a fetal trunk",
-                    "mm (not cm): the newborn's bisacromial is 124 +- 10 mm",
-                ));
-            }
-        }
+        in_band(
+            &[
+                ("trunk.bisacromial_mm", self.trunk.bisacromial_mm),
+                ("trunk.bitrochanteric_mm", self.trunk.bitrochanteric_mm),
+            ],
+            FETAL_TRUNK_WIDTH_MM,
+            "is not the width of a fetal trunk",
+            "mm (not cm): the newborn's bisacromial is 124 +- 10 mm",
+        )?;
         // Soft tissue is about as dense as water: a value near 1 is in
         // g/cm^3, and would give a fetus too light for its neck's springs.
-        for (key, density) in [
-            ("fetus.density_kg_per_m3", self.fetus.density_kg_per_m3),
-            ("floor.density_kg_per_m3", self.floor.density_kg_per_m3),
-        ] {
-            if !(SOFT_TISSUE_DENSITY_KG_PER_M3.0..=SOFT_TISSUE_DENSITY_KG_PER_M3.1).contains(&density) {
-                return Err(err(
-                    key,
-                    density,
-                    "is not the density of soft tissue",
-                    "kg/m^3 (not g/cm^3): soft tissue is about 1050",
-                ));
-            }
-        }
+        in_band(
+            &[
+                ("fetus.density_kg_per_m3", self.fetus.density_kg_per_m3),
+                ("floor.density_kg_per_m3", self.floor.density_kg_per_m3),
+            ],
+            SOFT_TISSUE_DENSITY_KG_PER_M3,
+            "is not the density of soft tissue",
+            "kg/m^3 (not g/cm^3): soft tissue is about 1050",
+        )?;
         if self.floor.shear_modulus_pa < FLOOR_SHEAR_MODULUS_MIN_PA {
             return Err(err(
                 "floor.shear_modulus_pa",

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use carus_anatomy::fetus::{FetalHead, HeadDiameters, HeadMeasurement};
-use carus_anatomy::floor::FloorParameters;
+use carus_anatomy::floor::{pelvic_floor, FloorParameters};
 use carus_anatomy::pelvis::{measure, Pelvis, PelvisMeasurement, PelvisSpec};
 use serde::Deserialize;
 
@@ -46,7 +46,7 @@ pub fn run(args: &MeasureArgs) -> anyhow::Result<Status> {
             }
         }
         MeasurePart::Head => {
-            let head = FetalHead::new(&file.head).context("the [head] diameters cannot be built")?;
+            let head = file.head()?;
             let m = head.measure();
             if args.json {
                 print_json(&m)?;
@@ -189,6 +189,17 @@ impl AnatomyFile {
         let base = self.path.as_deref().and_then(Path::parent).unwrap_or(Path::new("."));
         let where_ = self.path.as_ref().map_or("the default pelvis".to_string(), |p| format!("{}: [pelvis]", p.display()));
         self.pelvis.build(base).with_context(|| where_)
+    }
+
+    /// Builds the head the file describes; a failure names the file.
+    pub fn head(&self) -> anyhow::Result<FetalHead> {
+        FetalHead::new(&self.head).with_context(|| format!("{}: the [head] diameters cannot be built", self.describe()))
+    }
+
+    /// Builds the pelvic floor the file describes on `pelvis`; a failure names the file.
+    pub fn floor(&self, pelvis: &Pelvis) -> anyhow::Result<carus_fem::Mesh> {
+        pelvic_floor(pelvis, &self.floor)
+            .with_context(|| format!("{}: the [floor] cannot be built for this pelvis", self.describe()))
     }
 
     /// Where the anatomy came from, for headings.

@@ -8,8 +8,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
-use carus_anatomy::fetus::FetalHead;
-use carus_anatomy::floor::{pelvic_floor, ATTACHED};
+use carus_anatomy::floor::ATTACHED;
 use carus_anatomy::TriSurface;
 use carus_io::{write_vtu, FrameFields};
 
@@ -67,7 +66,7 @@ pub fn run(args: &MeshArgs) -> anyhow::Result<Status> {
                 .collect();
             written.push(write_axis(&args.out.join("pelvic_axis.csv"), &axis)?);
             if args.part == MeshPart::Floor {
-                let floor = pelvic_floor(&pelvis, &file.floor).context("the [floor] cannot be built for this pelvis")?;
+                let floor = file.floor(&pelvis)?;
                 let path = args.out.join("pelvic_floor.vtu");
                 let zeros_n = vec![[0.0; 3]; floor.node_count()];
                 let zeros_e = vec![0.0; floor.element_count()];
@@ -92,7 +91,7 @@ pub fn run(args: &MeshArgs) -> anyhow::Result<Status> {
             }
         }
         MeshPart::Head => {
-            let head = FetalHead::new(&file.head).context("the [head] diameters cannot be built")?;
+            let head = file.head()?;
             written.push(write_stl(&args.out.join("head.stl"), &head.surface)?);
             crossings.push(("head", self_crossings("head", &head.surface)));
             let landmarks: Vec<(String, [f64; 3])> =
@@ -190,7 +189,7 @@ fn write_axis(path: &Path, samples: &[(f64, [f64; 3])]) -> anyhow::Result<PathBu
 #[cfg(test)]
 mod tests {
     use super::*;
-    use carus_anatomy::fetus::HeadDiameters;
+    use carus_anatomy::fetus::{FetalHead, HeadDiameters};
 
     /// The generated head is a clean shell; a copy of it moved half its
     /// width into itself is not.

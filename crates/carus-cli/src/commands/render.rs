@@ -9,7 +9,7 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use carus_anatomy::fetus::{CapsuleChain, FetalHead, Fetus};
-use carus_anatomy::floor::{pelvic_floor, ATTACHED, LEVATOR_ANI, PERINEAL_BODY};
+use carus_anatomy::floor::{ATTACHED, LEVATOR_ANI, PERINEAL_BODY};
 use carus_anatomy::pelvis::measure;
 use carus_anatomy::{Pelvis, TriSurface};
 use carus_fem::mesh::Mesh;
@@ -91,9 +91,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<Status> {
         ),
         RenderPart::Head => {
             let file = AnatomyFile::load(args.file.as_deref())?;
-            let head = FetalHead::new(&file.head).with_context(|| {
-                format!("{}: the [head] diameters cannot be built", file.describe())
-            })?;
+            let head = file.head()?;
             head_meshes(&head, HEAD_OPACITY_ALONE)
         }
         RenderPart::Fetus => {
@@ -105,12 +103,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<Status> {
         RenderPart::Floor => {
             let file = AnatomyFile::load(args.file.as_deref())?;
             let pelvis = file.pelvis()?;
-            let floor = pelvic_floor(&pelvis, &file.floor).with_context(|| {
-                format!(
-                    "{}: the [floor] cannot be built for this pelvis",
-                    file.describe()
-                )
-            })?;
+            let floor = file.floor(&pelvis)?;
             floor_meshes(&pelvis, &floor)
         }
         RenderPart::Scene => {
