@@ -113,6 +113,12 @@ fn tled(args: &TledBenchArgs) -> anyhow::Result<Status> {
     if args.threads == Some(0) {
         bail!("--threads must be at least 1");
     }
+    if args.steps == Some(0) {
+        bail!("--steps must be at least 1: a rate needs timed steps");
+    }
+    if let Some(peak) = args.peak_gbs.filter(|p| !(p.is_finite() && *p > 0.0)) {
+        bail!("--peak-gbs {peak}: the device's peak memory bandwidth, a positive number of GB/s (e.g. 3350 for an H100)");
+    }
     let kind = match args.element {
         ElementArg::H8 => ElementKind::H8,
         ElementArg::T4 => ElementKind::T4,

@@ -56,9 +56,10 @@ pub fn ctrl_c_flag() -> std::sync::Arc<std::sync::atomic::AtomicBool> {
 /// The threads of a command that runs several labours at once: `jobs` of
 /// them, by default one per core; also says how many.
 pub fn labour_pool(jobs: Option<usize>) -> anyhow::Result<(rayon::ThreadPool, usize)> {
-    let jobs = jobs
-        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
-        .max(1);
+    if jobs == Some(0) {
+        anyhow::bail!("--jobs must be at least 1");
+    }
+    let jobs = jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(jobs)
         .build()

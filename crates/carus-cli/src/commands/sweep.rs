@@ -59,6 +59,9 @@ pub(super) fn parse_setting(text: &str) -> anyhow::Result<Setting> {
     if key.trim().is_empty() || values.iter().any(String::is_empty) {
         bail!("--set {text}: a key and at least one value, none empty, e.g. --set contact.friction=0.1,0.35");
     }
+    if let Some(twice) = values.iter().enumerate().find_map(|(i, v)| values[..i].contains(v).then_some(v)) {
+        bail!("--set {text}: the value {twice} is given twice; each value runs once");
+    }
     Ok(Setting {
         key: key.trim().to_string(),
         values,
@@ -468,7 +471,7 @@ mod tests {
             parse_setting("expulsion.direction=fetal_spine,[0.0, 0.2,-1.0]").unwrap().values,
             vec!["fetal_spine".to_string(), "[0.0, 0.2,-1.0]".to_string()]
         );
-        for bad in ["expulsion.period_s", "=8", "contact.friction=0.1,", "x="] {
+        for bad in ["expulsion.period_s", "=8", "contact.friction=0.1,", "x=", "contact.friction=0.1,0.1"] {
             assert!(parse_setting(bad).is_err(), "{bad}");
         }
     }
