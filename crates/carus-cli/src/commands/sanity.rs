@@ -66,9 +66,10 @@ pub fn run(args: &SanityArgs) -> anyhow::Result<Status> {
                 .map_err(anyhow::Error::from)
         })
         .collect::<anyhow::Result<Vec<Scenario>>>()?;
+    // The pool is made first: a bad --jobs leaves no out dir behind.
+    let (pool, jobs) = labour_pool(args.jobs)?;
     let out_dir = choose_out_dir(args.output.out.as_deref(), "sanity", args.output.force)?.make()?;
     let stop = ctrl_c_flag();
-    let (pool, jobs) = labour_pool(args.jobs)?;
     if !args.output.quiet {
         eprintln!(
             "running the {} sanity cases, {jobs} at a time, into {}",

@@ -160,6 +160,8 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
                 .map_err(anyhow::Error::from)
         })
         .collect::<anyhow::Result<Vec<Scenario>>>()?;
+    // The pool is made first: a bad --jobs leaves no out dir behind.
+    let (pool, jobs) = labour_pool(args.jobs)?;
     let out_dir = choose_out_dir(
         args.output.out.as_deref(),
         &format!("sweep-{}", base.name),
@@ -167,7 +169,6 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
     )?
     .make()?;
     let stop = ctrl_c_flag();
-    let (pool, jobs) = labour_pool(args.jobs)?;
     if !args.output.quiet {
         eprintln!(
             "sweeping `{}` over {} runs, {jobs} at a time, into {}",
