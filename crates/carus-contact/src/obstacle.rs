@@ -149,8 +149,10 @@ impl BodyContactState {
     /// Number of samples the state is kept for (that of the body's
     /// [`SurfaceSamples`] it was made for): a saved state read back must
     /// match its body.
-    pub fn sample_count(&self) -> usize {
-        self.anchors.len()
+    /// `None` when its per-sample parts disagree in length (an edited save).
+    pub fn sample_count(&self) -> Option<usize> {
+        let n = self.anchors.len();
+        (self.too_deep.len() == n && self.clearance.len() == n).then_some(n)
     }
 }
 

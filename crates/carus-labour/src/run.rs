@@ -126,9 +126,8 @@ fn check_scenario_file_unchanged(out_dir: &Path, scenario: &Scenario, base_dir: 
     }
     Err(LabourError::Checkpoint(format!(
         "{} was changed since the run started, and --resume continues the run as it started (its \
-         checkpoint keeps that scenario); undo the change to resume, or run the changed scenario \
-         from the start: `carus run {} --out NEW_DIR`",
-        path.display(),
+         checkpoint keeps that scenario); undo the change to resume, or make the same change in \
+         the scenario file the run came from and run that from the start with a new --out",
         path.display()
     )))
 }
@@ -924,7 +923,7 @@ mod tests {
         assert_ne!(edited, original);
         std::fs::write(&scenario, edited).unwrap();
         let e = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).expect_err("refused").to_string();
-        assert!(e.contains("was changed since the run started") && e.contains("carus run"), "{e}");
+        assert!(e.contains("was changed since the run started") && e.contains("from the start with a new --out"), "{e}");
         std::fs::write(&scenario, &original).unwrap();
 
         let path = dir.path().join(output::CHECKPOINT_FILE);

@@ -1184,7 +1184,7 @@ impl Scenario {
                 problem: "names the output folder runs/<name>-<n>, so it may not hold /, \\, : or control \
                           characters, nor start with a dot"
                     .into(),
-                hint: "letters, digits, - and _, e.g. \"narrow-inlet\"; --out DIR writes anywhere".into(),
+                hint: "a plain folder name: letters, digits, - and _, e.g. \"narrow-inlet\"".into(),
             });
         }
         Ok(())
@@ -1202,10 +1202,18 @@ fn syntax(path: &Path, text: &str, key: String, error: &toml::de::Error) -> Scen
         .and_then(|s| text.get(s))
         .map(str::trim)
         .filter(|k| message.starts_with("duplicate key") && !k.is_empty() && !k.contains('\n'));
+    let on_header = twice.is_some()
+        && text.lines().nth(line.saturating_sub(1)).is_some_and(|l| l.trim_start().starts_with('['));
     if let Some(k) = twice {
-        message = format!("duplicate key `{k}`: given a second time in its table");
+        message = if on_header {
+            format!("the table `{k}` is given a second time")
+        } else {
+            format!("duplicate key `{k}`: given a second time in its table")
+        };
     }
-    let hint = if twice.is_some() {
+    let hint = if on_header {
+        "put the keys of both into one table".to_string()
+    } else if twice.is_some() {
         "keep one of the two lines".to_string()
     } else if message.starts_with("unknown field") {
         "check the spelling against `carus scenarios show normal`, which lists every key"
@@ -1361,6 +1369,8 @@ mod tests {
         assert!(e.contains("`pelvis.inlet_ap_mm` = 11") && e.contains("not cm"), "{e}");
         let e = parse("name = \"x\"\n[contact]\nfriction = 0.1\nfriction = 0.2\n").unwrap_err().to_string();
         assert!(e.contains("test.toml:4") && e.contains("duplicate key `friction`"), "{e}");
+        let e = parse("name = \"x\"\n[contact]\nfriction = 0.1\n[contact]\n").unwrap_err().to_string();
+        assert!(e.contains("test.toml:4") && e.contains("the table `contact` is given a second time"), "{e}");
         for name in ["../../etc", "a/b", ".hidden"] {
             let e = parse(&format!("name = {name:?}\n")).unwrap_err().to_string();
             assert!(e.contains("`name`") && e.contains("output folder"), "{e}");

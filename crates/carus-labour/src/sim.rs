@@ -214,7 +214,7 @@ impl<'a> Simulation<'a> {
                 && contacts
                     .iter()
                     .enumerate()
-                    .all(|(i, c)| c.sample_count() == scene.fetal_body(i).samples.len())
+                    .all(|(i, c)| c.sample_count() == Some(scene.fetal_body(i).samples.len()))
         };
         let checks = [
             (
@@ -228,7 +228,7 @@ impl<'a> Simulation<'a> {
             (samples_match(&state.bone_contacts), "the contacts with the bone (`state.bone_contacts`)"),
             (
                 match (&scene.head_trunk, &state.head_trunk) {
-                    (Some(pair), Some(c)) => c.sample_count() == pair.trunk_samples.len(),
+                    (Some(pair), Some(c)) => c.sample_count() == Some(pair.trunk_samples.len()),
                     (None, None) => true,
                     _ => false,
                 },

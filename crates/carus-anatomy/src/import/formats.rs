@@ -267,9 +267,6 @@ pub struct NamedPart {
     pub mesh: RawMesh,
 }
 
-/// glTF 2.0 (`.gltf` JSON with embedded or neighbouring buffers, or `.glb`):
-/// every triangle primitive of every mesh reached from the default scene,
-/// each transformed by its node's world transform. Parts keep their names.
 /// Reads and validates a glTF or GLB file. gltf-json 1.4's validation
 /// indexes a primitive's POSITION accessor without a bounds check, so a
 /// file naming a missing accessor would panic there: that one reference is
@@ -301,6 +298,9 @@ fn parse_gltf(path: &Path, bytes: &[u8]) -> Result<gltf::Gltf, ImportError> {
     Ok(gltf::Gltf { document, blob })
 }
 
+/// glTF 2.0 (`.gltf` JSON with embedded or neighbouring buffers, or `.glb`):
+/// every triangle primitive of every mesh reached from the default scene,
+/// each transformed by its node's world transform. Parts keep their names.
 pub fn parse_gltf_parts(path: &Path, bytes: &[u8]) -> Result<Vec<NamedPart>, ImportError> {
     let gltf = parse_gltf(path, bytes)?;
     let mut buffers: Vec<Vec<u8>> = Vec::new();

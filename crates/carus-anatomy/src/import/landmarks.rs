@@ -275,7 +275,8 @@ fn check_size(path: &Path, units: Units, landmarks: &PelvisLandmarks) -> Result<
         format!(
             "sacral_promontory to symphysis_upper (the obstetric conjugate) measures {conjugate_mm:.4} mm \
              with `units = \"{declared}\"`, outside the {least}-{most} mm of any pelvis; check that `units` \
-             is the unit of the mesh and of the landmarks"
+             is the unit of the mesh and of the landmarks (a mesh in another unit must be rescaled to \
+             mm or m), and that the two landmarks lie where their names say"
         ),
     ))
 }

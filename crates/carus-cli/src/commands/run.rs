@@ -27,7 +27,7 @@ pub struct OutputArgs {
     /// Print one JSON object on standard output and nothing else there.
     #[arg(long)]
     pub json: bool,
-    /// Replace what the output folder holds.
+    /// Replace what the output folder holds, if carus wrote it (a run, sweep or sanity folder).
     #[arg(long)]
     pub force: bool,
     /// No progress or notes on standard error.
@@ -290,15 +290,17 @@ impl OutDir {
     /// time, gives way to the next); a given one is cleared only with
     /// `--force`, and refused if it was filled meanwhile.
     pub(super) fn make(self) -> anyhow::Result<PathBuf> {
-        let create = super::create_out_folder;
         match self {
             OutDir::Numbered(name) => {
-                create(Path::new("runs"))?;
+                super::create_out_folder(Path::new("runs"))?;
                 for n in 1.. {
                     let dir = PathBuf::from("runs").join(format!("{name}-{n}"));
                     // create_dir, not create_dir_all: it fails if the folder exists.
                     match std::fs::create_dir(&dir) {
-                        Ok(()) => return Ok(dir),
+                        Ok(()) => {
+                            make_marked(&dir)?;
+                            return Ok(dir);
+                        }
                         Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {}
                         Err(e) => return Err(e).with_context(|| format!("cannot create {}", dir.display())),
                     }
@@ -313,34 +315,51 @@ impl OutDir {
                     check_replaceable(&path)?;
                     std::fs::remove_dir_all(&path).with_context(|| format!("cannot clear {}", path.display()))?;
                 }
-                create(&path)?;
+                make_marked(&path)?;
                 Ok(path)
             }
         }
     }
 }
 
-/// The files by which a folder is known as one that carus wrote: a run
-/// (finished, or stopped with its checkpoint), a sweep or a sanity check.
-const CARUS_OUTPUT_MARKS: [&str; 5] = ["run.json", "checkpoint.json", "sweep.json", "sweep.csv", "sanity.json"];
+/// The mark carus leaves in every out dir it makes, the moment it makes
+/// it: a run cut off before it wrote anything else is still known as ours.
+const OUT_DIR_MARK: &str = ".carus-out";
+
+/// Files that together mark a folder carus wrote before it left
+/// [`OUT_DIR_MARK`]: a run (its scenario with its record or checkpoint) or
+/// a sweep (its two tables). One common file name alone is not enough.
+const EARLIER_OUTPUT_MARKS: [&[&str]; 3] =
+    [&["scenario.toml", "run.json"], &["scenario.toml", "checkpoint.json"], &["sweep.csv", "sweep.json"]];
+
+/// Makes `dir` and marks it as an out dir of carus.
+pub(super) fn make_marked(dir: &Path) -> anyhow::Result<()> {
+    super::create_out_folder(dir)?;
+    let mark = dir.join(OUT_DIR_MARK);
+    std::fs::write(&mark, "written by carus: `--force` may replace this folder\n")
+        .with_context(|| format!("cannot write {}", mark.display()))
+}
 
 /// `--force` replaces a folder that carus wrote, never any other: a
 /// mistyped `--out .` or `--out runs` must not delete a user's files or
 /// the earlier runs beside them.
 fn check_replaceable(dir: &Path) -> anyhow::Result<()> {
     let canonical = dir.canonicalize().with_context(|| format!("{}", dir.display()))?;
-    if std::env::current_dir().is_ok_and(|cwd| cwd.starts_with(&canonical)) {
+    // Both canonical, so that their forms agree (\\?\C:\ on Windows).
+    if std::env::current_dir().and_then(|cwd| cwd.canonicalize()).is_ok_and(|cwd| cwd.starts_with(&canonical)) {
         bail!(
             "{} is the current folder or holds it, and --force does not clear that; choose a new --out",
             dir.display()
         );
     }
-    if !CARUS_OUTPUT_MARKS.iter().any(|mark| dir.join(mark).is_file()) {
+    let marked = dir.join(OUT_DIR_MARK).is_file()
+        || EARLIER_OUTPUT_MARKS.iter().any(|files| files.iter().all(|f| dir.join(f).is_file()));
+    if !marked {
         bail!(
-            "{} holds files that no carus run, sweep or sanity check wrote (it has none of {}), and --force \
-             replaces only such a folder; choose another --out, or empty it yourself",
-            dir.display(),
-            CARUS_OUTPUT_MARKS.join(", ")
+            "{} is not a folder that carus made (it has no {OUT_DIR_MARK}, nor a run's scenario.toml with \
+             its run.json or checkpoint.json, nor a sweep's tables), and --force replaces only such a \
+             folder; choose another --out, or empty it yourself",
+            dir.display()
         );
     }
     Ok(())
@@ -358,7 +377,7 @@ fn holds_files(dir: &Path) -> anyhow::Result<bool> {
 /// as `carus run` would, stopping cleanly when `stop` is set: one run of a
 /// command that runs several (`carus sweep`, `carus sanity`).
 pub(super) fn run_into(scenario: &Scenario, dir: &Path, stop: &Arc<AtomicBool>) -> anyhow::Result<RunRecord> {
-    super::create_out_folder(dir)?;
+    make_marked(dir)?;
     let options = RunOptions {
         stop: Some(stop.clone()),
         stop_at_s: None,
@@ -538,6 +557,7 @@ mod tests {
         let chosen = choose_out_dir(Some(&out), "x", false).unwrap();
         std::fs::create_dir(&out).unwrap();
         std::fs::write(out.join("run.json"), "{}").unwrap();
+        std::fs::write(out.join("scenario.toml"), "").unwrap();
         let e = format!("{:#}", chosen.make().err().unwrap());
         assert!(e.contains("filled by another run meanwhile"), "{e}");
         assert!(out.join("run.json").exists());
@@ -555,7 +575,7 @@ mod tests {
         std::fs::create_dir(&mine).unwrap();
         std::fs::write(mine.join("notes.txt"), "mine").unwrap();
         let e = format!("{:#}", choose_out_dir(Some(&mine), "x", true).err().unwrap());
-        assert!(e.contains("no carus run, sweep or sanity check wrote") && e.contains("run.json"), "{e}");
+        assert!(e.contains("is not a folder that carus made") && e.contains(".carus-out"), "{e}");
         assert!(mine.join("notes.txt").exists());
 
         let runs = dir.path().join("runs");
@@ -564,12 +584,24 @@ mod tests {
         assert!(choose_out_dir(Some(&runs), "x", true).is_err());
         assert!(runs.join("normal-1/run.json").exists());
 
-        for mark in CARUS_OUTPUT_MARKS {
-            let earlier = dir.path().join(format!("earlier-{mark}"));
+        // One common file name alone does not make a folder ours.
+        let lone = dir.path().join("lone");
+        std::fs::create_dir(&lone).unwrap();
+        std::fs::write(lone.join("run.json"), "{}").unwrap();
+        assert!(choose_out_dir(Some(&lone), "x", true).is_err());
+
+        let marks: Vec<&[&str]> = [&[OUT_DIR_MARK][..]].into_iter().chain(EARLIER_OUTPUT_MARKS).collect();
+        for (i, files) in marks.into_iter().enumerate() {
+            let earlier = dir.path().join(format!("earlier-{i}"));
             std::fs::create_dir(&earlier).unwrap();
-            std::fs::write(earlier.join(mark), "{}").unwrap();
+            for f in files {
+                std::fs::write(earlier.join(f), "{}").unwrap();
+            }
+            std::fs::write(earlier.join("frame.vtu"), "").unwrap();
             assert_eq!(choose_out_dir(Some(&earlier), "x", true).unwrap().make().unwrap(), earlier);
-            assert!(!earlier.join(mark).exists(), "{mark}");
+            assert!(!earlier.join("frame.vtu").exists(), "{files:?}");
+            // The folder made is marked, so it can be replaced again.
+            assert!(earlier.join(OUT_DIR_MARK).is_file());
         }
     }
 }
