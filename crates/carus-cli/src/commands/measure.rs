@@ -155,31 +155,30 @@ impl AnatomyFile {
                     .with_context(|| format!("{}: in the [{key}] table (keys and units: docs/ANATOMY.md)", path.display())),
             }
         }
-        // A scenario (it has a `name`) is checked whole, as `carus run`
-        // would; an anatomy file has the three tables only, so that a
-        // misspelt one is not quietly replaced by the defaults.
+        // A scenario (it has a `name`) is read whole, as `carus run` reads
+        // it, and keeps the floor's shape in [floor.mesh]; an anatomy file
+        // has the three tables only, so that a misspelt one is not quietly
+        // replaced by the defaults.
         if table.contains_key("name") {
-            carus_labour::Scenario::from_file(path)?;
-        } else if let Some(unknown) = table.keys().find(|k| !["pelvis", "head", "floor"].contains(&k.as_str())) {
+            let scenario = carus_labour::Scenario::from_file(path)?;
+            return Ok(AnatomyFile {
+                pelvis: scenario.pelvis,
+                head: scenario.head,
+                floor: scenario.floor.mesh,
+                path: Some(path.to_path_buf()),
+            });
+        }
+        if let Some(unknown) = table.keys().find(|k| !["pelvis", "head", "floor"].contains(&k.as_str())) {
             anyhow::bail!(
                 "{}: `{unknown}` is not a table of an anatomy file, which has [pelvis], [head] and [floor] \
                  (docs/ANATOMY.md); a scenario file starts with its `name`",
                 path.display()
             );
         }
-        // A scenario keeps the floor's shape in [floor.mesh], beside the
-        // tissue and coupling keys of its [floor].
-        let floor = if table.contains_key("name") {
-            part::<carus_labour::scenario::FloorSection>(path, &table, "floor")
-                .context("a scenario's [floor] table: keys in docs/SCENARIOS.md")?
-                .mesh
-        } else {
-            part(path, &table, "floor")?
-        };
         Ok(AnatomyFile {
             pelvis: part(path, &table, "pelvis")?,
             head: part(path, &table, "head")?,
-            floor,
+            floor: part(path, &table, "floor")?,
             path: Some(path.to_path_buf()),
         })
     }

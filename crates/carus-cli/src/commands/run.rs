@@ -298,7 +298,7 @@ impl OutDir {
                     // create_dir, not create_dir_all: it fails if the folder exists.
                     match std::fs::create_dir(&dir) {
                         Ok(()) => {
-                            make_marked(&dir)?;
+                            mark(&dir)?;
                             return Ok(dir);
                         }
                         Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {}
@@ -335,6 +335,11 @@ const EARLIER_OUTPUT_MARKS: [&[&str]; 3] =
 /// Makes `dir` and marks it as an out dir of carus.
 pub(super) fn make_marked(dir: &Path) -> anyhow::Result<()> {
     super::create_out_folder(dir)?;
+    mark(dir)
+}
+
+/// Leaves [`OUT_DIR_MARK`] in `dir`, which exists.
+fn mark(dir: &Path) -> anyhow::Result<()> {
     let mark = dir.join(OUT_DIR_MARK);
     std::fs::write(&mark, "written by carus: `--force` may replace this folder\n")
         .with_context(|| format!("cannot write {}", mark.display()))
