@@ -47,6 +47,7 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    quiet_headless_vulkan();
     // The main thread joins the pool as one of its workers: a labour run
     // calls dozens of small parallel passes per millisecond of simulated
     // time, and from a thread outside the pool each would be handed to a
@@ -72,6 +73,16 @@ fn main() -> ExitCode {
             eprintln!("error: {}", error_text(&error));
             ExitCode::from(1)
         }
+    }
+}
+
+/// On a machine without a display (no `XDG_RUNTIME_DIR`), Mesa's
+/// device-select layer, which ranks GPUs by the display they drive, has
+/// nothing to rank by and prints an error for every Vulkan instance; it is
+/// turned off there, before any thread starts, unless the user chose.
+fn quiet_headless_vulkan() {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none() && std::env::var_os("NODEVICE_SELECT").is_none() {
+        std::env::set_var("NODEVICE_SELECT", "1");
     }
 }
 

@@ -14,7 +14,7 @@ use std::sync::{Arc, Mutex};
 use anyhow::{bail, Context};
 use carus_analysis::movements::ROTATION_STATION_MAX_MM;
 use carus_analysis::{Movements, Outcome};
-use carus_labour::{RunRecord, Scenario};
+use carus_labour::{RunRecord, Scenario, Scene, Simulation};
 use rayon::prelude::*;
 use serde_json::json;
 
@@ -160,6 +160,7 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
                 .map_err(anyhow::Error::from)
         })
         .collect::<anyhow::Result<Vec<Scenario>>>()?;
+    check_variants_start(&scenarios, &combinations)?;
     // The pool is made first: a bad --jobs leaves no out dir behind.
     let (pool, jobs) = labour_pool(args.jobs)?;
     let out_dir = choose_out_dir(
@@ -222,6 +223,32 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
     } else {
         Status::Success
     })
+}
+
+/// Builds every variant's anatomy and model before any runs, so one that
+/// cannot start (diameters that make no pelvis, say) is named now rather
+/// than when its turn comes, hours into a long sweep. It stays a row of the
+/// table with its reason; a sweep in which none can start is refused.
+fn check_variants_start(scenarios: &[Scenario], combinations: &[Vec<(String, String)>]) -> anyhow::Result<()> {
+    let failures: Vec<String> = scenarios
+        .iter()
+        .zip(combinations)
+        .enumerate()
+        .filter_map(|(i, (scenario, combination))| {
+            let started = Scene::build(scenario).and_then(|scene| Simulation::new(&scene).map(drop));
+            started.err().map(|e| format!("{}: {e}", folder_name(i, combination)))
+        })
+        .collect();
+    if failures.is_empty() {
+        return Ok(());
+    }
+    if failures.len() == scenarios.len() {
+        bail!("no run of the sweep can start:\n  {}", failures.join("\n  "));
+    }
+    for failure in &failures {
+        eprintln!("warning: {failure}\n  this run will not start; its row in the table gives the reason");
+    }
+    Ok(())
 }
 
 /// Runs one variant into `dir` with its report, as `carus run` would.
@@ -633,5 +660,20 @@ mod tests {
         };
         let e = run(&twice).err().expect("a key given twice is refused").to_string();
         assert!(e.contains("contact.friction is given twice"), "{e}");
+        // Diameters that make no pelvis in every variant: refused before
+        // any out dir, each variant named with its reason.
+        let unbuildable = SweepArgs {
+            settings: vec!["pelvis.inlet_oblique_mm=155,160".into()],
+            output: OutputArgs {
+                out: Some(dir.path().join("unbuildable")),
+                ..twice.output
+            },
+            ..twice
+        };
+        let e = format!("{:#}", run(&unbuildable).err().expect("no variant can start"));
+        assert!(e.contains("no run of the sweep can start"), "{e}");
+        assert!(e.contains("01-pelvis.inlet_oblique_mm=155: ") && e.contains("02-pelvis.inlet_oblique_mm=160: "), "{e}");
+        assert!(e.contains("inlet_oblique_mm"), "{e}");
+        assert!(!dir.path().join("unbuildable").exists());
     }
 }
