@@ -156,6 +156,12 @@ pub enum HistoryError {
     TrunkPoseWithoutGeometry { index: usize },
     #[error("sample {index} has no trunk pose but the history has trunk geometry; record the trunk at every sample or drop `trunk`")]
     MissingTrunkPose { index: usize },
+    #[error("sample {index}: {field} lies {distance_m:.3} m from the pelvis origin, farther than a fetus goes in labour ({FARTHEST_POSITION_M} m); positions are metres in the pelvis frame (CONVENTIONS.md): divide a history written in millimetres by 1000")]
+    TooFar {
+        index: usize,
+        field: &'static str,
+        distance_m: f64,
+    },
     #[error("head geometry: {problem}")]
     BadHead { problem: String },
     #[error("trunk geometry: {problem}")]
@@ -163,6 +169,18 @@ pub enum HistoryError {
     #[error("pose history JSON: {0}")]
     Json(String),
 }
+
+/// Farthest a recorded position may lie from its frame's origin, metres: a
+/// fetus in labour moves a few tenths of a metre through the pelvis (one
+/// born and left to drift for a minute, a metre or two) and a skull point
+/// lies a decimetre from the head's centre, so a figure past this is a
+/// length written in millimetres, not metres.
+pub const FARTHEST_POSITION_M: f64 = 10.0;
+
+/// Biparietal diameters a head can have, millimetres: below it the figure
+/// is in centimetres or metres (a term head's is about 95 mm,
+/// REFERENCE_DATA.md).
+const BIPARIETAL_MM: std::ops::RangeInclusive<f64> = 10.0..=1000.0;
 
 /// Tolerance on unit lengths and orthogonality of given directions: loose
 /// enough for values written to JSON with a dozen digits.
@@ -187,9 +205,9 @@ impl HeadGeometry {
         if !self.centre_m.is_finite() {
             return Err(bad("centre_m is not finite".into()));
         }
-        if !(self.biparietal_mm.is_finite() && self.biparietal_mm > 0.0) {
+        if !(self.biparietal_mm.is_finite() && BIPARIETAL_MM.contains(&self.biparietal_mm)) {
             return Err(bad(format!(
-                "biparietal_mm must be positive, got {}",
+                "biparietal_mm = {} is not a head's biparietal diameter in millimetres (a term head's is about 95)",
                 self.biparietal_mm
             )));
         }
@@ -200,6 +218,13 @@ impl HeadGeometry {
         }
         if let Some(i) = self.skull_points_m.iter().position(|p| !p.is_finite()) {
             return Err(bad(format!("skull point {i} is not finite")));
+        }
+        let far = |p: &DVec3| (*p - self.centre_m).length() > FARTHEST_POSITION_M;
+        if let Some(i) = self.skull_points_m.iter().position(far) {
+            return Err(bad(format!(
+                "skull point {i} lies {:.3} m from centre_m; skull points are metres in the head's frame: divide millimetres by 1000",
+                (self.skull_points_m[i] - self.centre_m).length()
+            )));
         }
         Ok(())
     }
@@ -286,6 +311,13 @@ impl PoseHistory {
             ];
             if let Some((field, _)) = finite.iter().find(|(_, ok)| !ok) {
                 return Err(HistoryError::NotFinite { index, field });
+            }
+            let positions = [("head.position_m", Some(s.head.position_m)), ("trunk.position_m", s.trunk.map(|t| t.position_m))];
+            for (field, position) in positions {
+                let distance_m = position.map_or(0.0, DVec3::length);
+                if distance_m > FARTHEST_POSITION_M {
+                    return Err(HistoryError::TooFar { index, field, distance_m });
+                }
             }
             if index > 0 {
                 let previous_s = self.samples[index - 1].time_s;

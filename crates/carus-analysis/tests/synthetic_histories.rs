@@ -291,6 +291,36 @@ fn bad_histories_are_refused_with_the_sample_named() {
     assert!(PoseHistory::from_json_str("{\"head\": 1}").is_err());
 }
 
+/// A history written in millimetres is refused with the fix, not read as
+/// a fetus metres away from the pelvis.
+#[test]
+fn lengths_in_millimetres_are_refused_with_the_fix() {
+    let (history, _) = textbook();
+    let mut h = history.clone();
+    h.samples[4].head.position_m *= 1000.0;
+    let err = detect(&h).unwrap_err().to_string();
+    assert!(err.contains("sample 4") && err.contains("head.position_m") && err.contains("millimetres"), "{err}");
+    let mut h = history.clone();
+    for s in &mut h.samples {
+        let trunk = s.trunk.as_mut().unwrap();
+        trunk.position_m *= 1000.0;
+    }
+    let err = detect(&h).unwrap_err().to_string();
+    assert!(err.contains("sample 0") && err.contains("trunk.position_m"), "{err}");
+    let mut h = history.clone();
+    for p in &mut h.head.skull_points_m {
+        *p *= 1000.0;
+    }
+    let err = detect(&h).unwrap_err().to_string();
+    assert!(err.contains("skull point") && err.contains("millimetres"), "{err}");
+    let mut h = history.clone();
+    h.head.biparietal_mm = 0.095;
+    let err = detect(&h).unwrap_err().to_string();
+    assert!(err.contains("biparietal_mm = 0.095"), "{err}");
+    // Every run's own history lies well inside the bound.
+    assert!(detect(&history).is_ok());
+}
+
 /// The textbook labour held with the head centre at `hold_mm` sigma for
 /// four contractions, pressing on `site`.
 fn held(hold_mm: f64, site: carus_analysis::ContactSite) -> DetectorReport {
