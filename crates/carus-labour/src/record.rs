@@ -5,7 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::loads::LoadSample;
 use crate::scenario::Scenario;
-use crate::sim::FloorSample;
+use crate::sim::{FloorSample, StageTimes};
 
 /// The headline figures of a run.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -16,6 +16,13 @@ pub struct RunSummary {
     pub simulated_s: f64,
     /// Wall-clock time of this invocation, s (a resumed run counts its part).
     pub wall_s: f64,
+    /// Of it, each stage of the rigid steps (`carus bench labour`).
+    #[serde(default)]
+    pub stage_wall_s: StageTimes,
+    /// Of it, writing frames, checkpoints, the pose history and run.json,
+    /// up to the summary (the report comes after).
+    #[serde(default)]
+    pub output_wall_s: f64,
     /// Whether the run reached its end (false: stopped, resumable, or failed).
     pub completed: bool,
     /// Why the run ended early, when the physics failed (for example a floor

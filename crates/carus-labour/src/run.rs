@@ -172,13 +172,21 @@ fn drive(
     let frame_every = ((s.output.vtu_every_s / dt).round() as u64).max(1);
     let stop_step = options.stop_at_s.map(|t| (t / dt).round() as u64);
     let frames_dir = out_dir.join(output::FRAMES_DIR);
+    // Wall time spent writing frames, checkpoints and the final files.
+    let mut output_s = 0.0;
+    let mut timed = |write: &mut dyn FnMut() -> Result<(), LabourError>| {
+        let t = Instant::now();
+        let result = write();
+        output_s += t.elapsed().as_secs_f64();
+        result
+    };
     if s.output.vtu {
         std::fs::create_dir_all(&frames_dir).map_err(|e| LabourError::Output {
             path: frames_dir.clone(),
             message: e.to_string(),
         })?;
         if sim.state.step == 0 && frame_times.is_empty() {
-            write_frame(&sim, out_dir, &mut frame_times)?;
+            timed(&mut || write_frame(&sim, out_dir, &mut frame_times))?;
         }
     }
     let mut completed = true;
@@ -201,10 +209,10 @@ fn drive(
         }
         let k = sim.state.step;
         if s.output.vtu && k % frame_every == 0 {
-            write_frame(&sim, out_dir, &mut frame_times)?;
+            timed(&mut || write_frame(&sim, out_dir, &mut frame_times))?;
         }
         if k % checkpoint_every == 0 {
-            save_checkpoint(&mut sim, out_dir, &frame_times)?;
+            timed(&mut || save_checkpoint(&mut sim, out_dir, &frame_times))?;
         }
         if k % POLL_STEPS == 0 {
             observer.progress(sim.time_s(), s.numerics.end_time_s);
@@ -214,8 +222,14 @@ fn drive(
         }
     }
     observer.progress(sim.time_s(), s.numerics.end_time_s);
-    save_checkpoint(&mut sim, out_dir, &frame_times)?;
-    finish(&mut sim, out_dir, &frame_times, completed, failure, started)
+    timed(&mut || save_checkpoint(&mut sim, out_dir, &frame_times))?;
+    finish(&mut sim, out_dir, &frame_times, completed, failure, Timing { started, output_s })
+}
+
+/// When a run began, and how long it has spent writing so far.
+struct Timing {
+    started: Instant,
+    output_s: f64,
 }
 
 /// The trunk's centre (or, without a trunk, the head's) is well past the outlet.
@@ -349,8 +363,9 @@ fn finish(
     frame_times: &[f64],
     completed: bool,
     failure: Option<String>,
-    started: Instant,
+    timing: Timing,
 ) -> Result<RunRecord, LabourError> {
+    let writing = Instant::now();
     let scene = sim.scene;
     let history = history(sim);
     // A run stopped before its second sample has nothing to detect yet.
@@ -403,7 +418,9 @@ fn finish(
             |r| r.outcome.clone(),
         ),
         simulated_s: sim.time_s(),
-        wall_s: started.elapsed().as_secs_f64(),
+        wall_s: timing.started.elapsed().as_secs_f64(),
+        stage_wall_s: sim.stage_times,
+        output_wall_s: timing.output_s + writing.elapsed().as_secs_f64(),
         completed,
         failure,
         rigid_steps: sim.state.step,

@@ -78,11 +78,75 @@ pub struct SimState {
     pub loads: Vec<LoadSample>,
 }
 
+/// Wall time each stage of the rigid step took, seconds, summed over the
+/// steps this simulation object took (a resumed run counts its own part):
+/// what `carus bench labour` prints. Never read back by the physics, so
+/// timing leaves the run bit for bit the same.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct StageTimes {
+    /// The expulsion and the contacts with the bony pelvis (broad and narrow phase, friction).
+    pub bone_contacts_s: f64,
+    /// The trunk against the head (chin on chest).
+    pub head_trunk_s: f64,
+    /// The neck and spine springs, and the floor's reaction added.
+    pub joints_s: f64,
+    /// Passive resistance and the rigid bodies' integration.
+    pub integration_s: f64,
+    /// Which floor nodes the bone and the fetus hold, and where.
+    pub floor_contact_s: f64,
+    /// The floor's TLED sub-steps and its reaction on the fetus.
+    pub floor_tled_s: f64,
+    /// Sorting the forces by site and recording the pose and load samples.
+    pub recording_s: f64,
+}
+
+impl StageTimes {
+    pub fn total_s(&self) -> f64 {
+        self.bone_contacts_s
+            + self.head_trunk_s
+            + self.joints_s
+            + self.integration_s
+            + self.floor_contact_s
+            + self.floor_tled_s
+            + self.recording_s
+    }
+
+    /// The stages by name, in step order.
+    pub fn named(&self) -> [(&'static str, f64); 7] {
+        [
+            ("bone_contacts", self.bone_contacts_s),
+            ("head_trunk", self.head_trunk_s),
+            ("joints", self.joints_s),
+            ("integration", self.integration_s),
+            ("floor_contact", self.floor_contact_s),
+            ("floor_tled", self.floor_tled_s),
+            ("recording", self.recording_s),
+        ]
+    }
+}
+
+/// A stopwatch that charges the time since its last lap to a stage.
+struct Lap(std::time::Instant);
+
+impl Lap {
+    fn start() -> Self {
+        Lap(std::time::Instant::now())
+    }
+
+    fn charge(&mut self, stage: &mut f64) {
+        let now = std::time::Instant::now();
+        *stage += (now - self.0).as_secs_f64();
+        self.0 = now;
+    }
+}
+
 /// The running simulation: the scene, the state, and the live TLED solver
 /// (the state keeps its snapshot only at checkpoints).
 pub struct Simulation<'a> {
     pub scene: &'a Scene,
     pub state: SimState,
+    /// Where this object's steps spent their time.
+    pub stage_times: StageTimes,
     solver: Option<TledSolver>,
     expulsion: Expulsion,
     dt: f64,
@@ -267,6 +331,7 @@ impl<'a> Simulation<'a> {
         Ok(Simulation {
             scene,
             state,
+            stage_times: StageTimes::default(),
             solver,
             expulsion: Expulsion::new(&scene.scenario.expulsion),
             dt,
@@ -323,6 +388,7 @@ impl<'a> Simulation<'a> {
 
     /// One rigid step with its floor sub-steps.
     pub fn step(&mut self) -> Result<(), LabourError> {
+        let mut lap = Lap::start();
         let scene = self.scene;
         let t = self.time_s();
         let n = scene.bodies.len();
@@ -366,6 +432,7 @@ impl<'a> Simulation<'a> {
             }
             reports.push(report);
         }
+        lap.charge(&mut self.stage_times.bone_contacts_s);
 
         // The head against the trunk below its thoracic inlet (chin on chest).
         let mut head_trunk = Wrench::default();
@@ -381,6 +448,7 @@ impl<'a> Simulation<'a> {
             wrenches[HEAD] += r.on_obstacle;
             head_trunk = r.on_obstacle;
         }
+        lap.charge(&mut self.stage_times.head_trunk_s);
 
         // The neck, and the spine when it bends.
         let mut joint = |j: &Neck| {
@@ -396,6 +464,7 @@ impl<'a> Simulation<'a> {
         for (w, f) in wrenches.iter_mut().zip(&self.state.floor_wrench) {
             *w += *f;
         }
+        lap.charge(&mut self.stage_times.joints_s);
 
         let mut forces = self.classify(expulsion, &reports);
         forces.spine = spine_angles;
@@ -403,6 +472,7 @@ impl<'a> Simulation<'a> {
         if (self.state.step + 1) % self.sample_every == 0 {
             self.site_loads(&mut forces, &reports, neck_load.as_ref(), pivot);
         }
+        lap.charge(&mut self.stage_times.recording_s);
 
         // Passive resistance of the surroundings, implicit so that it is
         // stable at any step (it only damps).
@@ -419,11 +489,14 @@ impl<'a> Simulation<'a> {
                 off * 1e3
             )));
         }
-        self.couple_floor()?;
+        lap.charge(&mut self.stage_times.integration_s);
+        self.couple_floor(&mut lap)?;
+        lap.charge(&mut self.stage_times.floor_tled_s);
         self.state.step += 1;
         if self.state.step % self.sample_every == 0 {
             self.record(forces);
         }
+        lap.charge(&mut self.stage_times.recording_s);
         Ok(())
     }
 
@@ -476,7 +549,7 @@ impl<'a> Simulation<'a> {
     /// The floor stage: hold the tissue nodes the fetus has entered on its
     /// surface (partial Dirichlet-Neumann, Lapeer et al. 2019), sub-step the
     /// tissue over the rigid step, and read back its reaction.
-    fn couple_floor(&mut self) -> Result<(), LabourError> {
+    fn couple_floor(&mut self, lap: &mut Lap) -> Result<(), LabourError> {
         let (Some(solver), Some(floor_state), Some(floor)) = (
             self.solver.as_mut(),
             self.state.floor.as_mut(),
@@ -541,6 +614,7 @@ impl<'a> Simulation<'a> {
                 hold(contact, &body.collider, &poses.pose(b), &mut prescribed)
             })
             .collect::<Result<Vec<_>, _>>()?;
+        lap.charge(&mut self.stage_times.floor_contact_s);
         for _ in 0..self.substeps {
             if let Err(e) = solver.step() {
                 let names: Vec<String> =

@@ -5,6 +5,11 @@
 //!
 //! The cube: edge 0.1 m, n^3 H8 or 6 n^3 T4, the V3 tissue, x = 0 fixed,
 //! x = L pulled 0.03 m over 1 s (VALIDATION.md V3), dt the critical step.
+//!
+//! `carus bench labour [NAME|FILE]`: a whole labour run, as `carus run`
+//! makes it (outputs and report included, into a folder removed after),
+//! with the wall time of each stage of the rigid step, against issue 4's
+//! target for the normal scenario.
 
 use std::time::Instant;
 
@@ -13,15 +18,32 @@ use carus_fem::gpu::{bench_tled, AdapterChoice, DeviceError, GpuDevice, GpuError
 use carus_fem::validation::cube::{baseline_solver, CubeElement, CubeSetup, CubeVariant, RAMP_S};
 use carus_fem::validation::tissue_model;
 use carus_fem::{ElementKind, LoadShape, Precision, StepControl, TledSolver};
+use carus_labour::StageTimes;
 use serde::Serialize;
 
-use super::{print_json, Status};
+use super::run::{load, run_into};
+use super::{ctrl_c_flag, print_json, Status};
 
 #[derive(clap::Subcommand)]
 pub enum BenchCommand {
     /// Time the TLED solver (and the plain baseline) on the V3 cube.
     Tled(TledBenchArgs),
+    /// Time a whole labour run, stage by stage (default: the normal scenario).
+    Labour(LabourBenchArgs),
 }
+
+#[derive(clap::Args)]
+pub struct LabourBenchArgs {
+    /// A built-in scenario name (`carus scenarios`) or a scenario file (TOML). Default: normal.
+    pub scenario: Option<String>,
+    /// Print one JSON object on standard output and nothing else there.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Issue 4: the normal scenario runs to its end in under 2 minutes on a
+/// 2-core machine like CI's.
+const NORMAL_TARGET_WALL_S: f64 = 120.0;
 
 #[derive(clap::Args)]
 pub struct TledBenchArgs {
@@ -100,10 +122,126 @@ struct CpuBenchReport {
     model_bytes_per_element: f64,
 }
 
+/// The figures of one labour bench run.
+#[derive(Serialize)]
+struct LabourBenchReport {
+    scenario: String,
+    simulated_s: f64,
+    /// The whole run as `carus run` spends it: build, steps, outputs, report.
+    wall_s: f64,
+    simulated_s_per_wall_s: f64,
+    threads: usize,
+    completed: bool,
+    failure: Option<String>,
+    delivered: bool,
+    rigid_steps: u64,
+    rigid_dt_s: f64,
+    us_per_rigid_step: f64,
+    floor_elements: usize,
+    floor_substeps_per_step: u32,
+    /// Wall time of each stage of the rigid steps, in step order.
+    stages_wall_s: StageTimes,
+    /// Before the first step: building the scene, writing the parts that
+    /// do not move (pelvis, ligaments, fetal bodies, scenario.toml).
+    setup_wall_s: f64,
+    /// Writing frames, checkpoints, the history and the record.
+    output_wall_s: f64,
+    /// report.html with its pictures.
+    report_wall_s: f64,
+    peak_rss_bytes: Option<u64>,
+    /// Issue 4's figure for the built-in normal scenario; null for any other.
+    target_wall_s: Option<f64>,
+}
+
 pub fn run(cmd: &BenchCommand) -> anyhow::Result<Status> {
     match cmd {
         BenchCommand::Tled(args) => tled(args),
+        BenchCommand::Labour(args) => labour(args),
     }
+}
+
+fn labour(args: &LabourBenchArgs) -> anyhow::Result<Status> {
+    let report = labour_bench(args.scenario.as_deref())?;
+    if args.json {
+        print_json(&report)?;
+        return Ok(Status::Success);
+    }
+    let ending = match (&report.failure, report.completed, report.delivered) {
+        (Some(failure), _, _) => format!("ended early: {failure}"),
+        (None, false, _) => "stopped before its end".to_string(),
+        (None, true, true) => "delivered".to_string(),
+        (None, true, false) => "not delivered".to_string(),
+    };
+    println!(
+        "labour `{}`: {:.2} s simulated in {:.1} s wall ({:.2} simulated s per wall s), {} threads; {ending}",
+        report.scenario, report.simulated_s, report.wall_s, report.simulated_s_per_wall_s, report.threads
+    );
+    println!(
+        "  {} rigid steps of {} ms, {:.0} us each; floor {} elements, {} TLED sub-steps per rigid step",
+        report.rigid_steps,
+        report.rigid_dt_s * 1e3,
+        report.us_per_rigid_step,
+        report.floor_elements,
+        report.floor_substeps_per_step
+    );
+    let share = |s: f64| 100.0 * s / report.wall_s;
+    for (name, s) in report.stages_wall_s.named() {
+        println!("  {name:<14} {s:>7.2} s  {:>4.1} %", share(s));
+    }
+    for (name, s) in [
+        ("setup", report.setup_wall_s),
+        ("output", report.output_wall_s),
+        ("report", report.report_wall_s),
+    ] {
+        println!("  {name:<14} {s:>7.2} s  {:>4.1} %", share(s));
+    }
+    if let Some(rss) = report.peak_rss_bytes {
+        println!("  peak RSS {:.0} MiB", rss as f64 / 1048576.0);
+    }
+    if let Some(target) = report.target_wall_s {
+        let verdict = if report.wall_s < target { "met" } else { "NOT met" };
+        println!("  issue 4's target, the normal scenario to its end in under {target:.0} s on 2 cores: {verdict} on this machine");
+    }
+    Ok(Status::Success)
+}
+
+/// Runs the scenario as `carus run` would, into a folder removed after,
+/// and reads the figures off its record.
+fn labour_bench(scenario: Option<&str>) -> anyhow::Result<LabourBenchReport> {
+    let scenario = load(scenario)?;
+    // The target is for the built-in scenario as it is, not an edit of it.
+    let is_builtin_normal = scenario.to_toml()? == carus_labour::Scenario::builtin("normal")?.to_toml()?;
+    let folder = tempfile::tempdir().context("cannot make a folder for the bench's run")?;
+    let dir = folder.path().join(&scenario.name);
+    let stop = ctrl_c_flag();
+    let started = Instant::now();
+    let record = run_into(&scenario, &dir, &stop)?;
+    let wall_s = started.elapsed().as_secs_f64();
+    let summary = &record.summary;
+    let stages = summary.stage_wall_s;
+    let stepping_s = stages.total_s();
+    Ok(LabourBenchReport {
+        scenario: scenario.name.clone(),
+        simulated_s: summary.simulated_s,
+        wall_s,
+        simulated_s_per_wall_s: summary.simulated_s / wall_s,
+        threads: rayon::current_num_threads(),
+        completed: summary.completed,
+        failure: summary.failure.clone(),
+        delivered: summary.outcome.delivered,
+        rigid_steps: summary.rigid_steps,
+        rigid_dt_s: summary.rigid_dt_s,
+        us_per_rigid_step: stepping_s * 1e6 / summary.rigid_steps.max(1) as f64,
+        floor_elements: summary.floor_elements,
+        floor_substeps_per_step: summary.floor_substeps_per_step,
+        stages_wall_s: stages,
+        // The run's own wall time is its setup, its steps and its writing.
+        setup_wall_s: (summary.wall_s - stepping_s - summary.output_wall_s).max(0.0),
+        output_wall_s: summary.output_wall_s,
+        report_wall_s: (wall_s - summary.wall_s).max(0.0),
+        peak_rss_bytes: peak_rss_bytes(),
+        target_wall_s: is_builtin_normal.then_some(NORMAL_TARGET_WALL_S),
+    })
 }
 
 fn tled(args: &TledBenchArgs) -> anyhow::Result<Status> {
@@ -271,4 +409,31 @@ fn peak_rss_bytes() -> Option<u64> {
     let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
     let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kib * 1024)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The labour bench runs the scenario as `carus run` would and accounts
+    /// for its wall time stage by stage; the target applies to `normal` only.
+    #[test]
+    fn the_labour_bench_accounts_for_the_runs_wall_time() {
+        let s = crate::commands::coarse_normal(0.3);
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("coarse.toml");
+        std::fs::write(&file, s.to_toml().unwrap()).unwrap();
+        let report = labour_bench(Some(file.to_str().unwrap())).unwrap();
+        assert!(report.completed && report.failure.is_none());
+        assert_eq!(report.simulated_s, 0.3);
+        assert_eq!(report.rigid_steps, (0.3 / s.numerics.rigid_dt_s).round() as u64);
+        let stages = report.stages_wall_s;
+        assert!(stages.named().iter().all(|(_, t)| *t >= 0.0));
+        assert!(stages.bone_contacts_s > 0.0 && stages.floor_tled_s > 0.0);
+        let accounted = stages.total_s() + report.setup_wall_s + report.output_wall_s + report.report_wall_s;
+        assert!((accounted - report.wall_s).abs() < 0.05 * report.wall_s + 1e-3, "{accounted} of {}", report.wall_s);
+        assert!((report.us_per_rigid_step - stages.total_s() * 1e6 / report.rigid_steps as f64).abs() < 1e-6);
+        assert_eq!(report.target_wall_s, None, "the coarse scenario is not the built-in `normal`");
+        assert!(report.floor_elements > 0 && report.floor_substeps_per_step > 0);
+    }
 }
