@@ -106,6 +106,24 @@ impl Mesh {
             .chunks_exact(self.kind.nodes_per_element())
     }
 
+    /// Each node's mean of a per-element value over the elements that hold
+    /// it (a node in no element gets 0): element results drawn smoothly on
+    /// a surface, as ParaView's Cell Data to Point Data does.
+    pub fn nodal_mean(&self, element_values: &[f64]) -> Vec<f64> {
+        let mut sum = vec![0.0; self.node_count()];
+        let mut count = vec![0u32; self.node_count()];
+        for (nodes, &value) in self.elements().zip(element_values) {
+            for &n in nodes {
+                sum[n as usize] += value;
+                count[n as usize] += 1;
+            }
+        }
+        sum.iter()
+            .zip(&count)
+            .map(|(&s, &c)| if c == 0 { 0.0 } else { s / f64::from(c) })
+            .collect()
+    }
+
     /// The outside of the part of the mesh made of `elements`: the faces only
     /// one of them has, as triangles wound outwards (H8 quads split in two).
     pub fn boundary_triangles(&self, elements: &[u32]) -> Vec<[u32; 3]> {
@@ -187,6 +205,18 @@ mod tests {
             ]
         };
         Mesh::new(ElementKind::H8, nodes, [hex(0), hex(1)].concat())
+    }
+
+    #[test]
+    fn a_nodes_mean_is_over_the_elements_that_hold_it() {
+        let mesh = two_hexes();
+        let mean = mesh.nodal_mean(&[1.0, 3.0]);
+        // Node x + 3 y + 6 z: x = 0 only in the first hex, x = 2 only in
+        // the second, x = 1 on the face they share.
+        for (node, expected) in [(0, 1.0), (1, 2.0), (2, 3.0), (3, 1.0), (4, 2.0), (11, 3.0)] {
+            assert_eq!(mean[node], expected, "node {node}");
+        }
+        assert_eq!(mesh.nodal_mean(&[5.0, 5.0]), vec![5.0; mesh.node_count()]);
     }
 
     #[test]

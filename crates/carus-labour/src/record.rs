@@ -19,8 +19,9 @@ pub struct RunSummary {
     /// Of it, each stage of the rigid steps (`carus bench labour`).
     #[serde(default)]
     pub stage_wall_s: StageTimes,
-    /// Of it, writing frames, checkpoints, the pose history and run.json,
-    /// up to the summary (the report comes after).
+    /// Of it, writing frames and checkpoints, keeping the floor's
+    /// snapshots, detecting the movements and writing the pose history, up
+    /// to the summary (run.json and the report come after).
     #[serde(default)]
     pub output_wall_s: f64,
     /// Whether the run reached its end (false: stopped, resumable, or failed).
@@ -51,6 +52,21 @@ pub struct KeyMoment {
     pub trunk: Option<RigidPose>,
     /// Index of the nearest VTU frame (floor_NNNN.vtu, head_NNNN.vtu), if written.
     pub frame: Option<usize>,
+    /// The pelvic floor's state nearest the moment, for its picture.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub floor: Option<FloorAtMoment>,
+}
+
+/// The pelvic floor at (or nearest) a key moment.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FloorAtMoment {
+    /// When this state is from: within a floor snapshot's interval of the
+    /// moment, or for a resumed run's earlier moments its nearest VTU frame.
+    pub time_s: f64,
+    /// Node displacements from rest, pelvis frame, m.
+    pub displacement_m: Vec<[f64; 3]>,
+    /// Largest principal stretch of each element.
+    pub element_stretch: Vec<f64>,
 }
 
 /// Everything a report needs (run.json in the out dir).
@@ -138,6 +154,7 @@ pub fn key_moments(
                 head: sample.head,
                 trunk: sample.trunk,
                 frame,
+                floor: None,
             })
         })
         .collect()

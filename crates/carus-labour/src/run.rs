@@ -12,7 +12,7 @@ use carus_analysis::{detect, Outcome, PoseHistory};
 use carus_contact::RigidPose;
 
 use crate::output::{self, Checkpoint};
-use crate::record::{key_moments, Files, RunRecord, RunSummary};
+use crate::record::{key_moments, FloorAtMoment, Files, KeyMoment, RunRecord, RunSummary};
 use crate::scenario::Scenario;
 use crate::scene::{Scene, HEAD, LOWER_TRUNK, TRUNK};
 use crate::sim::Simulation;
@@ -42,6 +42,67 @@ impl Observer for SilentObserver {
 
 /// Steps between stop-flag checks and progress calls.
 const POLL_STEPS: u64 = 200;
+
+/// How often the driver keeps the floor's state in memory for the key
+/// moments' pictures, s. The moments are known only once the run is
+/// detected; the VTU frames, a second apart by default, would draw the
+/// floor up to half a second from the head it holds.
+const FLOOR_SNAPSHOT_EVERY_S: f64 = 0.05;
+
+/// The floor's state at one instant, in single precision (for a picture).
+struct FloorSnapshot {
+    time_s: f64,
+    displacement_m: Vec<[f32; 3]>,
+    element_stretch: Vec<f32>,
+}
+
+impl FloorSnapshot {
+    fn take(sim: &Simulation<'_>) -> Option<Self> {
+        let solver = sim.solver()?;
+        Some(FloorSnapshot {
+            time_s: sim.time_s(),
+            displacement_m: solver.displacements().iter().map(|d| d.map(|x| x as f32)).collect(),
+            element_stretch: solver.element_fields().max_principal_stretch.iter().map(|&s| s as f32).collect(),
+        })
+    }
+
+    fn at_moment(&self) -> FloorAtMoment {
+        FloorAtMoment {
+            time_s: self.time_s,
+            displacement_m: self.displacement_m.iter().map(|d| d.map(f64::from)).collect(),
+            element_stretch: self.element_stretch.iter().map(|&s| f64::from(s)).collect(),
+        }
+    }
+}
+
+/// Gives each key moment the floor's state nearest it: the snapshot kept
+/// in memory, or where the run was resumed after the moment (its snapshots
+/// from before are gone) the moment's VTU frame, if that is nearer.
+fn attach_floor(moments: &mut [KeyMoment], snapshots: &[FloorSnapshot], out_dir: &Path, frame_times: &[f64]) {
+    for moment in moments {
+        let off = |t: f64| (t - moment.time_s).abs();
+        let nearest = snapshots.iter().min_by(|a, b| off(a.time_s).total_cmp(&off(b.time_s)));
+        let frame = moment
+            .frame
+            .filter(|_| nearest.is_none_or(|s| off(s.time_s) > FLOOR_SNAPSHOT_EVERY_S))
+            .filter(|&k| nearest.is_none_or(|s| off(frame_times[k]) < off(s.time_s)))
+            .and_then(|k| read_floor_frame(&out_dir.join(output::frame_name("floor", k)), frame_times[k]));
+        moment.floor = frame.or_else(|| nearest.map(FloorSnapshot::at_moment));
+    }
+}
+
+/// A floor VTU frame as the run wrote it; None if it is gone or unreadable
+/// (the picture then uses the nearest snapshot).
+fn read_floor_frame(path: &Path, time_s: f64) -> Option<FloorAtMoment> {
+    let arrays = carus_io::vtk::read_vtk_arrays(path).ok()?;
+    let displacement = arrays.point.get("displacement").filter(|a| a.components == 3)?;
+    let stretch = arrays.cell.get("max_principal_stretch")?;
+    Some(FloorAtMoment {
+        time_s,
+        displacement_m: displacement.values.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+        element_stretch: stretch.values.clone(),
+    })
+}
 
 /// Runs `scenario` from its start, writing into `out_dir` (which must exist).
 pub fn run(
@@ -171,6 +232,8 @@ fn drive(
     let checkpoint_every = ((s.numerics.checkpoint_every_s / dt).round() as u64).max(1);
     let frame_every = ((s.output.vtu_every_s / dt).round() as u64).max(1);
     let stop_step = options.stop_at_s.map(|t| (t / dt).round() as u64);
+    let snapshot_every = ((FLOOR_SNAPSHOT_EVERY_S / dt).round() as u64).max(1);
+    let mut floor_snapshots: Vec<FloorSnapshot> = FloorSnapshot::take(&sim).into_iter().collect();
     let frames_dir = out_dir.join(output::FRAMES_DIR);
     // Wall time spent writing frames, checkpoints and the final files.
     let mut output_s = 0.0;
@@ -208,6 +271,12 @@ fn drive(
             break;
         }
         let k = sim.state.step;
+        if k % snapshot_every == 0 {
+            timed(&mut || {
+                floor_snapshots.extend(FloorSnapshot::take(&sim));
+                Ok(())
+            })?;
+        }
         if s.output.vtu && k % frame_every == 0 {
             timed(&mut || write_frame(&sim, out_dir, &mut frame_times))?;
         }
@@ -223,7 +292,8 @@ fn drive(
     }
     observer.progress(sim.time_s(), s.numerics.end_time_s);
     timed(&mut || save_checkpoint(&mut sim, out_dir, &frame_times))?;
-    finish(&mut sim, out_dir, &frame_times, completed, failure, Timing { started, output_s })
+    let timing = Timing { started, output_s };
+    finish(&mut sim, out_dir, &frame_times, &floor_snapshots, completed, failure, timing)
 }
 
 /// When a run began, and how long it has spent writing so far.
@@ -361,6 +431,7 @@ fn finish(
     sim: &mut Simulation<'_>,
     out_dir: &Path,
     frame_times: &[f64],
+    floor_snapshots: &[FloorSnapshot],
     completed: bool,
     failure: Option<String>,
     timing: Timing,
@@ -433,12 +504,14 @@ fn finish(
         trunk_mass_kg: scene.trunk.as_ref().map(|t| t.mass.mass_kg),
         lower_trunk_mass_kg: scene.lower_trunk.as_ref().map(|t| t.mass.mass_kg),
     };
+    let mut moments = report
+        .as_ref()
+        .map_or_else(Vec::new, |r| key_moments(&history, r, frame_times));
+    attach_floor(&mut moments, floor_snapshots, out_dir, frame_times);
     let record = RunRecord {
         scenario: scene.scenario.clone(),
         summary,
-        key_moments: report
-            .as_ref()
-            .map_or_else(Vec::new, |r| key_moments(&history, r, frame_times)),
+        key_moments: moments,
         history,
         detector: report,
         floor: sim.state.floor_samples.clone(),
@@ -574,6 +647,14 @@ mod tests {
             assert!(report.outcome.delivered, "{:?}", report.outcome);
             for (key, m) in report.movements.by_key() {
                 assert!(m.observed, "{key} not observed: {:?}", report.movements);
+            }
+            // All four key moments, each pictured with the floor as it was
+            // then (no VTU frames in this run: the snapshots alone).
+            assert_eq!(record.key_moments.len(), 4, "{:?}", record.key_moments.iter().map(|m| &m.name).collect::<Vec<_>>());
+            for m in &record.key_moments {
+                let floor = m.floor.as_ref().unwrap_or_else(|| panic!("{} has no floor", m.name));
+                assert!((floor.time_s - m.time_s).abs() <= FLOOR_SNAPSHOT_EVERY_S, "{}", m.name);
+                assert!(floor.element_stretch.iter().all(|&l| l > 0.5 && l.is_finite()), "{}", m.name);
             }
         }
         let [a, b] = runs.each_ref().map(|r| r.detector.as_ref().unwrap().movements.by_key());
@@ -950,6 +1031,54 @@ mod tests {
         assert!(e.contains("cut short or damaged") && e.contains("checkpoint.json"), "{e}");
         std::fs::write(&path, &text).unwrap();
         assert!(resume(dir.path(), &RunOptions::default(), &mut SilentObserver).is_ok());
+    }
+
+    /// A key moment takes the floor snapshot nearest it; where the run was
+    /// resumed after it (no snapshot near), its VTU frame if nearer; with
+    /// that gone, the nearest snapshot all the same.
+    #[test]
+    fn a_key_moment_gets_the_floor_state_nearest_it() {
+        let mesh = carus_fem::Mesh::new(
+            carus_fem::ElementKind::T4,
+            vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            vec![0, 1, 2, 3],
+        );
+        let snapshot = |time_s: f64, stretch: f32| FloorSnapshot {
+            time_s,
+            displacement_m: vec![[0.0; 3]; 4],
+            element_stretch: vec![stretch],
+        };
+        let snapshots = [snapshot(4.0, 1.5), snapshot(4.05, 1.6)];
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::create_dir(dir.path().join(output::FRAMES_DIR)).unwrap();
+        let u = vec![[0.0, 0.0, -0.01]; 4];
+        let frame = carus_io::FrameFields {
+            displacement_m: &u,
+            von_mises_pa: &[0.0],
+            max_principal_stretch: &[2.0],
+            jacobian: &[1.0],
+        };
+        carus_io::write_vtu(&dir.path().join(output::frame_name("floor", 1)), &mesh, &frame).unwrap();
+        let moment = |time_s: f64, frame: Option<usize>| KeyMoment {
+            name: "m".into(),
+            time_s,
+            head: RigidPose::default(),
+            trunk: None,
+            frame,
+            floor: None,
+        };
+        let frame_times = [0.0, 1.0];
+        let mut moments = [moment(4.04, Some(1)), moment(1.1, Some(1)), moment(1.1, None)];
+        attach_floor(&mut moments, &snapshots, dir.path(), &frame_times);
+        let [near, resumed, gone] = moments.map(|m| m.floor.expect("a floor state"));
+        assert_eq!((near.time_s, near.element_stretch[0] as f32), (4.05, 1.6));
+        assert_eq!((resumed.time_s, resumed.element_stretch.as_slice()), (1.0, &[2.0][..]));
+        assert_eq!(resumed.displacement_m, u);
+        assert_eq!(gone.time_s, 4.0);
+        // No floor at all: nothing to picture.
+        let mut bare = [moment(1.0, None)];
+        attach_floor(&mut bare, &[], dir.path(), &frame_times);
+        assert!(bare[0].floor.is_none());
     }
 
     #[test]

@@ -12,6 +12,7 @@ use std::time::Instant;
 
 use anyhow::{bail, Context};
 use carus_analysis::{ArrestStage, Movement, Movements, Outcome, RotationOutsideWindow};
+use carus_labour::record::{FloorAtMoment, KeyMoment};
 use carus_labour::{Observer, RunOptions, RunRecord, Scenario, Scene, Simulation, BUILTINS};
 use serde_json::json;
 
@@ -223,13 +224,40 @@ pub(super) fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result
             head: scene.head.surface.clone(),
             trunk: scene.trunk.as_ref().map(|t| t.surface.clone()),
             lower_trunk: scene.lower_trunk.as_ref().map(|t| t.surface.clone()),
-            floor: None,
+            floor: scene.floor.as_ref().map(|floor| floor_surface(floor, &record.key_moments)),
         }),
     };
     Ok(carus_report::write_report_file(
         &input,
         &out_dir.join("report.html"),
     )?)
+}
+
+/// The floor for the report's pictures: its outer faces, at rest and in
+/// the states the run kept nearest its key moments, coloured by stretch
+/// (each node the mean of its elements' largest principal stretch).
+fn floor_surface(floor: &carus_labour::scene::FloorScene, moments: &[KeyMoment]) -> carus_report::FloorSurface {
+    let every_element: Vec<u32> = (0..floor.mesh.element_count() as u32).collect();
+    let mut states: Vec<&FloorAtMoment> = moments.iter().filter_map(|m| m.floor.as_ref()).collect();
+    states.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
+    states.dedup_by(|a, b| a.time_s == b.time_s);
+    carus_report::FloorSurface {
+        triangles: floor.mesh.boundary_triangles(&every_element),
+        rest_positions_m: floor.reference.clone(),
+        frames: states
+            .into_iter()
+            .map(|state| carus_report::FloorFrame {
+                time_s: state.time_s,
+                positions_m: floor
+                    .reference
+                    .iter()
+                    .zip(&state.displacement_m)
+                    .map(|(rest, u)| *rest + glam::DVec3::from_array(*u))
+                    .collect(),
+                stretch: floor.mesh.nodal_mean(&state.element_stretch),
+            })
+            .collect(),
+    }
 }
 
 /// The built-in scenario `carus run` runs when given none.
