@@ -65,6 +65,23 @@ pub fn write_checkpoint(dir: &Path, checkpoint: &Checkpoint) -> Result<(), Labou
     std::fs::rename(&partial, &path).map_err(|e| output_error(&path, e))
 }
 
+/// When the run in `dir` reached its end, the simulated time it ended at;
+/// None for a run stopped or failed before it (or no readable run.json).
+pub fn run_reached_its_end(dir: &Path) -> Option<f64> {
+    #[derive(serde::Deserialize)]
+    struct Summary {
+        completed: bool,
+        simulated_s: f64,
+    }
+    #[derive(serde::Deserialize)]
+    struct Record {
+        summary: Summary,
+    }
+    let text = std::fs::read_to_string(dir.join(RUN_FILE)).ok()?;
+    let record: Record = serde_json::from_str(&text).ok()?;
+    record.summary.completed.then_some(record.summary.simulated_s)
+}
+
 pub fn read_checkpoint(dir: &Path) -> Result<Checkpoint, LabourError> {
     let path = dir.join(CHECKPOINT_FILE);
     let text = std::fs::read_to_string(&path)

@@ -142,6 +142,14 @@ pub fn resume(
     observer: &mut dyn Observer,
 ) -> Result<RunRecord, LabourError> {
     let started = Instant::now();
+    // Stepping on would rewrite a finished run's record with one leg of it.
+    if let Some(end_s) = output::run_reached_its_end(out_dir) {
+        return Err(LabourError::Checkpoint(format!(
+            "the run reached its end at t = {end_s:.2} s and everything it computed is written;              there is nothing to resume (to run it again, run {}/{} with a new --out)",
+            out_dir.display(),
+            output::SCENARIO_FILE
+        )));
+    }
     let checkpoint = output::read_checkpoint(out_dir)?;
     let scenario = Scenario::parse(
         &out_dir.join(output::CHECKPOINT_FILE),
@@ -288,6 +296,18 @@ fn drive(
         }
         if s.numerics.stop_when_delivered && k % 20 == 0 && delivered(&sim) {
             break;
+        }
+    }
+    // A run that ended (at its end, delivered, or failed) shows its last
+    // state in ParaView; one stopped by the user does not, so that its
+    // resumed series numbers its frames as an uninterrupted run's.
+    let ended = completed || failure.is_some();
+    if s.output.vtu && ended && frame_times.last().is_some_and(|&t| t < sim.time_s()) {
+        if let Err(e) = timed(&mut || write_frame(&sim, out_dir, &mut frame_times)) {
+            match &mut failure {
+                Some(f) => f.push_str(&format!(" (its state then could not be written as a frame: {e})")),
+                None => return Err(e),
+            }
         }
     }
     observer.progress(sim.time_s(), s.numerics.end_time_s);
@@ -1033,6 +1053,27 @@ mod tests {
         assert!(resume(dir.path(), &RunOptions::default(), &mut SilentObserver).is_ok());
     }
 
+    /// A run that reaches its end between two VTU frames adds one at its
+    /// last state; a run stopped there does not (its resumption goes on
+    /// with the series as it was).
+    #[test]
+    fn an_ended_run_has_a_frame_at_its_last_state_and_a_stopped_one_not() {
+        let mut s = coarse(0.3);
+        s.output.vtu = true;
+        s.output.vtu_every_s = 0.2;
+        let (dir, ended) = run_in(&s, &RunOptions::default());
+        assert!(ended.summary.completed);
+        let pvd = std::fs::read_to_string(dir.path().join("floor.pvd")).unwrap();
+        assert_eq!(pvd.matches("<DataSet").count(), 3, "{pvd}");
+        assert!(pvd.contains("timestep=\"3e-1\""), "{pvd}");
+        assert!(dir.path().join(output::frame_name("head", 2)).exists());
+        s.numerics.end_time_s = 1.0;
+        let stop = RunOptions { stop_at_s: Some(0.3), ..RunOptions::default() };
+        let (dir, stopped) = run_in(&s, &stop);
+        assert!(!stopped.summary.completed);
+        assert!(!dir.path().join(output::frame_name("head", 2)).exists());
+    }
+
     /// A key moment takes the floor snapshot nearest it; where the run was
     /// resumed after it (no snapshot near), its VTU frame if nearer; with
     /// that gone, the nearest snapshot all the same.
@@ -1101,6 +1142,11 @@ mod tests {
         assert_eq!(half.summary.simulated_s, 1.0);
         let resumed = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).unwrap();
         assert!(resumed.summary.completed);
+        // A finished run is not resumed again: its record stays as it is.
+        let written = std::fs::read(dir.path().join(output::RUN_FILE)).unwrap();
+        let again = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).unwrap_err().to_string();
+        assert!(again.contains("reached its end") && again.contains("nothing to resume"), "{again}");
+        assert_eq!(std::fs::read(dir.path().join(output::RUN_FILE)).unwrap(), written);
         assert_eq!(resumed.history, whole.history);
         assert_eq!(resumed.loads, whole.loads);
         assert_eq!(resumed.floor, whole.floor);

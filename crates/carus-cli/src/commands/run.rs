@@ -133,7 +133,8 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
     } else {
         print_summary(&record, &out_dir);
     }
-    Ok(if record.summary.failure.is_some() {
+    // A stopped run is not a finished one: `carus run X && next` must not go on.
+    Ok(if record.summary.failure.is_some() || !record.summary.completed {
         Status::Failed
     } else {
         Status::Success
