@@ -20,7 +20,7 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Run a verification case of docs/VALIDATION.md and print PASS/FAIL.
+    /// Run a verification case of docs/VALIDATION.md and print PASS/FAIL (`cube`: the V3 cube's figures, without a verdict; `v3` judges them).
     Validate(commands::validate::ValidateArgs),
     /// Measure speed and print figures.
     #[command(subcommand)]
@@ -125,5 +125,22 @@ mod tests {
         assert_eq!(super::error_text(&e), "[pelvis] import: cannot read x.stl: No such file");
         let e = anyhow::Error::from(missing()).context("scenario my.toml");
         assert_eq!(super::error_text(&e), "scenario my.toml: No such file");
+    }
+
+    /// A malformed `--set` is a bad argument (clap's exit status 2), named
+    /// with the form to write, for sweep and sanity alike.
+    #[test]
+    fn a_malformed_setting_is_a_bad_argument() {
+        use clap::Parser;
+        for args in [
+            &["carus", "sweep", "--set", "contact.friction"][..],
+            &["carus", "sweep", "--set", "contact.friction=0.1,0.1"],
+            &["carus", "sanity", "--set", "contact.friction=0.1,0.2"],
+        ] {
+            let e = super::Cli::try_parse_from(args).err().expect("refused");
+            assert_eq!(e.exit_code(), 2, "{args:?}");
+            assert!(e.to_string().contains("--set"), "{e}");
+        }
+        assert!(super::Cli::try_parse_from(["carus", "sweep", "--set", "contact.friction=0.1,0.2"]).is_ok());
     }
 }

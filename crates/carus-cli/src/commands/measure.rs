@@ -117,7 +117,19 @@ fn print_head(m: &HeadMeasurement, source: String) {
         println!("  {key:<26} {value:8.1}");
     }
     println!();
-    println!("Extents: {}", serde_json::to_string(&m.extents).unwrap_or_default());
+    let e = &m.extents;
+    println!("Extents of the surface");
+    for (what, value) in [
+        ("along x (occiput to forehead)", e.along_o_mm),
+        ("along y (side to side)", e.along_b_mm),
+        ("along z (skull base or chin to top)", e.along_v_mm),
+        ("presenting, deflexed (vertex)", e.presenting_deflexed_mm),
+        ("presenting, well flexed", e.presenting_flexed_mm),
+        ("presenting, brow", e.presenting_brow_mm),
+        ("presenting, face", e.presenting_face_mm),
+    ] {
+        println!("  {what:<36} {value:8.1}");
+    }
     println!();
     println!("Landmarks (x, y, z)");
     for (name, p) in &m.landmarks_mm {

@@ -26,7 +26,7 @@ pub struct SanityArgs {
     /// KEY=VALUE applied to every case, a dotted key as `carus scenarios
     /// show` writes it (e.g. contact.friction=0.35: does the bar hold at
     /// the seed's friction?); repeat for more keys.
-    #[arg(long = "set", value_name = "KEY=VALUE")]
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = one_setting_arg)]
     pub settings: Vec<String>,
     /// Runs at a time; default one per core.
     #[arg(long)]
@@ -47,15 +47,23 @@ struct Judged {
     out_dir: String,
 }
 
+/// A key and its one value: every case runs with it.
+fn one_setting(text: &str) -> anyhow::Result<(String, String)> {
+    let setting = parse_setting(text)?;
+    let [value] = setting.values.as_slice() else {
+        bail!("--set {text}: one value per key here (every case runs with it); `carus sweep` runs several");
+    };
+    Ok((setting.key, value.clone()))
+}
+
+/// clap's check of a `--set` argument: a malformed one is a bad argument
+/// (exit status 2).
+fn one_setting_arg(text: &str) -> Result<String, String> {
+    one_setting(text).map(|_| text.to_string()).map_err(|e| e.to_string())
+}
+
 pub fn run(args: &SanityArgs) -> anyhow::Result<Status> {
-    let mut changes = Vec::new();
-    for text in &args.settings {
-        let setting = parse_setting(text)?;
-        let [value] = setting.values.as_slice() else {
-            bail!("--set {text}: one value per key here (every case runs with it); `carus sweep` runs several");
-        };
-        changes.push((setting.key, value.clone()));
-    }
+    let changes = args.settings.iter().map(|text| one_setting(text)).collect::<anyhow::Result<Vec<_>>>()?;
     // Every case is built before any runs, so a misspelt key costs nothing.
     let scenarios = SanityCase::ALL
         .iter()

@@ -30,7 +30,7 @@ pub struct SweepArgs {
     /// KEY=V1,V2,...: a dotted key as `carus scenarios show` writes it and
     /// the values to run it at (TOML values; repeat for more keys: every
     /// combination runs).
-    #[arg(long = "set", value_name = "KEY=VALUES", required = true)]
+    #[arg(long = "set", value_name = "KEY=VALUES", required = true, value_parser = setting_arg)]
     pub settings: Vec<String>,
     /// Run the scenario as it is, then each value of each key alone with the
     /// other keys as the scenario has them (a one-at-a-time sensitivity
@@ -49,6 +49,12 @@ pub struct SweepArgs {
 pub(super) struct Setting {
     pub(super) key: String,
     pub(super) values: Vec<String>,
+}
+
+/// clap's check of a `--set` argument's form: a malformed one is a bad
+/// argument (exit status 2), named before anything runs.
+fn setting_arg(text: &str) -> Result<String, String> {
+    parse_setting(text).map(|_| text.to_string()).map_err(|e| e.to_string())
 }
 
 pub(super) fn parse_setting(text: &str) -> anyhow::Result<Setting> {

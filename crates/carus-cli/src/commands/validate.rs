@@ -20,7 +20,9 @@ use super::{print_json, Status};
 
 #[derive(clap::Args)]
 pub struct ValidateArgs {
-    /// `cube` (V3 as VALIDATION.md specifies), `all` (V1-V7), or one case.
+    /// `cube` (the V3 cube's figures as VALIDATION.md specifies, printed
+    /// without a verdict), `all` (V1-V7, each PASS or FAIL), or one case
+    /// (`v3` judges the cube against its tolerances).
     #[arg(value_enum)]
     pub case: CaseArg,
     /// Cube: elements per edge (VALIDATION.md: 10 and 20).
