@@ -65,12 +65,13 @@ pub fn write_checkpoint(dir: &Path, checkpoint: &Checkpoint) -> Result<(), Labou
     std::fs::rename(&partial, &path).map_err(|e| output_error(&path, e))
 }
 
-/// When the run in `dir` reached its end, the simulated time it ended at;
-/// None for a run stopped or failed before it (or no readable run.json).
-pub fn run_reached_its_end(dir: &Path) -> Option<f64> {
+/// How the run in `dir` ended, from its run.json: completed, when it
+/// failed why, and the simulated time reached (None: no readable run.json).
+fn run_ending(dir: &Path) -> Option<(bool, Option<String>, f64)> {
     #[derive(serde::Deserialize)]
     struct Summary {
         completed: bool,
+        failure: Option<String>,
         simulated_s: f64,
     }
     #[derive(serde::Deserialize)]
@@ -78,8 +79,19 @@ pub fn run_reached_its_end(dir: &Path) -> Option<f64> {
         summary: Summary,
     }
     let text = std::fs::read_to_string(dir.join(RUN_FILE)).ok()?;
-    let record: Record = serde_json::from_str(&text).ok()?;
-    record.summary.completed.then_some(record.summary.simulated_s)
+    let Record { summary } = serde_json::from_str(&text).ok()?;
+    Some((summary.completed, summary.failure, summary.simulated_s))
+}
+
+/// When the run in `dir` reached its end, the simulated time it ended at;
+/// None for a run stopped or failed before it (or no readable run.json).
+pub fn run_reached_its_end(dir: &Path) -> Option<f64> {
+    run_ending(dir).and_then(|(completed, _, t)| completed.then_some(t))
+}
+
+/// Whether the run in `dir` ended early on a failure of the physics.
+pub fn run_failed(dir: &Path) -> bool {
+    run_ending(dir).is_some_and(|(_, failure, _)| failure.is_some())
 }
 
 pub fn read_checkpoint(dir: &Path) -> Result<Checkpoint, LabourError> {

@@ -4,34 +4,50 @@
 //! with `--one-at-a-time` the scenario as it is and then each value of each
 //! key alone), each a whole run in its own folder, and a table of their outcomes and movements
 //! (sweep.csv, sweep.json) rewritten as each run ends, so Ctrl-C or a
-//! failed run loses none that finished. The parameter studies of
-//! docs/LABOUR.md are sweeps.
+//! failed run loses none that finished. `carus sweep --resume DIR` goes on
+//! with a stopped sweep from its plan (sweep_plan.json): runs stopped part
+//! way continue from their checkpoints, runs not started start, and the
+//! tables are written whole again. The parameter studies of docs/LABOUR.md
+//! are sweeps.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
 use anyhow::{bail, Context};
 use carus_analysis::movements::ROTATION_STATION_MAX_MM;
 use carus_analysis::{Movements, Outcome};
-use carus_labour::{RunRecord, Scenario, Scene, Simulation};
+use carus_labour::output::{self, CHECKPOINT_FILE, RUN_FILE};
+use carus_labour::{RunOptions, RunRecord, Scenario, Scene, Simulation};
 use rayon::prelude::*;
 use serde_json::json;
 
 use super::run::{
-    choose_out_dir, json_summary, load, movements, outcome_line, run_into, serde_name, OutputArgs,
+    choose_out_dir, json_summary, load, movements, outcome_line, run_into, serde_name, write_report, OutputArgs,
 };
 use super::{ctrl_c_flag, labour_pool, print_json, Status};
 
 #[derive(clap::Args)]
 pub struct SweepArgs {
     /// A built-in scenario name (`carus scenarios`) or a scenario file (TOML). Default: normal.
+    #[arg(conflicts_with = "resume")]
     pub scenario: Option<String>,
     /// KEY=V1,V2,...: a dotted key as `carus scenarios show` writes it and
     /// the values to run it at (TOML values; repeat for more keys: every
     /// combination runs).
-    #[arg(long = "set", value_name = "KEY=VALUES", required = true, value_parser = setting_arg)]
+    #[arg(
+        long = "set",
+        value_name = "KEY=VALUES",
+        required_unless_present = "resume",
+        conflicts_with = "resume",
+        value_parser = setting_arg
+    )]
     pub settings: Vec<String>,
+    /// Go on with the stopped sweep in DIR, as it was planned: runs
+    /// stopped part way continue from their checkpoints, runs not started
+    /// start, finished ones are kept; the tables are written whole again.
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["one_at_a_time", "out", "force"])]
+    pub resume: Option<PathBuf>,
     /// Run the scenario as it is, then each value of each key alone with the
     /// other keys as the scenario has them (a one-at-a-time sensitivity
     /// study), instead of every combination.
@@ -136,9 +152,38 @@ struct Finished {
     row: Vec<String>,
 }
 
+/// What a sweep runs, kept in its folder (sweep_plan.json) so that
+/// `--resume` goes on with the same variants in the same folders.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct SweepPlan {
+    /// The base scenario, complete (`Scenario::to_toml`).
+    scenario_toml: String,
+    /// Where the base scenario's relative paths are read from.
+    base_dir: PathBuf,
+    /// The `--set` arguments as given.
+    set: Vec<String>,
+    one_at_a_time: bool,
+}
+
+const PLAN_FILE: &str = "sweep_plan.json";
+
 pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
-    let settings = args
-        .settings
+    let (plan, out_dir) = match &args.resume {
+        Some(dir) => (read_plan(dir)?, Some(dir.clone())),
+        None => {
+            let base = load(args.scenario.as_deref())?;
+            let plan = SweepPlan {
+                scenario_toml: base.to_toml()?,
+                base_dir: base.base_dir.clone(),
+                set: args.settings.clone(),
+                one_at_a_time: args.one_at_a_time,
+            };
+            (plan, None)
+        }
+    };
+    let base = Scenario::parse(Path::new("sweep_plan.json"), &plan.scenario_toml, plan.base_dir.clone())?;
+    let settings = plan
+        .set
         .iter()
         .map(|s| parse_setting(s))
         .collect::<anyhow::Result<Vec<_>>>()?;
@@ -151,8 +196,7 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
             );
         }
     }
-    let base = load(args.scenario.as_deref())?;
-    let combinations = if args.one_at_a_time {
+    let combinations = if plan.one_at_a_time {
         one_at_a_time(&settings)
     } else {
         combinations(&settings)
@@ -169,21 +213,28 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
     check_variants_start(&scenarios, &combinations)?;
     // The pool is made first: a bad --jobs leaves no out dir behind.
     let (pool, jobs) = labour_pool(args.jobs)?;
-    let out_dir = choose_out_dir(
-        args.output.out.as_deref(),
-        &format!("sweep-{}", base.name),
-        args.output.force,
-    )?
-    .make()?;
+    let out_dir = match out_dir {
+        Some(dir) => dir,
+        None => {
+            let dir = choose_out_dir(args.output.out.as_deref(), &format!("sweep-{}", base.name), args.output.force)?
+                .make()?;
+            let path = dir.join(PLAN_FILE);
+            std::fs::write(&path, serde_json::to_string_pretty(&plan)?)
+                .with_context(|| format!("cannot write {}", path.display()))?;
+            dir
+        }
+    };
     let stop = ctrl_c_flag();
     if !args.output.quiet {
+        let verb = if args.resume.is_some() { "going on with the sweep of" } else { "sweeping" };
         eprintln!(
-            "sweeping `{}` over {} runs, {jobs} at a time, into {}",
+            "{verb} `{}` over {} runs, {jobs} at a time, in {}",
             base.name,
             scenarios.len(),
             out_dir.display()
         );
     }
+    let resuming = args.resume.is_some();
     let keys: Vec<&str> = settings.iter().map(|s| s.key.as_str()).collect();
     let table = Mutex::new((0..scenarios.len()).map(|_| None).collect::<Vec<Option<Finished>>>());
     let failures = pool.install(|| {
@@ -195,7 +246,9 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
                 }
                 let dir = out_dir.join(folder_name(i, &combinations[i]));
                 // A run that cannot be made is a row of the table, not the end of the sweep.
-                let finished = run_variant(&scenarios[i], &dir, &keys, &combinations[i], &stop, args.output.quiet)
+                let variant = Variant { scenario: &scenarios[i], dir: &dir, keys: &keys, combination: &combinations[i] };
+                let finished = variant
+                    .finish(resuming, &stop, args.output.quiet)
                     .unwrap_or_else(|error| unmade(&dir, &combinations[i], &keys, &error));
                 let failed = finished.summary["failure"].is_string();
                 let mut rows = table.lock().expect("no run panics while holding the table");
@@ -220,8 +273,9 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
     }
     if stop.load(Ordering::Relaxed) {
         eprintln!(
-            "stopped with {done} of {} runs complete; a stopped run continues with carus run --resume on its folder",
-            rows.len()
+            "stopped with {done} of {} runs complete; go on with: carus sweep --resume {}",
+            rows.len(),
+            out_dir.display()
         );
     }
     Ok(if failures.iter().any(|&f| f) || done < rows.len() {
@@ -257,26 +311,67 @@ fn check_variants_start(scenarios: &[Scenario], combinations: &[Vec<(String, Str
     Ok(())
 }
 
-/// Runs one variant into `dir` with its report, as `carus run` would.
-fn run_variant(
-    scenario: &Scenario,
-    dir: &Path,
-    keys: &[&str],
-    combination: &[(String, String)],
-    stop: &Arc<AtomicBool>,
-    quiet: bool,
-) -> anyhow::Result<Finished> {
-    let record = run_into(scenario, dir, stop)?;
-    let mut summary = json_summary(&record, dir);
-    summary["set"] = set_json(combination);
-    summary["at_station_50mm"] = at_window_end(&record);
-    if !quiet {
-        let note = record.summary.failure.as_deref().map_or(String::new(), |f| format!(": ended early, {f}"));
-        let verb = if record.summary.completed { "finished" } else { "stopped" };
-        eprintln!("{verb} {} in {:.0} s{note}", dir.display(), record.summary.wall_s);
+/// The sweep's plan in `dir`, with what to do when it is not there.
+fn read_plan(dir: &Path) -> anyhow::Result<SweepPlan> {
+    let path = dir.join(PLAN_FILE);
+    let text = std::fs::read_to_string(&path).with_context(|| {
+        format!(
+            "cannot read {}: --resume takes the folder of a sweep this build of carus made (older sweeps \
+             have no plan: run their stopped runs with carus run --resume on each run's folder)",
+            path.display()
+        )
+    })?;
+    serde_json::from_str(&text).with_context(|| format!("{} is damaged; run the sweep again", path.display()))
+}
+
+/// One variant of the sweep and the folder it runs in.
+struct Variant<'a> {
+    scenario: &'a Scenario,
+    dir: &'a Path,
+    keys: &'a [&'a str],
+    combination: &'a [(String, String)],
+}
+
+impl Variant<'_> {
+    /// Runs the variant with its report, as `carus run` would; when the
+    /// sweep is resumed, goes on with a run stopped part way, and keeps
+    /// one that reached its end or failed (its rerun would fail alike).
+    fn finish(&self, resuming: bool, stop: &Arc<AtomicBool>, quiet: bool) -> anyhow::Result<Finished> {
+        let dir = self.dir;
+        let record = if resuming && dir.join(RUN_FILE).exists() && ended(dir) {
+            let path = dir.join(RUN_FILE);
+            let text = std::fs::read_to_string(&path).with_context(|| format!("cannot read {}", path.display()))?;
+            serde_json::from_str::<RunRecord>(&text).with_context(|| format!("{} is damaged", path.display()))?
+        } else if resuming && dir.join(CHECKPOINT_FILE).exists() {
+            let options = RunOptions {
+                stop: Some(stop.clone()),
+                stop_at_s: None,
+            };
+            let record = carus_labour::resume(dir, &options, &mut carus_labour::SilentObserver)?;
+            if let Err(error) = write_report(&record, dir) {
+                eprintln!("warning: {}: report.html was not written: {error:#}", dir.display());
+            }
+            record
+        } else {
+            run_into(self.scenario, dir, stop)?
+        };
+        let mut summary = json_summary(&record, dir);
+        summary["set"] = set_json(self.combination);
+        summary["at_station_50mm"] = at_window_end(&record);
+        if !quiet {
+            let note = record.summary.failure.as_deref().map_or(String::new(), |f| format!(": ended early, {f}"));
+            let verb = if record.summary.completed { "finished" } else { "stopped" };
+            eprintln!("{verb} {} in {:.0} s{note}", dir.display(), record.summary.wall_s);
+        }
+        let row = table_row(&record, dir, self.keys, self.combination, &summary);
+        Ok(Finished { summary, row })
     }
-    let row = table_row(&record, dir, keys, combination, &summary);
-    Ok(Finished { summary, row })
+}
+
+/// Whether the run in `dir` is over for good: it reached its end, or it
+/// failed (a rerun from its checkpoint would fail alike).
+fn ended(dir: &Path) -> bool {
+    output::run_reached_its_end(dir).is_some() || output::run_failed(dir)
 }
 
 /// A variant's settings as a JSON object, key to value as given.
@@ -572,6 +667,7 @@ mod tests {
             scenario: Some(file.display().to_string()),
             settings: settings.iter().map(|s| s.to_string()).collect(),
             one_at_a_time: false,
+            resume: None,
             jobs: Some(2),
             output: OutputArgs {
                 out: Some(out.clone()),
@@ -601,6 +697,44 @@ mod tests {
         assert!(lines[3].starts_with("03-contact.friction=0.1,,0.1,"), "{}", lines[3]);
         let base = std::fs::read_to_string(out.join("01-base/scenario.toml")).unwrap();
         assert_eq!(base, s.to_toml().unwrap());
+    }
+
+    /// A sweep stopped with one run part way and one not started goes on
+    /// with `--resume`: each run ends as in the uninterrupted sweep, bit
+    /// for bit, and the tables hold both, finished.
+    #[test]
+    fn a_stopped_sweep_resumes_to_the_uninterrupted_result() {
+        let s = crate::commands::coarse_normal(0.3);
+        let dir = tempfile::tempdir().unwrap();
+        let (args, out) = coarse_sweep(&s, dir.path(), &["expulsion.force_max_n=60,120"]);
+        assert!(matches!(run(&args).unwrap(), Status::Success));
+        let [first, second] = ["01-expulsion.force_max_n=60", "02-expulsion.force_max_n=120"].map(|d| out.join(d));
+        let history = |d: &Path| std::fs::read_to_string(d.join("pose_history.csv")).unwrap();
+        let whole = [history(&first), history(&second)];
+        // As Ctrl-C would leave it: the first stopped at 0.1 s, the second not begun.
+        std::fs::remove_dir_all(&first).unwrap();
+        std::fs::remove_dir_all(&second).unwrap();
+        std::fs::create_dir(&first).unwrap();
+        let variant = s.with_setting("expulsion.force_max_n", "60").unwrap();
+        let stop = RunOptions { stop_at_s: Some(0.1), ..RunOptions::default() };
+        let stopped = carus_labour::run(&variant, &first, &stop, &mut SilentObserver).unwrap();
+        assert!(!stopped.summary.completed);
+
+        let resume = SweepArgs { scenario: None, settings: Vec::new(), resume: Some(out.clone()), ..args };
+        assert!(matches!(run(&resume).unwrap(), Status::Success));
+        assert_eq!([history(&first), history(&second)], whole);
+        let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
+        assert_eq!(csv.lines().count(), 3, "{csv}");
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("sweep.json")).unwrap()).unwrap();
+        assert!(json["runs"].as_array().unwrap().iter().all(|r| r["completed"] == json!(true)), "{json}");
+        // Resumed again, the finished runs are kept as they are.
+        assert!(matches!(run(&resume).unwrap(), Status::Success));
+        assert_eq!([history(&first), history(&second)], whole);
+
+        // A folder without a plan is not a sweep to go on with.
+        let e = format!("{:#}", run(&SweepArgs { resume: Some(first.clone()), ..resume }).err().unwrap());
+        assert!(e.contains("sweep_plan.json") && e.contains("--resume takes the folder of a sweep"), "{e}");
     }
 
     #[test]
