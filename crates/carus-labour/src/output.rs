@@ -55,6 +55,9 @@ pub struct Checkpoint {
     pub base_dir: PathBuf,
     pub state: SimState,
     pub frame_times: Vec<f64>,
+    /// Wall time of the run's legs up to this checkpoint, s.
+    #[serde(default)]
+    pub wall_s: f64,
 }
 
 pub fn write_checkpoint(dir: &Path, checkpoint: &Checkpoint) -> Result<(), LabourError> {

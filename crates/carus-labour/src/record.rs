@@ -14,7 +14,7 @@ pub struct RunSummary {
     pub outcome: Outcome,
     /// Simulated time reached, s.
     pub simulated_s: f64,
-    /// Wall-clock time of this invocation, s (a resumed run counts its part).
+    /// Wall-clock time of the run, s; a resumed run's counts every leg.
     pub wall_s: f64,
     /// Of it, each stage of the rigid steps (`carus bench labour`).
     #[serde(default)]

@@ -132,7 +132,7 @@ pub fn run_from_start(
     let scene = sim.scene;
     output::write_text(&out_dir.join(output::SCENARIO_FILE), &scene.scenario.to_toml()?)?;
     write_static(scene, out_dir)?;
-    drive(sim, out_dir, options, observer, Vec::new(), started)
+    drive(sim, out_dir, options, observer, Vec::new(), Clock { started, earlier_s: 0.0 })
 }
 
 /// Continues the run in `out_dir` from its last checkpoint.
@@ -145,7 +145,8 @@ pub fn resume(
     // Stepping on would rewrite a finished run's record with one leg of it.
     if let Some(end_s) = output::run_reached_its_end(out_dir) {
         return Err(LabourError::Checkpoint(format!(
-            "the run reached its end at t = {end_s:.2} s and everything it computed is written;              there is nothing to resume (to run it again, run {}/{} with a new --out)",
+            "the run reached its end at t = {end_s:.2} s and everything it computed is written; \
+             there is nothing to resume (to run it again, run {}/{} with a new --out)",
             out_dir.display(),
             output::SCENARIO_FILE
         )));
@@ -175,7 +176,7 @@ pub fn resume(
         options,
         observer,
         checkpoint.frame_times,
-        started,
+        Clock { started, earlier_s: checkpoint.wall_s },
     )
 }
 
@@ -231,7 +232,7 @@ fn drive(
     options: &RunOptions,
     observer: &mut dyn Observer,
     mut frame_times: Vec<f64>,
-    started: Instant,
+    clock: Clock,
 ) -> Result<RunRecord, LabourError> {
     let scene = sim.scene;
     let s = &scene.scenario;
@@ -289,7 +290,7 @@ fn drive(
             timed(&mut || write_frame(&sim, out_dir, &mut frame_times))?;
         }
         if k % checkpoint_every == 0 {
-            timed(&mut || save_checkpoint(&mut sim, out_dir, &frame_times))?;
+            timed(&mut || save_checkpoint(&mut sim, out_dir, &frame_times, clock.wall_s()))?;
         }
         if k % POLL_STEPS == 0 {
             observer.progress(sim.time_s(), s.numerics.end_time_s);
@@ -311,14 +312,27 @@ fn drive(
         }
     }
     observer.progress(sim.time_s(), s.numerics.end_time_s);
-    timed(&mut || save_checkpoint(&mut sim, out_dir, &frame_times))?;
-    let timing = Timing { started, output_s };
+    timed(&mut || save_checkpoint(&mut sim, out_dir, &frame_times, clock.wall_s()))?;
+    let timing = Timing { clock, output_s };
     finish(&mut sim, out_dir, &frame_times, &floor_snapshots, completed, failure, timing)
 }
 
-/// When a run began, and how long it has spent writing so far.
-struct Timing {
+/// The wall clock of a run: when this leg began, and how long the legs
+/// before it took (a resumed run's wall time counts them all).
+struct Clock {
     started: Instant,
+    earlier_s: f64,
+}
+
+impl Clock {
+    fn wall_s(&self) -> f64 {
+        self.earlier_s + self.started.elapsed().as_secs_f64()
+    }
+}
+
+/// The run's clock, and how long this leg has spent writing so far.
+struct Timing {
+    clock: Clock,
     output_s: f64,
 }
 
@@ -343,6 +357,7 @@ fn save_checkpoint(
     sim: &mut Simulation<'_>,
     out_dir: &Path,
     frame_times: &[f64],
+    wall_s: f64,
 ) -> Result<(), LabourError> {
     let scenario_toml = sim.scene.scenario.to_toml()?;
     let base_dir = sim.scene.scenario.base_dir.clone();
@@ -354,6 +369,7 @@ fn save_checkpoint(
             base_dir,
             state,
             frame_times: frame_times.to_vec(),
+            wall_s,
         },
     )
 }
@@ -509,7 +525,7 @@ fn finish(
             |r| r.outcome.clone(),
         ),
         simulated_s: sim.time_s(),
-        wall_s: timing.started.elapsed().as_secs_f64(),
+        wall_s: timing.clock.wall_s(),
         stage_wall_s: sim.stage_times,
         output_wall_s: timing.output_s + writing.elapsed().as_secs_f64(),
         completed,
@@ -1140,8 +1156,12 @@ mod tests {
         );
         assert!(!half.summary.completed);
         assert_eq!(half.summary.simulated_s, 1.0);
+        let first_leg_s = output::read_checkpoint(dir.path()).unwrap().wall_s;
+        assert!(first_leg_s > 0.0 && first_leg_s <= half.summary.wall_s);
         let resumed = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).unwrap();
         assert!(resumed.summary.completed);
+        // Its wall time counts both legs.
+        assert!(resumed.summary.wall_s > first_leg_s);
         // A finished run is not resumed again: its record stays as it is.
         let written = std::fs::read(dir.path().join(output::RUN_FILE)).unwrap();
         let again = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).unwrap_err().to_string();
