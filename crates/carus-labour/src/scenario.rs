@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use carus_anatomy::fetus::{HeadDiameters, TrunkDiameters};
 use carus_anatomy::floor::FloorParameters;
-use carus_anatomy::pelvis::{PelvisSpec, PELVIC_CANAL_DIAMETER_MM};
+use carus_anatomy::pelvis::{PelvisSpec, PELVIC_CANAL_DIAMETER_MM, VISIBLE_HUMAN_FEMALE};
 use serde::{Deserialize, Serialize};
 
 /// Why a scenario cannot be used.
@@ -701,7 +701,13 @@ impl Scenario {
                 _ => source,
             },
         })?;
-        let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        // Absolute, so that a run resumed or measured from another folder
+        // still finds an imported pelvis.
+        let absolute = std::path::absolute(path).map_err(|source| ScenarioError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let base = absolute.parent().map(Path::to_path_buf).unwrap_or_default();
         Scenario::parse(path, &text, base)
     }
 
@@ -716,14 +722,25 @@ impl Scenario {
         Ok(scenario)
     }
 
-    /// The scenario as a complete TOML file (every key explicit).
+    /// The scenario as a complete TOML file (every key explicit). An
+    /// imported pelvis's file is named by its absolute path when the
+    /// scenario came from a file, so that the copy in a run folder finds it
+    /// from there; a built-in pelvis keeps its name.
     pub fn to_toml(&self) -> Result<String, ScenarioError> {
         let mut text = String::new();
         if !self.description.is_empty() {
             text.push_str(&format!("# {}\n", self.description));
         }
         text.push_str("# Every key is written out; units are in the key names (CONVENTIONS.md).\n");
-        text.push_str(&toml::to_string(self)?);
+        match &self.pelvis {
+            PelvisSpec::Imported { landmarks_file }
+                if landmarks_file.as_os_str() != VISIBLE_HUMAN_FEMALE && self.base_dir.is_absolute() =>
+            {
+                let pelvis = PelvisSpec::Imported { landmarks_file: self.base_dir.join(landmarks_file) };
+                text.push_str(&toml::to_string(&Scenario { pelvis, ..self.clone() })?);
+            }
+            _ => text.push_str(&toml::to_string(self)?),
+        }
         Ok(text)
     }
 
@@ -1443,6 +1460,41 @@ mod tests {
                 .unwrap_err()
                 .to_string();
             assert!(e.contains(&format!("{table}.density_kg_per_m3")) && e.contains("g/cm^3"), "{e}");
+        }
+    }
+
+    /// The scenario a run folder keeps names an imported pelvis so that it is
+    /// found from there, whatever folder the run was started in or resumed from.
+    #[test]
+    fn an_imported_pelvis_is_found_from_the_run_folder() {
+        let relative = Scenario::from_file(Path::new("../../scenarios/normal.toml")).unwrap();
+        assert!(relative.base_dir.is_absolute() && relative.base_dir.ends_with("scenarios"), "{:?}", relative.base_dir);
+
+        let dir = tempfile::tempdir().unwrap();
+        let anatomy = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/anatomy");
+        std::fs::create_dir_all(dir.path().join("imp/anat")).unwrap();
+        for file in ["visible-human-female-pelvis.landmarks.toml", "visible-human-female-pelvis.stl"] {
+            std::fs::copy(anatomy.join(file), dir.path().join("imp/anat").join(file)).unwrap();
+        }
+        let file = dir.path().join("imp/s.toml");
+        std::fs::write(&file, "name = \"x\"\n[pelvis]\nimport = \"anat/visible-human-female-pelvis.landmarks.toml\"\n")
+            .unwrap();
+        let scenario = Scenario::from_file(&file).unwrap();
+        let landmarks = dir.path().join("imp/anat/visible-human-female-pelvis.landmarks.toml");
+        let shown = scenario.to_toml().unwrap();
+        assert!(shown.contains(&format!("import = {:?}", landmarks.display().to_string())), "{shown}");
+
+        // The run folder's copy, read as `carus measure` reads it, and the
+        // checkpoint's, as `--resume` reads it, with an unrelated base.
+        std::fs::create_dir(dir.path().join("run")).unwrap();
+        let copy = dir.path().join("run/scenario.toml");
+        std::fs::write(&copy, &shown).unwrap();
+        let measured = Scenario::from_file(&copy).unwrap();
+        let resumed = Scenario::parse(Path::new("checkpoint.json"), &shown, PathBuf::from("elsewhere")).unwrap();
+        for s in [&measured, &resumed] {
+            assert_eq!(s.pelvis, PelvisSpec::Imported { landmarks_file: landmarks.clone() });
+            s.pelvis.build(&s.base_dir).unwrap();
+            assert_eq!(s.to_toml().unwrap(), shown, "written again unchanged");
         }
     }
 
