@@ -4,11 +4,14 @@
 //! refused with the key's path and a hint (serde_path_to_error gives the
 //! path, toml the line).
 
+use std::fmt;
 use std::path::{Path, PathBuf};
 
 use carus_anatomy::fetus::{HeadDiameters, TrunkDiameters};
 use carus_anatomy::floor::FloorParameters;
-use carus_anatomy::pelvis::{PelvisSpec, PELVIC_CANAL_DIAMETER_MM, VISIBLE_HUMAN_FEMALE};
+use carus_anatomy::pelvis::{PelvisDiameters, PelvisSpec, PELVIC_CANAL_DIAMETER_MM, VISIBLE_HUMAN_FEMALE};
+use serde::de::value::MapAccessDeserializer;
+use serde::de::{DeserializeSeed, Deserializer, Error as _, IntoDeserializer, MapAccess, Visitor};
 use serde::{Deserialize, Serialize};
 
 /// Why a scenario cannot be used.
@@ -614,7 +617,7 @@ pub struct Scenario {
     pub name: String,
     #[serde(default)]
     pub description: String,
-    #[serde(default)]
+    #[serde(default, deserialize_with = "pelvis_by_key")]
     pub pelvis: PelvisSpec,
     #[serde(default)]
     pub head: HeadDiameters,
@@ -646,6 +649,104 @@ pub struct Scenario {
     /// Folder an imported pelvis path is relative to (the file's folder).
     #[serde(skip)]
     pub base_dir: PathBuf,
+}
+
+/// Reads `[pelvis]` key by key, so that a mistake in it is reported at the
+/// key's own line and dotted path as in every other table: `PelvisSpec`'s
+/// own reader takes the table whole, which keeps neither.
+fn pelvis_by_key<'de, D: Deserializer<'de>>(deserializer: D) -> Result<PelvisSpec, D::Error> {
+    struct PelvisTable;
+    impl<'de> Visitor<'de> for PelvisTable {
+        type Value = PelvisSpec;
+
+        fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+            f.write_str("a table of pelvic diameters, or `import` naming a landmarks file or a built-in pelvis")
+        }
+
+        fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<PelvisSpec, A::Error> {
+            // The keys in the order `carus scenarios show` writes them.
+            let written = toml::to_string(&PelvisDiameters::default()).map_err(A::Error::custom)?;
+            let mut keys = PelvisKeys {
+                map,
+                diameters: written.lines().filter_map(|l| Some(l.split_once(" = ")?.0.to_string())).collect(),
+                import: None,
+                first_diameter: None,
+            };
+            let given = PelvisDiameters::deserialize(MapAccessDeserializer::new(&mut keys))?;
+            Ok(match keys.import {
+                Some(landmarks_file) => PelvisSpec::Imported { landmarks_file },
+                None => PelvisSpec::Generated(given),
+            })
+        }
+    }
+    deserializer.deserialize_map(PelvisTable)
+}
+
+/// `[pelvis]` as the diameters read it, with `import` taken out on the way.
+struct PelvisKeys<A> {
+    map: A,
+    diameters: Vec<String>,
+    import: Option<PathBuf>,
+    first_diameter: Option<String>,
+}
+
+impl<'de, A: MapAccess<'de>> MapAccess<'de> for PelvisKeys<A> {
+    type Error = A::Error;
+
+    fn next_key_seed<K: DeserializeSeed<'de>>(&mut self, seed: K) -> Result<Option<K::Value>, A::Error> {
+        while let Some(key) = self.map.next_key_seed(PelvisKey {
+            diameters: &self.diameters,
+            import: self.import.is_some(),
+            first_diameter: self.first_diameter.as_deref(),
+        })? {
+            if key == "import" {
+                self.import = Some(self.map.next_value()?);
+            } else {
+                self.first_diameter.get_or_insert_with(|| key.clone());
+                return seed.deserialize(IntoDeserializer::<A::Error>::into_deserializer(key)).map(Some);
+            }
+        }
+        Ok(None)
+    }
+
+    fn next_value_seed<V: DeserializeSeed<'de>>(&mut self, seed: V) -> Result<V::Value, A::Error> {
+        self.map.next_value_seed(seed)
+    }
+}
+
+/// One key of `[pelvis]`, checked while toml still knows its line.
+struct PelvisKey<'a> {
+    diameters: &'a [String],
+    import: bool,
+    first_diameter: Option<&'a str>,
+}
+
+impl<'de> DeserializeSeed<'de> for PelvisKey<'_> {
+    type Value = String;
+
+    fn deserialize<D: Deserializer<'de>>(self, deserializer: D) -> Result<String, D::Error> {
+        let key = String::deserialize(deserializer)?;
+        let clash = |diameter: &str| {
+            D::Error::custom(format!(
+                "`import` and `{diameter}` cannot be combined: an imported pelvis takes its diameters from its \
+                 landmarks; remove one"
+            ))
+        };
+        if key == "import" {
+            return self.first_diameter.map_or(Ok(key), |d| Err(clash(d)));
+        }
+        if !self.diameters.contains(&key) {
+            let expected: Vec<String> = self.diameters.iter().map(|k| format!("`{k}`")).collect();
+            return Err(D::Error::custom(format!(
+                "unknown field `{key}`, expected one of {}, or `import` alone for a real pelvis",
+                expected.join(", ")
+            )));
+        }
+        if self.import {
+            return Err(clash(&key));
+        }
+        Ok(key)
+    }
 }
 
 /// The built-in scenarios, embedded in the binary: (name, TOML text).
@@ -1496,6 +1597,37 @@ mod tests {
             s.pelvis.build(&s.base_dir).unwrap();
             assert_eq!(s.to_toml().unwrap(), shown, "written again unchanged");
         }
+    }
+
+    /// A mistake in `[pelvis]` is named at its own line and dotted path, as
+    /// in every other table, whether the pelvis is generated or imported.
+    #[test]
+    fn a_mistake_in_the_pelvis_table_names_its_line_and_key() {
+        let s = parse("name = \"x\"\n[pelvis]\ninlet_ap_mm = 100.0\n").unwrap();
+        assert_eq!(s.pelvis, PelvisSpec::Generated(PelvisDiameters { inlet_ap_mm: 100.0, ..Default::default() }));
+        let s = parse("name = \"x\"\n[pelvis]\n").unwrap();
+        assert_eq!(s.pelvis, PelvisSpec::default());
+        let s = parse(&format!("name = \"x\"\n[pelvis]\nimport = {VISIBLE_HUMAN_FEMALE:?}\n")).unwrap();
+        assert_eq!(s.pelvis, PelvisSpec::Imported { landmarks_file: VISIBLE_HUMAN_FEMALE.into() });
+
+        let e = parse("name = \"x\"\n[pelvis]\nmid_ap_mm = 115.0\ninterspinous_mm = \"102\"\n").unwrap_err().to_string();
+        assert!(e.starts_with("test.toml:4: `pelvis.interspinous_mm`: invalid type: string \"102\""), "{e}");
+        assert!(e.contains("numbers without quotes"), "{e}");
+        let e = parse("name = \"x\"\n[pelvis]\nmid_ap_mm = 115.0\ninlet_apmm = 110.0\n").unwrap_err().to_string();
+        assert!(e.starts_with("test.toml:4: `pelvis.inlet_apmm`: unknown field `inlet_apmm`"), "{e}");
+        assert!(e.contains("expected one of `inlet_ap_mm`, `inlet_transverse_mm`") && e.contains("`import`"), "{e}");
+        assert!(e.contains("check the spelling"), "{e}");
+        // toml hands the keys over in its own order: the second of the pair met is named.
+        let e = parse("name = \"x\"\n[pelvis]\nmid_ap_mm = 115.0\nimport = \"a.toml\"\n").unwrap_err().to_string();
+        assert!(
+            ["test.toml:3: `pelvis.mid_ap_mm`: ", "test.toml:4: `pelvis.import`: "].iter().any(|at| e.starts_with(at))
+                && e.contains("`import` and `mid_ap_mm` cannot be combined"),
+            "{e}"
+        );
+        let e = parse("name = \"x\"\n[pelvis]\nimport = \"a.toml\"\nmid_ap_mm = 115.0\n").unwrap_err().to_string();
+        assert!(e.starts_with("test.toml:4: `pelvis.mid_ap_mm`: `import` and `mid_ap_mm` cannot be combined"), "{e}");
+        let e = parse("name = \"x\"\n[pelvis]\nimport = 3\n").unwrap_err().to_string();
+        assert!(e.starts_with("test.toml:3: `pelvis.import`: invalid type"), "{e}");
     }
 
     #[test]
