@@ -814,8 +814,9 @@ impl Scenario {
 
     /// Parses and checks scenario text; `path` names it in errors.
     pub fn parse(path: &Path, text: &str, base_dir: PathBuf) -> Result<Scenario, ScenarioError> {
-        let deserializer =
-            toml::Deserializer::parse(text).map_err(|e| syntax(path, text, String::new(), &e))?;
+        let deserializer = toml::Deserializer::parse(text).map_err(|e| {
+            unit_in_value(path, text, &e).unwrap_or_else(|| syntax(path, text, String::new(), &e))
+        })?;
         let mut scenario: Scenario = serde_path_to_error::deserialize(deserializer)
             .map_err(|e| syntax(path, text, e.path().to_string(), e.inner()))?;
         scenario.base_dir = base_dir;
@@ -1309,10 +1310,78 @@ impl Scenario {
     }
 }
 
+/// The line, from 1, that byte `offset` of `text` lies on.
+fn line_at(text: &str, offset: usize) -> usize {
+    text[..offset.min(text.len())].matches('\n').count() + 1
+}
+
+/// The unit a key's name ends with, the longer endings first.
+const KEY_UNITS: [(&str, &str); 12] = [
+    ("_nm_s_per_rad", "N m s/rad"),
+    ("_nm_per_deg", "N m per degree"),
+    ("_n_s_per_m", "N s/m"),
+    ("_n_per_m", "N/m"),
+    ("_pa_per_m", "Pa/m"),
+    ("_kg_per_m3", "kg/m^3"),
+    ("_per_s", "per second"),
+    ("_mm", "millimetres"),
+    ("_deg", "degrees"),
+    ("_pa", "pascals"),
+    ("_s", "seconds"),
+    ("_n", "newtons"),
+];
+
+/// A unit written after a number (`force_max_n = 120 N`, `biparietal_mm =
+/// 9.5cm`): TOML's own advice, to quote it, would only lead to a type
+/// error, for the unit belongs in the key's name.
+fn unit_in_value(path: &Path, text: &str, error: &toml::de::Error) -> Option<ScenarioError> {
+    let line = line_at(text, error.span()?.start);
+    let (written_key, value) = text.lines().nth(line - 1)?.split_once('=')?;
+    let written_key = written_key.trim();
+    if written_key.is_empty() || !written_key.chars().all(|c| c.is_ascii_alphanumeric() || "_-.".contains(c)) {
+        return None;
+    }
+    let value = value.split('#').next()?.trim();
+    // The longest number before a unit, so that `1e3mm` is 1e3 in mm.
+    let (number, unit) = (1..value.len()).rev().filter(|&i| value.is_char_boundary(i)).find_map(|i| {
+        let (number, unit) = (value[..i].trim(), value[i..].trim());
+        let is_number = number.starts_with(|c: char| c.is_ascii_digit() || "+-.".contains(c))
+            && number.contains(|c: char| c.is_ascii_digit())
+            && number.replace('_', "").parse::<f64>().is_ok();
+        let is_unit = unit.starts_with(|c: char| c.is_alphabetic() || c == '°')
+            && unit.chars().all(|c| c.is_alphanumeric() || "/^*.°".contains(c));
+        (is_number && is_unit).then_some((number, unit))
+    })?;
+    let table = text
+        .lines()
+        .take(line - 1)
+        .filter_map(|l| l.trim().strip_prefix('[')?.split(']').next())
+        .last()
+        .map(str::trim);
+    let full_key = table.map_or(written_key.to_string(), |t| format!("{t}.{written_key}"));
+    let leaf = written_key.rsplit('.').next().unwrap_or(written_key);
+    let hint = match KEY_UNITS.iter().find(|(ending, _)| leaf.ends_with(ending)) {
+        Some((ending, name)) if unit.eq_ignore_ascii_case(&ending[1..]) => format!(
+            "write the number alone, `{leaf} = {number}`: the unit is in the key's name (`{ending}`, {name})"
+        ),
+        Some((ending, name)) => format!(
+            "write the number alone, converted to {name}: the unit is in the key's name (`{ending}`)"
+        ),
+        None => "write the number alone: units are in the key names (`_mm` millimetres, `_deg` degrees, `_s` \
+                 seconds, `_n` newtons, `_pa` pascals), and this key takes a plain number"
+            .to_string(),
+    };
+    Some(ScenarioError::Syntax {
+        path: path.to_path_buf(),
+        line,
+        key: format!("`{full_key}`: "),
+        message: format!("a unit after the number in `{value}` is not TOML, and quoted it is no number"),
+        hint,
+    })
+}
+
 fn syntax(path: &Path, text: &str, key: String, error: &toml::de::Error) -> ScenarioError {
-    let line = error.span().map_or(0, |s| {
-        text[..s.start.min(text.len())].matches('\n').count() + 1
-    });
+    let line = error.span().map_or(0, |s| line_at(text, s.start));
     let mut message = error.message().trim().to_string();
     // The parser names no key for a duplicate; its span covers the key written twice.
     let twice = error
@@ -1628,6 +1697,27 @@ mod tests {
         assert!(e.starts_with("test.toml:4: `pelvis.mid_ap_mm`: `import` and `mid_ap_mm` cannot be combined"), "{e}");
         let e = parse("name = \"x\"\n[pelvis]\nimport = 3\n").unwrap_err().to_string();
         assert!(e.starts_with("test.toml:3: `pelvis.import`: invalid type"), "{e}");
+    }
+
+    /// `force_max_n = 120 N`: TOML would say to quote it, which only leads
+    /// to a type error; the number is to be written alone.
+    #[test]
+    fn a_unit_written_in_a_value_is_refused_with_the_key_s_unit() {
+        for value in ["120N", "120 N", "120 n # peak"] {
+            let e = parse(&format!("name = \"x\"\n[expulsion]\nforce_max_n = {value}\n")).unwrap_err().to_string();
+            assert!(e.starts_with("test.toml:3: `expulsion.force_max_n`: a unit after the number"), "{e}");
+            assert!(e.contains("write the number alone, `force_max_n = 120`") && e.contains("newtons"), "{e}");
+        }
+        let e = parse("name = \"x\"\n[head]\nbiparietal_mm = 9.5cm\n").unwrap_err().to_string();
+        assert!(e.starts_with("test.toml:3: `head.biparietal_mm`: a unit after the number in `9.5cm`"), "{e}");
+        assert!(e.contains("converted to millimetres") && e.contains("`_mm`"), "{e}");
+        let e = parse("name = \"x\"\n[floor.mesh]\nthickness_mm = 1e1 mm\n").unwrap_err().to_string();
+        assert!(e.starts_with("test.toml:3: `floor.mesh.thickness_mm`") && e.contains("`thickness_mm = 1e1`"), "{e}");
+        let e = parse("name = \"x\"\n[contact]\nfriction = 0.3 mu\n").unwrap_err().to_string();
+        assert!(e.contains("`contact.friction`") && e.contains("this key takes a plain number"), "{e}");
+        // A bare word is not a unit: TOML's own message stands.
+        let e = parse("name = \"x\"\n[start]\nposition = LOT\n").unwrap_err().to_string();
+        assert!(e.starts_with("test.toml:3: string values must be quoted"), "{e}");
     }
 
     #[test]
