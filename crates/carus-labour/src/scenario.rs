@@ -821,6 +821,7 @@ impl Scenario {
             .map_err(|e| syntax(path, text, e.path().to_string(), e.inner()))?;
         scenario.base_dir = base_dir;
         scenario.check(path)?;
+        scenario.check_import(path, text)?;
         Ok(scenario)
     }
 
@@ -890,6 +891,41 @@ impl Scenario {
                 key, message, hint, ..
             } => refuse(&format!("{key}{message}"), &hint),
             other => other,
+        })
+    }
+
+    /// An imported pelvis names a file that exists or the built-in pelvis:
+    /// a misspelt name is told as that, not as a file that cannot be read.
+    fn check_import(&self, path: &Path, text: &str) -> Result<(), ScenarioError> {
+        let PelvisSpec::Imported { landmarks_file } = &self.pelvis else {
+            return Ok(());
+        };
+        let resolved = self.base_dir.join(landmarks_file);
+        if landmarks_file.as_os_str() == VISIBLE_HUMAN_FEMALE || resolved.is_file() {
+            return Ok(());
+        }
+        #[derive(Deserialize)]
+        struct File {
+            pelvis: Import,
+        }
+        #[derive(Deserialize)]
+        struct Import {
+            import: toml::Spanned<String>,
+        }
+        let line = toml::from_str::<File>(text).map_or(0, |f| line_at(text, f.pelvis.import.span().start));
+        Err(ScenarioError::Syntax {
+            path: path.to_path_buf(),
+            line,
+            key: "`pelvis.import`: ".into(),
+            message: format!(
+                "{:?} is neither a file ({} does not exist) nor a built-in pelvis",
+                landmarks_file.display().to_string(),
+                std::path::absolute(&resolved).unwrap_or(resolved).display()
+            ),
+            hint: format!(
+                "the built-in pelvis names: `{VISIBLE_HUMAN_FEMALE}`; or a landmarks file's path from the \
+                 scenario file's folder (docs/IMPORT.md)"
+            ),
         })
     }
 
@@ -1718,6 +1754,20 @@ mod tests {
         // A bare word is not a unit: TOML's own message stands.
         let e = parse("name = \"x\"\n[start]\nposition = LOT\n").unwrap_err().to_string();
         assert!(e.starts_with("test.toml:3: string values must be quoted"), "{e}");
+    }
+
+    /// A misspelt built-in pelvis is told as neither a file nor a built-in,
+    /// with the built-in names.
+    #[test]
+    fn a_misspelt_builtin_pelvis_is_named_with_the_builtins() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("s.toml");
+        std::fs::write(&file, "name = \"x\"\n\n[pelvis]\nimport = \"visible-human-femal\"\n").unwrap();
+        let e = Scenario::from_file(&file).unwrap_err().to_string();
+        let resolved = dir.path().join("visible-human-femal");
+        assert!(e.starts_with(&format!("{}:4: `pelvis.import`: \"visible-human-femal\" is neither a file", file.display())), "{e}");
+        assert!(e.contains(&format!("({} does not exist)", resolved.display())), "{e}");
+        assert!(e.contains(&format!("`{VISIBLE_HUMAN_FEMALE}`")), "{e}");
     }
 
     #[test]
