@@ -4,11 +4,14 @@
 //! refused with the key's path and a hint (serde_path_to_error gives the
 //! path, toml the line).
 
+use std::fmt;
 use std::path::{Path, PathBuf};
 
 use carus_anatomy::fetus::{HeadDiameters, TrunkDiameters};
 use carus_anatomy::floor::FloorParameters;
-use carus_anatomy::pelvis::{PelvisSpec, PELVIC_CANAL_DIAMETER_MM};
+use carus_anatomy::pelvis::{PelvisDiameters, PelvisSpec, PELVIC_CANAL_DIAMETER_MM, VISIBLE_HUMAN_FEMALE};
+use serde::de::value::MapAccessDeserializer;
+use serde::de::{DeserializeSeed, Deserializer, Error as _, IntoDeserializer, MapAccess, Visitor};
 use serde::{Deserialize, Serialize};
 
 /// Why a scenario cannot be used.
@@ -614,7 +617,7 @@ pub struct Scenario {
     pub name: String,
     #[serde(default)]
     pub description: String,
-    #[serde(default)]
+    #[serde(default, deserialize_with = "pelvis_by_key")]
     pub pelvis: PelvisSpec,
     #[serde(default)]
     pub head: HeadDiameters,
@@ -646,6 +649,104 @@ pub struct Scenario {
     /// Folder an imported pelvis path is relative to (the file's folder).
     #[serde(skip)]
     pub base_dir: PathBuf,
+}
+
+/// Reads `[pelvis]` key by key, so that a mistake in it is reported at the
+/// key's own line and dotted path as in every other table: `PelvisSpec`'s
+/// own reader takes the table whole, which keeps neither.
+fn pelvis_by_key<'de, D: Deserializer<'de>>(deserializer: D) -> Result<PelvisSpec, D::Error> {
+    struct PelvisTable;
+    impl<'de> Visitor<'de> for PelvisTable {
+        type Value = PelvisSpec;
+
+        fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+            f.write_str("a table of pelvic diameters, or `import` naming a landmarks file or a built-in pelvis")
+        }
+
+        fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<PelvisSpec, A::Error> {
+            // The keys in the order `carus scenarios show` writes them.
+            let written = toml::to_string(&PelvisDiameters::default()).map_err(A::Error::custom)?;
+            let mut keys = PelvisKeys {
+                map,
+                diameters: written.lines().filter_map(|l| Some(l.split_once(" = ")?.0.to_string())).collect(),
+                import: None,
+                first_diameter: None,
+            };
+            let given = PelvisDiameters::deserialize(MapAccessDeserializer::new(&mut keys))?;
+            Ok(match keys.import {
+                Some(landmarks_file) => PelvisSpec::Imported { landmarks_file },
+                None => PelvisSpec::Generated(given),
+            })
+        }
+    }
+    deserializer.deserialize_map(PelvisTable)
+}
+
+/// `[pelvis]` as the diameters read it, with `import` taken out on the way.
+struct PelvisKeys<A> {
+    map: A,
+    diameters: Vec<String>,
+    import: Option<PathBuf>,
+    first_diameter: Option<String>,
+}
+
+impl<'de, A: MapAccess<'de>> MapAccess<'de> for PelvisKeys<A> {
+    type Error = A::Error;
+
+    fn next_key_seed<K: DeserializeSeed<'de>>(&mut self, seed: K) -> Result<Option<K::Value>, A::Error> {
+        while let Some(key) = self.map.next_key_seed(PelvisKey {
+            diameters: &self.diameters,
+            import: self.import.is_some(),
+            first_diameter: self.first_diameter.as_deref(),
+        })? {
+            if key == "import" {
+                self.import = Some(self.map.next_value()?);
+            } else {
+                self.first_diameter.get_or_insert_with(|| key.clone());
+                return seed.deserialize(IntoDeserializer::<A::Error>::into_deserializer(key)).map(Some);
+            }
+        }
+        Ok(None)
+    }
+
+    fn next_value_seed<V: DeserializeSeed<'de>>(&mut self, seed: V) -> Result<V::Value, A::Error> {
+        self.map.next_value_seed(seed)
+    }
+}
+
+/// One key of `[pelvis]`, checked while toml still knows its line.
+struct PelvisKey<'a> {
+    diameters: &'a [String],
+    import: bool,
+    first_diameter: Option<&'a str>,
+}
+
+impl<'de> DeserializeSeed<'de> for PelvisKey<'_> {
+    type Value = String;
+
+    fn deserialize<D: Deserializer<'de>>(self, deserializer: D) -> Result<String, D::Error> {
+        let key = String::deserialize(deserializer)?;
+        let clash = |diameter: &str| {
+            D::Error::custom(format!(
+                "`import` and `{diameter}` cannot be combined: an imported pelvis takes its diameters from its \
+                 landmarks; remove one"
+            ))
+        };
+        if key == "import" {
+            return self.first_diameter.map_or(Ok(key), |d| Err(clash(d)));
+        }
+        if !self.diameters.contains(&key) {
+            let expected: Vec<String> = self.diameters.iter().map(|k| format!("`{k}`")).collect();
+            return Err(D::Error::custom(format!(
+                "unknown field `{key}`, expected one of {}, or `import` alone for a real pelvis",
+                expected.join(", ")
+            )));
+        }
+        if self.import {
+            return Err(clash(&key));
+        }
+        Ok(key)
+    }
 }
 
 /// The built-in scenarios, embedded in the binary: (name, TOML text).
@@ -701,29 +802,48 @@ impl Scenario {
                 _ => source,
             },
         })?;
-        let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        // Absolute, so that a run resumed or measured from another folder
+        // still finds an imported pelvis.
+        let absolute = std::path::absolute(path).map_err(|source| ScenarioError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let base = absolute.parent().map(Path::to_path_buf).unwrap_or_default();
         Scenario::parse(path, &text, base)
     }
 
     /// Parses and checks scenario text; `path` names it in errors.
     pub fn parse(path: &Path, text: &str, base_dir: PathBuf) -> Result<Scenario, ScenarioError> {
-        let deserializer =
-            toml::Deserializer::parse(text).map_err(|e| syntax(path, text, String::new(), &e))?;
+        let deserializer = toml::Deserializer::parse(text).map_err(|e| {
+            unit_in_value(path, text, &e).unwrap_or_else(|| syntax(path, text, String::new(), &e))
+        })?;
         let mut scenario: Scenario = serde_path_to_error::deserialize(deserializer)
             .map_err(|e| syntax(path, text, e.path().to_string(), e.inner()))?;
         scenario.base_dir = base_dir;
         scenario.check(path)?;
+        scenario.check_import(path, text)?;
         Ok(scenario)
     }
 
-    /// The scenario as a complete TOML file (every key explicit).
+    /// The scenario as a complete TOML file (every key explicit). An
+    /// imported pelvis's file is named by its absolute path when the
+    /// scenario came from a file, so that the copy in a run folder finds it
+    /// from there; a built-in pelvis keeps its name.
     pub fn to_toml(&self) -> Result<String, ScenarioError> {
         let mut text = String::new();
         if !self.description.is_empty() {
             text.push_str(&format!("# {}\n", self.description));
         }
         text.push_str("# Every key is written out; units are in the key names (CONVENTIONS.md).\n");
-        text.push_str(&toml::to_string(self)?);
+        match &self.pelvis {
+            PelvisSpec::Imported { landmarks_file }
+                if landmarks_file.as_os_str() != VISIBLE_HUMAN_FEMALE && self.base_dir.is_absolute() =>
+            {
+                let pelvis = PelvisSpec::Imported { landmarks_file: self.base_dir.join(landmarks_file) };
+                text.push_str(&toml::to_string(&Scenario { pelvis, ..self.clone() })?);
+            }
+            _ => text.push_str(&toml::to_string(self)?),
+        }
         Ok(text)
     }
 
@@ -771,6 +891,41 @@ impl Scenario {
                 key, message, hint, ..
             } => refuse(&format!("{key}{message}"), &hint),
             other => other,
+        })
+    }
+
+    /// An imported pelvis names a file that exists or the built-in pelvis:
+    /// a misspelt name is told as that, not as a file that cannot be read.
+    fn check_import(&self, path: &Path, text: &str) -> Result<(), ScenarioError> {
+        let PelvisSpec::Imported { landmarks_file } = &self.pelvis else {
+            return Ok(());
+        };
+        let resolved = self.base_dir.join(landmarks_file);
+        if landmarks_file.as_os_str() == VISIBLE_HUMAN_FEMALE || resolved.is_file() {
+            return Ok(());
+        }
+        #[derive(Deserialize)]
+        struct File {
+            pelvis: Import,
+        }
+        #[derive(Deserialize)]
+        struct Import {
+            import: toml::Spanned<String>,
+        }
+        let line = toml::from_str::<File>(text).map_or(0, |f| line_at(text, f.pelvis.import.span().start));
+        Err(ScenarioError::Syntax {
+            path: path.to_path_buf(),
+            line,
+            key: "`pelvis.import`: ".into(),
+            message: format!(
+                "{:?} is neither a file ({} does not exist) nor a built-in pelvis",
+                landmarks_file.display().to_string(),
+                std::path::absolute(&resolved).unwrap_or(resolved).display()
+            ),
+            hint: format!(
+                "the built-in pelvis names: `{VISIBLE_HUMAN_FEMALE}`; or a landmarks file's path from the \
+                 scenario file's folder (docs/IMPORT.md)"
+            ),
         })
     }
 
@@ -1191,10 +1346,78 @@ impl Scenario {
     }
 }
 
+/// The line, from 1, that byte `offset` of `text` lies on.
+fn line_at(text: &str, offset: usize) -> usize {
+    text[..offset.min(text.len())].matches('\n').count() + 1
+}
+
+/// The unit a key's name ends with, the longer endings first.
+const KEY_UNITS: [(&str, &str); 12] = [
+    ("_nm_s_per_rad", "N m s/rad"),
+    ("_nm_per_deg", "N m per degree"),
+    ("_n_s_per_m", "N s/m"),
+    ("_n_per_m", "N/m"),
+    ("_pa_per_m", "Pa/m"),
+    ("_kg_per_m3", "kg/m^3"),
+    ("_per_s", "per second"),
+    ("_mm", "millimetres"),
+    ("_deg", "degrees"),
+    ("_pa", "pascals"),
+    ("_s", "seconds"),
+    ("_n", "newtons"),
+];
+
+/// A unit written after a number (`force_max_n = 120 N`, `biparietal_mm =
+/// 9.5cm`): TOML's own advice, to quote it, would only lead to a type
+/// error, for the unit belongs in the key's name.
+fn unit_in_value(path: &Path, text: &str, error: &toml::de::Error) -> Option<ScenarioError> {
+    let line = line_at(text, error.span()?.start);
+    let (written_key, value) = text.lines().nth(line - 1)?.split_once('=')?;
+    let written_key = written_key.trim();
+    if written_key.is_empty() || !written_key.chars().all(|c| c.is_ascii_alphanumeric() || "_-.".contains(c)) {
+        return None;
+    }
+    let value = value.split('#').next()?.trim();
+    // The longest number before a unit, so that `1e3mm` is 1e3 in mm.
+    let (number, unit) = (1..value.len()).rev().filter(|&i| value.is_char_boundary(i)).find_map(|i| {
+        let (number, unit) = (value[..i].trim(), value[i..].trim());
+        let is_number = number.starts_with(|c: char| c.is_ascii_digit() || "+-.".contains(c))
+            && number.contains(|c: char| c.is_ascii_digit())
+            && number.replace('_', "").parse::<f64>().is_ok();
+        let is_unit = unit.starts_with(|c: char| c.is_alphabetic() || c == '°')
+            && unit.chars().all(|c| c.is_alphanumeric() || "/^*.°".contains(c));
+        (is_number && is_unit).then_some((number, unit))
+    })?;
+    let table = text
+        .lines()
+        .take(line - 1)
+        .filter_map(|l| l.trim().strip_prefix('[')?.split(']').next())
+        .last()
+        .map(str::trim);
+    let full_key = table.map_or(written_key.to_string(), |t| format!("{t}.{written_key}"));
+    let leaf = written_key.rsplit('.').next().unwrap_or(written_key);
+    let hint = match KEY_UNITS.iter().find(|(ending, _)| leaf.ends_with(ending)) {
+        Some((ending, name)) if unit.eq_ignore_ascii_case(&ending[1..]) => format!(
+            "write the number alone, `{leaf} = {number}`: the unit is in the key's name (`{ending}`, {name})"
+        ),
+        Some((ending, name)) => format!(
+            "write the number alone, converted to {name}: the unit is in the key's name (`{ending}`)"
+        ),
+        None => "write the number alone: units are in the key names (`_mm` millimetres, `_deg` degrees, `_s` \
+                 seconds, `_n` newtons, `_pa` pascals), and this key takes a plain number"
+            .to_string(),
+    };
+    Some(ScenarioError::Syntax {
+        path: path.to_path_buf(),
+        line,
+        key: format!("`{full_key}`: "),
+        message: format!("a unit after the number in `{value}` is not TOML, and quoted it is no number"),
+        hint,
+    })
+}
+
 fn syntax(path: &Path, text: &str, key: String, error: &toml::de::Error) -> ScenarioError {
-    let line = error.span().map_or(0, |s| {
-        text[..s.start.min(text.len())].matches('\n').count() + 1
-    });
+    let line = error.span().map_or(0, |s| line_at(text, s.start));
     let mut message = error.message().trim().to_string();
     // The parser names no key for a duplicate; its span covers the key written twice.
     let twice = error
@@ -1444,6 +1667,107 @@ mod tests {
                 .to_string();
             assert!(e.contains(&format!("{table}.density_kg_per_m3")) && e.contains("g/cm^3"), "{e}");
         }
+    }
+
+    /// The scenario a run folder keeps names an imported pelvis so that it is
+    /// found from there, whatever folder the run was started in or resumed from.
+    #[test]
+    fn an_imported_pelvis_is_found_from_the_run_folder() {
+        let relative = Scenario::from_file(Path::new("../../scenarios/normal.toml")).unwrap();
+        assert!(relative.base_dir.is_absolute() && relative.base_dir.ends_with("scenarios"), "{:?}", relative.base_dir);
+
+        let dir = tempfile::tempdir().unwrap();
+        let anatomy = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/anatomy");
+        std::fs::create_dir_all(dir.path().join("imp/anat")).unwrap();
+        for file in ["visible-human-female-pelvis.landmarks.toml", "visible-human-female-pelvis.stl"] {
+            std::fs::copy(anatomy.join(file), dir.path().join("imp/anat").join(file)).unwrap();
+        }
+        let file = dir.path().join("imp/s.toml");
+        std::fs::write(&file, "name = \"x\"\n[pelvis]\nimport = \"anat/visible-human-female-pelvis.landmarks.toml\"\n")
+            .unwrap();
+        let scenario = Scenario::from_file(&file).unwrap();
+        let landmarks = dir.path().join("imp/anat/visible-human-female-pelvis.landmarks.toml");
+        let shown = scenario.to_toml().unwrap();
+        assert!(shown.contains(&format!("import = {:?}", landmarks.display().to_string())), "{shown}");
+
+        // The run folder's copy, read as `carus measure` reads it, and the
+        // checkpoint's, as `--resume` reads it, with an unrelated base.
+        std::fs::create_dir(dir.path().join("run")).unwrap();
+        let copy = dir.path().join("run/scenario.toml");
+        std::fs::write(&copy, &shown).unwrap();
+        let measured = Scenario::from_file(&copy).unwrap();
+        let resumed = Scenario::parse(Path::new("checkpoint.json"), &shown, PathBuf::from("elsewhere")).unwrap();
+        for s in [&measured, &resumed] {
+            assert_eq!(s.pelvis, PelvisSpec::Imported { landmarks_file: landmarks.clone() });
+            s.pelvis.build(&s.base_dir).unwrap();
+            assert_eq!(s.to_toml().unwrap(), shown, "written again unchanged");
+        }
+    }
+
+    /// A mistake in `[pelvis]` is named at its own line and dotted path, as
+    /// in every other table, whether the pelvis is generated or imported.
+    #[test]
+    fn a_mistake_in_the_pelvis_table_names_its_line_and_key() {
+        let s = parse("name = \"x\"\n[pelvis]\ninlet_ap_mm = 100.0\n").unwrap();
+        assert_eq!(s.pelvis, PelvisSpec::Generated(PelvisDiameters { inlet_ap_mm: 100.0, ..Default::default() }));
+        let s = parse("name = \"x\"\n[pelvis]\n").unwrap();
+        assert_eq!(s.pelvis, PelvisSpec::default());
+        let s = parse(&format!("name = \"x\"\n[pelvis]\nimport = {VISIBLE_HUMAN_FEMALE:?}\n")).unwrap();
+        assert_eq!(s.pelvis, PelvisSpec::Imported { landmarks_file: VISIBLE_HUMAN_FEMALE.into() });
+
+        let e = parse("name = \"x\"\n[pelvis]\nmid_ap_mm = 115.0\ninterspinous_mm = \"102\"\n").unwrap_err().to_string();
+        assert!(e.starts_with("test.toml:4: `pelvis.interspinous_mm`: invalid type: string \"102\""), "{e}");
+        assert!(e.contains("numbers without quotes"), "{e}");
+        let e = parse("name = \"x\"\n[pelvis]\nmid_ap_mm = 115.0\ninlet_apmm = 110.0\n").unwrap_err().to_string();
+        assert!(e.starts_with("test.toml:4: `pelvis.inlet_apmm`: unknown field `inlet_apmm`"), "{e}");
+        assert!(e.contains("expected one of `inlet_ap_mm`, `inlet_transverse_mm`") && e.contains("`import`"), "{e}");
+        assert!(e.contains("check the spelling"), "{e}");
+        // toml hands the keys over in its own order: the second of the pair met is named.
+        let e = parse("name = \"x\"\n[pelvis]\nmid_ap_mm = 115.0\nimport = \"a.toml\"\n").unwrap_err().to_string();
+        assert!(
+            ["test.toml:3: `pelvis.mid_ap_mm`: ", "test.toml:4: `pelvis.import`: "].iter().any(|at| e.starts_with(at))
+                && e.contains("`import` and `mid_ap_mm` cannot be combined"),
+            "{e}"
+        );
+        let e = parse("name = \"x\"\n[pelvis]\nimport = \"a.toml\"\nmid_ap_mm = 115.0\n").unwrap_err().to_string();
+        assert!(e.starts_with("test.toml:4: `pelvis.mid_ap_mm`: `import` and `mid_ap_mm` cannot be combined"), "{e}");
+        let e = parse("name = \"x\"\n[pelvis]\nimport = 3\n").unwrap_err().to_string();
+        assert!(e.starts_with("test.toml:3: `pelvis.import`: invalid type"), "{e}");
+    }
+
+    /// `force_max_n = 120 N`: TOML would say to quote it, which only leads
+    /// to a type error; the number is to be written alone.
+    #[test]
+    fn a_unit_written_in_a_value_is_refused_with_the_key_s_unit() {
+        for value in ["120N", "120 N", "120 n # peak"] {
+            let e = parse(&format!("name = \"x\"\n[expulsion]\nforce_max_n = {value}\n")).unwrap_err().to_string();
+            assert!(e.starts_with("test.toml:3: `expulsion.force_max_n`: a unit after the number"), "{e}");
+            assert!(e.contains("write the number alone, `force_max_n = 120`") && e.contains("newtons"), "{e}");
+        }
+        let e = parse("name = \"x\"\n[head]\nbiparietal_mm = 9.5cm\n").unwrap_err().to_string();
+        assert!(e.starts_with("test.toml:3: `head.biparietal_mm`: a unit after the number in `9.5cm`"), "{e}");
+        assert!(e.contains("converted to millimetres") && e.contains("`_mm`"), "{e}");
+        let e = parse("name = \"x\"\n[floor.mesh]\nthickness_mm = 1e1 mm\n").unwrap_err().to_string();
+        assert!(e.starts_with("test.toml:3: `floor.mesh.thickness_mm`") && e.contains("`thickness_mm = 1e1`"), "{e}");
+        let e = parse("name = \"x\"\n[contact]\nfriction = 0.3 mu\n").unwrap_err().to_string();
+        assert!(e.contains("`contact.friction`") && e.contains("this key takes a plain number"), "{e}");
+        // A bare word is not a unit: TOML's own message stands.
+        let e = parse("name = \"x\"\n[start]\nposition = LOT\n").unwrap_err().to_string();
+        assert!(e.starts_with("test.toml:3: string values must be quoted"), "{e}");
+    }
+
+    /// A misspelt built-in pelvis is told as neither a file nor a built-in,
+    /// with the built-in names.
+    #[test]
+    fn a_misspelt_builtin_pelvis_is_named_with_the_builtins() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("s.toml");
+        std::fs::write(&file, "name = \"x\"\n\n[pelvis]\nimport = \"visible-human-femal\"\n").unwrap();
+        let e = Scenario::from_file(&file).unwrap_err().to_string();
+        let resolved = dir.path().join("visible-human-femal");
+        assert!(e.starts_with(&format!("{}:4: `pelvis.import`: \"visible-human-femal\" is neither a file", file.display())), "{e}");
+        assert!(e.contains(&format!("({} does not exist)", resolved.display())), "{e}");
+        assert!(e.contains(&format!("`{VISIBLE_HUMAN_FEMALE}`")), "{e}");
     }
 
     #[test]
