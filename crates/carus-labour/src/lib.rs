@@ -55,6 +55,8 @@ pub enum LabourError {
     },
     #[error("checkpoint: {0}")]
     Checkpoint(String),
+    #[error("the run reached its end at t = {end_s:.2} s and everything it computed is written; there is nothing to resume (to run it again: carus run {} --out NEW_FOLDER)", scenario.display())]
+    AlreadyEnded { end_s: f64, scenario: std::path::PathBuf },
     #[error("{0}")]
     LeftCanal(String),
     /// A fetal body pressed through the bone contact's reach: the penalty

@@ -16,12 +16,14 @@ pub struct RunSummary {
     pub simulated_s: f64,
     /// Wall-clock time of the run, s; a resumed run's counts every leg.
     pub wall_s: f64,
-    /// Of it, each stage of the rigid steps (`carus bench labour`).
+    /// Of it, each stage of the rigid steps (`carus bench labour`); a
+    /// resumed run's, of its last leg only.
     #[serde(default)]
     pub stage_wall_s: StageTimes,
     /// Of it, writing frames and checkpoints, keeping the floor's
     /// snapshots, detecting the movements and writing the pose history, up
-    /// to the summary (run.json and the report come after).
+    /// to the summary (run.json and the report come after); a resumed
+    /// run's, of its last leg only.
     #[serde(default)]
     pub output_wall_s: f64,
     /// Whether the run reached its end (false: stopped, resumable, or failed).
@@ -43,7 +45,8 @@ pub struct RunSummary {
 }
 
 /// An instant worth a picture (engagement, full internal rotation,
-/// crowning, restitution), with the poses and the nearest ParaView frame.
+/// crowning, restitution, and an arrested run's end), with the poses, the
+/// nearest ParaView frame and the floor's state nearest it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct KeyMoment {
     pub name: String,
@@ -129,11 +132,18 @@ pub fn key_moments(
         .iter()
         .position(|&d| d)
         .map(|i| report.series.time_s[i]);
+    // The report pictures an arrested run at its last sample, as here.
+    let arrest = report
+        .outcome
+        .arrest
+        .as_ref()
+        .and_then(|_| report.series.time_s.last().copied());
     let candidates = [
         ("engagement", m.engagement.end_s),
         ("internal_rotation", m.internal_rotation.end_s),
         ("crowning", crowning),
         ("restitution", m.external_rotation.end_s),
+        ("arrest", arrest),
     ];
     candidates
         .iter()

@@ -1403,9 +1403,12 @@ fn unit_in_value(path: &Path, text: &str, error: &toml::de::Error) -> Option<Sce
         Some((ending, name)) => format!(
             "write the number alone, converted to {name}: the unit is in the key's name (`{ending}`)"
         ),
-        None => "write the number alone: units are in the key names (`_mm` millimetres, `_deg` degrees, `_s` \
-                 seconds, `_n` newtons, `_pa` pascals), and this key takes a plain number"
+        None if takes_a_number(&full_key) => "write the number alone: units are in the key names (`_mm` \
+                 millimetres, `_deg` degrees, `_s` seconds, `_n` newtons, `_pa` pascals), and this key takes a \
+                 plain number"
             .to_string(),
+        // Not a number's key (`name = 2nd`): TOML's own message fits.
+        None => return None,
     };
     Some(ScenarioError::Syntax {
         path: path.to_path_buf(),
@@ -1414,6 +1417,21 @@ fn unit_in_value(path: &Path, text: &str, error: &toml::de::Error) -> Option<Sce
         message: format!("a unit after the number in `{value}` is not TOML, and quoted it is no number"),
         hint,
     })
+}
+
+/// Whether the dotted key holds a number in a complete scenario file.
+fn takes_a_number(full_key: &str) -> bool {
+    let Some(complete) = Scenario::builtin("normal").ok().and_then(|s| s.to_toml().ok()) else {
+        return false;
+    };
+    let Ok(table) = complete.parse::<toml::Table>() else {
+        return false;
+    };
+    let mut value = Some(&toml::Value::Table(table));
+    for part in full_key.split('.') {
+        value = value.and_then(|v| v.get(part));
+    }
+    value.is_some_and(|v| v.is_integer() || v.is_float())
 }
 
 fn syntax(path: &Path, text: &str, key: String, error: &toml::de::Error) -> ScenarioError {
@@ -1751,9 +1769,12 @@ mod tests {
         assert!(e.starts_with("test.toml:3: `floor.mesh.thickness_mm`") && e.contains("`thickness_mm = 1e1`"), "{e}");
         let e = parse("name = \"x\"\n[contact]\nfriction = 0.3 mu\n").unwrap_err().to_string();
         assert!(e.contains("`contact.friction`") && e.contains("this key takes a plain number"), "{e}");
-        // A bare word is not a unit: TOML's own message stands.
+        // A bare word is not a unit, nor a key that takes no number a
+        // number's key: TOML's own message stands.
         let e = parse("name = \"x\"\n[start]\nposition = LOT\n").unwrap_err().to_string();
         assert!(e.starts_with("test.toml:3: string values must be quoted"), "{e}");
+        let e = parse("name = 2nd\n").unwrap_err().to_string();
+        assert!(!e.contains("a unit after the number") && !e.contains("plain number"), "{e}");
     }
 
     /// A misspelt built-in pelvis is told as neither a file nor a built-in,

@@ -142,7 +142,9 @@ fn meshes_at(
     let mut floor_time_s = None;
     if let Some(floor) = &scene.floor {
         let (mesh, frame_time) = floor_mesh(floor, moment.time_s, stretch_range);
-        floor_time_s = frame_time.filter(|t| (t - moment.time_s).abs() > 1e-9);
+        // Captions give times to a tenth of a second: a frame that reads
+        // the same as its moment needs no note.
+        floor_time_s = frame_time.filter(|t| format!("{t:.1}") != format!("{:.1}", moment.time_s));
         meshes.push(mesh);
     }
     if let Some(pelvis) = &scene.pelvis {

@@ -144,9 +144,10 @@ struct LabourBenchReport {
     /// Before the first step: building the scene, writing the parts that
     /// do not move (pelvis, ligaments, fetal bodies, scenario.toml).
     setup_wall_s: f64,
-    /// Writing frames, checkpoints, the history and the record.
+    /// Writing frames and checkpoints, keeping floor snapshots, detecting
+    /// the movements and writing the pose history.
     output_wall_s: f64,
-    /// report.html with its pictures.
+    /// run.json, then report.html with its pictures.
     report_wall_s: f64,
     peak_rss_bytes: Option<u64>,
     /// Issue 4's figure for the built-in normal scenario; null for any other.
@@ -199,7 +200,11 @@ fn labour(args: &LabourBenchArgs) -> anyhow::Result<Status> {
         println!("  peak RSS {:.0} MiB", rss as f64 / 1048576.0);
     }
     if let Some(target) = report.target_wall_s {
-        let verdict = if report.wall_s < target { "met" } else { "NOT met" };
+        let verdict = match (report.completed, report.wall_s < target) {
+            (false, _) => "not judged, the run did not reach its end",
+            (true, true) => "met",
+            (true, false) => "NOT met",
+        };
         println!("  issue 4's target, the normal scenario to its end in under {target:.0} s on 2 cores: {verdict} on this machine");
     }
     Ok(Status::Success)
@@ -430,9 +435,10 @@ mod tests {
         let stages = report.stages_wall_s;
         assert!(stages.named().iter().all(|(_, t)| *t >= 0.0));
         assert!(stages.bone_contacts_s > 0.0 && stages.floor_tled_s > 0.0);
-        let accounted = stages.total_s() + report.setup_wall_s + report.output_wall_s + report.report_wall_s;
-        assert!((accounted - report.wall_s).abs() < 0.05 * report.wall_s + 1e-3, "{accounted} of {}", report.wall_s);
-        assert!((report.us_per_rigid_step - stages.total_s() * 1e6 / report.rigid_steps as f64).abs() < 1e-6);
+        // The parts were timed inside the run, the whole outside it.
+        let run_wall_s = report.wall_s - report.report_wall_s;
+        assert!(stages.total_s() + report.output_wall_s <= run_wall_s, "{stages:?} in {run_wall_s} s");
+        assert!(report.setup_wall_s > 0.0 && report.report_wall_s > 0.0);
         assert_eq!(report.target_wall_s, None, "the coarse scenario is not the built-in `normal`");
         assert!(report.floor_elements > 0 && report.floor_substeps_per_step > 0);
     }

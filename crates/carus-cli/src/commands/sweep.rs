@@ -236,20 +236,30 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
     }
     let resuming = args.resume.is_some();
     let keys: Vec<&str> = settings.iter().map(|s| s.key.as_str()).collect();
-    let table = Mutex::new((0..scenarios.len()).map(|_| None).collect::<Vec<Option<Finished>>>());
+    let dirs: Vec<PathBuf> = combinations.iter().enumerate().map(|(i, c)| out_dir.join(folder_name(i, c))).collect();
+    let variant = |i: usize| Variant { scenario: &scenarios[i], dir: &dirs[i], keys: &keys, combination: &combinations[i] };
+    // A resumed sweep's ended runs are rows from the start, so the tables
+    // written as the others end (or are stopped again) keep them.
+    let kept: Vec<Option<Finished>> = (0..scenarios.len())
+        .map(|i| {
+            let v = variant(i);
+            (resuming && ended(v.dir)).then(|| v.kept().unwrap_or_else(|error| unmade(v.dir, v.combination, &keys, &error)))
+        })
+        .collect();
+    let to_run: Vec<usize> = (0..kept.len()).filter(|&i| kept[i].is_none()).collect();
+    let table = Mutex::new(kept);
     let failures = pool.install(|| {
-        (0..scenarios.len())
+        to_run
             .into_par_iter()
             .map(|i| {
                 if stop.load(Ordering::Relaxed) {
                     return Ok(false);
                 }
-                let dir = out_dir.join(folder_name(i, &combinations[i]));
+                let dir = &dirs[i];
                 // A run that cannot be made is a row of the table, not the end of the sweep.
-                let variant = Variant { scenario: &scenarios[i], dir: &dir, keys: &keys, combination: &combinations[i] };
-                let finished = variant
+                let finished = variant(i)
                     .finish(resuming, &stop, args.output.quiet)
-                    .unwrap_or_else(|error| unmade(&dir, &combinations[i], &keys, &error));
+                    .unwrap_or_else(|error| unmade(dir, &combinations[i], &keys, &error));
                 let failed = finished.summary["failure"].is_string();
                 let mut rows = table.lock().expect("no run panics while holding the table");
                 rows[i] = Some(finished);
@@ -333,16 +343,20 @@ struct Variant<'a> {
 }
 
 impl Variant<'_> {
+    /// The row of a run that has ended, read from its run.json.
+    fn kept(&self) -> anyhow::Result<Finished> {
+        let path = self.dir.join(RUN_FILE);
+        let text = std::fs::read_to_string(&path).with_context(|| format!("cannot read {}", path.display()))?;
+        let record = serde_json::from_str::<RunRecord>(&text).with_context(|| format!("{} is damaged", path.display()))?;
+        Ok(self.row(&record))
+    }
+
     /// Runs the variant with its report, as `carus run` would; when the
-    /// sweep is resumed, goes on with a run stopped part way, and keeps
-    /// one that reached its end or failed (its rerun would fail alike).
+    /// sweep is resumed, goes on with a run stopped part way (ended ones
+    /// are [`Variant::kept`]).
     fn finish(&self, resuming: bool, stop: &Arc<AtomicBool>, quiet: bool) -> anyhow::Result<Finished> {
         let dir = self.dir;
-        let record = if resuming && dir.join(RUN_FILE).exists() && ended(dir) {
-            let path = dir.join(RUN_FILE);
-            let text = std::fs::read_to_string(&path).with_context(|| format!("cannot read {}", path.display()))?;
-            serde_json::from_str::<RunRecord>(&text).with_context(|| format!("{} is damaged", path.display()))?
-        } else if resuming && dir.join(CHECKPOINT_FILE).exists() {
+        let record = if resuming && dir.join(CHECKPOINT_FILE).exists() {
             let options = RunOptions {
                 stop: Some(stop.clone()),
                 stop_at_s: None,
@@ -355,16 +369,21 @@ impl Variant<'_> {
         } else {
             run_into(self.scenario, dir, stop)?
         };
-        let mut summary = json_summary(&record, dir);
-        summary["set"] = set_json(self.combination);
-        summary["at_station_50mm"] = at_window_end(&record);
         if !quiet {
             let note = record.summary.failure.as_deref().map_or(String::new(), |f| format!(": ended early, {f}"));
             let verb = if record.summary.completed { "finished" } else { "stopped" };
             eprintln!("{verb} {} in {:.0} s{note}", dir.display(), record.summary.wall_s);
         }
-        let row = table_row(&record, dir, self.keys, self.combination, &summary);
-        Ok(Finished { summary, row })
+        Ok(self.row(&record))
+    }
+
+    /// The run's row of both tables.
+    fn row(&self, record: &RunRecord) -> Finished {
+        let mut summary = json_summary(record, self.dir);
+        summary["set"] = set_json(self.combination);
+        summary["at_station_50mm"] = at_window_end(record);
+        let row = table_row(record, self.dir, self.keys, self.combination, &summary);
+        Finished { summary, row }
     }
 }
 
