@@ -29,7 +29,8 @@ pub struct RunSummary {
     /// Whether the run reached its end (false: stopped, resumable, or failed).
     pub completed: bool,
     /// Why the run ended early, when the physics failed (for example a floor
-    /// element crushed inside out); everything up to then is written.
+    /// element crushed inside out), and why it has no detector report if
+    /// the detector refused its history; everything simulated is written.
     pub failure: Option<String>,
     pub rigid_steps: u64,
     pub rigid_dt_s: f64,

@@ -8,7 +8,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Instant;
 
-use carus_analysis::{detect, Outcome, PoseHistory};
+use carus_analysis::{detect, DetectorReport, Outcome, PoseHistory};
 use carus_contact::RigidPose;
 
 use crate::output::{self, Checkpoint};
@@ -338,6 +338,20 @@ struct Timing {
     output_s: f64,
 }
 
+/// The detector's report on a run's history, and the run's failure note:
+/// a run stopped before its second sample has nothing to detect yet, and a
+/// history the detector refuses is still written, with why in the note.
+fn detect_or_say_why(history: &PoseHistory, failure: Option<String>) -> (Option<DetectorReport>, Option<String>) {
+    match (history.samples.len() >= 2).then(|| detect(history)) {
+        Some(Ok(report)) => (Some(report), failure),
+        Some(Err(e)) => {
+            let why = format!("the detector could not read the run's pose history: {e}");
+            (None, Some(failure.map_or(why.clone(), |f| format!("{f}; {why}"))))
+        }
+        None => (None, failure),
+    }
+}
+
 /// The trunk's centre (or, without a trunk, the head's) is well past the outlet.
 fn delivered(sim: &Simulation<'_>) -> bool {
     let scene = sim.scene;
@@ -477,12 +491,7 @@ fn finish(
     let writing = Instant::now();
     let scene = sim.scene;
     let history = history(sim);
-    // A run stopped before its second sample has nothing to detect yet.
-    let report = if history.samples.len() >= 2 {
-        Some(detect(&history)?)
-    } else {
-        None
-    };
+    let (report, failure) = detect_or_say_why(&history, failure);
     output::write_json(&out_dir.join(output::HISTORY_JSON), &history)?;
     output::write_json(&out_dir.join(output::MOVEMENTS_FILE), &report)?;
     output::write_history_csv(
@@ -1069,6 +1078,25 @@ mod tests {
         assert!(e.contains("cut short or damaged") && e.contains("checkpoint.json"), "{e}");
         std::fs::write(&path, &text).unwrap();
         assert!(resume(dir.path(), &RunOptions::default(), &mut SilentObserver).is_ok());
+    }
+
+    /// A history the detector refuses leaves no report but a note of why,
+    /// after the run's own failure if it had one; too short a history is
+    /// no failure.
+    #[test]
+    fn a_history_the_detector_refuses_is_noted_not_fatal() {
+        let (_, record) = run_in(&coarse(0.05), &RunOptions::default());
+        let mut history = record.history.clone();
+        assert!(detect_or_say_why(&history, None).0.is_some());
+        history.samples[1].head.position_m *= 1e6;
+        let (report, note) = detect_or_say_why(&history, None);
+        assert!(report.is_none());
+        let note = note.expect("a note");
+        assert!(note.starts_with("the detector could not read the run's pose history: sample 1"), "{note}");
+        let (_, note) = detect_or_say_why(&history, Some("a floor element inverted".into()));
+        assert!(note.unwrap().starts_with("a floor element inverted; the detector"));
+        history.samples.truncate(1);
+        assert_eq!(detect_or_say_why(&history, None), (None, None));
     }
 
     /// A run that reaches its end between two VTU frames adds one at its

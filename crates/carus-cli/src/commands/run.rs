@@ -120,7 +120,11 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
         Err(error) => eprintln!("warning: report.html was not written: {error:#}"),
     }
     if let Some(failure) = &record.summary.failure {
-        eprintln!("error: the run ended early at t = {:.2} s: {failure} (everything up to then is written)", record.summary.simulated_s);
+        if record.summary.completed {
+            eprintln!("error: {failure} (everything simulated is written)");
+        } else {
+            eprintln!("error: the run ended early at t = {:.2} s: {failure} (everything up to then is written)", record.summary.simulated_s);
+        }
     } else if !record.summary.completed && !args.output.quiet {
         eprintln!(
             "stopped at t = {:.2} s; continue with: carus run --resume {}",
