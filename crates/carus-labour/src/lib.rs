@@ -57,6 +57,8 @@ pub enum LabourError {
     Checkpoint(String),
     #[error("the run reached its end at t = {end_s:.2} s and everything it computed is written; there is nothing to resume (to run it again: carus run {} --out NEW_FOLDER)", scenario.display())]
     AlreadyEnded { end_s: f64, scenario: std::path::PathBuf },
+    #[error("the run failed at t = {failed_s:.2} s ({failure}); its checkpoint holds the state it failed in, so resuming would fail alike: change what the failure names in {} and run it with a new --out", scenario.display())]
+    AlreadyFailed { failed_s: f64, failure: String, scenario: std::path::PathBuf },
     #[error("{0}")]
     LeftCanal(String),
     /// A fetal body pressed through the bone contact's reach: the penalty

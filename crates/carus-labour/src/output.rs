@@ -92,9 +92,10 @@ pub fn run_reached_its_end(dir: &Path) -> Option<f64> {
     run_ending(dir).and_then(|(completed, _, t)| completed.then_some(t))
 }
 
-/// Whether the run in `dir` ended early on a failure of the physics.
-pub fn run_failed(dir: &Path) -> bool {
-    run_ending(dir).is_some_and(|(_, failure, _)| failure.is_some())
+/// When the run in `dir` ended early on a failure of the physics (or
+/// its history was refused by the detector): when, and why.
+pub fn run_failed(dir: &Path) -> Option<(f64, String)> {
+    run_ending(dir).and_then(|(_, failure, t)| Some((t, failure?)))
 }
 
 pub fn read_checkpoint(dir: &Path) -> Result<Checkpoint, LabourError> {

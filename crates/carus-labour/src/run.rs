@@ -142,12 +142,14 @@ pub fn resume(
     observer: &mut dyn Observer,
 ) -> Result<RunRecord, LabourError> {
     let started = Instant::now();
-    // Stepping on would rewrite a finished run's record with one leg of it.
+    // Stepping on would rewrite a finished run's record with one leg of
+    // it, and a failed run's checkpoint holds the state it failed in.
+    let scenario_file = out_dir.join(output::SCENARIO_FILE);
     if let Some(end_s) = output::run_reached_its_end(out_dir) {
-        return Err(LabourError::AlreadyEnded {
-            end_s,
-            scenario: out_dir.join(output::SCENARIO_FILE),
-        });
+        return Err(LabourError::AlreadyEnded { end_s, scenario: scenario_file });
+    }
+    if let Some((failed_s, failure)) = output::run_failed(out_dir) {
+        return Err(LabourError::AlreadyFailed { failed_s, failure, scenario: scenario_file });
     }
     let checkpoint = output::read_checkpoint(out_dir)?;
     let scenario = Scenario::parse(
@@ -1078,6 +1080,23 @@ mod tests {
         assert!(e.contains("cut short or damaged") && e.contains("checkpoint.json"), "{e}");
         std::fs::write(&path, &text).unwrap();
         assert!(resume(dir.path(), &RunOptions::default(), &mut SilentObserver).is_ok());
+    }
+
+    /// A failed run is not resumed: its checkpoint holds the state it
+    /// failed in, and its files stay as they are.
+    #[test]
+    fn a_failed_run_is_not_resumed() {
+        let stop = RunOptions { stop_at_s: Some(0.1), ..RunOptions::default() };
+        let (dir, _) = run_in(&coarse(0.3), &stop);
+        let path = dir.path().join(output::RUN_FILE);
+        let mut record: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+        record["summary"]["failure"] = "a floor element turned inside out".into();
+        std::fs::write(&path, record.to_string()).unwrap();
+        let written = std::fs::read(&path).unwrap();
+        let e = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).unwrap_err().to_string();
+        assert!(e.starts_with("the run failed at t = 0.10 s (a floor element turned inside out)"), "{e}");
+        assert!(e.contains("with a new --out"), "{e}");
+        assert_eq!(std::fs::read(&path).unwrap(), written);
     }
 
     /// A history the detector refuses leaves no report but a note of why,

@@ -615,18 +615,24 @@ impl<'a> Simulation<'a> {
             })
             .collect::<Result<Vec<_>, _>>()?;
         lap.charge(&mut self.stage_times.floor_contact_s);
+        // An element turned inside out is explained wherever the solver
+        // sees it: in a sub-step, or in the forces read after them.
+        let explain = |e: carus_fem::FemError, solver: &TledSolver| {
+            let names: Vec<String> =
+                (0..held_by.len()).map(|b| format!("held on the {}", Body::of(b).name().replace('_', " "))).collect();
+            let holders: Vec<(&str, &[u32])> = std::iter::once(("held on the bony wall", on_bone.as_slice()))
+                .chain(names.iter().map(String::as_str).zip(held_by.iter().map(Vec::as_slice)))
+                .collect();
+            floor_failure(e, solver, floor, &scene.scenario.floor.mesh, &holders)
+        };
         for _ in 0..self.substeps {
             if let Err(e) = solver.step() {
-                let names: Vec<String> =
-                    (0..held_by.len()).map(|b| format!("held on the {}", Body::of(b).name().replace('_', " "))).collect();
-                let holders: Vec<(&str, &[u32])> =
-                    std::iter::once(("held on the bony wall", on_bone.as_slice()))
-                        .chain(names.iter().map(String::as_str).zip(held_by.iter().map(Vec::as_slice)))
-                        .collect();
-                return Err(floor_failure(e, solver, floor, &scene.scenario.floor.mesh, &holders));
+                return Err(explain(e, solver));
             }
         }
-        solver.update_internal_forces()?;
+        if let Err(e) = solver.update_internal_forces() {
+            return Err(explain(e, solver));
+        }
         let pivot = self
             .state
             .bodies

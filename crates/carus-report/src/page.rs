@@ -273,7 +273,7 @@ fn pictures(w: &mut String, parts: &Parts) {
                     m.moment.kind.rule()
                 );
                 if let Some(t) = m.floor_time_s {
-                    let _ = write!(w, "<br><small>floor as recorded at {t:.1} s</small>");
+                    let _ = write!(w, "<br><small>floor as recorded at {t:.2} s</small>");
                 }
                 let _ = write!(w, "</figcaption>");
                 match &m.pictures {

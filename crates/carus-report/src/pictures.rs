@@ -142,9 +142,9 @@ fn meshes_at(
     let mut floor_time_s = None;
     if let Some(floor) = &scene.floor {
         let (mesh, frame_time) = floor_mesh(floor, moment.time_s, stretch_range);
-        // Captions give times to a tenth of a second: a frame that reads
-        // the same as its moment needs no note.
-        floor_time_s = frame_time.filter(|t| format!("{t:.1}") != format!("{:.1}", moment.time_s));
+        // A frame within half the captions' tenth of a second of its
+        // moment needs no note.
+        floor_time_s = frame_time.filter(|t| (t - moment.time_s).abs() >= FLOOR_NOTE_FROM_S);
         meshes.push(mesh);
     }
     if let Some(pelvis) = &scene.pelvis {
@@ -169,6 +169,10 @@ fn posed_mesh(name: &str, surface: &TriSurface, pose: &RigidPose, rgb: [f32; 3])
         rgb,
     )
 }
+
+/// How far a floor frame may lie from its moment, s, before the caption
+/// gives the frame's own time.
+const FLOOR_NOTE_FROM_S: f64 = 0.05;
 
 /// The floor at the frame nearest `time_s`, coloured by its stretch; at
 /// rest and plain when no frame was recorded.

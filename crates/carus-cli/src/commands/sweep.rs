@@ -370,8 +370,12 @@ impl Variant<'_> {
             run_into(self.scenario, dir, stop)?
         };
         if !quiet {
-            let note = record.summary.failure.as_deref().map_or(String::new(), |f| format!(": ended early, {f}"));
-            let verb = if record.summary.completed { "finished" } else { "stopped" };
+            let note = record.summary.failure.as_deref().map_or(String::new(), |f| format!(": {f}"));
+            let verb = match (&record.summary.failure, record.summary.completed) {
+                (Some(_), _) => "failed",
+                (None, true) => "finished",
+                (None, false) => "stopped",
+            };
             eprintln!("{verb} {} in {:.0} s{note}", dir.display(), record.summary.wall_s);
         }
         Ok(self.row(&record))
@@ -390,7 +394,7 @@ impl Variant<'_> {
 /// Whether the run in `dir` is over for good: it reached its end, or it
 /// failed (a rerun from its checkpoint would fail alike).
 fn ended(dir: &Path) -> bool {
-    output::run_reached_its_end(dir).is_some() || output::run_failed(dir)
+    output::run_reached_its_end(dir).is_some() || output::run_failed(dir).is_some()
 }
 
 /// A variant's settings as a JSON object, key to value as given.
