@@ -861,7 +861,16 @@ impl Scenario {
         };
         let parsed = match format!("v = {value}").parse::<toml::Table>() {
             Ok(mut t) => t.remove("v").expect("the one key parsed"),
-            Err(_) => toml::Value::String(value.to_string()),
+            Err(_) => {
+                // A unit after a number gets the hint a scenario file gets.
+                let (section, written) = key.rsplit_once('.').map_or((None, key), |(s, k)| (Some(s), k));
+                let text = format!("{}{written} = {value}\n", section.map_or(String::new(), |s| format!("[{s}]\n")));
+                let unit = text.parse::<toml::Table>().err().and_then(|e| unit_in_value(&label, &text, &e));
+                if let Some(ScenarioError::Syntax { key, message, hint, .. }) = unit {
+                    return Err(refuse(&format!("{key}{message}"), &hint));
+                }
+                toml::Value::String(value.to_string())
+            }
         };
         let mut table = toml::Table::try_from(self)?;
         let mut parts: Vec<&str> = key.split('.').collect();
@@ -1775,6 +1784,11 @@ mod tests {
         assert!(e.starts_with("test.toml:3: string values must be quoted"), "{e}");
         let e = parse("name = 2nd\n").unwrap_err().to_string();
         assert!(!e.contains("a unit after the number") && !e.contains("plain number"), "{e}");
+        // The same on the command line (`--set`).
+        let normal = Scenario::builtin("normal").unwrap();
+        let e = normal.with_setting("expulsion.force_max_n", "120 N").unwrap_err().to_string();
+        assert!(e.contains("`expulsion.force_max_n`: a unit after the number") && e.contains("`force_max_n = 120`"), "{e}");
+        assert!(normal.with_setting("start.position", "LOT").is_ok());
     }
 
     /// A misspelt built-in pelvis is told as neither a file nor a built-in,

@@ -72,7 +72,10 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
 
     let (out_dir, record) = match &args.resume {
         Some(dir) => {
-            if !args.output.quiet {
+            // A run that ended or failed is refused by resume, unannounced.
+            let resumable = carus_labour::output::run_reached_its_end(dir).is_none()
+                && carus_labour::output::run_failed(dir).is_none();
+            if !args.output.quiet && resumable {
                 eprintln!("resuming the run in {}", dir.display());
             }
             (
