@@ -430,6 +430,40 @@ pub(super) fn run_into(scenario: &Scenario, dir: &Path, stop: &Arc<AtomicBool>) 
     Ok(record)
 }
 
+/// The record of the run in `dir`, read from its run.json.
+pub(super) fn read_record(dir: &Path) -> anyhow::Result<RunRecord> {
+    let path = dir.join(carus_labour::output::RUN_FILE);
+    let text = std::fs::read_to_string(&path).with_context(|| format!("cannot read {}", path.display()))?;
+    serde_json::from_str(&text).with_context(|| format!("{} is damaged; run the scenario again", path.display()))
+}
+
+/// Whether the run in `dir` is over for good: it reached its end, or it
+/// failed (a rerun from its checkpoint would fail alike).
+pub(super) fn run_ended(dir: &Path) -> bool {
+    carus_labour::output::run_reached_its_end(dir).is_some() || carus_labour::output::run_failed(dir).is_some()
+}
+
+/// A run of a stopped sweep or set of sanity cases, gone on with: kept as
+/// it is if it ended, continued from its checkpoint if it was stopped part
+/// way (with its report), run from the start if it never began.
+pub(super) fn go_on_into(scenario: &Scenario, dir: &Path, stop: &Arc<AtomicBool>) -> anyhow::Result<RunRecord> {
+    if run_ended(dir) {
+        return read_record(dir);
+    }
+    if !dir.join(carus_labour::output::CHECKPOINT_FILE).exists() {
+        return run_into(scenario, dir, stop);
+    }
+    let options = RunOptions {
+        stop: Some(stop.clone()),
+        stop_at_s: None,
+    };
+    let record = carus_labour::resume(dir, &options, &mut carus_labour::SilentObserver)?;
+    if let Err(error) = write_report(&record, dir) {
+        eprintln!("warning: {}: report.html was not written: {error:#}", dir.display());
+    }
+    Ok(record)
+}
+
 pub(super) fn json_summary(record: &RunRecord, out_dir: &Path) -> serde_json::Value {
     json!({
         "outcome": record.summary.outcome,

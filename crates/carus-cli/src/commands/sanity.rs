@@ -5,8 +5,10 @@
 //! each its built-in scenario run forward with the same changes, judged
 //! against its expected outcome (carus_analysis::sanity). Each run is a
 //! whole `carus run` in its own folder. Exit status 1 when a case is not met.
+//! `carus sanity --resume DIR` goes on with stopped cases, with the changes
+//! they started with (sanity_plan.json).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
@@ -17,7 +19,7 @@ use carus_labour::Scenario;
 use rayon::prelude::*;
 use serde_json::json;
 
-use super::run::{choose_out_dir, outcome_line, run_into, OutputArgs};
+use super::run::{choose_out_dir, go_on_into, outcome_line, run_into, OutputArgs};
 use super::sweep::parse_setting;
 use super::{ctrl_c_flag, labour_pool, print_json, Status};
 
@@ -26,8 +28,13 @@ pub struct SanityArgs {
     /// KEY=VALUE applied to every case, a dotted key as `carus scenarios
     /// show` writes it (e.g. contact.friction=0.35: does the bar hold at
     /// the seed's friction?); repeat for more keys.
-    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = one_setting_arg)]
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = one_setting_arg, conflicts_with = "resume")]
     pub settings: Vec<String>,
+    /// Go on with the stopped cases in DIR, with the changes they started
+    /// with: runs stopped part way continue from their checkpoints, runs
+    /// not started start, ended ones are kept; then every case is judged.
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["out", "force"])]
+    pub resume: Option<PathBuf>,
     /// Runs at a time; default one per core.
     #[arg(long)]
     pub jobs: Option<usize>,
@@ -62,8 +69,27 @@ fn one_setting_arg(text: &str) -> Result<String, String> {
     one_setting(text).map(|_| text.to_string()).map_err(|e| e.to_string())
 }
 
+/// The changes the cases run with, kept in their folder for `--resume`.
+const PLAN_FILE: &str = "sanity_plan.json";
+
+#[derive(serde::Serialize, serde::Deserialize)]
+struct SanityPlan {
+    /// The `--set` arguments as given.
+    set: Vec<String>,
+}
+
 pub fn run(args: &SanityArgs) -> anyhow::Result<Status> {
-    let changes = args.settings.iter().map(|text| one_setting(text)).collect::<anyhow::Result<Vec<_>>>()?;
+    let plan = match &args.resume {
+        Some(dir) => {
+            let path = dir.join(PLAN_FILE);
+            let text = std::fs::read_to_string(&path).with_context(|| {
+                format!("cannot read {}: --resume takes the folder of `carus sanity` run by this build", path.display())
+            })?;
+            serde_json::from_str(&text).with_context(|| format!("{} is damaged; run the cases again", path.display()))?
+        }
+        None => SanityPlan { set: args.settings.clone() },
+    };
+    let changes = plan.set.iter().map(|text| one_setting(text)).collect::<anyhow::Result<Vec<_>>>()?;
     // Every case is built before any runs, so a misspelt key costs nothing.
     let scenarios = SanityCase::ALL
         .iter()
@@ -76,7 +102,17 @@ pub fn run(args: &SanityArgs) -> anyhow::Result<Status> {
         .collect::<anyhow::Result<Vec<Scenario>>>()?;
     // The pool is made first: a bad --jobs leaves no out dir behind.
     let (pool, jobs) = labour_pool(args.jobs)?;
-    let out_dir = choose_out_dir(args.output.out.as_deref(), "sanity", args.output.force)?.make()?;
+    let out_dir = match &args.resume {
+        Some(dir) => dir.clone(),
+        None => {
+            let dir = choose_out_dir(args.output.out.as_deref(), "sanity", args.output.force)?.make()?;
+            let path = dir.join(PLAN_FILE);
+            std::fs::write(&path, serde_json::to_string_pretty(&plan)?)
+                .with_context(|| format!("cannot write {}", path.display()))?;
+            dir
+        }
+    };
+    let resuming = args.resume.is_some();
     let stop = ctrl_c_flag();
     if !args.output.quiet {
         eprintln!(
@@ -93,7 +129,7 @@ pub fn run(args: &SanityArgs) -> anyhow::Result<Status> {
                 if stop.load(Ordering::Relaxed) {
                     return Ok(not_run(case));
                 }
-                judge_case(case, scenario, &out_dir.join(case.scenario()), &stop)
+                judge_case(case, scenario, &out_dir.join(case.scenario()), &stop, resuming)
             })
             .collect::<anyhow::Result<Vec<Judged>>>()
     })?;
@@ -136,6 +172,9 @@ pub fn run(args: &SanityArgs) -> anyhow::Result<Status> {
         }
         println!("{met} of {} cases met; runs in {}", judged.len(), out_dir.display());
     }
+    if stop.load(Ordering::Relaxed) {
+        eprintln!("stopped before every case ended; go on with: carus sanity --resume {}", out_dir.display());
+    }
     Ok(if met == judged.len() && !stop.load(Ordering::Relaxed) {
         Status::Success
     } else {
@@ -143,10 +182,17 @@ pub fn run(args: &SanityArgs) -> anyhow::Result<Status> {
     })
 }
 
-/// Runs one case into `dir` with its report, as `carus run` would, and
-/// judges what emerged.
-fn judge_case(case: SanityCase, scenario: &Scenario, dir: &Path, stop: &Arc<AtomicBool>) -> anyhow::Result<Judged> {
-    let record = run_into(scenario, dir, stop).with_context(|| format!("sanity case {}", case.scenario()))?;
+/// Runs one case into `dir` with its report, as `carus run` would (or
+/// goes on with it, `resuming`), and judges what emerged.
+fn judge_case(
+    case: SanityCase,
+    scenario: &Scenario,
+    dir: &Path,
+    stop: &Arc<AtomicBool>,
+    resuming: bool,
+) -> anyhow::Result<Judged> {
+    let record = if resuming { go_on_into(scenario, dir, stop) } else { run_into(scenario, dir, stop) }
+        .with_context(|| format!("sanity case {}", case.scenario()))?;
     let canal = &record.history.canal;
     let outlet_station_mm = (canal.outlet_sigma() - canal.spines_sigma()) * 1000.0;
     let summary = &record.summary;
@@ -221,6 +267,7 @@ mod tests {
             ]
             .map(String::from)
             .to_vec(),
+            resume: None,
             jobs: Some(2),
             output: OutputArgs {
                 out: Some(out.clone()),
@@ -245,6 +292,35 @@ mod tests {
             let toml = std::fs::read_to_string(out.join(case.scenario()).join("scenario.toml")).unwrap();
             assert!(toml.contains("end_time_s = 0.2"), "{}", case.scenario());
         }
+
+        // As Ctrl-C would leave them: the face stopped part way, the large
+        // shoulders not begun. --resume ends both as before, with the
+        // changes the cases started with.
+        let history = |case: &str| std::fs::read_to_string(out.join(case).join("pose_history.csv")).unwrap();
+        let whole = [history("face"), history("large-shoulders")];
+        let face = out.join("face");
+        std::fs::remove_dir_all(&face).unwrap();
+        std::fs::remove_dir_all(out.join("large-shoulders")).unwrap();
+        std::fs::create_dir(&face).unwrap();
+        let scenario = args.settings.iter().fold(Scenario::builtin("face").unwrap(), |s, text| {
+            let (key, value) = one_setting(text).unwrap();
+            s.with_setting(&key, &value).unwrap()
+        });
+        let stop = carus_labour::RunOptions { stop_at_s: Some(0.1), ..Default::default() };
+        carus_labour::run(&scenario, &face, &stop, &mut carus_labour::SilentObserver).unwrap();
+        let resume = SanityArgs {
+            settings: Vec::new(),
+            resume: Some(out.clone()),
+            output: OutputArgs { out: None, ..args.output },
+            ..args
+        };
+        assert!(matches!(run(&resume).unwrap(), Status::Failed));
+        assert_eq!([history("face"), history("large-shoulders")], whole);
+        let verdicts: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("sanity.json")).unwrap()).unwrap();
+        assert_eq!((verdicts["met"].clone(), verdicts["of"].clone()), (json!(0), json!(4)));
+        assert!(verdicts["cases"].as_array().unwrap().iter().all(|c| c["completed"] == json!(true)), "{verdicts}");
+        let args = SanityArgs { resume: None, settings: resume.settings.clone(), ..resume };
         // Several values for one key belong to a sweep.
         let several = SanityArgs {
             settings: vec!["contact.friction=0.1,0.35".into()],

@@ -17,13 +17,13 @@ use std::sync::{Arc, Mutex};
 use anyhow::{bail, Context};
 use carus_analysis::movements::ROTATION_STATION_MAX_MM;
 use carus_analysis::{Movements, Outcome};
-use carus_labour::output::{self, CHECKPOINT_FILE, RUN_FILE};
-use carus_labour::{RunOptions, RunRecord, Scenario, Scene, Simulation};
+use carus_labour::{RunRecord, Scenario, Scene, Simulation};
 use rayon::prelude::*;
 use serde_json::json;
 
 use super::run::{
-    choose_out_dir, json_summary, load, movements, outcome_line, run_into, serde_name, write_report, OutputArgs,
+    choose_out_dir, go_on_into, json_summary, load, movements, outcome_line, read_record, run_ended, run_into,
+    serde_name, OutputArgs,
 };
 use super::{ctrl_c_flag, labour_pool, print_json, Status};
 
@@ -243,7 +243,7 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
     let kept: Vec<Option<Finished>> = (0..scenarios.len())
         .map(|i| {
             let v = variant(i);
-            (resuming && ended(v.dir)).then(|| v.kept().unwrap_or_else(|error| unmade(v.dir, v.combination, &keys, &error)))
+            (resuming && run_ended(v.dir)).then(|| v.kept().unwrap_or_else(|error| unmade(v.dir, v.combination, &keys, &error)))
         })
         .collect();
     let to_run: Vec<usize> = (0..kept.len()).filter(|&i| kept[i].is_none()).collect();
@@ -345,10 +345,7 @@ struct Variant<'a> {
 impl Variant<'_> {
     /// The row of a run that has ended, read from its run.json.
     fn kept(&self) -> anyhow::Result<Finished> {
-        let path = self.dir.join(RUN_FILE);
-        let text = std::fs::read_to_string(&path).with_context(|| format!("cannot read {}", path.display()))?;
-        let record = serde_json::from_str::<RunRecord>(&text).with_context(|| format!("{} is damaged", path.display()))?;
-        Ok(self.row(&record))
+        Ok(self.row(&read_record(self.dir)?))
     }
 
     /// Runs the variant with its report, as `carus run` would; when the
@@ -356,16 +353,8 @@ impl Variant<'_> {
     /// are [`Variant::kept`]).
     fn finish(&self, resuming: bool, stop: &Arc<AtomicBool>, quiet: bool) -> anyhow::Result<Finished> {
         let dir = self.dir;
-        let record = if resuming && dir.join(CHECKPOINT_FILE).exists() {
-            let options = RunOptions {
-                stop: Some(stop.clone()),
-                stop_at_s: None,
-            };
-            let record = carus_labour::resume(dir, &options, &mut carus_labour::SilentObserver)?;
-            if let Err(error) = write_report(&record, dir) {
-                eprintln!("warning: {}: report.html was not written: {error:#}", dir.display());
-            }
-            record
+        let record = if resuming {
+            go_on_into(self.scenario, dir, stop)?
         } else {
             run_into(self.scenario, dir, stop)?
         };
@@ -389,12 +378,6 @@ impl Variant<'_> {
         let row = table_row(record, self.dir, self.keys, self.combination, &summary);
         Finished { summary, row }
     }
-}
-
-/// Whether the run in `dir` is over for good: it reached its end, or it
-/// failed (a rerun from its checkpoint would fail alike).
-fn ended(dir: &Path) -> bool {
-    output::run_reached_its_end(dir).is_some() || output::run_failed(dir).is_some()
 }
 
 /// A variant's settings as a JSON object, key to value as given.
