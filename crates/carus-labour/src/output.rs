@@ -68,34 +68,36 @@ pub fn write_checkpoint(dir: &Path, checkpoint: &Checkpoint) -> Result<(), Labou
     std::fs::rename(&partial, &path).map_err(|e| output_error(&path, e))
 }
 
-/// How the run in `dir` ended, from its run.json: completed, when it
-/// failed why, and the simulated time reached (None: no readable run.json).
-fn run_ending(dir: &Path) -> Option<(bool, Option<String>, f64)> {
-    #[derive(serde::Deserialize)]
-    struct Summary {
-        completed: bool,
-        failure: Option<String>,
-        simulated_s: f64,
+/// How a run ended, as its run.json's summary says.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+pub struct RunEnding {
+    /// It reached its end (its end time, or delivery).
+    pub completed: bool,
+    /// Why it ended early on a failure of the physics, or why the detector
+    /// refused its history.
+    pub failure: Option<String>,
+    /// The simulated time reached, s.
+    pub simulated_s: f64,
+}
+
+impl RunEnding {
+    /// Over for good: it reached its end, or it failed (its checkpoint
+    /// holds the state it failed in, so going on would fail alike).
+    pub fn is_over(&self) -> bool {
+        self.completed || self.failure.is_some()
     }
-    #[derive(serde::Deserialize)]
+}
+
+/// How the run in `dir` ended; None where it has no readable run.json (a
+/// run cut off before it wrote one).
+pub fn run_ending(dir: &Path) -> Option<RunEnding> {
+    #[derive(Deserialize)]
     struct Record {
-        summary: Summary,
+        summary: RunEnding,
     }
     let text = std::fs::read_to_string(dir.join(RUN_FILE)).ok()?;
     let Record { summary } = serde_json::from_str(&text).ok()?;
-    Some((summary.completed, summary.failure, summary.simulated_s))
-}
-
-/// When the run in `dir` reached its end, the simulated time it ended at;
-/// None for a run stopped or failed before it (or no readable run.json).
-pub fn run_reached_its_end(dir: &Path) -> Option<f64> {
-    run_ending(dir).and_then(|(completed, _, t)| completed.then_some(t))
-}
-
-/// When the run in `dir` ended early on a failure of the physics (or
-/// its history was refused by the detector): when, and why.
-pub fn run_failed(dir: &Path) -> Option<(f64, String)> {
-    run_ending(dir).and_then(|(_, failure, t)| Some((t, failure?)))
+    Some(summary)
 }
 
 pub fn read_checkpoint(dir: &Path) -> Result<Checkpoint, LabourError> {

@@ -144,12 +144,15 @@ pub fn resume(
     let started = Instant::now();
     // Stepping on would rewrite a finished run's record with one leg of
     // it, and a failed run's checkpoint holds the state it failed in.
-    let scenario_file = out_dir.join(output::SCENARIO_FILE);
-    if let Some(end_s) = output::run_reached_its_end(out_dir) {
-        return Err(LabourError::AlreadyEnded { end_s, scenario: scenario_file });
-    }
-    if let Some((failed_s, failure)) = output::run_failed(out_dir) {
-        return Err(LabourError::AlreadyFailed { failed_s, failure, scenario: scenario_file });
+    let scenario = out_dir.join(output::SCENARIO_FILE);
+    match output::run_ending(out_dir) {
+        Some(output::RunEnding { completed: true, simulated_s, .. }) => {
+            return Err(LabourError::AlreadyEnded { end_s: simulated_s, scenario })
+        }
+        Some(output::RunEnding { failure: Some(failure), simulated_s, .. }) => {
+            return Err(LabourError::AlreadyFailed { failed_s: simulated_s, failure, scenario })
+        }
+        _ => {}
     }
     let checkpoint = output::read_checkpoint(out_dir)?;
     let scenario = Scenario::parse(

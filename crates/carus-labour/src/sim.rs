@@ -102,13 +102,7 @@ pub struct StageTimes {
 
 impl StageTimes {
     pub fn total_s(&self) -> f64 {
-        self.bone_contacts_s
-            + self.head_trunk_s
-            + self.joints_s
-            + self.integration_s
-            + self.floor_contact_s
-            + self.floor_tled_s
-            + self.recording_s
+        self.named().iter().map(|(_, s)| s).sum()
     }
 
     /// The stages by name, in step order.

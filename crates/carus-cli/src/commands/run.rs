@@ -73,9 +73,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
     let (out_dir, record) = match &args.resume {
         Some(dir) => {
             // A run that ended or failed is refused by resume, unannounced.
-            let resumable = carus_labour::output::run_reached_its_end(dir).is_none()
-                && carus_labour::output::run_failed(dir).is_none();
-            if !args.output.quiet && resumable {
+            if !args.output.quiet && !run_ended(dir) {
                 eprintln!("resuming the run in {}", dir.display());
             }
             (
@@ -437,15 +435,15 @@ pub(super) fn read_record(dir: &Path) -> anyhow::Result<RunRecord> {
     serde_json::from_str(&text).with_context(|| format!("{} is damaged; run the scenario again", path.display()))
 }
 
-/// Whether the run in `dir` is over for good: it reached its end, or it
-/// failed (a rerun from its checkpoint would fail alike).
+/// Whether the run in `dir` is over for good (`RunEnding::is_over`).
 pub(super) fn run_ended(dir: &Path) -> bool {
-    carus_labour::output::run_reached_its_end(dir).is_some() || carus_labour::output::run_failed(dir).is_some()
+    carus_labour::output::run_ending(dir).is_some_and(|e| e.is_over())
 }
 
-/// A run of a stopped sweep or set of sanity cases, gone on with: kept as
-/// it is if it ended, continued from its checkpoint if it was stopped part
-/// way (with its report), run from the start if it never began.
+/// A run of a sweep or of the sanity cases into `dir`: run from the start
+/// if it never began (always, in a new sweep's fresh folder), continued
+/// from its checkpoint if it was stopped part way (with its report), kept
+/// as it is if it ended.
 pub(super) fn go_on_into(scenario: &Scenario, dir: &Path, stop: &Arc<AtomicBool>) -> anyhow::Result<RunRecord> {
     if run_ended(dir) {
         return read_record(dir);

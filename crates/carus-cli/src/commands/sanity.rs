@@ -19,7 +19,7 @@ use carus_labour::Scenario;
 use rayon::prelude::*;
 use serde_json::json;
 
-use super::run::{choose_out_dir, go_on_into, outcome_line, run_into, OutputArgs};
+use super::run::{choose_out_dir, go_on_into, outcome_line, OutputArgs};
 use super::sweep::parse_setting;
 use super::{ctrl_c_flag, labour_pool, print_json, Status};
 
@@ -112,7 +112,6 @@ pub fn run(args: &SanityArgs) -> anyhow::Result<Status> {
             dir
         }
     };
-    let resuming = args.resume.is_some();
     let stop = ctrl_c_flag();
     if !args.output.quiet {
         eprintln!(
@@ -129,7 +128,7 @@ pub fn run(args: &SanityArgs) -> anyhow::Result<Status> {
                 if stop.load(Ordering::Relaxed) {
                     return Ok(not_run(case));
                 }
-                judge_case(case, scenario, &out_dir.join(case.scenario()), &stop, resuming)
+                judge_case(case, scenario, &out_dir.join(case.scenario()), &stop)
             })
             .collect::<anyhow::Result<Vec<Judged>>>()
     })?;
@@ -182,17 +181,11 @@ pub fn run(args: &SanityArgs) -> anyhow::Result<Status> {
     })
 }
 
-/// Runs one case into `dir` with its report, as `carus run` would (or
-/// goes on with it, `resuming`), and judges what emerged.
-fn judge_case(
-    case: SanityCase,
-    scenario: &Scenario,
-    dir: &Path,
-    stop: &Arc<AtomicBool>,
-    resuming: bool,
-) -> anyhow::Result<Judged> {
-    let record = if resuming { go_on_into(scenario, dir, stop) } else { run_into(scenario, dir, stop) }
-        .with_context(|| format!("sanity case {}", case.scenario()))?;
+/// Runs one case into `dir` with its report, as `carus run` would (or,
+/// resumed, goes on with it), and judges what emerged.
+fn judge_case(case: SanityCase, scenario: &Scenario, dir: &Path, stop: &Arc<AtomicBool>) -> anyhow::Result<Judged> {
+    let record =
+        go_on_into(scenario, dir, stop).with_context(|| format!("sanity case {}", case.scenario()))?;
     let canal = &record.history.canal;
     let outlet_station_mm = (canal.outlet_sigma() - canal.spines_sigma()) * 1000.0;
     let summary = &record.summary;

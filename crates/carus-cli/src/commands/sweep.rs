@@ -22,7 +22,7 @@ use rayon::prelude::*;
 use serde_json::json;
 
 use super::run::{
-    choose_out_dir, go_on_into, json_summary, load, movements, outcome_line, read_record, run_ended, run_into,
+    choose_out_dir, go_on_into, json_summary, load, movements, outcome_line, read_record, run_ended,
     serde_name, OutputArgs,
 };
 use super::{ctrl_c_flag, labour_pool, print_json, Status};
@@ -168,8 +168,12 @@ struct SweepPlan {
 const PLAN_FILE: &str = "sweep_plan.json";
 
 pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
-    let (plan, out_dir) = match &args.resume {
-        Some(dir) => (read_plan(dir)?, Some(dir.clone())),
+    let (plan, base, out_dir) = match &args.resume {
+        Some(dir) => {
+            let plan = read_plan(dir)?;
+            let base = Scenario::parse(&dir.join(PLAN_FILE), &plan.scenario_toml, plan.base_dir.clone())?;
+            (plan, base, Some(dir.clone()))
+        }
         None => {
             let base = load(args.scenario.as_deref())?;
             let plan = SweepPlan {
@@ -178,10 +182,9 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
                 set: args.settings.clone(),
                 one_at_a_time: args.one_at_a_time,
             };
-            (plan, None)
+            (plan, base, None)
         }
     };
-    let base = Scenario::parse(Path::new("sweep_plan.json"), &plan.scenario_toml, plan.base_dir.clone())?;
     let settings = plan
         .set
         .iter()
@@ -234,16 +237,16 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
             out_dir.display()
         );
     }
-    let resuming = args.resume.is_some();
     let keys: Vec<&str> = settings.iter().map(|s| s.key.as_str()).collect();
     let dirs: Vec<PathBuf> = combinations.iter().enumerate().map(|(i, c)| out_dir.join(folder_name(i, c))).collect();
     let variant = |i: usize| Variant { scenario: &scenarios[i], dir: &dirs[i], keys: &keys, combination: &combinations[i] };
     // A resumed sweep's ended runs are rows from the start, so the tables
-    // written as the others end (or are stopped again) keep them.
+    // written as the others end (or are stopped again) keep them; a new
+    // sweep's folders do not exist yet.
     let kept: Vec<Option<Finished>> = (0..scenarios.len())
         .map(|i| {
             let v = variant(i);
-            (resuming && run_ended(v.dir)).then(|| v.kept().unwrap_or_else(|error| unmade(v.dir, v.combination, &keys, &error)))
+            run_ended(v.dir).then(|| v.kept().unwrap_or_else(|error| unmade(v.dir, v.combination, &keys, &error)))
         })
         .collect();
     let to_run: Vec<usize> = (0..kept.len()).filter(|&i| kept[i].is_none()).collect();
@@ -258,7 +261,7 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
                 let dir = &dirs[i];
                 // A run that cannot be made is a row of the table, not the end of the sweep.
                 let finished = variant(i)
-                    .finish(resuming, &stop, args.output.quiet)
+                    .finish(&stop, args.output.quiet)
                     .unwrap_or_else(|error| unmade(dir, &combinations[i], &keys, &error));
                 let failed = finished.summary["failure"].is_string();
                 let mut rows = table.lock().expect("no run panics while holding the table");
@@ -348,16 +351,12 @@ impl Variant<'_> {
         Ok(self.row(&read_record(self.dir)?))
     }
 
-    /// Runs the variant with its report, as `carus run` would; when the
-    /// sweep is resumed, goes on with a run stopped part way (ended ones
-    /// are [`Variant::kept`]).
-    fn finish(&self, resuming: bool, stop: &Arc<AtomicBool>, quiet: bool) -> anyhow::Result<Finished> {
+    /// Runs the variant with its report, as `carus run` would, or goes on
+    /// with it where a resumed sweep stopped it part way (ended ones are
+    /// [`Variant::kept`]).
+    fn finish(&self, stop: &Arc<AtomicBool>, quiet: bool) -> anyhow::Result<Finished> {
         let dir = self.dir;
-        let record = if resuming {
-            go_on_into(self.scenario, dir, stop)?
-        } else {
-            run_into(self.scenario, dir, stop)?
-        };
+        let record = go_on_into(self.scenario, dir, stop)?;
         if !quiet {
             let note = record.summary.failure.as_deref().map_or(String::new(), |f| format!(": {f}"));
             let verb = match (&record.summary.failure, record.summary.completed) {
