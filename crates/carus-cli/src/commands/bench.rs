@@ -21,7 +21,8 @@ use carus_fem::{ElementKind, LoadShape, Precision, StepControl, TledSolver};
 use carus_labour::StageTimes;
 use serde::Serialize;
 
-use super::run::{load, run_into};
+use super::run::{load_changed, run_into};
+use super::sweep::one_setting_arg;
 use super::{ctrl_c_flag, print_json, Status};
 
 #[derive(clap::Subcommand)]
@@ -36,6 +37,10 @@ pub enum BenchCommand {
 pub struct LabourBenchArgs {
     /// A built-in scenario name (`carus scenarios`) or a scenario file (TOML). Default: normal.
     pub scenario: Option<String>,
+    /// KEY=VALUE changed in the scenario, as `carus run --set` does
+    /// (e.g. floor.mesh.elements_around=48); repeat for more keys.
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = one_setting_arg)]
+    pub settings: Vec<String>,
     /// Print one JSON object on standard output and nothing else there.
     #[arg(long)]
     pub json: bool,
@@ -165,7 +170,7 @@ pub fn run(cmd: &BenchCommand) -> anyhow::Result<Status> {
 }
 
 fn labour(args: &LabourBenchArgs) -> anyhow::Result<Status> {
-    let report = labour_bench(args.scenario.as_deref())?;
+    let report = labour_bench(args.scenario.as_deref(), &args.settings)?;
     // Figures of a run that did not reach its end time no whole run.
     let status = if report.completed { Status::Success } else { Status::Failed };
     if args.json {
@@ -217,8 +222,8 @@ fn labour(args: &LabourBenchArgs) -> anyhow::Result<Status> {
 
 /// Runs the scenario as `carus run` would, into a folder removed after,
 /// and reads the figures off its record.
-fn labour_bench(scenario: Option<&str>) -> anyhow::Result<LabourBenchReport> {
-    let scenario = load(scenario)?;
+fn labour_bench(scenario: Option<&str>, settings: &[String]) -> anyhow::Result<LabourBenchReport> {
+    let scenario = load_changed(scenario, settings)?;
     // The target is for the built-in scenario as it is, not an edit of it.
     let is_builtin_normal = scenario.to_toml()? == carus_labour::Scenario::builtin("normal")?.to_toml()?;
     let folder = tempfile::tempdir().context("cannot make a folder for the bench's run")?;
@@ -428,17 +433,19 @@ mod tests {
     use super::*;
 
     /// The labour bench runs the scenario as `carus run` would and accounts
-    /// for its wall time stage by stage; the target applies to `normal` only.
+    /// for its wall time stage by stage, with its `--set` changes; the
+    /// target applies to `normal` only.
     #[test]
     fn the_labour_bench_accounts_for_the_runs_wall_time() {
         let s = crate::commands::coarse_normal(0.3);
         let dir = tempfile::tempdir().unwrap();
         let file = dir.path().join("coarse.toml");
         std::fs::write(&file, s.to_toml().unwrap()).unwrap();
-        let report = labour_bench(Some(file.to_str().unwrap())).unwrap();
+        let shortened = ["numerics.end_time_s=0.2".to_string()];
+        let report = labour_bench(Some(file.to_str().unwrap()), &shortened).unwrap();
         assert!(report.completed && report.failure.is_none());
-        assert_eq!(report.simulated_s, 0.3);
-        assert_eq!(report.rigid_steps, (0.3 / s.numerics.rigid_dt_s).round() as u64);
+        assert_eq!(report.simulated_s, 0.2);
+        assert_eq!(report.rigid_steps, (0.2 / s.numerics.rigid_dt_s).round() as u64);
         let stages = report.stages_wall_s;
         assert!(stages.named().iter().all(|(_, t)| *t >= 0.0));
         assert!(stages.bone_contacts_s > 0.0 && stages.floor_tled_s > 0.0);

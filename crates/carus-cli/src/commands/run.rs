@@ -1,4 +1,4 @@
-//! `carus run [NAME|FILE] [--out DIR] [--json] [--force] [--quiet] [--resume DIR]`:
+//! `carus run [NAME|FILE] [--set KEY=VALUE ...] [--out DIR] [--json] [--force] [--quiet] [--resume DIR]`:
 //! the forward simulation of labour (carus-labour). No argument runs the
 //! built-in normal scenario. Writes into an out dir it names on start and
 //! never overwrites an existing run unless `--force`. Ctrl-C stops cleanly
@@ -16,6 +16,7 @@ use carus_labour::record::{FloorAtMoment, KeyMoment};
 use carus_labour::{Observer, RunOptions, RunRecord, Scenario, Scene, Simulation, BUILTINS};
 use serde_json::json;
 
+use super::sweep::{one_setting, one_setting_arg};
 use super::{print_json, Status};
 
 /// Where a labour command writes and what it prints (`carus run`, `carus sweep`, `carus sanity`).
@@ -40,10 +41,15 @@ pub struct OutputArgs {
 pub struct RunArgs {
     /// A built-in scenario name (`carus scenarios`) or a scenario file (TOML). Default: normal.
     pub scenario: Option<String>,
+    /// KEY=VALUE changed in the scenario before it runs, a dotted key as
+    /// `carus scenarios show` writes it (e.g. contact.friction=0.35);
+    /// repeat for more keys. The run's scenario.toml keeps the changes.
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = one_setting_arg)]
+    pub settings: Vec<String>,
     #[command(flatten)]
     pub output: OutputArgs,
     /// Continue the run in DIR from its last checkpoint.
-    #[arg(long, value_name = "DIR", conflicts_with_all = ["scenario", "out", "force"])]
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["scenario", "settings", "out", "force"])]
     pub resume: Option<PathBuf>,
 }
 
@@ -83,7 +89,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
             )
         }
         None => {
-            let scenario = load(args.scenario.as_deref())?;
+            let scenario = load_changed(args.scenario.as_deref(), &args.settings)?;
             let context = || format!("scenario {}", args.scenario.as_deref().unwrap_or(DEFAULT_SCENARIO));
             let chosen = choose_out_dir(args.output.out.as_deref(), &scenario.name, args.output.force)?;
             // A scenario that cannot start is refused before the out dir is
@@ -96,8 +102,12 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
             // The run's wall time counts the build, not the clearing.
             let started = Instant::now().checked_sub(built).unwrap_or(building);
             if !args.output.quiet {
+                let changed = match args.settings.is_empty() {
+                    true => String::new(),
+                    false => format!(" with {}", args.settings.join(", ")),
+                };
                 eprintln!(
-                    "running scenario `{}` into {}",
+                    "running scenario `{}`{changed} into {}",
                     scenario.name,
                     out_dir.display()
                 );
@@ -283,6 +293,14 @@ pub(super) fn load(name: Option<&str>) -> anyhow::Result<Scenario> {
         );
     }
     Ok(Scenario::from_file(path)?)
+}
+
+/// A scenario as loaded, with the `--set KEY=VALUE` changes applied in turn.
+pub(super) fn load_changed(name: Option<&str>, settings: &[String]) -> anyhow::Result<Scenario> {
+    settings.iter().try_fold(load(name)?, |scenario, text| {
+        let (key, value) = one_setting(text)?;
+        anyhow::Ok(scenario.with_setting(&key, &value)?)
+    })
 }
 
 /// Where a run will write, chosen before anything is built.
@@ -602,6 +620,7 @@ mod tests {
         std::fs::write(&file, "name = \"narrow\"\n[pelvis]\ninterspinous_mm = 140.0\n").unwrap();
         let args = |out: PathBuf, force: bool| RunArgs {
             scenario: Some(file.display().to_string()),
+            settings: Vec::new(),
             output: OutputArgs { out: Some(out), json: true, force, quiet: true },
             resume: None,
         };
@@ -619,6 +638,33 @@ mod tests {
         // Without --force an occupied out dir is named first.
         let e = format!("{:#}", run(&args(earlier.clone(), false)).err().unwrap());
         assert!(e.contains("already holds files"), "{e}");
+    }
+
+    /// `--set` changes the scenario a run starts from, and its folder's
+    /// scenario.toml keeps the change (so `--resume` goes on with it); a
+    /// key that does not exist is refused before any out dir is made.
+    #[test]
+    fn set_changes_the_scenario_a_run_starts_from() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("coarse.toml");
+        std::fs::write(&file, crate::commands::coarse_normal(0.05).to_toml().unwrap()).unwrap();
+        let args = |out: PathBuf, settings: &[&str]| RunArgs {
+            scenario: Some(file.display().to_string()),
+            settings: settings.iter().map(|s| s.to_string()).collect(),
+            output: OutputArgs { out: Some(out), json: true, force: false, quiet: true },
+            resume: None,
+        };
+        let out = dir.path().join("dry");
+        run(&args(out.clone(), &["contact.friction=0.35", "numerics.end_time_s=0.02"])).unwrap();
+        let kept = Scenario::from_file(&out.join("scenario.toml")).unwrap();
+        assert_eq!(kept.contact.friction, 0.35);
+        assert_eq!(kept.numerics.end_time_s, 0.02);
+
+        let misspelt = dir.path().join("misspelt");
+        let e = format!("{:#}", run(&args(misspelt.clone(), &["contact.fiction=0.35"])).err().unwrap());
+        assert!(e.contains("fiction") && e.contains("carus scenarios show"), "{e}");
+        assert!(!misspelt.exists());
+        assert!(one_setting_arg("contact.friction=0.1,0.35").unwrap_err().contains("carus sweep"));
     }
 
     /// An out dir filled between its choice and its making (another run

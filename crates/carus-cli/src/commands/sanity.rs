@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
-use anyhow::{bail, Context};
+use anyhow::Context;
 use carus_analysis::sanity::{SanityCase, Verdict};
 use carus_analysis::Outcome;
 use carus_labour::Scenario;
@@ -20,7 +20,7 @@ use rayon::prelude::*;
 use serde_json::json;
 
 use super::run::{choose_out_dir, go_on_into, outcome_line, OutputArgs};
-use super::sweep::parse_setting;
+use super::sweep::{one_setting, one_setting_arg};
 use super::{ctrl_c_flag, labour_pool, print_json, Status};
 
 #[derive(clap::Args)]
@@ -52,21 +52,6 @@ struct Judged {
     completed: bool,
     failure: Option<String>,
     out_dir: String,
-}
-
-/// A key and its one value: every case runs with it.
-fn one_setting(text: &str) -> anyhow::Result<(String, String)> {
-    let setting = parse_setting(text)?;
-    let [value] = setting.values.as_slice() else {
-        bail!("--set {text}: one value per key here (every case runs with it); `carus sweep` runs several");
-    };
-    Ok((setting.key, value.clone()))
-}
-
-/// clap's check of a `--set` argument: a malformed one is a bad argument
-/// (exit status 2).
-fn one_setting_arg(text: &str) -> Result<String, String> {
-    one_setting(text).map(|_| text.to_string()).map_err(|e| e.to_string())
 }
 
 /// The changes the cases run with, kept in their folder for `--resume`.

@@ -73,6 +73,22 @@ fn setting_arg(text: &str) -> Result<String, String> {
     parse_setting(text).map(|_| text.to_string()).map_err(|e| e.to_string())
 }
 
+/// A key and its one value, for commands that run once with it (`carus
+/// run`, `carus sanity`).
+pub(super) fn one_setting(text: &str) -> anyhow::Result<(String, String)> {
+    let setting = parse_setting(text)?;
+    let [value] = setting.values.as_slice() else {
+        bail!("--set {text}: one value per key here; `carus sweep` runs several");
+    };
+    Ok((setting.key, value.clone()))
+}
+
+/// clap's check of a one-value `--set` argument: a malformed one is a bad
+/// argument (exit status 2).
+pub(super) fn one_setting_arg(text: &str) -> Result<String, String> {
+    one_setting(text).map(|_| text.to_string()).map_err(|e| e.to_string())
+}
+
 pub(super) fn parse_setting(text: &str) -> anyhow::Result<Setting> {
     let Some((key, values)) = text.split_once('=') else {
         bail!("--set {text}: write KEY=V1,V2,..., e.g. --set expulsion.period_s=8,16,32");
