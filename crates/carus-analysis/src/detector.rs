@@ -2,7 +2,7 @@
 
 use crate::history::{HistoryError, PoseHistory};
 use crate::measures::Series;
-use crate::movements::{detect_movements, Movement, Movements, RotationOutsideWindow};
+use crate::movements::{detect_movements, HeadBorn, Movement, Movements, RotationOutsideWindow};
 use crate::outcome::{contraction_period_s, outcome, Outcome};
 use serde::{Deserialize, Serialize};
 
@@ -18,6 +18,9 @@ pub struct DetectorReport {
     /// rotation's station window, when the rule saw no internal rotation.
     #[serde(default)]
     pub internal_rotation_outside_window: Option<RotationOutsideWindow>,
+    /// The head's position and attitude at its first delivered sample.
+    #[serde(default)]
+    pub head_born: Option<HeadBorn>,
     pub outcome: Outcome,
     pub contraction_period_s: Option<f64>,
     pub series: Series,
@@ -35,6 +38,7 @@ pub fn detect(history: &PoseHistory) -> Result<DetectorReport, HistoryError> {
         movements: detected.movements,
         posterior_rotation: detected.posterior_rotation,
         internal_rotation_outside_window: detected.rotation_outside_window,
+        head_born: detected.head_born,
         outcome: outcome(history, &series, spines_sigma_mm, period_s),
         contraction_period_s: period_s,
         series,

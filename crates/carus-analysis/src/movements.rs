@@ -147,6 +147,7 @@ pub struct Detected {
     pub movements: Movements,
     pub posterior_rotation: Movement,
     pub rotation_outside_window: Option<RotationOutsideWindow>,
+    pub head_born: Option<HeadBorn>,
 }
 
 /// A turn to within 20 degrees of occiput anterior (from at least 45, as
@@ -173,6 +174,57 @@ impl std::fmt::Display for RotationOutsideWindow {
              station {:+.0} mm, outside the rule's window of stations {ROTATION_STATION_MIN_MM:+.0} \
              to {ROTATION_STATION_MAX_MM:+.0} mm",
             self.time_s, self.station_mm
+        )
+    }
+}
+
+/// The head at its first delivered sample: the position and attitude it
+/// was born in. The rules judge each movement where it happened; this says
+/// whether what happened lasted to the birth (an extension undone before
+/// it, a rotation turned back), which is what the textbooks describe.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct HeadBorn {
+    pub time_s: f64,
+    /// The leading point's station, mm.
+    pub station_mm: f64,
+    /// Theta wrapped to (-180, 180], degrees.
+    pub theta_deg: f64,
+    /// Phi, degrees: positive in flexion.
+    pub phi_deg: f64,
+}
+
+impl HeadBorn {
+    fn at(series: &Series, i: usize) -> HeadBorn {
+        HeadBorn {
+            time_s: series.time_s[i],
+            station_mm: series.station_mm[i],
+            theta_deg: wrap_deg(series.theta_deg[i]),
+            phi_deg: series.phi_deg[i],
+        }
+    }
+
+    /// The occiput position nearest theta, as a clinician names it: OA at
+    /// 0, ROT at +90, LOT at -90, OP at 180 (CARDINAL_MOVEMENTS.md), in
+    /// eighths of a turn.
+    pub fn occiput_position(&self) -> &'static str {
+        const EIGHTHS: [&str; 8] = ["OA", "ROA", "ROT", "ROP", "OP", "LOP", "LOT", "LOA"];
+        EIGHTHS[((self.theta_deg / 45.0).round() as i64).rem_euclid(8) as usize]
+    }
+}
+
+/// "the head was born at 11.4 s, station +90 mm, occiput LOA (theta -31
+/// deg), phi +19.8 deg (flexion positive)": the words `carus run`, `carus detect` and the
+/// report share.
+impl std::fmt::Display for HeadBorn {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "the head was born at {:.1} s, station {:+.0} mm, occiput {} (theta {:+.0} deg), phi {:+.1} deg (flexion positive)",
+            self.time_s,
+            self.station_mm,
+            self.occiput_position(),
+            self.theta_deg,
+            self.phi_deg
         )
     }
 }
@@ -241,6 +293,7 @@ pub fn detect_movements(series: &Series, spines_sigma_mm: f64) -> Detected {
         },
         posterior_rotation: rotation(posterior),
         rotation_outside_window,
+        head_born: delivery(series).map(|i| HeadBorn::at(series, i)),
     }
 }
 

@@ -3,7 +3,7 @@
 //! only engagement and descent), plus the arrest and posterior cases.
 
 use carus_analysis::synthetic::{self, reference_canal};
-use carus_analysis::{detect, ArrestStage, DetectorReport, FetalPart, Movement, PoseHistory, Unit};
+use carus_analysis::{detect, ArrestStage, DetectorReport, FetalPart, HeadBorn, Movement, PoseHistory, Unit};
 use std::sync::OnceLock;
 
 fn textbook() -> &'static (PoseHistory, DetectorReport) {
@@ -559,4 +559,28 @@ fn the_textbook_plan_in_the_generated_pelvis_with_the_term_fetus() {
         history.head.biparietal_mm,
         fetus.head.diameters.biparietal_mm
     );
+}
+
+/// How the head was born is read at its first delivered sample: the
+/// textbook head leaves occiput anterior, extending; a head that never
+/// passes the outlet has no such sample.
+#[test]
+fn the_head_born_is_read_at_its_first_delivered_sample() {
+    let (_, report) = textbook();
+    let born = report.head_born.expect("the textbook head is delivered");
+    let first = report.series.head_delivered.iter().position(|&d| d).unwrap();
+    assert_eq!(born.time_s, report.series.time_s[first]);
+    assert_eq!(born.phi_deg, report.series.phi_deg[first]);
+    assert_eq!(born.occiput_position(), "OA");
+    // Born as it extends: phi is already 30 deg past the flexion peak.
+    let peak = report.movements.flexion.end_s.unwrap();
+    let at_peak = report.series.time_s.iter().position(|&t| t == peak).unwrap();
+    assert!(born.phi_deg < report.series.phi_deg[at_peak] - 30.0, "{born}");
+    assert!(born.to_string().starts_with("the head was born at 54.8 s, station +90 mm, occiput OA"), "{born}");
+    // Clinical names by the nearest eighth of a turn, either way round.
+    for (theta_deg, name) in [(0.0, "OA"), (-31.0, "LOA"), (22.4, "OA"), (22.6, "ROA"), (90.0, "ROT"), (-90.0, "LOT"), (135.0, "ROP"), (-135.0, "LOP"), (180.0, "OP"), (-170.0, "OP")] {
+        assert_eq!(HeadBorn { theta_deg, ..born }.occiput_position(), name, "{theta_deg}");
+    }
+    let held = detect(&synthetic::inlet_arrest(&reference_canal())).unwrap();
+    assert_eq!(held.head_born, None);
 }

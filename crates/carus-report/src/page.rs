@@ -4,9 +4,7 @@
 
 use std::fmt::Write as _;
 
-use carus_analysis::{
-    ArrestStage, DetectorReport, Outcome, RotationOutsideWindow, Series, THETA_ILL_CONDITIONED_TILT_DEG,
-};
+use carus_analysis::{ArrestStage, DetectorReport, Outcome, THETA_ILL_CONDITIONED_TILT_DEG};
 use plotters::style::RGBColor;
 
 use crate::error::ReportError;
@@ -132,7 +130,7 @@ pub fn page(input: &ReportInput, parts: &Parts) -> Result<String, ReportError> {
     }
     let _ = writeln!(w, "</p></header>");
 
-    timeline(w, &rows, series, d.internal_rotation_outside_window, parts, time_range);
+    timeline(w, &rows, d, parts, time_range);
     pictures(w, parts);
     plots_section(w, input, &rows, parts, time_range)?;
     figures(w, input);
@@ -148,11 +146,11 @@ fn percent(t: f64, (t0, t1): (f64, f64)) -> f64 {
 fn timeline(
     w: &mut String,
     rows: &[Shown],
-    series: &Series,
-    rotation_outside_window: Option<RotationOutsideWindow>,
+    d: &DetectorReport,
     parts: &Parts,
     range: (f64, f64),
 ) {
+    let series = &d.series;
     let _ = write!(
         w,
         "<section id=\"movements\"><h2>Cardinal movements</h2>\
@@ -219,12 +217,23 @@ fn timeline(
              a turn of the head about another axis can read as this rotation.</p>"
         );
     }
-    if let Some(r) = rotation_outside_window {
+    if let Some(r) = d.internal_rotation_outside_window {
         let _ = write!(
             w,
             "<p class=\"note\" data-note=\"rotation-outside-window\">Internal rotation not counted: \
              {} (CARDINAL_MOVEMENTS.md).</p>",
             escape(&r.to_string())
+        );
+    }
+    // Whether what the rules counted lasted to the birth (an extension
+    // undone before it, a rotation turned back) is read here.
+    if let Some(born) = d.head_born {
+        let text = born.to_string();
+        let _ = write!(
+            w,
+            "<p class=\"note\" data-note=\"head-born\">{}{}.</p>",
+            text[..1].to_uppercase(),
+            escape(&text[1..])
         );
     }
     let _ = writeln!(w, "</section>");

@@ -258,3 +258,17 @@ fn a_recorded_floor_is_coloured_by_stretch_and_a_bad_frame_costs_only_its_pictur
     assert!(report.html.contains("Not drawn: "));
     assert!(report.html.contains("Delivered"));
 }
+
+/// How the head was born is said under the timeline, so that a movement
+/// undone before the birth is seen; no note for a head not born.
+#[test]
+fn how_the_head_was_born_is_noted() {
+    let mut demo = Demo::textbook().unwrap();
+    let html = write_report_with(&demo.input("born"), None).unwrap().html;
+    let at = html.find("data-note=\"head-born\"").expect("the note");
+    assert!(at < html.find("id=\"plots\"").unwrap(), "under the timeline");
+    let note = &html[at..at + html[at..].find("</p>").unwrap()];
+    assert!(note.contains("The head was born at") && note.contains("occiput OA") && note.contains("flexion positive"), "{note}");
+    demo.detector.head_born = None;
+    assert!(!write_report_with(&demo.input("held"), None).unwrap().html.contains("head-born"));
+}

@@ -32,11 +32,12 @@ pub fn run(args: &DetectArgs) -> anyhow::Result<Status> {
             "movements": movements_json(&movements),
             "posterior_rotation": report.posterior_rotation,
             "internal_rotation_outside_window": report.internal_rotation_outside_window,
+            "head_born": report.head_born,
             "contraction_period_s": report.contraction_period_s,
         }))?;
     } else {
         println!("{}: {}", path.display(), outcome_line(&report.outcome));
-        print_movements(&movements, report.internal_rotation_outside_window);
+        print_movements(&movements, report.internal_rotation_outside_window, report.head_born);
     }
     Ok(Status::Success)
 }

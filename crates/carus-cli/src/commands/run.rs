@@ -11,7 +11,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{bail, Context};
-use carus_analysis::{ArrestStage, Movement, Movements, Outcome, RotationOutsideWindow};
+use carus_analysis::{ArrestStage, HeadBorn, Movement, Movements, Outcome, RotationOutsideWindow};
 use carus_labour::record::{FloorAtMoment, KeyMoment};
 use carus_labour::{Observer, RunOptions, RunRecord, Scenario, Scene, Simulation, BUILTINS};
 use serde_json::json;
@@ -494,6 +494,7 @@ pub(super) fn json_summary(record: &RunRecord, out_dir: &Path) -> serde_json::Va
             .detector
             .as_ref()
             .and_then(|d| d.internal_rotation_outside_window),
+        "head_born": record.detector.as_ref().and_then(|d| d.head_born),
         "scenario": record.summary.scenario,
     })
 }
@@ -533,6 +534,7 @@ fn print_summary(record: &RunRecord, out_dir: &Path) {
     print_movements(
         &movements(record),
         record.detector.as_ref().and_then(|d| d.internal_rotation_outside_window),
+        record.detector.as_ref().and_then(|d| d.head_born),
     );
     println!(
         "results in {} (report.html, run.json, movements.json, pose_history.csv, *.pvd)",
@@ -563,9 +565,11 @@ pub(super) fn outcome_line(outcome: &Outcome) -> String {
 
 /// One line per movement: observed with its span and size, or not; an
 /// internal rotation the rule did not count for where it happened says so.
+/// Then how the head was born, if it was.
 pub(super) fn print_movements(
     movements: &[(&'static str, Movement)],
     rotation_outside_window: Option<RotationOutsideWindow>,
+    head_born: Option<HeadBorn>,
 ) {
     for (key, m) in movements {
         let unit = serde_name(&m.unit);
@@ -578,6 +582,9 @@ pub(super) fn print_movements(
                 None => println!("  {key:18} not observed"),
             },
         }
+    }
+    if let Some(born) = head_born {
+        println!("  {born}");
     }
 }
 

@@ -492,6 +492,9 @@ fn header(keys: &[&str]) -> Vec<String> {
             "arrest_part",
             "arrest_shoulders_station_mm",
             "internal_rotation_outside_window_station_mm",
+            "head_born_s",
+            "head_born_theta_deg",
+            "head_born_phi_deg",
         ]
         .map(String::from),
     );
@@ -533,6 +536,10 @@ fn table_row(
     row.push(number(arrest.and_then(|a| a.shoulders_station_mm)));
     let outside = record.detector.as_ref().and_then(|d| d.internal_rotation_outside_window);
     row.push(number(outside.map(|r| r.station_mm)));
+    let born = record.detector.as_ref().and_then(|d| d.head_born);
+    row.push(number(born.map(|h| h.time_s)));
+    row.push(number(born.map(|h| h.theta_deg)));
+    row.push(number(born.map(|h| h.phi_deg)));
     row
 }
 
