@@ -1376,6 +1376,14 @@ const KEY_UNITS: [(&str, &str); 12] = [
     ("_n", "newtons"),
 ];
 
+/// The tables of a TOML file, refused as a scenario's syntax is: by line,
+/// and a unit written after a number named as such (`carus measure` and
+/// `carus mesh` read anatomy files this way).
+pub fn toml_table(path: &Path, text: &str) -> Result<toml::Table, ScenarioError> {
+    text.parse::<toml::Table>()
+        .map_err(|e| unit_in_value(path, text, &e).unwrap_or_else(|| syntax(path, text, String::new(), &e)))
+}
+
 /// A unit written after a number (`force_max_n = 120 N`, `biparietal_mm =
 /// 9.5cm`): TOML's own advice, to quote it, would only lead to a type
 /// error, for the unit belongs in the key's name.

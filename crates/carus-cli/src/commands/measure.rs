@@ -159,7 +159,7 @@ impl AnatomyFile {
             });
         };
         let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-        let table: toml::Table = toml::from_str(&text).with_context(|| format!("{} is not valid TOML", path.display()))?;
+        let table = carus_labour::scenario::toml_table(path, &text)?;
         fn part<T: for<'de> Deserialize<'de> + Default>(path: &Path, table: &toml::Table, key: &str) -> anyhow::Result<T> {
             match table.get(key) {
                 None => Ok(T::default()),
@@ -252,6 +252,9 @@ mod tests {
         assert!(error.contains("`pelvsi` is not a table"), "{error}");
         let error = format!("{:#}", load(&text.replace("[head]", "[haed]")).err().unwrap());
         assert!(error.contains("haed"), "{error}");
+        // A unit after a number gets the scenario's advice, with its line.
+        let error = format!("{:#}", load("[head]\nbiparietal_mm = 95mm\n").err().unwrap());
+        assert!(error.contains("file.toml:2") && error.contains("write the number alone"), "{error}");
     }
 
     #[test]
