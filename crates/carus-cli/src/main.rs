@@ -46,6 +46,7 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    end_quietly_on_a_closed_pipe();
     let cli = Cli::parse();
     quiet_headless_vulkan();
     // The main thread joins the pool as one of its workers: a labour run
@@ -101,6 +102,19 @@ fn error_text(error: &anyhow::Error) -> String {
     text
 }
 
+/// Rust ignores SIGPIPE, so printing into a pipe whose reader has gone
+/// (`carus scenarios | head -1`) panics; with the default action restored
+/// the process ends quietly, as other command-line tools do. Everything a
+/// run writes to files is written before its summary is printed.
+fn end_quietly_on_a_closed_pipe() {
+    #[cfg(unix)]
+    // SAFETY: called first in main, before any other thread exists; it
+    // only sets the signal's disposition.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     /// A cause the message already quotes is not repeated; one it does not is added.
@@ -128,7 +142,7 @@ mod tests {
     }
 
     /// A malformed `--set` is a bad argument (clap's exit status 2), named
-    /// with the form to write, for sweep and sanity alike.
+    /// with the form to write, for every command that takes one.
     #[test]
     fn a_malformed_setting_is_a_bad_argument() {
         use clap::Parser;
@@ -136,6 +150,8 @@ mod tests {
             &["carus", "sweep", "--set", "contact.friction"][..],
             &["carus", "sweep", "--set", "contact.friction=0.1,0.1"],
             &["carus", "sanity", "--set", "contact.friction=0.1,0.2"],
+            &["carus", "run", "--set", "contact.friction=0.1,0.2"],
+            &["carus", "bench", "labour", "--set", "contact.friction"],
         ] {
             let e = super::Cli::try_parse_from(args).err().expect("refused");
             assert_eq!(e.exit_code(), 2, "{args:?}");
@@ -144,3 +160,4 @@ mod tests {
         assert!(super::Cli::try_parse_from(["carus", "sweep", "--set", "contact.friction=0.1,0.2"]).is_ok());
     }
 }
+
