@@ -53,13 +53,18 @@ pub fn ctrl_c_flag() -> std::sync::Arc<std::sync::atomic::AtomicBool> {
     flag.clone()
 }
 
-/// The threads of a command that runs several labours at once: `jobs` of
-/// them, by default one per core; also says how many.
-pub fn labour_pool(jobs: Option<usize>) -> anyhow::Result<(rayon::ThreadPool, usize)> {
+/// The threads of a command that runs `runs` labours at once: `jobs` of
+/// them, by default one per core, never more than the runs; also says how
+/// many.
+pub fn labour_pool(jobs: Option<usize>, runs: usize) -> anyhow::Result<(rayon::ThreadPool, usize)> {
     if jobs == Some(0) {
         anyhow::bail!("--jobs must be at least 1");
     }
-    let jobs = jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    // More threads than runs would only wait: a --jobs of 100000 would
+    // spend its time starting threads.
+    let jobs = jobs
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+        .min(runs.max(1));
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(jobs)
         .build()
@@ -125,6 +130,16 @@ pub fn coarse_normal(end_s: f64) -> carus_labour::Scenario {
 
 #[cfg(test)]
 mod tests {
+    /// --jobs is capped at the runs there are (a huge one would spend its
+    /// time starting threads) and 0 is refused.
+    #[test]
+    fn the_runs_threads_are_never_more_than_the_runs() {
+        assert_eq!(super::labour_pool(Some(100_000), 2).unwrap().1, 2);
+        assert_eq!(super::labour_pool(Some(3), 4).unwrap().1, 3);
+        assert_eq!(super::labour_pool(None, 1).unwrap().1, 1);
+        assert!(super::labour_pool(Some(0), 2).err().unwrap().to_string().contains("at least 1"));
+    }
+
     /// A cube too large to allocate is refused with the largest that is
     /// built, before anything is allocated; the usual sizes pass.
     #[test]

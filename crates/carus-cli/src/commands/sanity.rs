@@ -86,7 +86,7 @@ pub fn run(args: &SanityArgs) -> anyhow::Result<Status> {
         })
         .collect::<anyhow::Result<Vec<Scenario>>>()?;
     // The pool is made first: a bad --jobs leaves no out dir behind.
-    let (pool, jobs) = labour_pool(args.jobs)?;
+    let (pool, jobs) = labour_pool(args.jobs, scenarios.len())?;
     let out_dir = match &args.resume {
         Some(dir) => dir.clone(),
         None => {

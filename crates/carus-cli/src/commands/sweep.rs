@@ -231,7 +231,7 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
         .collect::<anyhow::Result<Vec<Scenario>>>()?;
     check_variants_start(&scenarios, &combinations)?;
     // The pool is made first: a bad --jobs leaves no out dir behind.
-    let (pool, jobs) = labour_pool(args.jobs)?;
+    let (pool, jobs) = labour_pool(args.jobs, scenarios.len())?;
     let out_dir = match out_dir {
         Some(dir) => dir,
         None => {
