@@ -145,6 +145,16 @@ impl RigidBodyModel {
 }
 
 impl RigidBodyState {
+    /// The first body whose pose or motion holds a NaN or an infinity.
+    pub fn first_not_finite(&self) -> Option<usize> {
+        (0..self.position.len()).find(|&b| {
+            !(self.position[b].is_finite()
+                && self.orientation[b].is_finite()
+                && self.linear_velocity[b].is_finite()
+                && self.angular_momentum[b].is_finite())
+        })
+    }
+
     /// State for `model` with every body at `poses`, at rest.
     pub fn at_rest(model: &RigidBodyModel, poses: &[RigidPose]) -> Result<Self, ContactError> {
         if poses.len() != model.len() {

@@ -80,6 +80,16 @@ pub enum LabourError {
         depth_mm: f64,
         force_n: f64,
     },
+    /// A fetal body's motion no longer finite, or thrown a metre or more:
+    /// caught before the next contact query, which cannot search a
+    /// bounding-volume tree for a NaN.
+    #[error(
+        "the fetal {body}'s motion blew up at t = {time_s:.3} s (its state no longer finite, or \
+         thrown a metre from the canal): the rigid step cannot integrate the scenario's forces\n  hint: a stiffness, damping or drag far from its default makes the \
+         explicit step unstable; compare the scenario with `carus scenarios show normal` and bring \
+         such a value back towards it, or shorten numerics.rigid_dt_s"
+    )]
+    Diverged { time_s: f64, body: &'static str },
     /// A joint stiffer than the rigid step can integrate: the run would
     /// blow up within its first steps.
     #[error("`{section}.{key}` = {stiffness}: its spring is unstable at the rigid step numerics.rigid_dt_s = {dt_s} s; the step must be below {limit_s:.3e} s for it\n  hint: set numerics.rigid_dt_s below {limit_s:.3e}, or lower {section}.{key}")]

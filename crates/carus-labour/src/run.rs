@@ -621,6 +621,21 @@ mod tests {
         s
     }
 
+    /// A drag far from its default blows the step up; the run ends there
+    /// with what it simulated and a hint, instead of searching the bone's
+    /// bounding-volume tree for a NaN forever.
+    #[test]
+    fn a_state_that_blows_up_ends_the_run_with_a_hint() {
+        let mut s = coarse(0.05);
+        s.fetus.head_angular_drag_nm_s_per_rad = 1e300;
+        let dir = tempfile::tempdir().unwrap();
+        let record = crate::run(&s, dir.path(), &RunOptions::default(), &mut SilentObserver).unwrap();
+        let failure = record.summary.failure.expect("the run failed");
+        assert!(failure.contains("the fetal head's motion blew up") && failure.contains("carus scenarios show normal"), "{failure}");
+        assert!(!record.summary.completed);
+        assert!(dir.path().join("run.json").is_file());
+    }
+
     /// A neck too stiff for the rigid step is refused before the first
     /// step, naming the key, rather than flinging the head out of the canal.
     #[test]

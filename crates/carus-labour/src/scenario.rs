@@ -395,6 +395,13 @@ impl Default for ContactSection {
 /// twice the mean, so that a width given in cm is refused.
 pub const FETAL_TRUNK_WIDTH_MM: (f64, f64) = (50.0, 250.0);
 
+/// The spacings of contact samples a scenario may give, mm: from four
+/// times finer than the default 4 mm (some 2000 samples on the head at 4 mm;
+/// at 1 mm 16 times as many) to coarser than the head's own curvature
+/// allows, so that a spacing given in metres is refused before the
+/// sampling runs out of memory.
+pub const CONTACT_SAMPLE_SPACING_MM: (f64, f64) = (1.0, 30.0);
+
 /// The head diameters a scenario may give, mm: a wide band around the
 /// term head's 81-137.5 mm (REFERENCE_DATA.md), so that a diameter in cm,
 /// or a slip of many digits, is refused before the head is shaped.
@@ -943,7 +950,7 @@ impl Scenario {
         let err = |key: &'static str, value: f64, problem: &str, hint: &str| ScenarioError::Value {
             path: path.to_path_buf(),
             key,
-            value: value.to_string(),
+            value: shown(value),
             problem: problem.into(),
             hint: hint.into(),
         };
@@ -1095,6 +1102,10 @@ impl Scenario {
             ("neck.shear_n_per_m", self.neck.shear_n_per_m),
             ("neck.flexion_limit_deg", self.neck.flexion_limit_deg),
             ("neck.extension_limit_deg", self.neck.extension_limit_deg),
+            ("neck.lateral_bending_limit_deg", self.neck.lateral_bending_limit_deg),
+            ("neck.axial_rotation_limit_deg", self.neck.axial_rotation_limit_deg),
+            ("neck.rotational_damping_nm_s_per_rad", self.neck.rotational_damping_nm_s_per_rad),
+            ("neck.linear_damping_n_s_per_m", self.neck.linear_damping_n_s_per_m),
             (
                 "neck.end_range_stiffness_nm_per_deg",
                 self.neck.end_range_stiffness_nm_per_deg,
@@ -1205,6 +1216,12 @@ impl Scenario {
             "is not the width of a fetal trunk",
             "mm (not cm): the newborn's bisacromial is 124 +- 10 mm",
         )?;
+        in_band(
+            &[("contact.sample_spacing_mm", self.contact.sample_spacing_mm)],
+            CONTACT_SAMPLE_SPACING_MM,
+            "is not a spacing of contact samples on a fetal head",
+            "mm (not m): 4.0 is the default, 2.0 a refinement",
+        )?;
         // Soft tissue is about as dense as water: a value near 1 is in
         // g/cm^3, and would give a fetus too light for its neck's springs.
         in_band(
@@ -1237,6 +1254,24 @@ impl Scenario {
                 "numerics.floor_step_fraction",
                 self.numerics.floor_step_fraction,
                 "a step above the critical one is unstable",
+                "0.5 to 0.9",
+            ));
+        }
+        // Steps so small that a run could not finish: each rigid step takes
+        // about 0.4 ms of wall time (docs/PERFORMANCE.md).
+        if self.numerics.rigid_dt_s < 1e-5 {
+            return Err(err(
+                "numerics.rigid_dt_s",
+                self.numerics.rigid_dt_s,
+                "is too small for a run to finish (50 times finer than the default)",
+                "1e-4 to 1e-3 s; the default is 5e-4",
+            ));
+        }
+        if self.numerics.floor_step_fraction < 0.05 {
+            return Err(err(
+                "numerics.floor_step_fraction",
+                self.numerics.floor_step_fraction,
+                "would take the floor through twenty times its needed sub-steps or more",
                 "0.5 to 0.9",
             ));
         }
@@ -1375,6 +1410,16 @@ const KEY_UNITS: [(&str, &str); 12] = [
     ("_s", "seconds"),
     ("_n", "newtons"),
 ];
+
+/// A number as a message shows it: as written, or with an exponent when
+/// its decimals would run to hundreds of digits (1e300, 1e-300).
+fn shown(value: f64) -> String {
+    if value != 0.0 && !(1e-6..1e15).contains(&value.abs()) {
+        format!("{value:e}")
+    } else {
+        value.to_string()
+    }
+}
 
 /// The tables of a TOML file, refused as a scenario's syntax is: by line,
 /// and a unit written after a number named as such (`carus measure` and
@@ -1665,6 +1710,18 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("spine.enabled") && e.contains("trunk.enabled = true"), "{e}");
+        // Keys that would run for ever, or run out of memory, are refused
+        // by name; a number far out of range is shown with its exponent.
+        for (text, named) in [
+            ("[contact]\nsample_spacing_mm = 0.004\n", "`contact.sample_spacing_mm` = 0.004"),
+            ("[neck]\naxial_rotation_limit_deg = nan\n", "`neck.axial_rotation_limit_deg` = NaN"),
+            ("[neck]\nlinear_damping_n_s_per_m = -1.0\n", "`neck.linear_damping_n_s_per_m` = -1"),
+            ("[numerics]\nrigid_dt_s = 1e-300\n", "`numerics.rigid_dt_s` = 1e-300"),
+            ("[numerics]\nfloor_step_fraction = 0.001\n", "`numerics.floor_step_fraction` = 0.001"),
+        ] {
+            let e = parse(&format!("name = \"x\"\n{text}")).unwrap_err().to_string();
+            assert!(e.contains(named) && e.contains("hint:"), "{e}");
+        }
         let e = parse("name = \"x\"\n[spine]\nbending_nm_per_deg = -0.1\n")
             .unwrap_err()
             .to_string();

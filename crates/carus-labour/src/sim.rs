@@ -25,6 +25,10 @@ use crate::scenario::FloorCoupling;
 use crate::scene::{Scene, HEAD, LOWER_TRUNK, TRUNK};
 use crate::LabourError;
 
+/// How far from the pelvic axis a head has been thrown, not walked out,
+/// when the canal cannot hold it: no pelvis is a metre across.
+const THROWN_M: f64 = 1.0;
+
 /// The floor's part of the mutable state.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FloorState {
@@ -475,7 +479,13 @@ impl<'a> Simulation<'a> {
         }
 
         self.state.bodies.step(&scene.bodies, &wrenches, self.dt)?;
+        if let Some(b) = self.state.bodies.first_not_finite() {
+            return Err(LabourError::Diverged { time_s: t, body: Body::of(b).name() });
+        }
         if let Some(off) = scene.outside_canal(self.state.bodies.position[HEAD]) {
+            if off > THROWN_M {
+                return Err(LabourError::Diverged { time_s: t, body: Body::of(HEAD).name() });
+            }
             return Err(LabourError::LeftCanal(format!(
                 "the fetal head left the birth canal before the outlet (its centre {:.0} mm \
                  from the pelvic axis, more than half the inlet's transverse diameter): the \

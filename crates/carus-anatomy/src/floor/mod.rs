@@ -123,6 +123,10 @@ pub enum FloorError {
         "elements_around = {0} must be even, so the posterior midline (coccyx) is a row of nodes"
     )]
     OddAround(usize),
+    #[error("{key} = {value:?} is outside {least} to {most}, the sizes a pelvic floor takes (mm, not m or cm; the default is {default})")]
+    OutOfRange { key: &'static str, value: f64, least: f64, most: f64, default: f64 },
+    #[error("elements_around x elements_across x elements_through = {count} elements, more than {MAX_FLOOR_ELEMENTS}: a run's time and memory grow with them (the default floor has 768); use fewer")]
+    TooManyElements { count: usize },
     #[error("hiatus_width_mm = {width} does not fit between the ischial spines ({interspinous:.1} mm apart); make it narrower than 0.6 x the interspinous diameter")]
     HiatusTooWide { width: f64, interspinous: f64 },
     #[error("hiatus_length_mm = {length} reaches the coccyx ({outlet_ap:.1} mm behind the symphysis); make it shorter than 0.75 x the outlet AP diameter")]
@@ -144,6 +148,11 @@ pub enum FloorError {
 /// stresses unreliable long before they invert; such a floor is refused
 /// with the element and the parameters to change.
 pub const MIN_SCALED_JACOBIAN: f64 = 0.15;
+
+/// The most elements a generated floor may have: 130 times the default's
+/// 768, past any refinement study, and below where a labour run would take
+/// days or a machine's memory.
+pub const MAX_FLOOR_ELEMENTS: usize = 100_000;
 
 /// Name of the node set fixed to bone.
 pub const ATTACHED: &str = "attached";
@@ -212,6 +221,29 @@ impl FloorParameters {
         }
         if !self.elements_around.is_multiple_of(2) {
             return Err(FloorError::OddAround(self.elements_around));
+        }
+        let count = self
+            .elements_around
+            .saturating_mul(self.elements_across)
+            .saturating_mul(self.elements_through);
+        if count > MAX_FLOOR_ELEMENTS {
+            return Err(FloorError::TooManyElements { count });
+        }
+        // Wide bands round the measured sizes the fields' docs cite: they
+        // catch another unit (a thickness of 0.007 is metres) and values no
+        // mesh can be built from.
+        let d = FloorParameters::default();
+        for (key, value, default, least, most) in [
+            ("thickness_mm", self.thickness_mm, d.thickness_mm, 1.0, 30.0),
+            ("sag_mm", self.sag_mm, d.sag_mm, 0.0, 60.0),
+            ("bowl_mm", self.bowl_mm, d.bowl_mm, -60.0, 60.0),
+            ("hiatus_length_mm", self.hiatus_length_mm, d.hiatus_length_mm, 20.0, 100.0),
+            ("hiatus_width_mm", self.hiatus_width_mm, d.hiatus_width_mm, 10.0, 80.0),
+            ("perineal_body_mm", self.perineal_body_mm, d.perineal_body_mm, 0.0, 40.0),
+        ] {
+            if !(least..=most).contains(&value) {
+                return Err(FloorError::OutOfRange { key, value, least, most, default });
+            }
         }
         Ok(())
     }
@@ -1088,7 +1120,7 @@ mod tests {
             .to_string()
             .contains("thickness_mm"));
         let wide = FloorParameters {
-            hiatus_width_mm: 90.0,
+            hiatus_width_mm: 70.0,
             ..Default::default()
         };
         assert!(matches!(
@@ -1103,6 +1135,17 @@ mod tests {
             pelvic_floor(&pelvis, &odd),
             Err(FloorError::OddAround(47))
         ));
+        // A size in another unit, or none a mesh can be built from, is
+        // named with its band and default; a count that would not finish
+        // is refused before anything is allocated.
+        let metres = FloorParameters { thickness_mm: 0.007, ..Default::default() };
+        let e = pelvic_floor(&pelvis, &metres).unwrap_err().to_string();
+        assert!(e.contains("thickness_mm = 0.007 is outside 1 to 30") && e.contains("default is 7"), "{e}");
+        let huge = FloorParameters { bowl_mm: 1e300, ..Default::default() };
+        assert!(pelvic_floor(&pelvis, &huge).unwrap_err().to_string().contains("bowl_mm = 1e300"));
+        let fine = FloorParameters { elements_around: 100_000_000, ..Default::default() };
+        let e = pelvic_floor(&pelvis, &fine).unwrap_err().to_string();
+        assert!(e.contains("1600000000 elements, more than 100000"), "{e}");
     }
 
     /// Spines 90 mm apart with a 45 mm wide, shallow hiatus leave a narrow
