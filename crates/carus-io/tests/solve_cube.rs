@@ -210,7 +210,7 @@ fn a_run_that_inverts_an_element_stops_with_its_last_good_frame() {
 #[test]
 fn job_errors_name_the_key_the_line_and_the_fix() {
     let dir = fresh_dir("errors");
-    let cases: [(&str, &str); 6] = [
+    let cases: [(&str, &str); 8] = [
         (
             "\n[solver]\nend_time_s = 1.0\ntime_stepp_s = 1e-3\n",
             "job.toml:17:1: `solver.time_stepp_s`: unknown field `time_stepp_s`",
@@ -229,9 +229,16 @@ fn job_errors_name_the_key_the_line_and_the_fix() {
             "`pressure[0].load`: unknown field `ramp`",
         ),
         ("\n[solver]\nend_time_s = 1.0\nhourglass_coefficient = \"high\"\n", "`solver.hourglass_coefficient`: invalid type"),
+        // Steps so small that the run could not end, set or implied.
+        ("\n[solver]\nend_time_s = 1.0\ntime_step_s = 1e-300\n", "`solver.time_step_s`: 1e-300 s would take 1.0e300 steps"),
+        (
+            "\n[solver]\nend_time_s = 1.0\ntime_step_s = \"auto\"\n",
+            "`materials`: the stable time step is 1.875e-157 s, so 1 s would take 5.3e156 steps",
+        ),
     ];
-    for (extra, expected) in cases {
-        let job = write_job(&dir, &format!("{BASE}{extra}"));
+    for (i, (extra, expected)) in cases.into_iter().enumerate() {
+        let base = if i == 7 { BASE.replace("density_kg_m3 = 1000.0", "density_kg_m3 = 1e-300") } else { BASE.to_string() };
+        let job = write_job(&dir, &format!("{base}{extra}"));
         let err = run_job(&job, &dir.join("out"), &RunOptions::default(), &mut |_| {})
             .unwrap_err()
             .to_string();

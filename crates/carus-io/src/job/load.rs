@@ -27,6 +27,11 @@ pub fn parse_job(path: &Path, text: &str) -> Result<JobSpec, JobError> {
     Ok(spec)
 }
 
+/// The most steps a job may take: at the cube benchmark's 0.035 us per
+/// element-step (docs/PERFORMANCE.md), ten hours of one core for a mesh
+/// of a thousand elements; more is a slip of units or digits.
+pub(crate) const MAX_STEPS: f64 = 1e9;
+
 fn toml_error(path: &Path, text: &str, key: String, error: &toml::de::Error) -> JobError {
     let (line, column) = match error.span() {
         Some(span) => {
@@ -290,6 +295,13 @@ fn check_values(path: &Path, spec: &JobSpec) -> Result<(), JobError> {
     c.positive("solver.end_time_s".into(), s.end_time_s)?;
     if let TimeStep::Seconds(dt) = s.time_step_s {
         c.positive("solver.time_step_s".into(), dt)?;
+        if s.end_time_s / dt > MAX_STEPS {
+            return Err(c.fail(
+                "solver.time_step_s".into(),
+                format!("{dt:e} s would take {:.1e} steps to reach end_time_s = {} s", s.end_time_s / dt, s.end_time_s),
+                "a step near the critical one, or \"auto\"",
+            ));
+        }
         if dt > s.end_time_s {
             return Err(c.fail(
                 "solver.time_step_s".into(),

@@ -390,6 +390,25 @@ fn build_solver(
         message: describe(&e, file),
     };
     let model = TledModel::new(mesh, &regions, &model_options).map_err(model_error)?;
+    // A material far too stiff or too light (another unit, a slip of
+    // digits) makes the stable step so small that the run could not end.
+    let critical_s = model.critical_time_step();
+    let steps = solver_spec.end_time_s / critical_s;
+    if !(steps <= super::load::MAX_STEPS) {
+        return Err(JobError::Invalid {
+            path: job_path.to_path_buf(),
+            key: "materials".into(),
+            problem: format!(
+                "the stable time step is {critical_s:.3e} s, so {} s would take {steps:.1e} steps: \
+                 a material's stiffness is far too high or its density far too low (the step is \
+                 an element's size over the wave speed, sqrt(E / density))",
+                solver_spec.end_time_s
+            ),
+            fix: "check each material's young_modulus_pa (Pa) and density_kg_m3 (kg/m^3), and \
+                  solver.hourglass_coefficient"
+                .into(),
+        });
+    }
     let (dt_s, control) = match solver_spec.time_step_s {
         TimeStep::Auto => (
             AUTO_TIME_STEP_FRACTION * model.critical_time_step(),
@@ -403,7 +422,7 @@ fn build_solver(
             path: job_path.to_path_buf(),
             key: "solver.time_step_s".into(),
             problem: e.to_string(),
-            fix: "lower time_step_s, set it to \"auto\", or set sub_stepping = true".into(),
+            fix: "lower time_step_s, set it to \"auto\", or set solver.sub_stepping = true".into(),
         },
         other => model_error(other),
     })?;
