@@ -64,7 +64,11 @@ pub fn write_checkpoint(dir: &Path, checkpoint: &Checkpoint) -> Result<(), Labou
     // Write then rename, so an interrupted write never leaves a broken checkpoint.
     let path = dir.join(CHECKPOINT_FILE);
     let partial = dir.join("checkpoint.json.partial");
-    write_json(&partial, checkpoint)?;
+    if let Err(e) = write_json(&partial, checkpoint) {
+        // On a full disk the half-written copy must not keep the space.
+        let _ = std::fs::remove_file(&partial);
+        return Err(e);
+    }
     std::fs::rename(&partial, &path).map_err(|e| output_error(&path, e))
 }
 

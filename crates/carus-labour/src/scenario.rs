@@ -1241,6 +1241,16 @@ impl Scenario {
                 "Pa (not kPa): the levator ani at rest measures 16.5 kPa, 16500.0",
             ));
         }
+        // Stiffer than any soft tissue, the floor's stable step would be too
+        // small for a run to end (water's bulk modulus is 2.2 GPa).
+        for (key, value, most, hint) in [
+            ("floor.shear_modulus_pa", self.floor.shear_modulus_pa, 1e7, "Pa: the levator ani at rest measures 16.5 kPa, 16500.0"),
+            ("floor.bulk_modulus_pa", self.floor.bulk_modulus_pa, 1e10, "Pa, about 20 x shear_modulus_pa; water's is 2.2e9"),
+        ] {
+            if value > most {
+                return Err(err(key, value, "is stiffer than any soft tissue", hint));
+            }
+        }
         if self.floor.bulk_modulus_pa <= self.floor.shear_modulus_pa {
             return Err(err(
                 "floor.bulk_modulus_pa",
@@ -1718,6 +1728,7 @@ mod tests {
             ("[neck]\nlinear_damping_n_s_per_m = -1.0\n", "`neck.linear_damping_n_s_per_m` = -1"),
             ("[numerics]\nrigid_dt_s = 1e-300\n", "`numerics.rigid_dt_s` = 1e-300"),
             ("[numerics]\nfloor_step_fraction = 0.001\n", "`numerics.floor_step_fraction` = 0.001"),
+            ("[floor]\nbulk_modulus_pa = 1e300\n", "`floor.bulk_modulus_pa` = 1e300: is stiffer than any soft tissue"),
         ] {
             let e = parse(&format!("name = \"x\"\n{text}")).unwrap_err().to_string();
             assert!(e.contains(named) && e.contains("hint:"), "{e}");

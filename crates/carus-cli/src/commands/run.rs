@@ -13,7 +13,7 @@ use std::time::Instant;
 use anyhow::{bail, Context};
 use carus_analysis::{ArrestStage, HeadBorn, Movement, Movements, Outcome, RotationOutsideWindow};
 use carus_labour::record::{FloorAtMoment, KeyMoment};
-use carus_labour::{Observer, RunOptions, RunRecord, Scenario, Scene, Simulation, BUILTINS};
+use carus_labour::{LabourError, Observer, RunOptions, RunRecord, Scenario, Scene, Simulation, BUILTINS};
 use serde_json::json;
 
 use super::sweep::{one_setting, one_setting_arg};
@@ -120,7 +120,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
     if let Some(bar) = &observer.0 {
         bar.finish_and_clear();
     }
-    let record = record?;
+    let record = record.map_err(|e| resumable(e, &out_dir))?;
     // The report must never cost the run's data: its failure is a warning.
     match write_report(&record, &out_dir) {
         Ok(warnings) => {
@@ -154,6 +154,21 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
     } else {
         Status::Success
     })
+}
+
+/// A run stopped by its output (a full disk, a folder made read-only)
+/// keeps its last checkpoint: the error says how to go on from it.
+fn resumable(error: anyhow::Error, out_dir: &Path) -> anyhow::Error {
+    let by_output = matches!(error.downcast_ref::<LabourError>(), Some(LabourError::Output { .. }));
+    if by_output && out_dir.join(carus_labour::output::CHECKPOINT_FILE).is_file() {
+        anyhow::anyhow!(
+            "{error:#}\n  hint: the last checkpoint is kept; once that is mended (space freed, \
+             the folder writable), `carus run --resume {}` goes on from it",
+            out_dir.display()
+        )
+    } else {
+        error
+    }
 }
 
 /// The most floor elements with a corner turned inside out at one sample,
@@ -672,6 +687,23 @@ mod tests {
         assert!(e.contains("fiction") && e.contains("carus scenarios show"), "{e}");
         assert!(!misspelt.exists());
         assert!(one_setting_arg("contact.friction=0.1,0.35").unwrap_err().contains("carus sweep"));
+    }
+
+    /// A run stopped by its output says how to go on from its checkpoint,
+    /// when it has one; other errors are left as they are.
+    #[test]
+    fn a_run_stopped_by_its_output_says_how_to_resume() {
+        let dir = tempfile::tempdir().unwrap();
+        let full = || anyhow::Error::from(LabourError::Output {
+            path: dir.path().join("checkpoint.json.partial"),
+            message: "No space left on device (os error 28)".into(),
+        });
+        assert!(!format!("{:#}", resumable(full(), dir.path())).contains("--resume"));
+        std::fs::write(dir.path().join("checkpoint.json"), "{}").unwrap();
+        let e = format!("{:#}", resumable(full().context("scenario normal"), dir.path()));
+        assert!(e.contains("No space left") && e.contains(&format!("carus run --resume {}", dir.path().display())), "{e}");
+        let other = anyhow::anyhow!("the fetal head left the birth canal");
+        assert!(!format!("{:#}", resumable(other, dir.path())).contains("--resume"));
     }
 
     /// An out dir filled between its choice and its making (another run
