@@ -1096,6 +1096,13 @@ mod tests {
         std::fs::write(&path, &text[..text.len() / 2]).unwrap();
         let e = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).expect_err("refused").to_string();
         assert!(e.contains("cut short or damaged") && e.contains("checkpoint.json"), "{e}");
+        // A step count edited past the scenario's end, which would report
+        // years simulated.
+        let mut edited: serde_json::Value = serde_json::from_str(&text).unwrap();
+        edited["state"]["step"] = 1_000_000_000_000_000u64.into();
+        std::fs::write(&path, edited.to_string()).unwrap();
+        let e = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).expect_err("refused").to_string();
+        assert!(e.contains("not one its scenario can reach") && e.contains("edited or damaged"), "{e}");
         std::fs::write(&path, &text).unwrap();
         assert!(resume(dir.path(), &RunOptions::default(), &mut SilentObserver).is_ok());
     }

@@ -310,6 +310,15 @@ impl<'a> Simulation<'a> {
             )));
         }
         let dt = scene.scenario.numerics.rigid_dt_s;
+        let reached_s = state.step as f64 * dt;
+        if reached_s > scene.scenario.numerics.end_time_s || b.first_not_finite().is_some() {
+            return Err(LabourError::Checkpoint(format!(
+                "the saved state is not one its scenario can reach (its step count puts it at t = \
+                 {reached_s:.3e} s, the scenario ends at {} s; or a pose is not finite): the \
+                 checkpoint was edited or damaged: run the scenario again from the start",
+                scene.scenario.numerics.end_time_s
+            )));
+        }
         let (mut solver, substeps) = match (&scene.floor, &state.floor) {
             (Some(f), Some(_)) => {
                 let (s, n) = new_solver(scene, f, dt)?;

@@ -543,7 +543,7 @@ fn print_summary(record: &RunRecord, out_dir: &Path) {
     let s = &record.summary;
     println!("scenario {}: {}", s.scenario, outcome_line(&s.outcome));
     println!(
-        "simulated {:.1} s in {:.1} s wall time ({} rigid steps)",
+        "simulated {:.2} s in {:.1} s wall time ({} rigid steps)",
         s.simulated_s, s.wall_s, s.rigid_steps
     );
     print_movements(
