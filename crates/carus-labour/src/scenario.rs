@@ -395,6 +395,9 @@ impl Default for ContactSection {
 /// twice the mean, so that a width given in cm is refused.
 pub const FETAL_TRUNK_WIDTH_MM: (f64, f64) = (50.0, 250.0);
 
+/// The longest scenario name, bytes: a folder name of runs/ may take 255.
+const MAX_NAME_BYTES: usize = 200;
+
 /// The spacings of contact samples a scenario may give, mm: from four
 /// times finer than the default 4 mm (some 2000 samples on the head at 4 mm;
 /// at 1 mm 16 times as many) to coarser than the head's own curvature
@@ -1385,6 +1388,17 @@ impl Scenario {
             });
         }
         // The name becomes a folder under runs/: it must stay one folder there.
+        // Within the 255 bytes a file name may take, with room for the
+        // sweep's `sweep-` prefix and a run's number.
+        if self.name.len() > MAX_NAME_BYTES {
+            return Err(ScenarioError::Value {
+                path: path.to_path_buf(),
+                key: "name",
+                value: format!("{} bytes", self.name.len()),
+                problem: format!("names the output folder runs/<name>-<n>, which file systems cap; at most {MAX_NAME_BYTES} bytes"),
+                hint: "a short name; the description holds the rest".into(),
+            });
+        }
         if self.name.starts_with('.') || self.name.chars().any(|c| matches!(c, '/' | '\\' | ':') || c.is_control()) {
             return Err(ScenarioError::Value {
                 path: path.to_path_buf(),
@@ -1729,8 +1743,10 @@ mod tests {
             ("[numerics]\nrigid_dt_s = 1e-300\n", "`numerics.rigid_dt_s` = 1e-300"),
             ("[numerics]\nfloor_step_fraction = 0.001\n", "`numerics.floor_step_fraction` = 0.001"),
             ("[floor]\nbulk_modulus_pa = 1e300\n", "`floor.bulk_modulus_pa` = 1e300: is stiffer than any soft tissue"),
+            ("", "`name` = 201 bytes"),
         ] {
-            let e = parse(&format!("name = \"x\"\n{text}")).unwrap_err().to_string();
+            let name = if text.is_empty() { "x".repeat(201) } else { "x".into() };
+            let e = parse(&format!("name = \"{name}\"\n{text}")).unwrap_err().to_string();
             assert!(e.contains(named) && e.contains("hint:"), "{e}");
         }
         let e = parse("name = \"x\"\n[spine]\nbending_nm_per_deg = -0.1\n")
