@@ -273,6 +273,39 @@ fn broken_meshes_say_what_and_where() {
     std::fs::remove_dir_all(dir).ok();
 }
 
+#[test]
+fn gltf_cycles_and_accessors_outside_their_buffers_are_named() {
+    let path = Path::new("bad.gltf");
+    let err = |json: String| parse_gltf_parts(path, json.as_bytes()).unwrap_err().to_string();
+    let good = embedded_gltf("");
+    assert_eq!(parse_gltf_parts(path, good.as_bytes()).unwrap()[0].mesh.triangles.len(), 4);
+
+    // A node that is its own child, and a two-node loop: walked, they never end.
+    let e = err(embedded_gltf(r#", "children": [0]"#));
+    assert!(e.contains("bad.gltf") && e.contains("node 0 is its own ancestor") && e.contains("cycle (0 -> 0)"), "{e}");
+    let e = err(embedded_gltf(r#", "children": [1]}, {"children": [0]"#));
+    assert!(e.contains("node 0 is its own ancestor") && e.contains("(0 -> 1 -> 0)"), "{e}");
+    // A child shared by two parents would be walked once per path.
+    let e = err(embedded_gltf(r#", "children": [1, 2]}, {"children": [2]}, {"#));
+    assert!(e.contains("node 2 is a child of both node 0 and node 1"), "{e}");
+
+    // Accessors of the wrong type were read as something else.
+    let e = err(good.replacen(r#""type": "VEC3""#, r#""type": "VEC2""#, 1));
+    assert!(e.contains("accessor 0 (POSITION of primitive 0 of mesh 0) is a VEC2 of FLOAT") && e.contains("must be a VEC3 of FLOAT"), "{e}");
+    let e = err(good.replacen(r#""componentType": 5126"#, r#""componentType": 5121"#, 1));
+    assert!(e.contains("is a VEC3 of UNSIGNED_BYTE"), "{e}");
+    // More indices than the view holds were silently dropped (a non-indexed mesh read instead).
+    let e = err(good.replacen(r#""count": 12"#, r#""count": 300"#, 1));
+    assert!(e.contains("accessor 1 (indices of primitive 0 of mesh 0) runs past its bufferView 1") && e.contains("fix the accessor's `count`"), "{e}");
+    let e = err(good.replacen(r#""count": 4"#, r#""count": 400"#, 1));
+    assert!(e.contains("accessor 0 (POSITION") && e.contains("runs past its bufferView 0"), "{e}");
+    // Views past their buffer read as an empty mesh.
+    let e = err(good.replacen(r#""byteLength": 48}"#, r#""byteLength": 4800}"#, 1));
+    assert!(e.contains("bufferView 0 runs past buffer 0") && e.contains("byteLength is 72"), "{e}");
+    let e = err(good.replacen(r#""byteOffset": 48,"#, r#""byteOffset": 4800,"#, 1));
+    assert!(e.contains("bufferView 1 runs past buffer 0: it ends at byte 4824"), "{e}");
+}
+
 /// The shipped Visible Human landmarks file, edited by `edit`.
 fn edited_landmarks(dir: &Path, edit: impl Fn(String) -> String) -> PathBuf {
     let text = std::fs::read_to_string(visible_human_female_pelvis_path()).unwrap();
