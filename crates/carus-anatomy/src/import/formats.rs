@@ -186,6 +186,144 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
     Ok(mesh)
 }
 
+/// What a PLY file's header declares, as far as telling a fault needs:
+/// each element's name, count and properties (name, list or not, integer
+/// or not), and where its data starts.
+struct PlyLayout {
+    ascii: bool,
+    /// The 1-based line number of the first data line.
+    data_line: usize,
+    elements: Vec<(String, usize, Vec<(String, bool, bool)>)>,
+}
+
+/// Reads a PLY header, or says which line of it is wrong.
+fn ply_layout(text: &str) -> Result<PlyLayout, String> {
+    let mut layout = PlyLayout { ascii: false, data_line: 0, elements: Vec::new() };
+    let integer = |t: &str| -> Option<bool> {
+        match t {
+            "char" | "uchar" | "short" | "ushort" | "int" | "uint" | "int8" | "uint8" | "int16" | "uint16"
+            | "int32" | "uint32" => Some(true),
+            "float" | "double" | "float32" | "float64" => Some(false),
+            _ => None,
+        }
+    };
+    for (number, line) in text.lines().enumerate().map(|(i, l)| (i + 1, l)) {
+        let words: Vec<&str> = line.split_whitespace().collect();
+        let bad = |what: &str| Err(format!("line {number}: `{}` {what}", line.trim()));
+        match words.as_slice() {
+            ["ply"] if number == 1 => {}
+            _ if number == 1 => return bad("is not `ply`, the first line of every PLY file"),
+            ["format", format, _] => layout.ascii = *format == "ascii",
+            ["comment" | "obj_info", ..] => {}
+            ["element", name, count] => match count.parse() {
+                Ok(count) => layout.elements.push((name.to_string(), count, Vec::new())),
+                Err(_) => return bad("needs a whole number of elements, e.g. `element vertex 8`"),
+            },
+            ["property", kind, name] | ["property", "list", _, kind, name] => {
+                let Some(integer) = integer(kind) else {
+                    return bad("names an unknown type; use char, uchar, short, ushort, int, uint, float or double");
+                };
+                let Some(element) = layout.elements.last_mut() else {
+                    return bad("comes before any `element` line");
+                };
+                element.2.push((name.to_string(), words.len() == 5, integer));
+            }
+            ["end_header"] => {
+                layout.data_line = number + 1;
+                return Ok(layout);
+            }
+            _ => return bad("is not a PLY header line (format, element, property, comment or end_header)"),
+        }
+    }
+    Err("the header has no `end_header` line: the file is truncated or not a PLY file".into())
+}
+
+/// Why ply-rs refused a file, in the file's terms: the header line at
+/// fault, data that ends before the elements the header announces, or the
+/// data line and element whose values do not fit their properties. The
+/// library's own message (its internals) is the last resort.
+fn ply_fault(bytes: &[u8], error: &std::io::Error) -> String {
+    let library = || error.to_string().lines().next().unwrap_or_default().trim().to_string();
+    let text = String::from_utf8_lossy(bytes);
+    let layout = match ply_layout(&text) {
+        Ok(layout) => layout,
+        Err(fault) => return fault,
+    };
+    let announced: Vec<String> =
+        layout.elements.iter().map(|(name, count, _)| format!("{count} `{name}`")).collect();
+    let announced = announced.join(" and ");
+    let fix = "make the counts of the header's `element` lines match the data";
+    if !layout.ascii {
+        // Binary values are always numbers: after a sound header, only data
+        // that ends early fails.
+        return format!("the binary data ends before the {announced} elements the header announces; {fix}");
+    }
+    let data: Vec<(usize, &str)> = text
+        .lines()
+        .enumerate()
+        .skip(layout.data_line - 1)
+        .map(|(i, l)| (i + 1, l))
+        .collect();
+    let needed: usize = layout.elements.iter().map(|(_, count, _)| count).sum();
+    let written = data.iter().filter(|(_, l)| !l.trim().is_empty()).count();
+    if written < needed {
+        return format!(
+            "the header announces {announced} elements, {needed} lines of data, but the file has {written} \
+             (from line {}); {fix}",
+            layout.data_line
+        );
+    }
+    let mut lines = data.into_iter();
+    for (name, count, properties) in &layout.elements {
+        for index in 0..*count {
+            let Some((number, line)) = lines.next() else {
+                return library();
+            };
+            let mut values = line.split_whitespace();
+            for (property, is_list, integer) in properties {
+                let items = if *is_list {
+                    match values.next().map(|n| n.parse::<usize>()) {
+                        Some(Ok(n)) => n,
+                        _ => {
+                            return format!(
+                                "line {number} (`{name}` {index}): the list `{property}` does not start with its \
+                                 length"
+                            )
+                        }
+                    }
+                } else {
+                    1
+                };
+                for item in 0..items {
+                    let Some(value) = values.next() else {
+                        if *is_list {
+                            return format!(
+                                "line {number} (`{name}` {index}): the list `{property}` announces {items} values \
+                                 but holds {item}"
+                            );
+                        }
+                        return format!(
+                            "line {number} (`{name}` {index}): `{property}` is missing; each `{name}` line holds \
+                             the values of its {} properties in the header's order",
+                            properties.len()
+                        );
+                    };
+                    let plain = value.chars().all(|c| c.is_ascii_digit() || "+-.eE".contains(c));
+                    let fits = plain
+                        && if *integer { value.parse::<i64>().is_ok() } else { value.parse::<f64>().is_ok() };
+                    if !fits {
+                        let kind = if *integer { "an integer" } else { "a finite number" };
+                        return format!(
+                            "line {number} (`{name}` {index}): `{value}` is not {kind}, as `{property}` must be"
+                        );
+                    }
+                }
+            }
+        }
+    }
+    library()
+}
+
 /// PLY (ASCII or binary): the `vertex` element's x, y, z and the `face`
 /// element's `vertex_indices` (or `vertex_index`) lists, fan-triangulated.
 pub fn parse_ply(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
@@ -193,7 +331,7 @@ pub fn parse_ply(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
     let parser = ply_rs::parser::Parser::<ply_rs::ply::DefaultElement>::new();
     let ply = parser
         .read_ply(&mut BufReader::new(bytes))
-        .map_err(|e| format_error(path, "PLY", e))?;
+        .map_err(|e| format_error(path, "PLY", ply_fault(bytes, &e)))?;
     let scalar = |p: &Property| -> Option<f64> {
         Some(match *p {
             Property::Char(v) => v as f64,
@@ -237,6 +375,42 @@ pub fn parse_ply(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
         .payload
         .get("face")
         .ok_or_else(|| format_error(path, "PLY", "no `face` element"))?;
+    // The index list's declaration, checked once rather than per face.
+    let declared = ply.header.elements.get("face").and_then(|face| {
+        ["vertex_indices", "vertex_index"]
+            .iter()
+            .find_map(|name| face.properties.get(*name).map(|p| (*name, p.data_type.clone())))
+    });
+    let example = "e.g. `property list uchar int vertex_indices`";
+    match declared {
+        None => {
+            return Err(format_error(
+                path,
+                "PLY",
+                format!("the `face` element has no `vertex_indices` (or `vertex_index`) property; declare the corners, {example}"),
+            ))
+        }
+        Some((name, ply_rs::ply::PropertyType::List(_, item)))
+            if matches!(item, ply_rs::ply::ScalarType::Float | ply_rs::ply::ScalarType::Double) =>
+        {
+            return Err(format_error(
+                path,
+                "PLY",
+                format!(
+                    "the header declares `{name}` a list of {}; vertex indices are integers, {example}",
+                    format!("{item:?}").to_lowercase()
+                ),
+            ))
+        }
+        Some((name, ply_rs::ply::PropertyType::Scalar(_))) => {
+            return Err(format_error(
+                path,
+                "PLY",
+                format!("the header declares `{name}` a single number; a face's corners are a list, {example}"),
+            ))
+        }
+        Some(_) => {}
+    }
     let count = mesh.positions.len() as i64;
     for (index, face) in faces.iter().enumerate() {
         let corners = face

@@ -306,6 +306,48 @@ fn gltf_cycles_and_accessors_outside_their_buffers_are_named() {
     assert!(e.contains("bufferView 1 runs past buffer 0: it ends at byte 4824"), "{e}");
 }
 
+#[test]
+fn ply_faults_name_the_line_and_the_fix() {
+    let path = Path::new("bad.ply");
+    let err = |text: String| parse_ply(path, text.as_bytes()).unwrap_err().to_string();
+    // More vertices announced than written: the counts, not the library's internals.
+    let e = err(ply_ascii().replacen("element vertex 4", "element vertex 6", 1));
+    assert!(e.contains("bad.ply") && e.contains("announces 6 `vertex` and 4 `face` elements") && e.contains("`element` lines"), "{e}");
+    assert!(!e.contains("Custom") && !e.contains("Couln't"), "{e}");
+    let e = err(ply_ascii().replacen("1 0 0", "1 nan 0", 1));
+    assert!(e.contains("line 11 (`vertex` 1): `nan` is not a finite number, as `y` must be"), "{e}");
+    let e = err(ply_ascii().replacen("3 0 1 3", "3 0 1", 1));
+    assert!(e.contains("line 15 (`face` 1): the list `vertex_indices` announces 3 values but holds 2"), "{e}");
+    let e = err("ply
+format ascii 1.0
+element vertex 3
+".into());
+    assert!(e.contains("no `end_header`"), "{e}");
+    let mut binary = ply_binary();
+    binary.truncate(binary.len() - 5);
+    let e = parse_ply(path, &binary).unwrap_err().to_string();
+    assert!(e.contains("binary data ends before the 4 `vertex` and 4 `face` elements"), "{e}");
+    // Float indices: named as a declaration to fix, not as a missing list.
+    let e = err(ply_ascii().replacen("list uchar int", "list uchar float", 1));
+    assert!(e.contains("declares `vertex_indices` a list of float") && e.contains("property list uchar int vertex_indices"), "{e}");
+    let e = err(ply_ascii().replacen("vertex_indices", "corners", 1));
+    assert!(e.contains("no `vertex_indices` (or `vertex_index`) property"), "{e}");
+}
+
+#[test]
+fn absurdly_far_vertices_are_refused_with_their_place() {
+    let mut raw = RawMesh::default();
+    raw.positions = vec![DVec3::ZERO, DVec3::new(3e38, 0.0, 0.0), DVec3::Y];
+    raw.triangles = vec![[0, 1, 2]];
+    let e = weld(Path::new("huge.stl"), &raw, 1e-3).unwrap_err();
+    assert!(matches!(e, ImportError::TooFar { triangle: 0, corner: 1, vertex: 1, .. }), "{e}");
+    let e = e.to_string();
+    assert!(e.contains("huge.stl") && e.contains("3.0e35 m") && e.contains("check `units`"), "{e}");
+    // A CT mesh's offsets, in mm, are fine.
+    raw.positions[1] = DVec3::new(-1500.0, 0.0, 0.0);
+    assert!(weld(Path::new("ct.stl"), &raw, 1e-3).is_ok());
+}
+
 /// The shipped Visible Human landmarks file, edited by `edit`.
 fn edited_landmarks(dir: &Path, edit: impl Fn(String) -> String) -> PathBuf {
     let text = std::fs::read_to_string(visible_human_female_pelvis_path()).unwrap();
