@@ -408,6 +408,22 @@ fn landmark_file_mistakes_are_named_with_their_fix() {
 
     let units = edited_landmarks(&dir, |t| t.replace("units = \"mm\"", "units = \"cm\""));
     assert!(import_pelvis(&units).unwrap_err().to_string().contains("units"));
+
+    // An unknown key is named as a landmark, whatever its value.
+    let shipped = std::fs::read_to_string(visible_human_female_pelvis_path()).unwrap();
+    let parse = |text: String| LandmarksFile::parse(Path::new("lm.toml"), &text).unwrap_err().to_string();
+    let e = parse(shipped.clone() + "foo = 1\n");
+    assert!(e.contains("lm.toml") && e.contains("unknown landmark(s) foo") && e.contains("sacral_promontory"), "{e}");
+    // A missing key says what it is and how to write it.
+    let without = |key: &str| shipped.lines().filter(|l| !l.starts_with(key)).collect::<Vec<_>>().join("\n");
+    let e = parse(without("units"));
+    assert!(e.contains("lm.toml: missing `units`") && e.contains("units = \"mm\""), "{e}");
+    let e = parse(without("mesh"));
+    assert!(e.contains("missing `mesh`") && e.contains("mesh = \"pelvis.stl\""), "{e}");
+    let e = parse(shipped.replace("[axes]", "").replace("right = \"-x\"\nanterior = \"-y\"\ncranial = \"+z\"\n", ""));
+    assert!(e.contains("missing the [axes] table") && e.contains("right = \"-x\""), "{e}");
+    let e = parse(shipped.split("[landmarks]").next().unwrap().to_string());
+    assert!(e.contains("missing landmark(s) sacral_promontory"), "{e}");
     std::fs::remove_dir_all(dir).ok();
 }
 
