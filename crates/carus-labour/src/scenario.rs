@@ -913,39 +913,9 @@ impl Scenario {
         })
     }
 
-    /// An imported pelvis names a file that exists or the built-in pelvis:
-    /// a misspelt name is told as that, not as a file that cannot be read.
+    /// An imported pelvis names a file that exists or the built-in pelvis.
     fn check_import(&self, path: &Path, text: &str) -> Result<(), ScenarioError> {
-        let PelvisSpec::Imported { landmarks_file } = &self.pelvis else {
-            return Ok(());
-        };
-        let resolved = self.base_dir.join(landmarks_file);
-        if landmarks_file.as_os_str() == VISIBLE_HUMAN_FEMALE || resolved.is_file() {
-            return Ok(());
-        }
-        #[derive(Deserialize)]
-        struct File {
-            pelvis: Import,
-        }
-        #[derive(Deserialize)]
-        struct Import {
-            import: toml::Spanned<String>,
-        }
-        let line = toml::from_str::<File>(text).map_or(0, |f| line_at(text, f.pelvis.import.span().start));
-        Err(ScenarioError::Syntax {
-            path: path.to_path_buf(),
-            line,
-            key: "`pelvis.import`: ".into(),
-            message: format!(
-                "{:?} is neither a file ({} does not exist) nor a built-in pelvis",
-                landmarks_file.display().to_string(),
-                std::path::absolute(&resolved).unwrap_or(resolved).display()
-            ),
-            hint: format!(
-                "the built-in pelvis names: `{VISIBLE_HUMAN_FEMALE}`; or a landmarks file's path from the \
-                 scenario file's folder (docs/IMPORT.md)"
-            ),
-        })
+        check_pelvis_import(path, text, &self.pelvis, &self.base_dir)
     }
 
     /// Impossible values, named by their key with a hint.
@@ -1443,6 +1413,45 @@ fn shown(value: f64) -> String {
     } else {
         value.to_string()
     }
+}
+
+/// An imported pelvis (`[pelvis] import = ...` of the file `path`, whose
+/// text is `text`) names a file that exists, relative to `base_dir`, or the
+/// built-in pelvis: a misspelt name is told as that, with the built-in
+/// names, not as a file that cannot be read. Scenarios and anatomy files
+/// (`carus measure`, `carus mesh`) both check their import with it.
+pub fn check_pelvis_import(path: &Path, text: &str, pelvis: &PelvisSpec, base_dir: &Path) -> Result<(), ScenarioError> {
+    let PelvisSpec::Imported { landmarks_file } = pelvis else {
+        return Ok(());
+    };
+    let resolved = base_dir.join(landmarks_file);
+    if landmarks_file.as_os_str() == VISIBLE_HUMAN_FEMALE || resolved.is_file() {
+        return Ok(());
+    }
+    #[derive(Deserialize)]
+    struct File {
+        pelvis: Import,
+    }
+    #[derive(Deserialize)]
+    struct Import {
+        import: toml::Spanned<String>,
+    }
+    let line = toml::from_str::<File>(text).map_or(0, |f| line_at(text, f.pelvis.import.span().start));
+    let found = if resolved.is_dir() { "is a folder" } else { "does not exist" };
+    Err(ScenarioError::Syntax {
+        path: path.to_path_buf(),
+        line,
+        key: "`pelvis.import`: ".into(),
+        message: format!(
+            "{:?} is neither a file ({} {found}) nor a built-in pelvis",
+            landmarks_file.display().to_string(),
+            std::path::absolute(&resolved).unwrap_or(resolved).display()
+        ),
+        hint: format!(
+            "the built-in pelvis names: `{VISIBLE_HUMAN_FEMALE}`; or a landmarks file's path from this \
+             file's folder (docs/IMPORT.md)"
+        ),
+    })
 }
 
 /// The tables of a TOML file, refused as a scenario's syntax is: by line,

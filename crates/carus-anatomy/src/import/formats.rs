@@ -186,6 +186,144 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
     Ok(mesh)
 }
 
+/// What a PLY file's header declares, as far as telling a fault needs:
+/// each element's name, count and properties (name, list or not, integer
+/// or not), and where its data starts.
+struct PlyLayout {
+    ascii: bool,
+    /// The 1-based line number of the first data line.
+    data_line: usize,
+    elements: Vec<(String, usize, Vec<(String, bool, bool)>)>,
+}
+
+/// Reads a PLY header, or says which line of it is wrong.
+fn ply_layout(text: &str) -> Result<PlyLayout, String> {
+    let mut layout = PlyLayout { ascii: false, data_line: 0, elements: Vec::new() };
+    let integer = |t: &str| -> Option<bool> {
+        match t {
+            "char" | "uchar" | "short" | "ushort" | "int" | "uint" | "int8" | "uint8" | "int16" | "uint16"
+            | "int32" | "uint32" => Some(true),
+            "float" | "double" | "float32" | "float64" => Some(false),
+            _ => None,
+        }
+    };
+    for (number, line) in text.lines().enumerate().map(|(i, l)| (i + 1, l)) {
+        let words: Vec<&str> = line.split_whitespace().collect();
+        let bad = |what: &str| Err(format!("line {number}: `{}` {what}", line.trim()));
+        match words.as_slice() {
+            ["ply"] if number == 1 => {}
+            _ if number == 1 => return bad("is not `ply`, the first line of every PLY file"),
+            ["format", format, _] => layout.ascii = *format == "ascii",
+            ["comment" | "obj_info", ..] => {}
+            ["element", name, count] => match count.parse() {
+                Ok(count) => layout.elements.push((name.to_string(), count, Vec::new())),
+                Err(_) => return bad("needs a whole number of elements, e.g. `element vertex 8`"),
+            },
+            ["property", kind, name] | ["property", "list", _, kind, name] => {
+                let Some(integer) = integer(kind) else {
+                    return bad("names an unknown type; use char, uchar, short, ushort, int, uint, float or double");
+                };
+                let Some(element) = layout.elements.last_mut() else {
+                    return bad("comes before any `element` line");
+                };
+                element.2.push((name.to_string(), words.len() == 5, integer));
+            }
+            ["end_header"] => {
+                layout.data_line = number + 1;
+                return Ok(layout);
+            }
+            _ => return bad("is not a PLY header line (format, element, property, comment or end_header)"),
+        }
+    }
+    Err("the header has no `end_header` line: the file is truncated or not a PLY file".into())
+}
+
+/// Why ply-rs refused a file, in the file's terms: the header line at
+/// fault, data that ends before the elements the header announces, or the
+/// data line and element whose values do not fit their properties. The
+/// library's own message (its internals) is the last resort.
+fn ply_fault(bytes: &[u8], error: &std::io::Error) -> String {
+    let library = || error.to_string().lines().next().unwrap_or_default().trim().to_string();
+    let text = String::from_utf8_lossy(bytes);
+    let layout = match ply_layout(&text) {
+        Ok(layout) => layout,
+        Err(fault) => return fault,
+    };
+    let announced: Vec<String> =
+        layout.elements.iter().map(|(name, count, _)| format!("{count} `{name}`")).collect();
+    let announced = announced.join(" and ");
+    let fix = "make the counts of the header's `element` lines match the data";
+    if !layout.ascii {
+        // Binary values are always numbers: after a sound header, only data
+        // that ends early fails.
+        return format!("the binary data ends before the {announced} elements the header announces; {fix}");
+    }
+    let data: Vec<(usize, &str)> = text
+        .lines()
+        .enumerate()
+        .skip(layout.data_line - 1)
+        .map(|(i, l)| (i + 1, l))
+        .collect();
+    let needed: usize = layout.elements.iter().map(|(_, count, _)| count).sum();
+    let written = data.iter().filter(|(_, l)| !l.trim().is_empty()).count();
+    if written < needed {
+        return format!(
+            "the header announces {announced} elements, {needed} lines of data, but the file has {written} \
+             (from line {}); {fix}",
+            layout.data_line
+        );
+    }
+    let mut lines = data.into_iter();
+    for (name, count, properties) in &layout.elements {
+        for index in 0..*count {
+            let Some((number, line)) = lines.next() else {
+                return library();
+            };
+            let mut values = line.split_whitespace();
+            for (property, is_list, integer) in properties {
+                let items = if *is_list {
+                    match values.next().map(|n| n.parse::<usize>()) {
+                        Some(Ok(n)) => n,
+                        _ => {
+                            return format!(
+                                "line {number} (`{name}` {index}): the list `{property}` does not start with its \
+                                 length"
+                            )
+                        }
+                    }
+                } else {
+                    1
+                };
+                for item in 0..items {
+                    let Some(value) = values.next() else {
+                        if *is_list {
+                            return format!(
+                                "line {number} (`{name}` {index}): the list `{property}` announces {items} values \
+                                 but holds {item}"
+                            );
+                        }
+                        return format!(
+                            "line {number} (`{name}` {index}): `{property}` is missing; each `{name}` line holds \
+                             the values of its {} properties in the header's order",
+                            properties.len()
+                        );
+                    };
+                    let plain = value.chars().all(|c| c.is_ascii_digit() || "+-.eE".contains(c));
+                    let fits = plain
+                        && if *integer { value.parse::<i64>().is_ok() } else { value.parse::<f64>().is_ok() };
+                    if !fits {
+                        let kind = if *integer { "an integer" } else { "a finite number" };
+                        return format!(
+                            "line {number} (`{name}` {index}): `{value}` is not {kind}, as `{property}` must be"
+                        );
+                    }
+                }
+            }
+        }
+    }
+    library()
+}
+
 /// PLY (ASCII or binary): the `vertex` element's x, y, z and the `face`
 /// element's `vertex_indices` (or `vertex_index`) lists, fan-triangulated.
 pub fn parse_ply(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
@@ -193,7 +331,7 @@ pub fn parse_ply(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
     let parser = ply_rs::parser::Parser::<ply_rs::ply::DefaultElement>::new();
     let ply = parser
         .read_ply(&mut BufReader::new(bytes))
-        .map_err(|e| format_error(path, "PLY", e))?;
+        .map_err(|e| format_error(path, "PLY", ply_fault(bytes, &e)))?;
     let scalar = |p: &Property| -> Option<f64> {
         Some(match *p {
             Property::Char(v) => v as f64,
@@ -237,6 +375,42 @@ pub fn parse_ply(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
         .payload
         .get("face")
         .ok_or_else(|| format_error(path, "PLY", "no `face` element"))?;
+    // The index list's declaration, checked once rather than per face.
+    let declared = ply.header.elements.get("face").and_then(|face| {
+        ["vertex_indices", "vertex_index"]
+            .iter()
+            .find_map(|name| face.properties.get(*name).map(|p| (*name, p.data_type.clone())))
+    });
+    let example = "e.g. `property list uchar int vertex_indices`";
+    match declared {
+        None => {
+            return Err(format_error(
+                path,
+                "PLY",
+                format!("the `face` element has no `vertex_indices` (or `vertex_index`) property; declare the corners, {example}"),
+            ))
+        }
+        Some((name, ply_rs::ply::PropertyType::List(_, item)))
+            if matches!(item, ply_rs::ply::ScalarType::Float | ply_rs::ply::ScalarType::Double) =>
+        {
+            return Err(format_error(
+                path,
+                "PLY",
+                format!(
+                    "the header declares `{name}` a list of {}; vertex indices are integers, {example}",
+                    format!("{item:?}").to_lowercase()
+                ),
+            ))
+        }
+        Some((name, ply_rs::ply::PropertyType::Scalar(_))) => {
+            return Err(format_error(
+                path,
+                "PLY",
+                format!("the header declares `{name}` a single number; a face's corners are a list, {example}"),
+            ))
+        }
+        Some(_) => {}
+    }
     let count = mesh.positions.len() as i64;
     for (index, face) in faces.iter().enumerate() {
         let corners = face
@@ -327,14 +501,28 @@ pub fn parse_gltf_parts(path: &Path, bytes: &[u8]) -> Result<Vec<NamedPart>, Imp
         buffers.push(data);
     }
 
+    let parents = check_node_graph(path, &gltf.document)?;
     let mut parts = Vec::new();
     let scene = gltf.document.default_scene().or_else(|| gltf.document.scenes().next());
     let roots: Vec<gltf::Node> = match scene {
         Some(scene) => scene.nodes().collect(),
-        None => gltf.document.nodes().collect(),
+        None => gltf.document.nodes().filter(|n| parents[n.index()].is_none()).collect(),
     };
+    // The graph is a forest (checked above), so each node is met once and
+    // the stack holds at most one entry per node.
+    let mut reached = vec![false; parents.len()];
     let mut stack: Vec<(gltf::Node, DMat4)> = roots.into_iter().map(|n| (n, DMat4::IDENTITY)).collect();
     while let Some((node, parent)) = stack.pop() {
+        if std::mem::replace(&mut reached[node.index()], true) {
+            return Err(format_error(
+                path,
+                "glTF",
+                format!(
+                    "node {} is reached twice from the scene: list only root nodes in the scene's `nodes`",
+                    node.index()
+                ),
+            ));
+        }
         let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(|v| v as f64)));
         let world = parent * local;
         if let Some(mesh) = node.mesh() {
@@ -346,19 +534,46 @@ pub fn parse_gltf_parts(path: &Path, bytes: &[u8]) -> Result<Vec<NamedPart>, Imp
             let mut raw = RawMesh::default();
             let mirrored = world.determinant() < 0.0;
             for primitive in mesh.primitives().filter(|p| p.mode() == gltf::mesh::Mode::Triangles) {
+                let (m, p) = (mesh.index(), primitive.index());
+                // gltf's reader yields nothing for an accessor of the wrong
+                // type or outside its buffer: check them first, and name them.
+                let position = primitive.get(&gltf::Semantic::Positions);
+                if let Some(accessor) = &position {
+                    check_accessor(path, accessor, &format!("POSITION of primitive {p} of mesh {m}"))?;
+                }
+                if let Some(accessor) = &primitive.indices() {
+                    check_accessor(path, accessor, &format!("indices of primitive {p} of mesh {m}"))?;
+                }
                 let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
-                let Some(positions) = reader.read_positions() else {
-                    continue;
+                let unreadable = |what: &str| {
+                    format_error(path, "glTF", format!("the {what} of primitive {p} of mesh {m} cannot be read"))
+                };
+                let positions = match (reader.read_positions(), position) {
+                    (Some(positions), _) => positions,
+                    (None, None) => continue,
+                    (None, Some(_)) => return Err(unreadable("POSITION")),
                 };
                 let base = raw.positions.len() as u32;
                 raw.positions.extend(
                     positions.map(|p| world.transform_point3(DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64))),
                 );
                 let count = raw.positions.len() as u32 - base;
-                let indices: Vec<u32> = match reader.read_indices() {
-                    Some(indices) => indices.into_u32().collect(),
-                    None => (0..count).collect(),
+                let indices: Vec<u32> = match (reader.read_indices(), primitive.indices()) {
+                    (Some(indices), _) => indices.into_u32().collect(),
+                    (None, None) => (0..count).collect(),
+                    (None, Some(_)) => return Err(unreadable("indices")),
                 };
+                if indices.len() % 3 != 0 {
+                    return Err(format_error(
+                        path,
+                        "glTF",
+                        format!(
+                            "primitive {p} of mesh {m} has {} corners, not a whole number of triangles \
+                             (a multiple of 3)",
+                            indices.len()
+                        ),
+                    ));
+                }
                 if let Some(&bad) = indices.iter().find(|&&i| i >= count) {
                     return Err(format_error(
                         path,
@@ -382,6 +597,163 @@ pub fn parse_gltf_parts(path: &Path, bytes: &[u8]) -> Result<Vec<NamedPart>, Imp
     // Scene order, not stack order.
     parts.reverse();
     Ok(parts)
+}
+
+/// The parent of each node, after checking that the node graph is a forest:
+/// a node with two parents, or one that is its own ancestor, would have the
+/// scene walked without end (a cycle) or exponentially often (shared
+/// children), so both are refused with the nodes named.
+fn check_node_graph(path: &Path, document: &gltf::Document) -> Result<Vec<Option<usize>>, ImportError> {
+    let count = document.nodes().len();
+    let mut parents: Vec<Option<usize>> = vec![None; count];
+    for node in document.nodes() {
+        for child in node.children() {
+            let c = child.index();
+            if let Some(other) = parents[c].replace(node.index()) {
+                let message = if other == node.index() {
+                    format!("node {other} lists node {c} twice among its `children`")
+                } else {
+                    format!("node {c} is a child of both node {other} and node {}; a node has one parent", node.index())
+                };
+                return Err(format_error(path, "glTF", message));
+            }
+        }
+    }
+    // Walk up from every node; with one parent each, a walk that comes back
+    // to a node of its own path has found a cycle. O(nodes).
+    const UNSEEN: usize = usize::MAX;
+    let mut walked_from = vec![UNSEEN; count];
+    for start in 0..count {
+        let mut node = Some(start);
+        while let Some(n) = node {
+            if walked_from[n] == start {
+                let mut cycle = vec![n];
+                let mut up = parents[n];
+                while let Some(u) = up.filter(|&u| u != n) {
+                    cycle.push(u);
+                    up = parents[u];
+                }
+                cycle.push(n);
+                // Written from ancestor to descendant, as `children` go.
+                let cycle: Vec<String> = cycle.iter().rev().map(usize::to_string).collect();
+                return Err(format_error(
+                    path,
+                    "glTF",
+                    format!(
+                        "node {n} is its own ancestor: the scene graph has a cycle ({}); remove the child that \
+                         leads back",
+                        cycle.join(" -> ")
+                    ),
+                ));
+            }
+            if walked_from[n] != UNSEEN {
+                break;
+            }
+            walked_from[n] = start;
+            node = parents[n];
+        }
+    }
+    Ok(parents)
+}
+
+/// The glTF names of a component type and an element type.
+fn gltf_type_name(accessor: &gltf::Accessor) -> String {
+    use gltf::accessor::{DataType, Dimensions};
+    let component = match accessor.data_type() {
+        DataType::I8 => "BYTE",
+        DataType::U8 => "UNSIGNED_BYTE",
+        DataType::I16 => "SHORT",
+        DataType::U16 => "UNSIGNED_SHORT",
+        DataType::U32 => "UNSIGNED_INT",
+        DataType::F32 => "FLOAT",
+    };
+    let element = match accessor.dimensions() {
+        Dimensions::Scalar => "SCALAR",
+        Dimensions::Vec2 => "VEC2",
+        Dimensions::Vec3 => "VEC3",
+        Dimensions::Vec4 => "VEC4",
+        Dimensions::Mat2 => "MAT2",
+        Dimensions::Mat3 => "MAT3",
+        Dimensions::Mat4 => "MAT4",
+    };
+    format!("{element} of {component}")
+}
+
+/// Checks an accessor a primitive reads (`role`, e.g. "POSITION of
+/// primitive 0 of mesh 0"): the type the role needs (POSITION a VEC3 of
+/// FLOAT, indices a SCALAR of unsigned integers), and its elements inside
+/// its bufferView and the view inside its buffer (declared `byteLength`,
+/// which the buffer's data was checked to hold).
+fn check_accessor(path: &Path, accessor: &gltf::Accessor, role: &str) -> Result<(), ImportError> {
+    use gltf::accessor::{DataType, Dimensions};
+    let a = accessor.index();
+    let refuse = |message: String| Err(format_error(path, "glTF", format!("accessor {a} ({role}) {message}")));
+    let position = role.starts_with("POSITION");
+    let fits = if position {
+        accessor.dimensions() == Dimensions::Vec3 && accessor.data_type() == DataType::F32
+    } else {
+        accessor.dimensions() == Dimensions::Scalar
+            && matches!(accessor.data_type(), DataType::U8 | DataType::U16 | DataType::U32)
+    };
+    if !fits {
+        let needed = if position {
+            "a VEC3 of FLOAT (componentType 5126)"
+        } else {
+            "a SCALAR of UNSIGNED_BYTE, UNSIGNED_SHORT or UNSIGNED_INT"
+        };
+        return refuse(format!("is a {}, but it must be {needed}", gltf_type_name(accessor)));
+    }
+    let size = accessor.size();
+    let mut ranges: Vec<(gltf::buffer::View, usize, usize, usize, usize, &str)> = Vec::new();
+    if let Some(view) = accessor.view() {
+        ranges.push((view.clone(), accessor.offset(), view.stride().unwrap_or(size), accessor.count(), size, ""));
+    }
+    if let Some(sparse) = accessor.sparse() {
+        let (indices, values) = (sparse.indices(), sparse.values());
+        let index_size = match indices.index_type() {
+            gltf::accessor::sparse::IndexType::U8 => 1,
+            gltf::accessor::sparse::IndexType::U16 => 2,
+            gltf::accessor::sparse::IndexType::U32 => 4,
+        };
+        ranges.push((indices.view(), indices.offset(), index_size, sparse.count(), index_size, "sparse indices "));
+        ranges.push((values.view(), values.offset(), size, sparse.count(), size, "sparse values "));
+    }
+    for (view, offset, stride, count, size, which) in ranges {
+        let v = view.index();
+        if stride < size {
+            return refuse(format!(
+                "reads {size}-byte elements, but bufferView {v} has a byteStride of {stride}; fix `byteStride`"
+            ));
+        }
+        let end = match count {
+            0 => offset,
+            _ => offset.saturating_add(stride.saturating_mul(count - 1)).saturating_add(size),
+        };
+        if end > view.length() {
+            return refuse(format!(
+                "runs past its bufferView {v}: its {which}{count} elements from byteOffset {offset} need {end} \
+                 bytes, the view holds {}; fix the accessor's `count` or `byteOffset`, or the view's `byteLength`",
+                view.length()
+            ));
+        }
+        let buffer = view.buffer();
+        let view_end = view.offset().saturating_add(view.length());
+        if view_end > buffer.length() {
+            return Err(format_error(
+                path,
+                "glTF",
+                format!(
+                    "bufferView {v} runs past buffer {}: it ends at byte {view_end} (byteOffset {} + byteLength {}), \
+                     the buffer's byteLength is {}; fix the view's `byteOffset` or `byteLength`",
+                    buffer.index(),
+                    view.offset(),
+                    view.length(),
+                    buffer.length()
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// All parts as one mesh.

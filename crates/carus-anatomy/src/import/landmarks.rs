@@ -53,7 +53,9 @@ pub struct LandmarksFile {
     pub mesh: PathBuf,
     pub units: Units,
     pub axes: AxesDeclaration,
-    /// Landmark name -> [x, y, z] in the mesh's coordinates and units.
+    /// Landmark name -> [x, y, z] in the mesh's coordinates and units
+    /// (without the table, every landmark is missing and listed as such).
+    #[serde(default)]
     pub landmarks: BTreeMap<String, [f64; 3]>,
 }
 
@@ -154,13 +156,18 @@ impl LandmarksFile {
 
     /// Parses and checks landmarks text; `path` names it in errors.
     pub fn parse(path: &Path, text: &str) -> Result<Self, ImportError> {
-        let file: LandmarksFile = toml::from_str(text).map_err(|e| file_error(path, e))?;
-        let unknown: Vec<String> = file
-            .landmarks
-            .keys()
-            .filter(|k| !LANDMARK_NAMES.contains(&k.as_str()))
-            .cloned()
-            .collect();
+        // Names and required keys first, from the bare table: serde would
+        // report an unknown landmark by its value's type, and a missing key
+        // at line 1 without saying what it is.
+        let table: toml::Table = text.parse().map_err(|e| file_error(path, e))?;
+        let unknown: Vec<String> = match table.get("landmarks") {
+            Some(toml::Value::Table(landmarks)) => landmarks
+                .keys()
+                .filter(|k| !LANDMARK_NAMES.contains(&k.as_str()))
+                .cloned()
+                .collect(),
+            _ => Vec::new(),
+        };
         if !unknown.is_empty() {
             return Err(ImportError::UnknownLandmarks {
                 path: path.to_path_buf(),
@@ -168,6 +175,28 @@ impl LandmarksFile {
                 known: LANDMARK_NAMES.iter().map(|s| s.to_string()).collect(),
             });
         }
+        for (key, what) in [
+            (
+                "mesh",
+                "missing `mesh`, the mesh file (relative to this file); add e.g. `mesh = \"pelvis.stl\"` above \
+                 the first [table]",
+            ),
+            (
+                "units",
+                "missing `units`, the unit of the mesh and of the landmarks; add `units = \"mm\"` (or \"m\") \
+                 above the first [table]",
+            ),
+            (
+                "axes",
+                "missing the [axes] table, which mesh axis points to the mother's right, front and head; add e.g. \
+                 `[axes]` with `right = \"-x\"`, `anterior = \"-y\"` and `cranial = \"+z\"` on lines of their own",
+            ),
+        ] {
+            if !table.contains_key(key) {
+                return Err(file_error(path, what));
+            }
+        }
+        let file: LandmarksFile = toml::from_str(text).map_err(|e| file_error(path, e))?;
         let missing: Vec<String> = LANDMARK_NAMES
             .iter()
             .filter(|k| !file.landmarks.contains_key(**k))

@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 
 pub use formats::{parse_gltf_parts, parse_obj, parse_ply, parse_stl, MeshFormat, NamedPart, RawMesh};
 pub use landmarks::{assemble_pelvis, import_pelvis, AxesDeclaration, ImportedPelvis, LandmarksFile};
-pub use weld::{weld, MeshReport};
+pub use weld::{weld, MeshReport, MAX_COORDINATE_M};
 
 use serde::{Deserialize, Serialize};
 
@@ -70,6 +70,14 @@ pub enum ImportError {
         triangle: usize,
         corner: usize,
         vertex: usize,
+    },
+    #[error("{path}: triangle {triangle} (corner {corner}, vertex {vertex} as read) has a coordinate {coordinate_m:.1e} m from the origin, beyond the {} m within which any anatomy lies; check `units` (mm or m) and export the mesh again", weld::MAX_COORDINATE_M)]
+    TooFar {
+        path: PathBuf,
+        triangle: usize,
+        corner: usize,
+        vertex: usize,
+        coordinate_m: f64,
     },
     #[error("{path}: the mesh has no (non-degenerate) triangles")]
     Empty { path: PathBuf },

@@ -273,6 +273,81 @@ fn broken_meshes_say_what_and_where() {
     std::fs::remove_dir_all(dir).ok();
 }
 
+#[test]
+fn gltf_cycles_and_accessors_outside_their_buffers_are_named() {
+    let path = Path::new("bad.gltf");
+    let err = |json: String| parse_gltf_parts(path, json.as_bytes()).unwrap_err().to_string();
+    let good = embedded_gltf("");
+    assert_eq!(parse_gltf_parts(path, good.as_bytes()).unwrap()[0].mesh.triangles.len(), 4);
+
+    // A node that is its own child, and a two-node loop: walked, they never end.
+    let e = err(embedded_gltf(r#", "children": [0]"#));
+    assert!(e.contains("bad.gltf") && e.contains("node 0 is its own ancestor") && e.contains("cycle (0 -> 0)"), "{e}");
+    let e = err(embedded_gltf(r#", "children": [1]}, {"children": [0]"#));
+    assert!(e.contains("node 0 is its own ancestor") && e.contains("(0 -> 1 -> 0)"), "{e}");
+    // A child shared by two parents would be walked once per path.
+    let e = err(embedded_gltf(r#", "children": [1, 2]}, {"children": [2]}, {"#));
+    assert!(e.contains("node 2 is a child of both node 0 and node 1"), "{e}");
+
+    // Accessors of the wrong type were read as something else.
+    let e = err(good.replacen(r#""type": "VEC3""#, r#""type": "VEC2""#, 1));
+    assert!(e.contains("accessor 0 (POSITION of primitive 0 of mesh 0) is a VEC2 of FLOAT") && e.contains("must be a VEC3 of FLOAT"), "{e}");
+    let e = err(good.replacen(r#""componentType": 5126"#, r#""componentType": 5121"#, 1));
+    assert!(e.contains("is a VEC3 of UNSIGNED_BYTE"), "{e}");
+    // More indices than the view holds were silently dropped (a non-indexed mesh read instead).
+    let e = err(good.replacen(r#""count": 12"#, r#""count": 300"#, 1));
+    assert!(e.contains("accessor 1 (indices of primitive 0 of mesh 0) runs past its bufferView 1") && e.contains("fix the accessor's `count`"), "{e}");
+    let e = err(good.replacen(r#""count": 4"#, r#""count": 400"#, 1));
+    assert!(e.contains("accessor 0 (POSITION") && e.contains("runs past its bufferView 0"), "{e}");
+    // Views past their buffer read as an empty mesh.
+    let e = err(good.replacen(r#""byteLength": 48}"#, r#""byteLength": 4800}"#, 1));
+    assert!(e.contains("bufferView 0 runs past buffer 0") && e.contains("byteLength is 72"), "{e}");
+    let e = err(good.replacen(r#""byteOffset": 48,"#, r#""byteOffset": 4800,"#, 1));
+    assert!(e.contains("bufferView 1 runs past buffer 0: it ends at byte 4824"), "{e}");
+}
+
+#[test]
+fn ply_faults_name_the_line_and_the_fix() {
+    let path = Path::new("bad.ply");
+    let err = |text: String| parse_ply(path, text.as_bytes()).unwrap_err().to_string();
+    // More vertices announced than written: the counts, not the library's internals.
+    let e = err(ply_ascii().replacen("element vertex 4", "element vertex 6", 1));
+    assert!(e.contains("bad.ply") && e.contains("announces 6 `vertex` and 4 `face` elements") && e.contains("`element` lines"), "{e}");
+    assert!(!e.contains("Custom") && !e.contains("Couln't"), "{e}");
+    let e = err(ply_ascii().replacen("1 0 0", "1 nan 0", 1));
+    assert!(e.contains("line 11 (`vertex` 1): `nan` is not a finite number, as `y` must be"), "{e}");
+    let e = err(ply_ascii().replacen("3 0 1 3", "3 0 1", 1));
+    assert!(e.contains("line 15 (`face` 1): the list `vertex_indices` announces 3 values but holds 2"), "{e}");
+    let e = err("ply
+format ascii 1.0
+element vertex 3
+".into());
+    assert!(e.contains("no `end_header`"), "{e}");
+    let mut binary = ply_binary();
+    binary.truncate(binary.len() - 5);
+    let e = parse_ply(path, &binary).unwrap_err().to_string();
+    assert!(e.contains("binary data ends before the 4 `vertex` and 4 `face` elements"), "{e}");
+    // Float indices: named as a declaration to fix, not as a missing list.
+    let e = err(ply_ascii().replacen("list uchar int", "list uchar float", 1));
+    assert!(e.contains("declares `vertex_indices` a list of float") && e.contains("property list uchar int vertex_indices"), "{e}");
+    let e = err(ply_ascii().replacen("vertex_indices", "corners", 1));
+    assert!(e.contains("no `vertex_indices` (or `vertex_index`) property"), "{e}");
+}
+
+#[test]
+fn absurdly_far_vertices_are_refused_with_their_place() {
+    let mut raw = RawMesh::default();
+    raw.positions = vec![DVec3::ZERO, DVec3::new(3e38, 0.0, 0.0), DVec3::Y];
+    raw.triangles = vec![[0, 1, 2]];
+    let e = weld(Path::new("huge.stl"), &raw, 1e-3).unwrap_err();
+    assert!(matches!(e, ImportError::TooFar { triangle: 0, corner: 1, vertex: 1, .. }), "{e}");
+    let e = e.to_string();
+    assert!(e.contains("huge.stl") && e.contains("3.0e35 m") && e.contains("check `units`"), "{e}");
+    // A CT mesh's offsets, in mm, are fine.
+    raw.positions[1] = DVec3::new(-1500.0, 0.0, 0.0);
+    assert!(weld(Path::new("ct.stl"), &raw, 1e-3).is_ok());
+}
+
 /// The shipped Visible Human landmarks file, edited by `edit`.
 fn edited_landmarks(dir: &Path, edit: impl Fn(String) -> String) -> PathBuf {
     let text = std::fs::read_to_string(visible_human_female_pelvis_path()).unwrap();
@@ -333,6 +408,22 @@ fn landmark_file_mistakes_are_named_with_their_fix() {
 
     let units = edited_landmarks(&dir, |t| t.replace("units = \"mm\"", "units = \"cm\""));
     assert!(import_pelvis(&units).unwrap_err().to_string().contains("units"));
+
+    // An unknown key is named as a landmark, whatever its value.
+    let shipped = std::fs::read_to_string(visible_human_female_pelvis_path()).unwrap();
+    let parse = |text: String| LandmarksFile::parse(Path::new("lm.toml"), &text).unwrap_err().to_string();
+    let e = parse(shipped.clone() + "foo = 1\n");
+    assert!(e.contains("lm.toml") && e.contains("unknown landmark(s) foo") && e.contains("sacral_promontory"), "{e}");
+    // A missing key says what it is and how to write it.
+    let without = |key: &str| shipped.lines().filter(|l| !l.starts_with(key)).collect::<Vec<_>>().join("\n");
+    let e = parse(without("units"));
+    assert!(e.contains("lm.toml: missing `units`") && e.contains("units = \"mm\""), "{e}");
+    let e = parse(without("mesh"));
+    assert!(e.contains("missing `mesh`") && e.contains("mesh = \"pelvis.stl\""), "{e}");
+    let e = parse(shipped.replace("[axes]", "").replace("right = \"-x\"\nanterior = \"-y\"\ncranial = \"+z\"\n", ""));
+    assert!(e.contains("missing the [axes] table") && e.contains("right = \"-x\""), "{e}");
+    let e = parse(shipped.split("[landmarks]").next().unwrap().to_string());
+    assert!(e.contains("missing landmark(s) sacral_promontory"), "{e}");
     std::fs::remove_dir_all(dir).ok();
 }
 

@@ -1,5 +1,5 @@
-//! From triangles as stored to a clean surface: non-finite coordinates
-//! refused with their triangle and vertex, duplicate vertices merged,
+//! From triangles as stored to a clean surface: non-finite or absurdly
+//! large coordinates refused with their triangle and vertex, duplicate vertices merged,
 //! degenerate triangles dropped, and the surface's parts and openings counted.
 
 use std::collections::HashMap;
@@ -32,6 +32,12 @@ pub struct MeshReport {
     pub non_manifold_edges: usize,
 }
 
+/// The farthest a vertex may lie from the origin, in metres: a body fits
+/// in metres and scanner coordinates stay within a few of them, so
+/// anything beyond is a wrong unit or a broken export, and coordinates
+/// near the float range would overflow areas and volumes downstream.
+pub const MAX_COORDINATE_M: f64 = 1e3;
+
 /// Checks coordinates, merges duplicate vertices (exactly equal after
 /// scaling) and drops degenerate triangles; `scale` converts file units to
 /// metres.
@@ -52,6 +58,16 @@ pub fn weld(path: &Path, raw: &RawMesh, scale: f64) -> Result<(TriSurface, MeshR
                     triangle,
                     corner,
                     vertex: vertex as usize,
+                });
+            }
+            let coordinate_m = p.abs().max_element() * scale;
+            if coordinate_m > MAX_COORDINATE_M {
+                return Err(ImportError::TooFar {
+                    path: path.to_path_buf(),
+                    triangle,
+                    corner,
+                    vertex: vertex as usize,
+                    coordinate_m,
                 });
             }
         }

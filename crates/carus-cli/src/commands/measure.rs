@@ -137,6 +137,27 @@ fn print_head(m: &HeadMeasurement, source: String) {
     }
 }
 
+/// The text of an anatomy or scenario file; a folder, a mesh or a binary
+/// file is refused as not one, with how a mesh is imported.
+fn read_text(path: &Path) -> anyhow::Result<String> {
+    let not_toml = |what: &str| {
+        anyhow::anyhow!(
+            "{}: {what}; give an anatomy (or scenario) file, TOML text with a [pelvis] or [head] table \
+             (docs/ANATOMY.md)\n  hint: a mesh is imported through a landmarks file that names it: \
+             `[pelvis] import = \"pelvis.landmarks.toml\"` (docs/IMPORT.md)",
+            path.display()
+        )
+    };
+    if path.is_dir() {
+        return Err(not_toml("is a folder"));
+    }
+    if carus_anatomy::import::MeshFormat::from_path(path).is_ok() {
+        return Err(not_toml("is a mesh, not an anatomy file"));
+    }
+    let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
+    String::from_utf8(bytes).map_err(|_| not_toml("is not a text file (UTF-8)"))
+}
+
 /// The anatomy tables (`[pelvis]`, `[head]`, `[floor]`) of an anatomy or
 /// scenario file, shared with `carus mesh`. Other tables of a scenario file
 /// are left to the commands that use them.
@@ -158,7 +179,7 @@ impl AnatomyFile {
                 floor: FloorParameters::default(),
             });
         };
-        let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+        let text = read_text(path)?;
         let table = carus_labour::scenario::toml_table(path, &text)?;
         fn part<T: for<'de> Deserialize<'de> + Default>(path: &Path, table: &toml::Table, key: &str) -> anyhow::Result<T> {
             match table.get(key) {
@@ -187,8 +208,11 @@ impl AnatomyFile {
                 path.display()
             );
         }
+        let pelvis = part(path, &table, "pelvis")?;
+        let base = path.parent().unwrap_or(Path::new("."));
+        carus_labour::scenario::check_pelvis_import(path, &text, &pelvis, base)?;
         Ok(AnatomyFile {
-            pelvis: part(path, &table, "pelvis")?,
+            pelvis,
             head: part(path, &table, "head")?,
             floor: part(path, &table, "floor")?,
             path: Some(path.to_path_buf()),
@@ -255,6 +279,26 @@ mod tests {
         // A unit after a number gets the scenario's advice, with its line.
         let error = format!("{:#}", load("[head]\nbiparietal_mm = 95mm\n").err().unwrap());
         assert!(error.contains("file.toml:2") && error.contains("write the number alone"), "{error}");
+    }
+
+    #[test]
+    fn a_mesh_a_folder_or_a_bad_import_is_refused_with_how_to_import() {
+        let dir = tempfile::tempdir().unwrap();
+        let mesh = dir.path().join("pelvis.stl");
+        std::fs::write(&mesh, [0u8, 159, 146, 150]).unwrap();
+        let binary = dir.path().join("pelvis.bin");
+        std::fs::write(&binary, [0u8, 159, 146, 150]).unwrap();
+        for (path, what) in [(&mesh, "is a mesh"), (&binary, "is not a text file"), (&dir.path().to_path_buf(), "is a folder")] {
+            let e = format!("{:#}", AnatomyFile::load(Some(path)).err().unwrap());
+            assert!(e.starts_with(&format!("{}: {what}", path.display())), "{e}");
+            assert!(e.contains("anatomy (or scenario) file") && e.contains("[pelvis] import = "), "{e}");
+        }
+        // A misspelt built-in is told as the scenario's is, with the built-in names.
+        let e = format!("{:#}", load("[pelvis]\nimport = \"visible-human-male\"\n").err().unwrap());
+        assert!(e.contains("file.toml:2: `pelvis.import`") && e.contains("does not exist"), "{e}");
+        assert!(e.contains(carus_anatomy::pelvis::VISIBLE_HUMAN_FEMALE), "{e}");
+        let e = format!("{:#}", load("[pelvis]\nimport = \"\"\n").err().unwrap());
+        assert!(e.contains("is a folder) nor a built-in pelvis"), "{e}");
     }
 
     #[test]
