@@ -1107,6 +1107,20 @@ mod tests {
         assert!(resume(dir.path(), &RunOptions::default(), &mut SilentObserver).is_ok());
     }
 
+    /// The last step may end a hair past end_time_s when the rigid step
+    /// does not divide it; a checkpoint there is no damaged one, and a run
+    /// whose run.json was lost (a full disk) resumes from it and ends.
+    #[test]
+    fn a_checkpoint_at_the_last_step_resumes() {
+        let mut s = coarse(0.3);
+        s.numerics.rigid_dt_s = 7e-4;
+        let (dir, _) = run_in(&s, &RunOptions::default());
+        std::fs::remove_file(dir.path().join(output::RUN_FILE)).unwrap();
+        let record = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).unwrap();
+        assert!(record.summary.completed && record.summary.failure.is_none());
+        assert!(record.summary.simulated_s > 0.3);
+    }
+
     /// A failed run is not resumed: its checkpoint holds the state it
     /// failed in, and its files stay as they are.
     #[test]

@@ -1246,7 +1246,7 @@ impl Scenario {
             return Err(err(
                 "numerics.rigid_dt_s",
                 self.numerics.rigid_dt_s,
-                "is too small for a run to finish (50 times finer than the default)",
+                "is below 1e-5 s (50 times finer than the default), too small for a run to finish",
                 "1e-4 to 1e-3 s; the default is 5e-4",
             ));
         }

@@ -311,7 +311,10 @@ impl<'a> Simulation<'a> {
         }
         let dt = scene.scenario.numerics.rigid_dt_s;
         let reached_s = state.step as f64 * dt;
-        if reached_s > scene.scenario.numerics.end_time_s || b.first_not_finite().is_some() {
+        // As the run counts its steps (run.rs): the last may end a hair past
+        // end_time_s when the step does not divide it.
+        let last_step = (scene.scenario.numerics.end_time_s / dt).round() as u64;
+        if state.step > last_step || b.first_not_finite().is_some() {
             return Err(LabourError::Checkpoint(format!(
                 "the saved state is not one its scenario can reach (its step count puts it at t = \
                  {reached_s:.3e} s, the scenario ends at {} s; or a pose is not finite): the \

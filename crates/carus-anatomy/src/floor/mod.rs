@@ -125,7 +125,7 @@ pub enum FloorError {
     OddAround(usize),
     #[error("{key} = {value:?} is outside {least} to {most}, the sizes a pelvic floor takes (mm, not m or cm; the default is {default})")]
     OutOfRange { key: &'static str, value: f64, least: f64, most: f64, default: f64 },
-    #[error("elements_around x elements_across x elements_through = {count} elements, more than {MAX_FLOOR_ELEMENTS}: a run's time and memory grow with them (the default floor has 768); use fewer")]
+    #[error("elements_around x elements_across x elements_through = {count} elements, more than {MAX_FLOOR_ELEMENTS}: a run's time and memory grow with them (the built-in scenarios' floor has 192, this crate's default 768); use fewer")]
     TooManyElements { count: usize },
     #[error("hiatus_width_mm = {width} does not fit between the ischial spines ({interspinous:.1} mm apart); make it narrower than 0.6 x the interspinous diameter")]
     HiatusTooWide { width: f64, interspinous: f64 },

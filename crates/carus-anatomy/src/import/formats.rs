@@ -254,9 +254,15 @@ fn ply_fault(bytes: &[u8], error: &std::io::Error) -> String {
     let announced = announced.join(" and ");
     let fix = "make the counts of the header's `element` lines match the data";
     if !layout.ascii {
-        // Binary values are always numbers: after a sound header, only data
-        // that ends early fails.
-        return format!("the binary data ends before the {announced} elements the header announces; {fix}");
+        // Binary values are always numbers: after a sound header, data that
+        // ends early is the usual fault (the library runs out of bytes, or of
+        // a list's items); any other keeps the library's words.
+        let ran_out = error.kind() == std::io::ErrorKind::UnexpectedEof
+            || ["fill whole buffer", "Couldn't find"].iter().any(|m| library().contains(m));
+        if ran_out {
+            return format!("the binary data ends before the {announced} elements the header announces; {fix}");
+        }
+        return library();
     }
     let data: Vec<(usize, &str)> = text
         .lines()

@@ -151,7 +151,7 @@ fn read_text(path: &Path) -> anyhow::Result<String> {
     if path.is_dir() {
         return Err(not_toml("is a folder"));
     }
-    if carus_anatomy::import::MeshFormat::from_path(path).is_ok() {
+    if path.is_file() && carus_anatomy::import::MeshFormat::from_path(path).is_ok() {
         return Err(not_toml("is a mesh, not an anatomy file"));
     }
     let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;

@@ -54,17 +54,17 @@ pub fn ctrl_c_flag() -> std::sync::Arc<std::sync::atomic::AtomicBool> {
 }
 
 /// The threads of a command that runs `runs` labours at once: `jobs` of
-/// them, by default one per core, never more than the runs; also says how
-/// many.
+/// them, by default one per core, never more than the runs or the cores,
+/// whichever is more; also says how many.
 pub fn labour_pool(jobs: Option<usize>, runs: usize) -> anyhow::Result<(rayon::ThreadPool, usize)> {
     if jobs == Some(0) {
         anyhow::bail!("--jobs must be at least 1");
     }
-    // More threads than runs would only wait: a --jobs of 100000 would
-    // spend its time starting threads.
-    let jobs = jobs
-        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
-        .min(runs.max(1));
+    // The runs' own parallel passes share the pool, so it keeps a thread
+    // per core however few the runs; past that, a thread per run is all
+    // that can work (a --jobs of 100000 spent its time starting threads).
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let jobs = jobs.unwrap_or(cores).min(runs.max(cores));
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(jobs)
         .build()
@@ -130,13 +130,16 @@ pub fn coarse_normal(end_s: f64) -> carus_labour::Scenario {
 
 #[cfg(test)]
 mod tests {
-    /// --jobs is capped at the runs there are (a huge one would spend its
-    /// time starting threads) and 0 is refused.
+    /// --jobs is capped at the runs or the cores, whichever is more (a huge
+    /// one would spend its time starting threads), and 0 is refused.
     #[test]
     fn the_runs_threads_are_never_more_than_the_runs() {
-        assert_eq!(super::labour_pool(Some(100_000), 2).unwrap().1, 2);
-        assert_eq!(super::labour_pool(Some(3), 4).unwrap().1, 3);
-        assert_eq!(super::labour_pool(None, 1).unwrap().1, 1);
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        assert_eq!(super::labour_pool(Some(100_000), 2).unwrap().1, cores.max(2));
+        assert_eq!(super::labour_pool(Some(100_000), cores + 3).unwrap().1, cores + 3);
+        assert_eq!(super::labour_pool(Some(1), 4).unwrap().1, 1);
+        // One run still gets every core for its own parallel passes.
+        assert_eq!(super::labour_pool(None, 1).unwrap().1, cores);
         assert!(super::labour_pool(Some(0), 2).err().unwrap().to_string().contains("at least 1"));
     }
 
