@@ -824,14 +824,12 @@ impl Scenario {
 
     /// Parses and checks scenario text; `path` names it in errors.
     pub fn parse(path: &Path, text: &str, base_dir: PathBuf) -> Result<Scenario, ScenarioError> {
-        let deserializer = toml::Deserializer::parse(text).map_err(|e| {
-            unit_in_value(path, text, &e).unwrap_or_else(|| syntax(path, text, String::new(), &e))
-        })?;
+        let deserializer = toml::Deserializer::parse(text).map_err(|e| toml_syntax(path, text, &e))?;
         let mut scenario: Scenario = serde_path_to_error::deserialize(deserializer)
             .map_err(|e| syntax(path, text, e.path().to_string(), e.inner()))?;
         scenario.base_dir = base_dir;
         scenario.check(path)?;
-        scenario.check_import(path, text)?;
+        check_pelvis_import(path, text, &scenario.pelvis, &scenario.base_dir)?;
         Ok(scenario)
     }
 
@@ -855,6 +853,12 @@ impl Scenario {
             _ => text.push_str(&toml::to_string(self)?),
         }
         Ok(text)
+    }
+
+    /// This scenario with each (key, value) change of
+    /// [`Self::with_setting`] applied in turn.
+    pub fn with_settings(&self, settings: &[(String, String)]) -> Result<Scenario, ScenarioError> {
+        settings.iter().try_fold(self.clone(), |s, (key, value)| s.with_setting(key, value))
     }
 
     /// This scenario with one key changed: `key` is a dotted path as `carus
@@ -911,11 +915,6 @@ impl Scenario {
             } => refuse(&format!("{key}{message}"), &hint),
             other => other,
         })
-    }
-
-    /// An imported pelvis names a file that exists or the built-in pelvis.
-    fn check_import(&self, path: &Path, text: &str) -> Result<(), ScenarioError> {
-        check_pelvis_import(path, text, &self.pelvis, &self.base_dir)
     }
 
     /// Impossible values, named by their key with a hint.
@@ -1458,8 +1457,13 @@ pub fn check_pelvis_import(path: &Path, text: &str, pelvis: &PelvisSpec, base_di
 /// and a unit written after a number named as such (`carus measure` and
 /// `carus mesh` read anatomy files this way).
 pub fn toml_table(path: &Path, text: &str) -> Result<toml::Table, ScenarioError> {
-    text.parse::<toml::Table>()
-        .map_err(|e| unit_in_value(path, text, &e).unwrap_or_else(|| syntax(path, text, String::new(), &e)))
+    text.parse::<toml::Table>().map_err(|e| toml_syntax(path, text, &e))
+}
+
+/// A TOML syntax error by line, with the unit-after-a-number advice where
+/// that is the fault.
+fn toml_syntax(path: &Path, text: &str, error: &toml::de::Error) -> ScenarioError {
+    unit_in_value(path, text, error).unwrap_or_else(|| syntax(path, text, String::new(), error))
 }
 
 /// A unit written after a number (`force_max_n = 120 N`, `biparietal_mm =

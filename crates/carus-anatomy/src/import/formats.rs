@@ -545,10 +545,11 @@ pub fn parse_gltf_parts(path: &Path, bytes: &[u8]) -> Result<Vec<NamedPart>, Imp
                 // type or outside its buffer: check them first, and name them.
                 let position = primitive.get(&gltf::Semantic::Positions);
                 if let Some(accessor) = &position {
-                    check_accessor(path, accessor, &format!("POSITION of primitive {p} of mesh {m}"))?;
+                    let named = format!("POSITION of primitive {p} of mesh {m}");
+                    check_accessor(path, accessor, AccessorRole::Positions, &named)?;
                 }
                 if let Some(accessor) = &primitive.indices() {
-                    check_accessor(path, accessor, &format!("indices of primitive {p} of mesh {m}"))?;
+                    check_accessor(path, accessor, AccessorRole::Indices, &format!("indices of primitive {p} of mesh {m}"))?;
                 }
                 let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
                 let unreadable = |what: &str| {
@@ -685,16 +686,23 @@ fn gltf_type_name(accessor: &gltf::Accessor) -> String {
     format!("{element} of {component}")
 }
 
-/// Checks an accessor a primitive reads (`role`, e.g. "POSITION of
-/// primitive 0 of mesh 0"): the type the role needs (POSITION a VEC3 of
-/// FLOAT, indices a SCALAR of unsigned integers), and its elements inside
-/// its bufferView and the view inside its buffer (declared `byteLength`,
-/// which the buffer's data was checked to hold).
-fn check_accessor(path: &Path, accessor: &gltf::Accessor, role: &str) -> Result<(), ImportError> {
+/// What a primitive reads an accessor for.
+#[derive(Clone, Copy, PartialEq)]
+enum AccessorRole {
+    Positions,
+    Indices,
+}
+
+/// Checks an accessor a primitive reads (`named` in messages, e.g.
+/// "POSITION of primitive 0 of mesh 0"): the type its role needs (POSITION
+/// a VEC3 of FLOAT, indices a SCALAR of unsigned integers), and its
+/// elements inside its bufferView and the view inside its buffer (declared
+/// `byteLength`, which the buffer's data was checked to hold).
+fn check_accessor(path: &Path, accessor: &gltf::Accessor, role: AccessorRole, named: &str) -> Result<(), ImportError> {
     use gltf::accessor::{DataType, Dimensions};
     let a = accessor.index();
-    let refuse = |message: String| Err(format_error(path, "glTF", format!("accessor {a} ({role}) {message}")));
-    let position = role.starts_with("POSITION");
+    let refuse = |message: String| Err(format_error(path, "glTF", format!("accessor {a} ({named}) {message}")));
+    let position = role == AccessorRole::Positions;
     let fits = if position {
         accessor.dimensions() == Dimensions::Vec3 && accessor.data_type() == DataType::F32
     } else {

@@ -312,10 +312,8 @@ pub(super) fn load(name: Option<&str>) -> anyhow::Result<Scenario> {
 
 /// A scenario as loaded, with the `--set KEY=VALUE` changes applied in turn.
 pub(super) fn load_changed(name: Option<&str>, settings: &[String]) -> anyhow::Result<Scenario> {
-    settings.iter().try_fold(load(name)?, |scenario, text| {
-        let (key, value) = one_setting(text)?;
-        anyhow::Ok(scenario.with_setting(&key, &value)?)
-    })
+    let changes = settings.iter().map(|text| one_setting(text)).collect::<anyhow::Result<Vec<_>>>()?;
+    Ok(load(name)?.with_settings(&changes)?)
 }
 
 /// Where a run will write, chosen before anything is built.

@@ -78,13 +78,8 @@ pub fn run(args: &SanityArgs) -> anyhow::Result<Status> {
     // Every case is built before any runs, so a misspelt key costs nothing.
     let scenarios = SanityCase::ALL
         .iter()
-        .map(|case| {
-            changes
-                .iter()
-                .try_fold(Scenario::builtin(case.scenario())?, |s, (k, v)| s.with_setting(k, v))
-                .map_err(anyhow::Error::from)
-        })
-        .collect::<anyhow::Result<Vec<Scenario>>>()?;
+        .map(|case| Scenario::builtin(case.scenario())?.with_settings(&changes))
+        .collect::<Result<Vec<Scenario>, _>>()?;
     // The pool is made first: a bad --jobs leaves no out dir behind.
     let (pool, jobs) = labour_pool(args.jobs, scenarios.len())?;
     let out_dir = match &args.resume {

@@ -223,12 +223,8 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
     // Every variant is checked before any runs, so a typo costs nothing.
     let scenarios = combinations
         .iter()
-        .map(|c| {
-            c.iter()
-                .try_fold(base.clone(), |s, (k, v)| s.with_setting(k, v))
-                .map_err(anyhow::Error::from)
-        })
-        .collect::<anyhow::Result<Vec<Scenario>>>()?;
+        .map(|c| base.with_settings(c))
+        .collect::<Result<Vec<Scenario>, _>>()?;
     check_variants_start(&scenarios, &combinations)?;
     // The pool is made first: a bad --jobs leaves no out dir behind.
     let (pool, jobs) = labour_pool(args.jobs, scenarios.len())?;
