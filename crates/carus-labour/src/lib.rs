@@ -1,11 +1,13 @@
-//! Forward simulation of labour (issue 4, docs/LABOUR.md): a scenario in,
-//! a pose history, the cardinal-movement detector's report, ParaView series
-//! and a run record out.
+//! Forward simulation of labour (issue 4, docs/LABOUR.md), and for
+//! teaching the same run with the head imposed or guided along way-points
+//! (docs/TRAJECTORIES.md): a scenario in, a pose history, the
+//! cardinal-movement detector's report, ParaView series and a run record out.
 //!
 //! - [`scenario`]: the TOML schema and the built-in scenarios;
 //! - [`scene`]: the constant scene built from a scenario (anatomy, bodies, floor, start);
 //! - [`expulsion`]: the expulsion force generator;
 //! - [`sim`]: the mutable state and the step pipeline;
+//! - [`trajectory`]: the imposed and hybrid modes' way-points (teaching);
 //! - [`loads`]: the contact loads per site and the moments they cause;
 //! - [`record`]: the run record (everything a report needs);
 //! - [`output`]: the files of a run (the only module that writes);
@@ -19,12 +21,14 @@ pub mod run;
 pub mod scenario;
 pub mod scene;
 pub mod sim;
+pub mod trajectory;
 
 pub use record::{KeyMoment, RunRecord, RunSummary};
 pub use run::{resume, run, run_from_start, Observer, RunOptions, SilentObserver};
 pub use scenario::{FloorCoupling, Scenario, ScenarioError, BUILTINS};
 pub use scene::Scene;
 pub use sim::{SimState, Simulation, StageTimes};
+pub use trajectory::{Mode, Trajectory, TrajectorySection, Waypoint};
 
 /// Why a run cannot start or go on.
 #[derive(Debug, thiserror::Error)]
@@ -80,6 +84,16 @@ pub enum LabourError {
         depth_mm: f64,
         force_n: f64,
     },
+    /// The imposed trajectory drives the head through the bony canal.
+    #[error(
+        "the imposed trajectory drives the fetal head into the bony canal at t = {time_s:.3} s: a \
+         contact point on the {site} went {depth_mm:.1} mm deep, past the contact's reach; the run \
+         stops here (everything so far is written)\n  hint: at that time the canal is narrower than \
+         the head in the attitude and position the way-points ask: change the way-points around \
+         it (more flexion in [[trajectory.waypoints]] phi_deg, a theta along the canal's widest \
+         diameter, or a later time for that station)"
+    )]
+    TrajectoryThroughBone { time_s: f64, site: &'static str, depth_mm: f64 },
     /// A fetal body's motion no longer finite, or thrown a metre or more:
     /// caught before the next contact query, which cannot search a
     /// bounding-volume tree for a NaN.

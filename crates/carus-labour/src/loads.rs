@@ -92,6 +92,49 @@ pub struct LoadSample {
     /// bends (flexion bends the thorax forwards).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub spine: Option<NeckAngles>,
+    /// What moved the head besides the physics: the hybrid's guide, or in
+    /// imposed mode the force and moment it took to keep the head on its
+    /// way-points (none in forward mode).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub guide: Option<GuideLoad>,
+}
+
+/// A wrench on the head from outside the physics (crate::trajectory),
+/// about the head's centre of mass.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct GuideLoad {
+    pub force_n: DVec3,
+    pub moment_nm: DVec3,
+}
+
+/// How hard the guide worked over a run (imposed and hybrid modes): the
+/// magnitudes of its force and moment on the head, over the recorded
+/// instants.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct GuideSummary {
+    pub peak_force_n: f64,
+    pub mean_force_n: f64,
+    pub peak_moment_nm: f64,
+    pub mean_moment_nm: f64,
+}
+
+impl GuideSummary {
+    /// None when no instant was guided (forward mode).
+    pub fn of(loads: &[LoadSample]) -> Option<GuideSummary> {
+        let guided: Vec<&GuideLoad> = loads.iter().filter_map(|l| l.guide.as_ref()).collect();
+        if guided.is_empty() {
+            return None;
+        }
+        let n = guided.len() as f64;
+        let (forces, moments): (Vec<f64>, Vec<f64>) =
+            guided.iter().map(|g| (g.force_n.length(), g.moment_nm.length())).unzip();
+        Some(GuideSummary {
+            peak_force_n: forces.iter().copied().fold(0.0, f64::max),
+            mean_force_n: forces.iter().sum::<f64>() / n,
+            peak_moment_nm: moments.iter().copied().fold(0.0, f64::max),
+            mean_moment_nm: moments.iter().sum::<f64>() / n,
+        })
+    }
 }
 
 /// One body's bone contacts summed by site; `sites[label]` is the site of

@@ -598,6 +598,7 @@ mod tests {
     use super::*;
     use crate::loads::Body;
     use crate::scenario::Scenario;
+    use crate::{Mode, Waypoint};
     use glam::{DQuat, DVec3};
 
     /// The normal scenario made coarse for tests: a coarser head, sparser
@@ -1263,6 +1264,135 @@ mod tests {
         assert_eq!(resumed.detector, whole.detector);
         assert!(resumed.detector.is_some());
         whole
+    }
+
+    /// The coarse textbook scenario's fetus taken through two way-points
+    /// in its first second.
+    fn coarse_path(mode: Mode) -> Scenario {
+        let mut s = coarse_builtin("textbook", 2.0);
+        s.trajectory.mode = mode;
+        let point = |time_s, station_mm, theta_deg, phi_deg, anterior_mm| Waypoint { time_s, station_mm, theta_deg, phi_deg, anterior_mm };
+        s.trajectory.waypoints = vec![point(0.5, -45.0, -75.0, 15.0, 0.0), point(1.0, -30.0, -60.0, 25.0, 3.0)];
+        s
+    }
+
+    /// An imposed head is where its way-points put it, as the detector
+    /// reads the history (station, theta), whatever the push and the
+    /// contacts do; the force it took is recorded at every instant, and the
+    /// run resumes bit for bit.
+    #[test]
+    fn an_imposed_head_passes_through_its_way_points_and_resumes_bit_for_bit() {
+        let s = coarse_path(Mode::Imposed);
+        let whole = assert_resumes_bit_for_bit(&s);
+        let series = carus_analysis::Series::from_history(&whole.history);
+        for w in &s.trajectory.waypoints {
+            let k = series.time_s.iter().position(|&t| (t - w.time_s).abs() < 1e-9).expect("sampled");
+            assert!((series.station_mm[k] - w.station_mm).abs() < 0.05, "{} at {:?}", series.station_mm[k], w);
+            assert!((series.theta_deg[k] - w.theta_deg).abs() < 0.05, "{} at {:?}", series.theta_deg[k], w);
+        }
+        // Held at the last way-point after it.
+        let last = series.station_mm.last().unwrap();
+        assert!((last - s.trajectory.waypoints[1].station_mm).abs() < 0.05, "{last}");
+        assert!(whole.loads.iter().skip(1).all(|l| l.guide.is_some()));
+        let guide = crate::loads::GuideSummary::of(&whole.loads).unwrap();
+        assert!(guide.peak_force_n > 0.1 && guide.mean_force_n <= guide.peak_force_n, "{guide:?}");
+        assert!(crate::loads::GuideSummary::of(&run_in(&coarse(0.2), &RunOptions::default()).1.loads).is_none());
+    }
+
+    /// The hybrid's guide is the only thing it adds to the physics: at zero
+    /// stiffness the run is the forward one to the bit, and at its default
+    /// it holds a head told to stay put nearer its start than the push lets
+    /// the forward head stay.
+    #[test]
+    fn a_hybrid_guide_pulls_towards_the_path_and_nothing_else() {
+        let mut forward = coarse_path(Mode::Forward);
+        forward.trajectory.waypoints.clear();
+        forward.numerics.end_time_s = 3.0;
+        let (_, free) = run_in(&forward, &RunOptions::default());
+        let mut limp = coarse_path(Mode::Hybrid);
+        limp.numerics.end_time_s = 3.0;
+        limp.trajectory.guide_stiffness_n_per_m = 0.0;
+        limp.trajectory.guide_torsion_nm_per_rad = 0.0;
+        let (_, unguided) = run_in(&limp, &RunOptions::default());
+        assert_eq!(unguided.history.samples, free.history.samples);
+
+        let mut stay = limp.clone();
+        stay.trajectory = crate::TrajectorySection { mode: Mode::Hybrid, ..Default::default() };
+        let start = Scene::build(&stay).unwrap().start_coordinates();
+        stay.trajectory.waypoints = vec![Waypoint { time_s: 3.0, station_mm: start.station_mm, theta_deg: start.theta_deg, phi_deg: start.phi_deg, anterior_mm: 0.0 }];
+        let (_, held) = run_in(&stay, &RunOptions::default());
+        // How far the head's centre went down the canal.
+        let descent = |r: &RunRecord| {
+            let sigma = carus_analysis::Series::from_history(&r.history).head_sigma_mm;
+            sigma.last().unwrap() - sigma[0]
+        };
+        let (free_mm, held_mm) = (descent(&free), descent(&held));
+        assert!(free_mm > 10.0 && held_mm.abs() < 0.5 * free_mm, "forward {free_mm} mm, guided {held_mm} mm");
+        assert!(held.loads.iter().skip(1).all(|l| l.guide.is_some()));
+    }
+
+    /// The built-in `textbook` (imposed, for teaching) shows all seven
+    /// movements and delivers, at the tests' coarse resolution too, and
+    /// says how hard its hand worked.
+    #[test]
+    fn the_textbook_scenario_shows_all_seven_movements_imposed() {
+        let s = coarse_builtin("textbook", 40.0);
+        let (_, record) = run_in(&s, &RunOptions::default());
+        assert!(record.summary.failure.is_none(), "{:?}", record.summary.failure);
+        let report = record.detector.as_ref().expect("detected");
+        assert!(report.outcome.delivered, "{:?}", report.outcome);
+        for (key, m) in report.movements.by_key() {
+            assert!(m.observed, "{key} not observed: {:?}", report.movements);
+        }
+        let guide = crate::loads::GuideSummary::of(&record.loads).unwrap();
+        assert!(guide.mean_force_n > 1.0 && guide.peak_force_n < 1000.0, "{guide:?}");
+    }
+
+    /// A way-point the canal cannot take is named before an imposed run
+    /// starts; a path that runs into the bone between way-points ends the
+    /// run there, naming the way-points as the fix.
+    #[test]
+    fn an_imposed_path_through_bone_is_refused_or_ends_the_run() {
+        let mut s = coarse_path(Mode::Imposed);
+        let into_bone = Waypoint { time_s: 1.0, station_mm: 30.0, theta_deg: 0.0, phi_deg: -80.0, anterior_mm: 40.0 };
+        s.trajectory.waypoints[1] = into_bone;
+        let e = Scene::build(&s).err().expect("refused").to_string();
+        assert!(
+            e.contains("`trajectory.waypoints[1] (time_s = 1)`") && e.contains("into the bony canal") && e.contains("anterior_mm"),
+            "{e}"
+        );
+
+        // The same path, not checked at its way-points, is stopped in the run.
+        let mut scene = Scene::build(&coarse_path(Mode::Imposed)).unwrap();
+        let unchecked = crate::Trajectory::new(scene.start_coordinates(), &[into_bone], |c| scene.centre_sigma_at(c));
+        scene.trajectory = Some(unchecked);
+        let mut sim = Simulation::new(&scene).unwrap();
+        let failure = loop {
+            if let Err(e) = sim.step() {
+                break e.to_string();
+            }
+            assert!(sim.time_s() < 1.0, "the head never met the bone");
+        };
+        assert!(
+            failure.contains("the imposed trajectory drives the fetal head into the bony canal")
+                && failure.contains("[[trajectory.waypoints]]"),
+            "{failure}"
+        );
+        assert!(sim.state.samples.len() > 10);
+    }
+
+    /// A guide too stiff for the rigid step is refused before the first
+    /// step, naming its key.
+    #[test]
+    fn a_guide_too_stiff_for_the_step_is_refused_with_its_key() {
+        let mut s = coarse_path(Mode::Hybrid);
+        s.trajectory.guide_stiffness_n_per_m = 1e9;
+        let e = Simulation::new(&Scene::build(&s).unwrap()).err().expect("refused").to_string();
+        assert!(e.contains("`trajectory.guide_stiffness_n_per_m` = 1000000000") && e.contains("numerics.rigid_dt_s"), "{e}");
+        s.trajectory.guide_stiffness_n_per_m = 20000.0;
+        s.trajectory.guide_torsion_nm_per_rad = 1e6;
+        let e = Simulation::new(&Scene::build(&s).unwrap()).err().expect("refused").to_string();
+        assert!(e.contains("`trajectory.guide_torsion_nm_per_rad`"), "{e}");
     }
 
     /// The coarse normal scenario with a spine that bends at `bending` N m

@@ -14,6 +14,8 @@ use serde::de::value::MapAccessDeserializer;
 use serde::de::{DeserializeSeed, Deserializer, Error as _, IntoDeserializer, MapAccess, Visitor};
 use serde::{Deserialize, Serialize};
 
+use crate::trajectory::{Mode, TrajectorySection};
+
 /// Why a scenario cannot be used.
 #[derive(Debug, thiserror::Error)]
 pub enum ScenarioError {
@@ -33,7 +35,7 @@ pub enum ScenarioError {
     #[error("{path}: `{key}` = {value}: {problem}\n  hint: {hint}")]
     Value {
         path: PathBuf,
-        key: &'static str,
+        key: std::borrow::Cow<'static, str>,
         value: String,
         problem: String,
         hint: String,
@@ -656,6 +658,10 @@ pub struct Scenario {
     pub numerics: NumericsSection,
     #[serde(default)]
     pub output: OutputSection,
+    /// `[trajectory]`: forward (the default), or an imposed or hybrid
+    /// motion of the head through way-points (crate::trajectory).
+    #[serde(default)]
+    pub trajectory: TrajectorySection,
     /// Folder an imported pelvis path is relative to (the file's folder).
     #[serde(skip)]
     pub base_dir: PathBuf,
@@ -760,7 +766,7 @@ impl<'de> DeserializeSeed<'de> for PelvisKey<'_> {
 }
 
 /// The built-in scenarios, embedded in the binary: (name, TOML text).
-pub const BUILTINS: [(&str, &str); 7] = [
+pub const BUILTINS: [(&str, &str); 8] = [
     ("normal", include_str!("../../../scenarios/normal.toml")),
     (
         "normal-dry",
@@ -783,6 +789,7 @@ pub const BUILTINS: [(&str, &str); 7] = [
         "large-shoulders",
         include_str!("../../../scenarios/large-shoulders.toml"),
     ),
+    ("textbook", include_str!("../../../scenarios/textbook.toml")),
 ];
 
 impl Scenario {
@@ -856,9 +863,28 @@ impl Scenario {
     }
 
     /// This scenario with each (key, value) change of
-    /// [`Self::with_setting`] applied in turn.
+    /// [`Self::with_setting`] made, then checked once as a file would be,
+    /// so that keys which must agree (a mode and its way-points) can
+    /// change together.
     pub fn with_settings(&self, settings: &[(String, String)]) -> Result<Scenario, ScenarioError> {
-        settings.iter().try_fold(self.clone(), |s, (key, value)| s.with_setting(key, value))
+        let mut table = toml::Table::try_from(self)?;
+        for (key, value) in settings {
+            set_key(&mut table, key, value)?;
+        }
+        let written: Vec<String> = settings.iter().map(|(k, v)| format!("{k} = {v}")).collect();
+        let label = PathBuf::from(format!("{} with {}", self.name, written.join(", ")));
+        let text = toml::to_string(&table)?;
+        // Line numbers would point into the generated text: name the settings instead.
+        Scenario::parse(&label, &text, self.base_dir.clone()).map_err(|e| match e {
+            ScenarioError::Syntax {
+                key, message, hint, ..
+            } => ScenarioError::Setting {
+                setting: written.join(", "),
+                problem: format!("{key}{message}"),
+                hint,
+            },
+            other => other,
+        })
     }
 
     /// This scenario with one key changed: `key` is a dotted path as `carus
@@ -867,61 +893,14 @@ impl Scenario {
     /// result is checked as a file would be, so an unknown key or an
     /// impossible value is refused with the key named.
     pub fn with_setting(&self, key: &str, value: &str) -> Result<Scenario, ScenarioError> {
-        let label = PathBuf::from(format!("{} with {key} = {value}", self.name));
-        let refuse = |problem: &str, hint: &str| ScenarioError::Setting {
-            setting: format!("{key} = {value}"),
-            problem: problem.into(),
-            hint: hint.into(),
-        };
-        let parsed = match format!("v = {value}").parse::<toml::Table>() {
-            Ok(mut t) => t.remove("v").expect("the one key parsed"),
-            Err(_) => {
-                // A unit after a number gets the hint a scenario file gets.
-                let (section, written) = key.rsplit_once('.').map_or((None, key), |(s, k)| (Some(s), k));
-                let text = format!("{}{written} = {value}\n", section.map_or(String::new(), |s| format!("[{s}]\n")));
-                let unit = text.parse::<toml::Table>().err().and_then(|e| unit_in_value(&label, &text, &e));
-                if let Some(ScenarioError::Syntax { key, message, hint, .. }) = unit {
-                    return Err(refuse(&format!("{key}{message}"), &hint));
-                }
-                toml::Value::String(value.to_string())
-            }
-        };
-        let mut table = toml::Table::try_from(self)?;
-        let mut parts: Vec<&str> = key.split('.').collect();
-        let leaf = parts.pop().filter(|k| !k.is_empty()).ok_or_else(|| {
-            refuse("no key given", "write SECTION.KEY=VALUE, e.g. expulsion.period_s=32")
-        })?;
-        let mut section = &mut table;
-        for part in parts {
-            section = match section
-                .entry(part)
-                .or_insert_with(|| toml::Value::Table(toml::Table::new()))
-            {
-                toml::Value::Table(t) => t,
-                _ => {
-                    return Err(refuse(
-                        &format!("`{part}` is a value, not a section"),
-                        "the keys are those `carus scenarios show normal` lists",
-                    ))
-                }
-            };
-        }
-        section.insert(leaf.to_string(), parsed);
-        let text = toml::to_string(&table)?;
-        // Line numbers would point into the generated text: name the setting instead.
-        Scenario::parse(&label, &text, self.base_dir.clone()).map_err(|e| match e {
-            ScenarioError::Syntax {
-                key, message, hint, ..
-            } => refuse(&format!("{key}{message}"), &hint),
-            other => other,
-        })
+        self.with_settings(&[(key.to_string(), value.to_string())])
     }
 
     /// Impossible values, named by their key with a hint.
     fn check(&self, path: &Path) -> Result<(), ScenarioError> {
         let err = |key: &'static str, value: f64, problem: &str, hint: &str| ScenarioError::Value {
             path: path.to_path_buf(),
-            key,
+            key: key.into(),
             value: shown(value),
             problem: problem.into(),
             hint: hint.into(),
@@ -1308,7 +1287,7 @@ impl Scenario {
             if !(length.is_finite() && length > 1e-9) {
                 return Err(ScenarioError::Value {
                     path: path.to_path_buf(),
-                    key: "expulsion.direction",
+                    key: "expulsion.direction".into(),
                     value: format!("{v:?}"),
                     problem: "has no direction (zero or not finite)".into(),
                     hint: "a vector in the pelvis frame, e.g. [0.0, 0.0, -1.0] down the inlet axis, or \"fetal_spine\"".into(),
@@ -1318,7 +1297,7 @@ impl Scenario {
         if self.spine.enabled && !self.trunk.enabled {
             return Err(ScenarioError::Value {
                 path: path.to_path_buf(),
-                key: "spine.enabled",
+                key: "spine.enabled".into(),
                 value: "true".into(),
                 problem: "a spine that bends needs the trunk it bends".into(),
                 hint: "set trunk.enabled = true, or spine.enabled = false".into(),
@@ -1327,7 +1306,7 @@ impl Scenario {
         let mentum = self.start.position.is_mentum();
         let wrong_denominator = |problem: &str, hint: &str| ScenarioError::Value {
             path: path.to_path_buf(),
-            key: "start.position",
+            key: "start.position".into(),
             value: format!("\"{:?}\"", self.start.position),
             problem: problem.into(),
             hint: hint.into(),
@@ -1350,7 +1329,7 @@ impl Scenario {
         if self.name.trim().is_empty() {
             return Err(ScenarioError::Value {
                 path: path.to_path_buf(),
-                key: "name",
+                key: "name".into(),
                 value: "\"\"".into(),
                 problem: "must not be empty".into(),
                 hint: "a short name, used for the output folder".into(),
@@ -1362,7 +1341,7 @@ impl Scenario {
         if self.name.len() > MAX_NAME_BYTES {
             return Err(ScenarioError::Value {
                 path: path.to_path_buf(),
-                key: "name",
+                key: "name".into(),
                 value: format!("{} bytes", self.name.len()),
                 problem: format!("names the output folder runs/<name>-<n>, which file systems cap; at most {MAX_NAME_BYTES} bytes"),
                 hint: "a short name; the description holds the rest".into(),
@@ -1371,7 +1350,7 @@ impl Scenario {
         if self.name.starts_with('.') || self.name.chars().any(|c| matches!(c, '/' | '\\' | ':') || c.is_control()) {
             return Err(ScenarioError::Value {
                 path: path.to_path_buf(),
-                key: "name",
+                key: "name".into(),
                 value: format!("{:?}", self.name),
                 problem: "names the output folder runs/<name>-<n>, so it may not hold /, \\, : or control \
                           characters, nor start with a dot"
@@ -1379,8 +1358,140 @@ impl Scenario {
                 hint: "a plain folder name: letters, digits, - and _, e.g. \"narrow-inlet\"".into(),
             });
         }
+        self.check_trajectory(path)
+    }
+
+    /// The mode and its way-points agree, and each way-point can be
+    /// reached and placed: times rising within the run, stations and
+    /// angles in the ranges a head in the canal takes.
+    fn check_trajectory(&self, path: &Path) -> Result<(), ScenarioError> {
+        let t = &self.trajectory;
+        let err = |key: String, value: String, problem: &str, hint: &str| ScenarioError::Value {
+            path: path.to_path_buf(),
+            key: key.into(),
+            value,
+            problem: problem.into(),
+            hint: hint.into(),
+        };
+        match (t.mode, t.waypoints.is_empty()) {
+            (Mode::Forward, false) => {
+                return Err(err(
+                    "trajectory.waypoints".into(),
+                    format!("{} way-points", t.waypoints.len()),
+                    "forward mode moves the head by the physics alone and reads no way-point",
+                    "set trajectory.mode = \"imposed\" (the head follows them) or \"hybrid\" (the physics, guided \
+                     towards them), or remove the way-points (`--set trajectory.waypoints=[]`)",
+                ))
+            }
+            (Mode::Imposed | Mode::Hybrid, true) => {
+                return Err(err(
+                    "trajectory.mode".into(),
+                    format!("\"{}\"", t.mode.name()),
+                    "needs way-points to follow",
+                    "add [[trajectory.waypoints]] tables with time_s, station_mm, theta_deg and phi_deg \
+                     (`carus scenarios show textbook` has an example)",
+                ))
+            }
+            _ => {}
+        }
+        for (key, value, hint) in [
+            ("guide_stiffness_n_per_m", t.guide_stiffness_n_per_m, "N/m, 0 or more, e.g. 20000.0"),
+            ("guide_torsion_nm_per_rad", t.guide_torsion_nm_per_rad, "N m/rad, 0 or more, e.g. 10.0"),
+        ] {
+            if !(value.is_finite() && value >= 0.0) {
+                return Err(err(format!("trajectory.{key}"), shown(value), "must be zero or more and finite", hint));
+            }
+        }
+        let mut previous_s = 0.0;
+        for (i, w) in t.waypoints.iter().enumerate() {
+            let key = |field: &str| format!("trajectory.waypoints[{i}].{field}");
+            if !(w.time_s.is_finite() && w.time_s > previous_s) {
+                return Err(err(
+                    key("time_s"),
+                    shown(w.time_s),
+                    &format!("must come after the way-point before it ({previous_s} s; the start is at 0 s)"),
+                    "list the way-points in time order, each at a later time",
+                ));
+            }
+            if w.time_s > self.numerics.end_time_s {
+                return Err(err(
+                    key("time_s"),
+                    shown(w.time_s),
+                    &format!("lies past the run's end, numerics.end_time_s = {} s", self.numerics.end_time_s),
+                    "an earlier time, or a later numerics.end_time_s",
+                ));
+            }
+            previous_s = w.time_s;
+            for (field, value, (low, high), hint) in [
+                ("station_mm", w.station_mm, WAYPOINT_STATION_MM, "mm from the ischial spines, e.g. -20.0 or 45.0"),
+                ("theta_deg", w.theta_deg, WAYPOINT_THETA_DEG, "degrees from anterior: OA 0, LOT -90, ROT 90, OP 180"),
+                ("phi_deg", w.phi_deg, WAYPOINT_PHI_DEG, "degrees, flexion positive, e.g. 30.0"),
+                ("anterior_mm", w.anterior_mm, WAYPOINT_ANTERIOR_MM, "mm off the pelvic axis towards the symphysis, e.g. 10.0"),
+            ] {
+                if !(value.is_finite() && (low..=high).contains(&value)) {
+                    return Err(err(key(field), shown(value), &format!("must lie between {low} and {high}"), hint));
+                }
+            }
+        }
         Ok(())
     }
+}
+
+/// The stations a way-point may name, mm: from well above the inlet to
+/// well past the outlet, where the whole fetus is born.
+pub const WAYPOINT_STATION_MM: (f64, f64) = (-150.0, 300.0);
+/// theta of a way-point, degrees: two turns either way, so that a path
+/// can turn past 180 without a jump.
+pub const WAYPOINT_THETA_DEG: (f64, f64) = (-720.0, 720.0);
+/// How far a way-point may put the head's centre off the pelvic axis, mm:
+/// half the narrowest diameter of a normal canal (the interspinous, 100
+/// mm), so that the centre stays inside it.
+pub const WAYPOINT_ANTERIOR_MM: (f64, f64) = (-50.0, 50.0);
+/// phi of a way-point, degrees: from full extension to full flexion.
+pub const WAYPOINT_PHI_DEG: (f64, f64) = (-90.0, 90.0);
+
+/// Writes `key` (a dotted path) = `value` (TOML text; a bare word is
+/// taken as a string) into a scenario's table, refusing a value with a
+/// unit after it, an empty key or a path through a value, named by the
+/// setting.
+fn set_key(table: &mut toml::Table, key: &str, value: &str) -> Result<(), ScenarioError> {
+    let refuse = |problem: &str, hint: &str| ScenarioError::Setting {
+        setting: format!("{key} = {value}"),
+        problem: problem.into(),
+        hint: hint.into(),
+    };
+    let parsed = match format!("v = {value}").parse::<toml::Table>() {
+        Ok(mut t) => t.remove("v").expect("the one key parsed"),
+        Err(_) => {
+            // A unit after a number gets the hint a scenario file gets.
+            let (section, written) = key.rsplit_once('.').map_or((None, key), |(s, k)| (Some(s), k));
+            let text = format!("{}{written} = {value}\n", section.map_or(String::new(), |s| format!("[{s}]\n")));
+            let unit = text.parse::<toml::Table>().err().and_then(|e| unit_in_value(Path::new(key), &text, &e));
+            if let Some(ScenarioError::Syntax { key, message, hint, .. }) = unit {
+                return Err(refuse(&format!("{key}{message}"), &hint));
+            }
+            toml::Value::String(value.to_string())
+        }
+    };
+    let mut parts: Vec<&str> = key.split('.').collect();
+    let leaf = parts
+        .pop()
+        .filter(|k| !k.is_empty())
+        .ok_or_else(|| refuse("no key given", "write SECTION.KEY=VALUE, e.g. expulsion.period_s=32"))?;
+    let mut section = table;
+    for part in parts {
+        section = match section.entry(part).or_insert_with(|| toml::Value::Table(toml::Table::new())) {
+            toml::Value::Table(t) => t,
+            _ => {
+                return Err(refuse(
+                    &format!("`{part}` is a value, not a section"),
+                    "the keys are those `carus scenarios show normal` lists",
+                ))
+            }
+        };
+    }
+    section.insert(leaf.to_string(), parsed);
+    Ok(())
 }
 
 /// The line, from 1, that byte `offset` of `text` lies on.
@@ -1389,9 +1500,10 @@ fn line_at(text: &str, offset: usize) -> usize {
 }
 
 /// The unit a key's name ends with, the longer endings first.
-const KEY_UNITS: [(&str, &str); 12] = [
+const KEY_UNITS: [(&str, &str); 13] = [
     ("_nm_s_per_rad", "N m s/rad"),
     ("_nm_per_deg", "N m per degree"),
+    ("_nm_per_rad", "N m per radian"),
     ("_n_s_per_m", "N s/m"),
     ("_n_per_m", "N/m"),
     ("_pa_per_m", "Pa/m"),
@@ -1657,6 +1769,60 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("test.toml") && e.contains("expulsion.direction") && e.contains("zero"), "{e}");
+    }
+
+    /// The mode and its way-points must agree, and every way-point is
+    /// checked, named by its index and key.
+    #[test]
+    fn a_trajectory_is_checked_way_point_by_way_point() {
+        let point = |t: f64, station: f64| format!("[[trajectory.waypoints]]\ntime_s = {t}\nstation_mm = {station}\ntheta_deg = -90.0\nphi_deg = 20.0\n");
+        let with = |mode: &str, points: &str| parse(&format!("name = \"x\"\n[trajectory]\nmode = \"{mode}\"\n{points}"));
+        let two = format!("{}{}", point(1.0, -40.0), point(2.0, -20.0));
+        let imposed = with("imposed", &two).unwrap();
+        assert_eq!(imposed.trajectory.mode, Mode::Imposed);
+        assert_eq!(imposed.trajectory.waypoints[1].station_mm, -20.0);
+        assert_eq!(imposed.trajectory.waypoints[1].anterior_mm, 0.0);
+        assert_eq!(parse(&imposed.to_toml().unwrap()).unwrap(), imposed, "round trip through show");
+        assert_eq!(Scenario::builtin("normal").unwrap().trajectory.mode, Mode::Forward);
+
+        let refused = |mode: &str, points: &str| with(mode, points).unwrap_err().to_string();
+        let e = refused("forward", &two);
+        assert!(e.contains("`trajectory.waypoints`") && e.contains("reads no way-point") && e.contains("hybrid"), "{e}");
+        let e = refused("hybrid", "");
+        assert!(e.contains("`trajectory.mode`") && e.contains("needs way-points"), "{e}");
+        let e = refused("imposed", &format!("{}{}", point(2.0, -40.0), point(1.0, -20.0)));
+        assert!(e.contains("`trajectory.waypoints[1].time_s` = 1") && e.contains("time order"), "{e}");
+        let e = refused("imposed", &point(0.0, -40.0));
+        assert!(e.contains("`trajectory.waypoints[0].time_s` = 0") && e.contains("the start is at 0 s"), "{e}");
+        let e = refused("imposed", &point(61.0, -40.0));
+        assert!(e.contains("`trajectory.waypoints[0].time_s` = 61") && e.contains("numerics.end_time_s"), "{e}");
+        let e = refused("imposed", &point(1.0, -400.0));
+        assert!(e.contains("`trajectory.waypoints[0].station_mm` = -400") && e.contains("between -150 and 300"), "{e}");
+        let e = refused("imposed", &format!("{}anterior_mm = 80.0\n", point(1.0, -40.0)));
+        assert!(e.contains("`trajectory.waypoints[0].anterior_mm` = 80"), "{e}");
+        let e = refused("imposed", &format!("{}stationmm = 1.0\n", point(1.0, -40.0)));
+        assert!(e.contains("trajectory.waypoints") && e.contains("stationmm") && e.contains("unknown field"), "{e}");
+        let e = refused("guided", &two);
+        assert!(e.contains("trajectory.mode") && e.contains("guided"), "{e}");
+        let e = imposed.with_setting("trajectory.guide_stiffness_n_per_m", "-1").unwrap_err().to_string();
+        assert!(e.contains("trajectory.guide_stiffness_n_per_m") && e.contains("zero or more"), "{e}");
+        let hybrid = imposed.with_setting("trajectory.mode", "hybrid").unwrap();
+        assert_eq!((hybrid.trajectory.mode, &hybrid.trajectory.waypoints), (Mode::Hybrid, &imposed.trajectory.waypoints));
+
+        // Keys that must agree change together: the settings are checked once, after all of them.
+        let textbook = Scenario::builtin("textbook").unwrap();
+        let e = textbook.with_setting("trajectory.mode", "forward").unwrap_err().to_string();
+        assert!(e.contains("textbook with trajectory.mode = forward") && e.contains("reads no way-point"), "{e}");
+        let setting = |k: &str, v: &str| (k.to_string(), v.to_string());
+        let forward = textbook
+            .with_settings(&[setting("trajectory.mode", "forward"), setting("trajectory.waypoints", "[]")])
+            .unwrap();
+        assert_eq!((forward.trajectory.mode, forward.trajectory.waypoints.len()), (Mode::Forward, 0));
+        let e = textbook
+            .with_settings(&[setting("trajectory.mode", "forward"), setting("contact.fiction", "0.3")])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("trajectory.mode = forward, contact.fiction = 0.3") && e.contains("fiction"), "{e}");
     }
 
     #[test]

@@ -16,9 +16,10 @@ use carus_contact::{
     RigidBodyModel, RigidObstacle, RigidPose, SoftCover, SurfaceSamples, TriangleCollider, DESIGN_PENETRATION_M,
 };
 use carus_fem::{BoundaryConditions, Material, MaterialRegion, Mesh, ModelOptions, TledModel};
-use glam::{DMat3, DVec3};
+use glam::{DMat3, DQuat, DVec3};
 
 use crate::scenario::{Presentation, Scenario};
+use crate::trajectory::{HeadCoordinates, Mode, Trajectory, TrajectoryPoint};
 use crate::LabourError;
 
 /// Index of the head among the rigid bodies.
@@ -113,6 +114,9 @@ pub struct Scene {
     pub floor: Option<FloorScene>,
     /// Starting poses (head, then trunk), pelvis frame.
     pub start: Vec<RigidPose>,
+    /// The head's way-points from the start, in the imposed and hybrid
+    /// modes only: forward mode has none to read.
+    pub trajectory: Option<Trajectory>,
 }
 
 impl Scene {
@@ -232,9 +236,15 @@ impl Scene {
             head_trunk,
             floor,
             start: Vec::new(),
+            trajectory: None,
         };
         scene.start = scene.start_poses();
+        scene.trajectory = (scenario.trajectory.mode != Mode::Forward)
+            .then(|| {
+                Trajectory::new(scene.start_coordinates(), &scenario.trajectory.waypoints, |c| scene.centre_sigma_at(c))
+            });
         scene.check_head_clear_of_bone()?;
+        scene.check_waypoints_clear_of_bone()?;
         scene.check_head_clear_of_trunk()?;
         scene.neck_joint = scene.trunk.is_some().then(|| NeckGeometry {
             head: HEAD,
@@ -268,11 +278,7 @@ impl Scene {
         let start = &self.scenario.start;
         let axis = self.canal.axis();
         let frame = axis.frame(0.0);
-        // The face is named by the chin, which lies opposite the occiput.
-        let occiput_theta = match start.presentation {
-            Presentation::Vertex => start.position.theta_deg(),
-            Presentation::Face => start.position.theta_deg() + 180.0,
-        };
+        let occiput_theta = self.start_occiput_theta_deg();
         let orient = |phi: f64| {
             carus_analysis::synthetic::head_orientation(
                 frame.tangent,
@@ -283,22 +289,7 @@ impl Scene {
             )
         };
         let (q_head, q_trunk) = (orient(start.attitude_deg), orient(0.0));
-        // Place the head centre on the axis so its leading point sits at the station.
-        let target = self.canal.spines_sigma() + start.station_mm * 1e-3;
-        let mut centre_sigma = target - 0.05;
-        let centre = self.head_geometry.centre_m;
-        let mut position = DVec3::ZERO;
-        for _ in 0..8 {
-            position = axis.point(centre_sigma) - q_head * centre;
-            let pose = RigidPose::new(position, q_head);
-            if let Some((_, sigma)) =
-                self.canal
-                    .leading_point(&self.head_geometry.skull_points_m, &pose, centre_sigma)
-            {
-                centre_sigma += target - sigma;
-            }
-        }
-        let head = RigidPose::new(position, q_head);
+        let (head, _) = self.head_at_station(start.station_mm, |_| (q_head, DVec3::ZERO));
         let pivot = head.point(self.pivot_in_head);
         // The trunk frame's origin is the pivot; each segment's centre of
         // mass sits at -frame_origin from it, the spine straight.
@@ -308,21 +299,88 @@ impl Scene {
             .collect()
     }
 
+    /// The head with its leading point at `station_mm`, turned and its
+    /// centre moved off the pelvic axis as `off_axis` says for a centre at
+    /// a given arc length (m); and that arc length.
+    fn head_at_station(&self, station_mm: f64, off_axis: impl Fn(f64) -> (DQuat, DVec3)) -> (RigidPose, f64) {
+        let axis = self.canal.axis();
+        let target = self.canal.spines_sigma() + station_mm * 1e-3;
+        let mut centre_sigma = target - 0.05;
+        let centre = self.head_geometry.centre_m;
+        let mut placed = (RigidPose::new(DVec3::ZERO, off_axis(centre_sigma).0), centre_sigma);
+        for _ in 0..8 {
+            let (q, offset) = off_axis(centre_sigma);
+            let pose = RigidPose::new(axis.point(centre_sigma) + offset - q * centre, q);
+            placed = (pose, centre_sigma);
+            if let Some((_, sigma)) =
+                self.canal
+                    .leading_point(&self.head_geometry.skull_points_m, &pose, centre_sigma)
+            {
+                centre_sigma += target - sigma;
+            }
+        }
+        placed
+    }
+
+    /// The head's pose and orientation at a trajectory's point: the occiput
+    /// at theta and the attitude phi in the canal's frame at the head's own
+    /// arc length, so that the head turns with the curve of Carus, and its
+    /// centre `anterior_mm` off the axis towards the symphysis.
+    pub fn head_on_trajectory(&self, point: TrajectoryPoint) -> RigidPose {
+        let sigma = point.centre_sigma_m;
+        let (q, offset) = self.turned_at(sigma, point.theta_deg, point.phi_deg, point.anterior_mm);
+        RigidPose::new(self.canal.axis().point(sigma) + offset - q * self.head_geometry.centre_m, q)
+    }
+
+    /// The head's orientation for theta and phi in the canal's frame at arc
+    /// length `sigma` (m), and the offset of its centre off the axis.
+    fn turned_at(&self, sigma: f64, theta_deg: f64, phi_deg: f64, anterior_mm: f64) -> (DQuat, DVec3) {
+        let frame = self.canal.axis().frame(sigma);
+        let q = carus_analysis::synthetic::head_orientation(
+            frame.tangent,
+            frame.anterior,
+            frame.transverse,
+            theta_deg,
+            phi_deg,
+        );
+        (q, frame.anterior * anterior_mm * 1e-3)
+    }
+
+    /// The arc length of the head's centre when its leading point is at
+    /// the coordinates' station, the head turned and moved as they say.
+    pub fn centre_sigma_at(&self, c: &HeadCoordinates) -> f64 {
+        self.head_at_station(c.station_mm, |sigma| self.turned_at(sigma, c.theta_deg, c.phi_deg, c.anterior_mm))
+            .1
+    }
+
+    /// The start as trajectory coordinates: station, the occiput's theta
+    /// (the chin's opposite in a face presentation) and the attitude.
+    pub fn start_coordinates(&self) -> HeadCoordinates {
+        let start = &self.scenario.start;
+        HeadCoordinates {
+            station_mm: start.station_mm,
+            theta_deg: self.start_occiput_theta_deg(),
+            phi_deg: start.attitude_deg,
+            anterior_mm: 0.0,
+        }
+    }
+
+    /// The occiput's theta at the start: the face is named by the chin,
+    /// which lies opposite the occiput.
+    fn start_occiput_theta_deg(&self) -> f64 {
+        let start = &self.scenario.start;
+        match start.presentation {
+            Presentation::Vertex => start.position.theta_deg(),
+            Presentation::Face => start.position.theta_deg() + 180.0,
+        }
+    }
+
     /// Refuses a start where the head already presses into the bony canal
     /// deeper than the bone law's design penetration (started low in the
     /// canal in an attitude that does not fit there): the contact would
     /// throw it out, or let it through, at the first steps.
     fn check_head_clear_of_bone(&self) -> Result<(), LabourError> {
-        let samples = &self.fetal_body(HEAD).samples;
-        let mut fresh = BodyContactState::new(samples);
-        let found = obstacle_contacts(
-            &self.pelvis_collider,
-            self.contact_law(HEAD),
-            samples,
-            &BodyMotion::at_rest(self.start[HEAD]),
-            self.start[HEAD].position_m,
-            &mut fresh,
-        )?;
+        let found = self.bone_on_head(self.start[HEAD])?;
         if found.deepest_m <= DESIGN_PENETRATION_M {
             return Ok(());
         }
@@ -343,6 +401,56 @@ impl Scene {
                 .into(),
         }
         .into())
+    }
+
+    /// The bone's contact on a head at rest at `pose`.
+    fn bone_on_head(&self, pose: RigidPose) -> Result<carus_contact::ContactReport, LabourError> {
+        let samples = &self.fetal_body(HEAD).samples;
+        Ok(obstacle_contacts(
+            &self.pelvis_collider,
+            self.contact_law(HEAD),
+            samples,
+            &BodyMotion::at_rest(pose),
+            pose.position_m,
+            &mut BodyContactState::new(samples),
+        )?)
+    }
+
+    /// Refuses, in imposed mode, a way-point that puts the head into the
+    /// bony canal deeper than the contact allows at the start: the run
+    /// would stop there (LabourError::TrajectoryThroughBone), so it is
+    /// named before the run rather than found after it.
+    fn check_waypoints_clear_of_bone(&self) -> Result<(), LabourError> {
+        let (Some(path), Mode::Imposed) = (&self.trajectory, self.scenario.trajectory.mode) else {
+            return Ok(());
+        };
+        for (i, w) in self.scenario.trajectory.waypoints.iter().enumerate() {
+            let found = self.bone_on_head(self.head_on_trajectory(path.at(w.time_s)))?;
+            if found.deepest_m <= DESIGN_PENETRATION_M {
+                continue;
+            }
+            let site = self.site_name(found.main_region(self.sites.len()));
+            return Err(crate::scenario::ScenarioError::Setting {
+                setting: format!("trajectory.waypoints[{i}] (time_s = {})", w.time_s),
+                problem: format!(
+                    "puts the head {:.1} mm into the bony canal at the {site}, more than the {:.0} mm \
+                     the contact allows: at station {} mm the canal is narrower than the head at \
+                     theta {} deg, phi {} deg and {} mm off the axis",
+                    found.deepest_m * 1e3,
+                    DESIGN_PENETRATION_M * 1e3,
+                    w.station_mm,
+                    w.theta_deg,
+                    w.phi_deg,
+                    w.anterior_mm
+                ),
+                hint: "flex the head more there (phi_deg), turn its occiput along the canal's widest \
+                       diameter (theta_deg), or move its centre off the axis away from that wall \
+                       (anterior_mm)"
+                    .into(),
+            }
+            .into());
+        }
+        Ok(())
     }
 
     /// Refuses a start where the head already presses into the trunk below

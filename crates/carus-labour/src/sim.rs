@@ -20,9 +20,10 @@ use glam::{DMat3, DVec3};
 use serde::{Deserialize, Serialize};
 
 use crate::expulsion::Expulsion;
-use crate::loads::{self, AxialMoments, Body, LoadSample, SiteLoad};
+use crate::loads::{self, AxialMoments, Body, GuideLoad, LoadSample, SiteLoad};
 use crate::scenario::FloorCoupling;
 use crate::scene::{Scene, HEAD, LOWER_TRUNK, TRUNK};
+use crate::trajectory::{Mode, GUIDE_DAMPING_RATIO};
 use crate::LabourError;
 
 /// How far from the pelvic axis a head has been thrown, not walked out,
@@ -169,6 +170,18 @@ struct StepForces {
     head_trunk: Wrench,
     neck: Option<NeckAngles>,
     spine: Option<NeckAngles>,
+    /// What moved the head besides the physics (imposed and hybrid modes).
+    guide: Option<Wrench>,
+}
+
+/// Where the trajectory wants the head: its pose, and the velocity and
+/// angular velocity of following it.
+struct HeadTarget {
+    pose: RigidPose,
+    /// The pose one rigid step later.
+    next: RigidPose,
+    velocity: DVec3,
+    angular_velocity: DVec3,
 }
 
 impl<'a> Simulation<'a> {
@@ -200,6 +213,9 @@ impl<'a> Simulation<'a> {
                     });
                 }
             }
+        }
+        if scene.scenario.trajectory.mode == Mode::Hybrid {
+            check_guide_step(scene, &bodies, dt)?;
         }
         let bone_contacts = (0..scene.bodies.len())
             .map(|b| BodyContactState::new(&scene.fetal_body(b).samples))
@@ -260,6 +276,7 @@ impl<'a> Simulation<'a> {
             head_trunk: Wrench::default(),
             neck,
             spine,
+            guide: None,
         });
         Ok(sim)
     }
@@ -432,6 +449,13 @@ impl<'a> Simulation<'a> {
             )?;
             *wrench += report.wrench();
             if let Some((_, depth, region)) = report.first_pushed_through {
+                if b == HEAD && self.mode() == Mode::Imposed {
+                    return Err(LabourError::TrajectoryThroughBone {
+                        time_s: t,
+                        site: scene.site_name(region),
+                        depth_mm: depth * 1e3,
+                    });
+                }
                 return Err(LabourError::PushedThrough {
                     time_s: t,
                     body: Body::of(b).name(),
@@ -479,6 +503,14 @@ impl<'a> Simulation<'a> {
         let mut forces = self.classify(expulsion, &reports);
         forces.spine = spine_angles;
         forces.head_trunk = head_trunk;
+        // The hybrid's guide: a spring and damper towards the way-points.
+        if self.mode() == Mode::Hybrid {
+            if let Some(target) = self.head_target() {
+                let guide = self.guide(&target);
+                wrenches[HEAD] += guide;
+                forces.guide = Some(guide);
+            }
+        }
         if (self.state.step + 1) % self.sample_every == 0 {
             self.site_loads(&mut forces, &reports, neck_load.as_ref(), pivot);
         }
@@ -490,7 +522,11 @@ impl<'a> Simulation<'a> {
             *w += self.implicit_drag(b, *w);
         }
 
+        let head_before = (self.state.bodies.linear_velocity[HEAD], self.state.bodies.angular_momentum[HEAD]);
         self.state.bodies.step(&scene.bodies, &wrenches, self.dt)?;
+        if self.mode() == Mode::Imposed {
+            forces.guide = self.impose_head(head_before, wrenches[HEAD]);
+        }
         if let Some(b) = self.state.bodies.first_not_finite() {
             return Err(LabourError::Diverged { time_s: t, body: Body::of(b).name() });
         }
@@ -514,6 +550,66 @@ impl<'a> Simulation<'a> {
         }
         lap.charge(&mut self.stage_times.recording_s);
         Ok(())
+    }
+
+    /// How the head is moved (`[trajectory] mode`).
+    fn mode(&self) -> Mode {
+        self.scene.scenario.trajectory.mode
+    }
+
+    /// The trajectory's head at this step's time, in the imposed and hybrid
+    /// modes (forward mode has no trajectory), with the velocities of
+    /// following it over the step.
+    fn head_target(&self) -> Option<HeadTarget> {
+        let path = self.scene.trajectory.as_ref()?;
+        let pose_at = |n: u64| self.scene.head_on_trajectory(path.at(n as f64 * self.dt));
+        let (now, next) = (pose_at(self.state.step), pose_at(self.state.step + 1));
+        Some(HeadTarget {
+            pose: now,
+            next,
+            velocity: (next.position_m - now.position_m) / self.dt,
+            angular_velocity: shortest(next.orientation * now.orientation.inverse()).to_scaled_axis() / self.dt,
+        })
+    }
+
+    /// The hybrid's guide on the head, about its centre of mass: springs
+    /// (`guide_stiffness_n_per_m`, `guide_torsion_nm_per_rad`) towards the
+    /// target pose, critically damped towards its motion.
+    fn guide(&self, target: &HeadTarget) -> Wrench {
+        let path = &self.scene.scenario.trajectory;
+        let (k, kr) = (path.guide_stiffness_n_per_m, path.guide_torsion_nm_per_rad);
+        let s = &self.state.bodies;
+        let m = self.scene.bodies.mass_kg[HEAD];
+        let inertia = head_turning_inertia(&self.scene.bodies, s.orientation[HEAD]);
+        let damping = |stiffness: f64, mass: f64| 2.0 * GUIDE_DAMPING_RATIO * (stiffness * mass).sqrt();
+        let turn = shortest(target.pose.orientation * s.orientation[HEAD].inverse()).to_scaled_axis();
+        Wrench {
+            force: k * (target.pose.position_m - s.position[HEAD])
+                + damping(k, m) * (target.velocity - s.linear_velocity[HEAD]),
+            torque: kr * turn
+                + damping(kr, inertia) * (target.angular_velocity - s.angular_velocity(&self.scene.bodies, HEAD)),
+        }
+    }
+
+    /// Imposed mode: puts the head where the trajectory has it at the end
+    /// of this step, moving as it moves, and returns what that took
+    /// beyond the forces on it (`applied`, over the step from the velocity
+    /// and momentum `before`): the teacher's hand.
+    fn impose_head(&mut self, before: (DVec3, DVec3), applied: Wrench) -> Option<Wrench> {
+        // Its velocities carry the path's pose now to the next one, as
+        // the symplectic step moves a free body.
+        let target = self.head_target()?;
+        let model = &self.scene.bodies;
+        let s = &mut self.state.bodies;
+        s.position[HEAD] = target.next.position_m;
+        s.orientation[HEAD] = target.next.orientation;
+        s.linear_velocity[HEAD] = target.velocity;
+        s.set_angular_velocity(model, HEAD, target.angular_velocity);
+        let dt = self.dt;
+        Some(Wrench {
+            force: model.mass_kg[HEAD] * (target.velocity - before.0) / dt - applied.force,
+            torque: (s.angular_momentum[HEAD] - before.1) / dt - applied.torque,
+        })
     }
 
     /// The atlanto-occipital pivot as the head carries it.
@@ -701,6 +797,7 @@ impl<'a> Simulation<'a> {
             head_trunk: Wrench::default(),
             neck: None,
             spine: None,
+            guide: None,
         }
     }
 
@@ -763,6 +860,7 @@ impl<'a> Simulation<'a> {
             head_trunk_force_n: forces.head_trunk.force,
             neck: forces.neck,
             spine: forces.spine,
+            guide: forces.guide.map(|g| GuideLoad { force_n: g.force, moment_nm: g.torque }),
         });
         if let (Some(solver), Some(floor), Some(scene_floor)) =
             (&self.solver, &self.state.floor, &self.scene.floor)
@@ -779,6 +877,44 @@ impl<'a> Simulation<'a> {
             });
         }
     }
+}
+
+/// Refuses a hybrid guide too stiff for the rigid step. A critically
+/// damped spring under symplectic Euler is stable for dt omega below
+/// 2 (sqrt(zeta^2 + 1) - zeta), 0.83 at zeta = 1; 0.8 is asked.
+fn check_guide_step(scene: &Scene, bodies: &RigidBodyState, dt: f64) -> Result<(), LabourError> {
+    let path = &scene.scenario.trajectory;
+    let mass = scene.bodies.mass_kg[HEAD];
+    let inertia = head_turning_inertia(&scene.bodies, bodies.orientation[HEAD]);
+    for (key, stiffness, omega) in [
+        ("guide_stiffness_n_per_m", path.guide_stiffness_n_per_m, (path.guide_stiffness_n_per_m / mass).sqrt()),
+        ("guide_torsion_nm_per_rad", path.guide_torsion_nm_per_rad, (path.guide_torsion_nm_per_rad / inertia).sqrt()),
+    ] {
+        let limit_s = 0.8 / omega;
+        if dt > limit_s {
+            return Err(LabourError::UnstableJoint { section: "trajectory", key, stiffness, dt_s: dt, limit_s });
+        }
+    }
+    Ok(())
+}
+
+/// The same rotation with a non-negative scalar part: the short way round.
+fn shortest(q: glam::DQuat) -> glam::DQuat {
+    if q.w < 0.0 {
+        -q
+    } else {
+        q
+    }
+}
+
+/// The head's moment of inertia for the guide's damping and step limit,
+/// kg m^2: its smallest principal moment or just under it (one over the
+/// largest row sum of the inverse inertia, which no eigenvalue of the
+/// inverse exceeds), so that no axis is taken as heavier than it is.
+fn head_turning_inertia(model: &carus_contact::RigidBodyModel, q: glam::DQuat) -> f64 {
+    let inverse = model.inverse_inertia_world(HEAD, q);
+    let rows = [inverse.row(0), inverse.row(1), inverse.row(2)];
+    1.0 / rows.iter().map(|r| r.abs().element_sum()).fold(0.0, f64::max)
 }
 
 /// The floor's nodes where they are now: reference plus displacement.

@@ -13,7 +13,8 @@ use std::time::Instant;
 use anyhow::{bail, Context};
 use carus_analysis::{ArrestStage, HeadBorn, Movement, Movements, Outcome, RotationOutsideWindow};
 use carus_labour::record::{FloorAtMoment, KeyMoment};
-use carus_labour::{LabourError, Observer, RunOptions, RunRecord, Scenario, Scene, Simulation, BUILTINS};
+use carus_labour::loads::GuideSummary;
+use carus_labour::{LabourError, Mode, Observer, RunOptions, RunRecord, Scenario, Scene, Simulation, BUILTINS};
 use serde_json::json;
 
 use super::sweep::{one_setting, one_setting_arg};
@@ -198,7 +199,11 @@ pub(super) fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result
     let scene = carus_labour::Scene::build(&record.scenario)?;
     let summary = &record.summary;
     let input = carus_report::ReportInput {
-        title: format!("Carus: {}", summary.scenario),
+        // A run that did not move the head by the physics alone says so first.
+        title: match record.scenario.trajectory.mode {
+            Mode::Forward => format!("Carus: {}", summary.scenario),
+            mode => format!("Carus: {} ({mode} trajectory, not the physics alone)", summary.scenario, mode = mode.name()),
+        },
         notice: summary.failure.as_ref().map(|f| {
             format!(
                 "The run ended early at t = {:.2} s: {f}",
@@ -210,7 +215,10 @@ pub(super) fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result
             simulated_s: summary.simulated_s,
             wall_s: Some(summary.wall_s),
             steps: Some(summary.rigid_steps),
-            extra: vec![
+            extra: mode_line(record)
+                .map(|line| ("mode".to_string(), line))
+                .into_iter()
+                .chain([
                 (
                     // The outcome turns on it (docs/LABOUR.md), so it heads the figures.
                     "contact friction (0.009: the wetted canal; 0.35: muscle on bone)".into(),
@@ -229,7 +237,8 @@ pub(super) fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result
                         .into(),
                     inverted_corners(record),
                 ),
-            ],
+            ])
+            .collect(),
         },
         history: &record.history,
         detector,
@@ -509,6 +518,8 @@ pub(super) fn json_summary(record: &RunRecord, out_dir: &Path) -> serde_json::Va
             .and_then(|d| d.internal_rotation_outside_window),
         "head_born": record.detector.as_ref().and_then(|d| d.head_born),
         "scenario": record.summary.scenario,
+        "mode": record.scenario.trajectory.mode.name(),
+        "guide": GuideSummary::of(&record.loads),
     })
 }
 
@@ -540,6 +551,9 @@ pub(super) fn movement_list(all: &Movements) -> Vec<(&'static str, Movement)> {
 fn print_summary(record: &RunRecord, out_dir: &Path) {
     let s = &record.summary;
     println!("scenario {}: {}", s.scenario, outcome_line(&s.outcome));
+    if let Some(line) = mode_line(record) {
+        println!("{line}");
+    }
     println!(
         "simulated {:.2} s in {:.1} s wall time ({} rigid steps)",
         s.simulated_s, s.wall_s, s.rigid_steps
@@ -553,6 +567,25 @@ fn print_summary(record: &RunRecord, out_dir: &Path) {
         "results in {} (report.html, run.json, movements.json, pose_history.csv, *.pvd)",
         out_dir.display()
     );
+}
+
+/// What moved the head, when not the physics alone: the mode, and how
+/// hard the guide (the teacher's hand) worked.
+fn mode_line(record: &RunRecord) -> Option<String> {
+    let trajectory = &record.scenario.trajectory;
+    let how = match trajectory.mode {
+        Mode::Forward => return None,
+        Mode::Imposed => "the head followed its way-points (imposed mode, not the physics)",
+        Mode::Hybrid => "the physics, with the head guided towards its way-points (hybrid mode)",
+    };
+    let guide = GuideSummary::of(&record.loads).map_or(String::new(), |g| {
+        format!(
+            "; the guide's force on the head: peak {:.0} N, mean {:.0} N; its moment: peak {:.2} N m, mean {:.2} N m",
+            g.peak_force_n, g.mean_force_n, g.peak_moment_nm, g.mean_moment_nm
+        )
+    });
+    let n = trajectory.waypoints.len();
+    Some(format!("{how}, {n} way-point{}{guide}", if n == 1 { "" } else { "s" }))
 }
 
 /// The outcome in words: delivered, or where, what and against what it arrested.
@@ -628,6 +661,32 @@ mod tests {
         record.floor[2].inverted_corner_elements = 5;
         let t = record.floor[1].time_s;
         assert_eq!(inverted_corners(&record), format!("up to 5 of 48, from t = {t:.1} s"));
+    }
+
+    /// `--json` and the text summary say how the head was moved: the mode
+    /// always, and how hard the guide worked when there was one.
+    #[test]
+    fn a_run_says_how_its_head_was_moved() {
+        let run_with = |s: &Scenario| {
+            let dir = tempfile::tempdir().unwrap();
+            let record = carus_labour::run(s, dir.path(), &RunOptions::default(), &mut carus_labour::SilentObserver).unwrap();
+            let json = json_summary(&record, dir.path());
+            (record, json)
+        };
+        let forward = crate::commands::coarse_normal(0.1);
+        let (record, json) = run_with(&forward);
+        assert_eq!((json["mode"].as_str(), json["guide"].is_null()), (Some("forward"), true));
+        assert_eq!(mode_line(&record), None);
+
+        let mut imposed = forward.clone();
+        imposed.trajectory.mode = Mode::Imposed;
+        imposed.trajectory.waypoints =
+            vec![carus_labour::Waypoint { time_s: 0.1, station_mm: -50.0, theta_deg: -80.0, phi_deg: 10.0, anterior_mm: 0.0 }];
+        let (record, json) = run_with(&imposed);
+        assert_eq!(json["mode"].as_str(), Some("imposed"));
+        assert!(json["guide"]["peak_force_n"].as_f64().unwrap() > 0.0, "{json}");
+        let line = mode_line(&record).unwrap();
+        assert!(line.contains("imposed mode, not the physics") && line.contains("1 way-point;") && line.contains("peak"), "{line}");
     }
 
     /// A scenario whose pelvis cannot be built is refused with the table,
