@@ -110,7 +110,8 @@ pub enum LabourError {
     UnstableJoint {
         section: &'static str,
         key: &'static str,
-        stiffness: f64,
+        /// As the scenario's messages show numbers (`scenario::shown`).
+        stiffness: String,
         dt_s: f64,
         limit_s: f64,
     },

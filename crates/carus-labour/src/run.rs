@@ -1299,6 +1299,32 @@ mod tests {
         assert!(crate::loads::GuideSummary::of(&run_in(&coarse(0.2), &RunOptions::default()).1.loads).is_none());
     }
 
+    /// A head held where it starts takes the whole push in the hand: at
+    /// the contraction's peak the recorded guide force is the push (the
+    /// trunk, hanging on the still head, barely moves), and the head
+    /// starting lower in the curved canal does not jump at the first step.
+    #[test]
+    fn an_imposed_head_held_still_takes_the_push_in_the_hand() {
+        let mut s = coarse_path(Mode::Imposed);
+        s.start.station_mm = -20.0;
+        s.numerics.end_time_s = 4.0;
+        let here = Waypoint { time_s: 4.0, station_mm: -20.0, theta_deg: -90.0, phi_deg: s.start.attitude_deg, anterior_mm: 0.0 };
+        s.trajectory.waypoints = vec![here];
+        let scene = Scene::build(&s).unwrap();
+        let mut sim = Simulation::new(&scene).unwrap();
+        sim.step().unwrap();
+        let moved = sim.state.bodies.position[0].distance(scene.start[0].position_m);
+        let turned = sim.state.bodies.orientation[0].angle_between(scene.start[0].orientation);
+        assert!(moved < 1e-9 && turned < 1e-9, "{moved} m, {turned} rad");
+
+        let (_, record) = run_in(&s, &RunOptions::default());
+        let peak = record.loads.last().unwrap();
+        let push = s.expulsion.force_max_n;
+        let hand = peak.guide.unwrap().force_n.length();
+        assert!((record.loads.last().unwrap().time_s - 4.0).abs() < 1e-9);
+        assert!((hand - push).abs() < 0.1 * push, "hand {hand} N against the push {push} N");
+    }
+
     /// The hybrid's guide is the only thing it adds to the physics: at zero
     /// stiffness the run is the forward one to the bit, and at its default
     /// it holds a head told to stay put nearer its start than the push lets

@@ -867,6 +867,9 @@ impl Scenario {
     /// so that keys which must agree (a mode and its way-points) can
     /// change together.
     pub fn with_settings(&self, settings: &[(String, String)]) -> Result<Scenario, ScenarioError> {
+        if settings.is_empty() {
+            return Ok(self.clone());
+        }
         let mut table = toml::Table::try_from(self)?;
         for (key, value) in settings {
             set_key(&mut table, key, value)?;
@@ -1403,13 +1406,20 @@ impl Scenario {
             }
         }
         let mut previous_s = 0.0;
+        let dt = self.numerics.rigid_dt_s;
         for (i, w) in t.waypoints.iter().enumerate() {
             let key = |field: &str| format!("trajectory.waypoints[{i}].{field}");
-            if !(w.time_s.is_finite() && w.time_s > previous_s) {
+            // A rigid step at least between two: the head's motion over a
+            // step is read from the path, and a turn within one step would
+            // be taken the short way round.
+            if !(w.time_s.is_finite() && w.time_s >= previous_s + dt) {
                 return Err(err(
                     key("time_s"),
                     shown(w.time_s),
-                    &format!("must come after the way-point before it ({previous_s} s; the start is at 0 s)"),
+                    &format!(
+                        "must come at least a rigid step (numerics.rigid_dt_s = {dt} s) after the way-point \
+                         before it ({previous_s} s; the start is at 0 s)"
+                    ),
                     "list the way-points in time order, each at a later time",
                 ));
             }
@@ -1518,7 +1528,7 @@ const KEY_UNITS: [(&str, &str); 13] = [
 
 /// A number as a message shows it: as written, or with an exponent when
 /// its decimals would run to hundreds of digits (1e300, 1e-300).
-fn shown(value: f64) -> String {
+pub(crate) fn shown(value: f64) -> String {
     if value != 0.0 && !(1e-6..1e15).contains(&value.abs()) {
         format!("{value:e}")
     } else {
@@ -1602,7 +1612,7 @@ fn unit_in_value(path: &Path, text: &str, error: &toml::de::Error) -> Option<Sce
     let table = text
         .lines()
         .take(line - 1)
-        .filter_map(|l| l.trim().strip_prefix('[')?.split(']').next())
+        .filter_map(|l| l.trim().starts_with('[').then(|| l.trim().trim_start_matches('[').split(']').next())?)
         .last()
         .map(str::trim);
     let full_key = table.map_or(written_key.to_string(), |t| format!("{t}.{written_key}"));
@@ -1792,6 +1802,10 @@ mod tests {
         assert!(e.contains("`trajectory.mode`") && e.contains("needs way-points"), "{e}");
         let e = refused("imposed", &format!("{}{}", point(2.0, -40.0), point(1.0, -20.0)));
         assert!(e.contains("`trajectory.waypoints[1].time_s` = 1") && e.contains("time order"), "{e}");
+        let e = refused("imposed", &format!("{}{}", point(1.0, -40.0), point(1.0001, -20.0)));
+        assert!(e.contains("`trajectory.waypoints[1].time_s` = 1.0001") && e.contains("at least a rigid step"), "{e}");
+        let e = refused("imposed", &point(1.0, -40.0).replace("time_s = 1", "time_s = 1 s"));
+        assert!(e.contains("`trajectory.waypoints.time_s`") && e.contains("write the number alone"), "{e}");
         let e = refused("imposed", &point(0.0, -40.0));
         assert!(e.contains("`trajectory.waypoints[0].time_s` = 0") && e.contains("the start is at 0 s"), "{e}");
         let e = refused("imposed", &point(61.0, -40.0));

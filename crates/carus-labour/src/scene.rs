@@ -238,11 +238,11 @@ impl Scene {
             start: Vec::new(),
             trajectory: None,
         };
-        scene.start = scene.start_poses();
         scene.trajectory = (scenario.trajectory.mode != Mode::Forward)
             .then(|| {
                 Trajectory::new(scene.start_coordinates(), &scenario.trajectory.waypoints, |c| scene.centre_sigma_at(c))
             });
+        scene.start = scene.start_poses();
         scene.check_head_clear_of_bone()?;
         scene.check_waypoints_clear_of_bone()?;
         scene.check_head_clear_of_trunk()?;
@@ -273,11 +273,15 @@ impl Scene {
     }
 
     /// Head and trunk at the scenario's start: station of the leading point,
-    /// position of the denominator, attitude (all inputs).
+    /// position of the denominator, attitude (all inputs). Forward, both
+    /// are turned in the canal's frame at its top; with a trajectory, in
+    /// the frame at the head, where the trajectory's own start turns them,
+    /// so that the head does not jump at the first step.
     fn start_poses(&self) -> Vec<RigidPose> {
         let start = &self.scenario.start;
         let axis = self.canal.axis();
-        let frame = axis.frame(0.0);
+        let path_start = self.trajectory.as_ref().map(|path| path.at(0.0));
+        let frame = axis.frame(path_start.map_or(0.0, |p| p.centre_sigma_m));
         let occiput_theta = self.start_occiput_theta_deg();
         let orient = |phi: f64| {
             carus_analysis::synthetic::head_orientation(
@@ -289,7 +293,10 @@ impl Scene {
             )
         };
         let (q_head, q_trunk) = (orient(start.attitude_deg), orient(0.0));
-        let (head, _) = self.head_at_station(start.station_mm, |_| (q_head, DVec3::ZERO));
+        let head = match path_start {
+            Some(p) => self.head_on_trajectory(p),
+            None => self.head_at_station(start.station_mm, |_| (q_head, DVec3::ZERO)).0,
+        };
         let pivot = head.point(self.pivot_in_head);
         // The trunk frame's origin is the pivot; each segment's centre of
         // mass sits at -frame_origin from it, the spine straight.

@@ -207,7 +207,7 @@ impl<'a> Simulation<'a> {
                     return Err(LabourError::UnstableJoint {
                         section,
                         key: key_of(limit.limited_by),
-                        stiffness: limit.stiffness,
+                        stiffness: crate::scenario::shown(limit.stiffness),
                         dt_s: dt,
                         limit_s: limit.dt_s,
                     });
@@ -519,7 +519,10 @@ impl<'a> Simulation<'a> {
         // Passive resistance of the surroundings, implicit so that it is
         // stable at any step (it only damps).
         for (b, w) in wrenches.iter_mut().enumerate() {
-            *w += self.implicit_drag(b, *w);
+            // An imposed head's drag is taken at the path's motion (impose_head).
+            if !(b == HEAD && self.mode() == Mode::Imposed) {
+                *w += self.implicit_drag(b, *w);
+            }
         }
 
         let head_before = (self.state.bodies.linear_velocity[HEAD], self.state.bodies.angular_momentum[HEAD]);
@@ -593,12 +596,19 @@ impl<'a> Simulation<'a> {
 
     /// Imposed mode: puts the head where the trajectory has it at the end
     /// of this step, moving as it moves, and returns what that took
-    /// beyond the forces on it (`applied`, over the step from the velocity
-    /// and momentum `before`): the teacher's hand.
+    /// beyond the forces on it (`applied`, and the surroundings' drag at
+    /// the path's motion, over the step from the velocity and momentum
+    /// `before`): the teacher's hand.
     fn impose_head(&mut self, before: (DVec3, DVec3), applied: Wrench) -> Option<Wrench> {
-        // Its velocities carry the path's pose now to the next one, as
-        // the symplectic step moves a free body.
+        // Its velocities carry the path's position now to the next one,
+        // as the symplectic step moves a body.
         let target = self.head_target()?;
+        let fetus = &self.scene.scenario.fetus;
+        let applied = applied
+            + Wrench {
+                force: -fetus.head_linear_drag_n_s_per_m * target.velocity,
+                torque: -fetus.head_angular_drag_nm_s_per_rad * target.angular_velocity,
+            };
         let model = &self.scene.bodies;
         let s = &mut self.state.bodies;
         s.position[HEAD] = target.next.position_m;
@@ -892,7 +902,13 @@ fn check_guide_step(scene: &Scene, bodies: &RigidBodyState, dt: f64) -> Result<(
     ] {
         let limit_s = 0.8 / omega;
         if dt > limit_s {
-            return Err(LabourError::UnstableJoint { section: "trajectory", key, stiffness, dt_s: dt, limit_s });
+            return Err(LabourError::UnstableJoint {
+                section: "trajectory",
+                key,
+                stiffness: crate::scenario::shown(stiffness),
+                dt_s: dt,
+                limit_s,
+            });
         }
     }
     Ok(())
