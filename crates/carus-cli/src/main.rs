@@ -43,6 +43,8 @@ enum Command {
     Detect(commands::detect::DetectArgs),
     /// Run the clinical sanity cases (normal, contracted inlet, face, large shoulders) and judge each against its expected outcome.
     Sanity(commands::sanity::SanityArgs),
+    /// Replay a run in a window (time slider, play, orbiting camera), or draw one of its frames to a PNG.
+    View(commands::view::ViewArgs),
 }
 
 fn main() -> ExitCode {
@@ -66,6 +68,7 @@ fn main() -> ExitCode {
         Command::Sweep(args) => commands::sweep::run(args),
         Command::Detect(args) => commands::detect::run(args),
         Command::Sanity(args) => commands::sanity::run(args),
+        Command::View(args) => commands::view::run(args),
     };
     match result {
         Ok(Status::Success) => ExitCode::SUCCESS,

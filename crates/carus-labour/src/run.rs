@@ -91,6 +91,22 @@ fn attach_floor(moments: &mut [KeyMoment], snapshots: &[FloorSnapshot], out_dir:
     }
 }
 
+/// The floor's states in the VTU frames a run in `out_dir` wrote (its
+/// floor.pvd), in time order; frames gone or unreadable are left out (a
+/// replay then shows the nearest one it has).
+pub fn floor_frames(out_dir: &Path, record: &RunRecord) -> Vec<FloorAtMoment> {
+    let Some(collection) = record
+        .files
+        .floor_pvd
+        .as_ref()
+        .and_then(|pvd| std::fs::read_to_string(out_dir.join(pvd)).ok())
+        .and_then(|xml| carus_io::PvdCollection::parse(&xml))
+    else {
+        return Vec::new();
+    };
+    collection.frames().iter().filter_map(|(t, file)| read_floor_frame(&out_dir.join(file), *t)).collect()
+}
+
 /// A floor VTU frame as the run wrote it; None if it is gone or unreadable
 /// (the picture then uses the nearest snapshot).
 fn read_floor_frame(path: &Path, time_s: f64) -> Option<FloorAtMoment> {

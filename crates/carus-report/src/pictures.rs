@@ -72,15 +72,7 @@ pub fn draw(
         .iter()
         .map(|m| meshes_at(scene, history, m, range))
         .collect();
-    // The trunk reaches far above the inlet early and far below the
-    // outlet late; fitting it would shrink the canal, so it may run off
-    // the picture's edge.
-    let bounds = posed
-        .iter()
-        .flat_map(|(meshes, _)| meshes.iter())
-        .filter(|mesh| mesh.name != TRUNK && mesh.name != LOWER_TRUNK)
-        .filter_map(RenderMesh::bounds)
-        .reduce(Bounds::union);
+    let bounds = fitting_bounds(posed.iter().flat_map(|(meshes, _)| meshes.iter()));
     moments
         .iter()
         .zip(posed)
@@ -92,6 +84,17 @@ pub fn draw(
                 .and_then(|b| render_views(renderer, meshes, &b).map_err(|e| e.to_string())),
         })
         .collect()
+}
+
+/// What a camera is fitted to: every mesh but the trunk's. The trunk
+/// reaches far above the inlet early and far below the outlet late;
+/// fitting it would shrink the canal, so it may run off the picture's edge.
+pub fn fitting_bounds<'a>(meshes: impl IntoIterator<Item = &'a RenderMesh>) -> Option<Bounds> {
+    meshes
+        .into_iter()
+        .filter(|mesh| mesh.name != TRUNK && mesh.name != LOWER_TRUNK)
+        .filter_map(RenderMesh::bounds)
+        .reduce(Bounds::union)
 }
 
 fn render_views(
@@ -126,7 +129,24 @@ fn meshes_at(
     moment: &KeyMoment,
     stretch_range: Option<[f64; 2]>,
 ) -> (Vec<RenderMesh>, Option<f64>) {
-    let sample = &history.samples[moment.sample];
+    let (meshes, frame_time) = meshes_at_sample(scene, history, moment.sample, stretch_range);
+    // A frame within half the captions' tenth of a second of its
+    // moment needs no note.
+    (meshes, frame_time.filter(|t| (t - moment.time_s).abs() >= FLOOR_NOTE_FROM_S))
+}
+
+/// The meshes of the history's sample `sample`: the fetus where it was
+/// (opaque), the floor at its recorded frame nearest in time, coloured by
+/// stretch over `stretch_range`, and the see-through pelvis last; with the
+/// floor frame's time. The report's pictures and the viewer draw these.
+pub fn meshes_at_sample(
+    scene: &ReportScene,
+    history: &PoseHistory,
+    sample: usize,
+    stretch_range: Option<[f64; 2]>,
+) -> (Vec<RenderMesh>, Option<f64>) {
+    let time_s = history.samples[sample].time_s;
+    let sample = &history.samples[sample];
     let mut meshes = vec![posed_mesh(
         "fetal head",
         &scene.head,
@@ -141,10 +161,8 @@ fn meshes_at(
     }
     let mut floor_time_s = None;
     if let Some(floor) = &scene.floor {
-        let (mesh, frame_time) = floor_mesh(floor, moment.time_s, stretch_range);
-        // A frame within half the captions' tenth of a second of its
-        // moment needs no note.
-        floor_time_s = frame_time.filter(|t| (t - moment.time_s).abs() >= FLOOR_NOTE_FROM_S);
+        let (mesh, frame_time) = floor_mesh(floor, time_s, stretch_range);
+        floor_time_s = frame_time;
         meshes.push(mesh);
     }
     if let Some(pelvis) = &scene.pelvis {

@@ -11,6 +11,7 @@ pub mod scenarios;
 pub mod solve;
 pub mod sweep;
 pub mod validate;
+pub mod view;
 
 /// How a command that ran to completion ended.
 pub enum Status {

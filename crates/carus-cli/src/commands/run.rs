@@ -12,7 +12,7 @@ use std::time::Instant;
 
 use anyhow::{bail, Context};
 use carus_analysis::{ArrestStage, HeadBorn, Movement, Movements, Outcome, RotationOutsideWindow};
-use carus_labour::record::{FloorAtMoment, KeyMoment};
+use carus_labour::record::FloorAtMoment;
 use carus_labour::loads::GuideSummary;
 use carus_labour::{LabourError, Mode, Observer, RunOptions, RunRecord, Scenario, Scene, Simulation, BUILTINS};
 use serde_json::json;
@@ -194,16 +194,9 @@ pub(super) fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result
             "no report: the run stopped before its second pose sample".into(),
         ]);
     };
-    // Rebuilt from the scenario (deterministic) for the surfaces in the
-    // body frames the history's poses refer to.
-    let scene = carus_labour::Scene::build(&record.scenario)?;
     let summary = &record.summary;
     let input = carus_report::ReportInput {
-        // A run that did not move the head by the physics alone says so first.
-        title: match record.scenario.trajectory.mode {
-            Mode::Forward => format!("Carus: {}", summary.scenario),
-            mode => format!("Carus: {} ({mode} trajectory, not the physics alone)", summary.scenario, mode = mode.name()),
-        },
+        title: run_title(record),
         notice: summary.failure.as_ref().map(|f| {
             format!(
                 "The run ended early at t = {:.2} s: {f}",
@@ -259,13 +252,7 @@ pub(super) fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result
                 trunk_nm: l.head_axial.trunk_nm,
             })
             .collect(),
-        scene: Some(carus_report::ReportScene {
-            pelvis: Some(scene.pelvis.surface.clone()),
-            head: scene.head.surface.clone(),
-            trunk: scene.trunk.as_ref().map(|t| t.surface.clone()),
-            lower_trunk: scene.lower_trunk.as_ref().map(|t| t.surface.clone()),
-            floor: scene.floor.as_ref().map(|floor| floor_surface(floor, &record.key_moments)),
-        }),
+        scene: Some(report_scene(record, &[])?),
     };
     Ok(carus_report::write_report_file(
         &input,
@@ -273,12 +260,36 @@ pub(super) fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result
     )?)
 }
 
-/// The floor for the report's pictures: its outer faces, at rest and in
-/// the states the run kept nearest its key moments, coloured by stretch
-/// (each node the mean of its elements' largest principal stretch).
-fn floor_surface(floor: &carus_labour::scene::FloorScene, moments: &[KeyMoment]) -> carus_report::FloorSurface {
+/// A run's title: its scenario, and when the head was not moved by the
+/// physics alone, how it was (said first).
+pub(super) fn run_title(record: &RunRecord) -> String {
+    let name = &record.summary.scenario;
+    match record.scenario.trajectory.mode {
+        Mode::Forward => format!("Carus: {name}"),
+        mode => format!("Carus: {name} ({} trajectory, not the physics alone)", mode.name()),
+    }
+}
+
+/// The surfaces a run's pictures and its replay draw, rebuilt from its
+/// scenario (deterministic) in the body frames its poses refer to, with
+/// the floor's states the run kept nearest its key moments and `more`.
+pub(super) fn report_scene(record: &RunRecord, more: &[FloorAtMoment]) -> anyhow::Result<carus_report::ReportScene> {
+    let scene = carus_labour::Scene::build(&record.scenario)?;
+    let kept = record.key_moments.iter().filter_map(|m| m.floor.as_ref());
+    Ok(carus_report::ReportScene {
+        pelvis: Some(scene.pelvis.surface.clone()),
+        head: scene.head.surface.clone(),
+        trunk: scene.trunk.as_ref().map(|t| t.surface.clone()),
+        lower_trunk: scene.lower_trunk.as_ref().map(|t| t.surface.clone()),
+        floor: scene.floor.as_ref().map(|floor| floor_surface(floor, kept.chain(more).collect())),
+    })
+}
+
+/// The floor for pictures: its outer faces, at rest and in the given
+/// states, coloured by stretch (each node the mean of its elements'
+/// largest principal stretch).
+fn floor_surface(floor: &carus_labour::scene::FloorScene, mut states: Vec<&FloorAtMoment>) -> carus_report::FloorSurface {
     let every_element: Vec<u32> = (0..floor.mesh.element_count() as u32).collect();
-    let mut states: Vec<&FloorAtMoment> = moments.iter().filter_map(|m| m.floor.as_ref()).collect();
     states.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
     states.dedup_by(|a, b| a.time_s == b.time_s);
     carus_report::FloorSurface {

@@ -1,0 +1,105 @@
+//! `carus view RUN [--at T --picture FILE.png]`: a run replayed in a
+//! window (crate carus-view), or one of its frames drawn to a picture.
+
+use std::path::PathBuf;
+
+use carus_view::{Orbit, Replay};
+
+use super::render::ViewName;
+use super::run::{read_record, report_scene, run_title};
+use super::Status;
+
+#[derive(clap::Args)]
+pub struct ViewArgs {
+    /// A run folder, as `carus run` writes it.
+    pub run: PathBuf,
+    /// Draw the frame at this time (s) to --picture instead of opening a window.
+    #[arg(long, requires = "picture")]
+    pub at: Option<f64>,
+    /// The PNG file the frame at --at is drawn to.
+    #[arg(long, requires = "at")]
+    pub picture: Option<PathBuf>,
+    /// The view the picture is drawn from.
+    #[arg(long, value_enum, default_value = "lateral")]
+    pub view: ViewName,
+    /// Width and height of the picture, px.
+    #[arg(long, num_args = 2, default_values = ["800", "600"], value_names = ["WIDTH", "HEIGHT"])]
+    pub size: Vec<u32>,
+}
+
+pub fn run(args: &ViewArgs) -> anyhow::Result<Status> {
+    let record = read_record(&args.run)?;
+    // The floor at every VTU frame the run wrote, besides its key moments'.
+    let frames = carus_labour::floor_frames(&args.run, &record);
+    let replay = Replay::new(run_title(&record), report_scene(&record, &frames)?, record.history.clone(), record.detector.as_ref())
+        .map_err(|e| anyhow::anyhow!("{}: {e}", args.run.display()))?;
+    let (Some(at), Some(path)) = (args.at, &args.picture) else {
+        carus_view::open(replay)?;
+        return Ok(Status::Success);
+    };
+    if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
+        anyhow::bail!("--picture {}: the frame is written as a PNG picture; name the file *.png", path.display());
+    }
+    let end = replay.duration_s();
+    if !(at.is_finite() && (0.0..=end).contains(&at)) {
+        anyhow::bail!("--at {at}: the run was recorded from 0 to {end:.2} s; give a time in that range");
+    }
+    let [width, height] = [args.size[0], args.size[1]];
+    let picture = replay.picture(at, &Orbit::from_view(args.view.into()), width, height)?;
+    picture.save_png(path)?;
+    let k = replay.sample_at(at);
+    println!("{} ({width} x {height}): {}", path.display(), replay.readout(k).join(", "));
+    Ok(Status::Success)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn args(run: PathBuf, at: f64, picture: PathBuf) -> ViewArgs {
+        ViewArgs { run, at: Some(at), picture: Some(picture), view: ViewName::Inferior, size: vec![120, 90] }
+    }
+
+    /// A run's frame is drawn to a PNG of the size asked, with the floor
+    /// from the run's VTU frames; a time outside the run, a picture that
+    /// is not a PNG and a folder without a run are refused with the fix.
+    /// Needs a GPU or Mesa's lavapipe (`.ci/run` installs it).
+    #[test]
+    fn a_frame_of_a_run_is_drawn_to_a_picture() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut s = crate::commands::coarse_normal(0.3);
+        s.output.vtu = true;
+        s.output.vtu_every_s = 0.1;
+        let record = carus_labour::run(&s, dir.path(), &carus_labour::RunOptions::default(), &mut carus_labour::SilentObserver).unwrap();
+        assert_eq!(carus_labour::floor_frames(dir.path(), &record).len(), 4);
+        let png = dir.path().join("frame.png");
+        run(&args(dir.path().to_path_buf(), 0.2, png.clone())).unwrap();
+        let bytes = std::fs::read(&png).unwrap();
+        assert!(bytes.starts_with(b"\x89PNG"));
+        // Width and height in the PNG header.
+        assert_eq!((&bytes[16..20], &bytes[20..24]), (&120u32.to_be_bytes()[..], &90u32.to_be_bytes()[..]));
+
+        let refused = |a: ViewArgs| format!("{:#}", run(&a).err().expect("refused"));
+        let e = refused(args(dir.path().to_path_buf(), 5.0, png.clone()));
+        assert!(e.contains("--at 5") && e.contains("from 0 to 0.30 s"), "{e}");
+        let e = refused(args(dir.path().to_path_buf(), 0.1, dir.path().join("frame.jpg")));
+        assert!(e.contains("*.png"), "{e}");
+        let e = refused(args(dir.path().join("nothing"), 0.1, png));
+        assert!(e.contains("run.json"), "{e}");
+    }
+
+    #[test]
+    fn a_time_and_a_picture_go_together() {
+        #[derive(clap::Parser)]
+        struct Cli {
+            #[command(flatten)]
+            view: ViewArgs,
+        }
+        use clap::Parser;
+        assert!(Cli::try_parse_from(["view", "runs/x", "--at", "1"]).is_err());
+        assert!(Cli::try_parse_from(["view", "runs/x", "--picture", "a.png"]).is_err());
+        let both = Cli::try_parse_from(["view", "runs/x", "--at", "1", "--picture", "a.png"]).unwrap();
+        assert_eq!((both.view.at, both.view.size.as_slice(), both.view.view), (Some(1.0), &[800, 600][..], ViewName::Lateral));
+        assert!(Cli::try_parse_from(["view", "runs/x"]).unwrap().view.picture.is_none());
+    }
+}

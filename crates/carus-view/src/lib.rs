@@ -1,0 +1,193 @@
+//! The interactive viewer (`carus view RUN`): a run replayed in a window,
+//! the pelvis see-through, the fetus where the pose history has it and the
+//! floor at its recorded state nearest in time, with a time slider, play
+//! and pause, an orbiting camera, the standard views, and the station,
+//! theta, phi and the movements under way read out beside it.
+//!
+//! The replay ([`Replay`]) and the camera ([`Orbit`]) are plain data, so
+//! what a frame shows is tested without a window, and [`Replay::picture`]
+//! draws any frame offscreen (`carus view RUN --at T --picture FILE`). The
+//! window ([`open`]) only adds egui's controls; it draws the same meshes
+//! with the renderer's painter inside egui's render pass.
+
+mod window;
+
+use carus_analysis::{DetectorReport, PoseHistory, Series};
+use carus_render::{Bounds, Camera, Image, Projection, RenderError, RenderMesh, Renderer, Scene, View};
+use carus_report::pictures::{fitting_bounds, meshes_at_sample, stretch_range};
+use carus_report::ReportScene;
+use glam::Vec3;
+
+pub use window::open;
+
+/// Why a run cannot be replayed.
+#[derive(Debug, thiserror::Error)]
+pub enum ViewError {
+    #[error("the pose history has no samples: there is nothing to replay")]
+    NoSamples,
+    #[error("the scene has no vertices to fit the camera to")]
+    NoBounds,
+    #[error(transparent)]
+    Render(#[from] RenderError),
+    #[error("the window could not be opened: {0}\n  hint: the viewer needs a display (X11) and a Vulkan driver; without a display, `carus view RUN --at T --picture FILE` draws a frame to a PNG")]
+    Window(String),
+}
+
+/// A recorded run, ready to be shown at any of its samples.
+pub struct Replay {
+    pub title: String,
+    scene: ReportScene,
+    history: PoseHistory,
+    series: Series,
+    /// The seven movements: key, start and end (observed ones only).
+    movements: Vec<(&'static str, f64, f64)>,
+    stretch_range: Option<[f64; 2]>,
+    /// What the camera is fitted to: the canal at the start.
+    bounds: Bounds,
+}
+
+impl Replay {
+    /// A replay of `history` with the surfaces of `scene` (the report's),
+    /// and the detector's movements when there is a report.
+    pub fn new(
+        title: impl Into<String>,
+        scene: ReportScene,
+        history: PoseHistory,
+        detector: Option<&DetectorReport>,
+    ) -> Result<Replay, ViewError> {
+        if history.samples.is_empty() {
+            return Err(ViewError::NoSamples);
+        }
+        let series = Series::from_history(&history);
+        let movements = detector.map_or_else(Vec::new, |d| {
+            d.movements
+                .by_key()
+                .iter()
+                .filter(|(_, m)| m.observed)
+                .filter_map(|(key, m)| Some((*key, m.start_s?, m.end_s?)))
+                .collect()
+        });
+        let stretch_range = scene.floor.as_ref().and_then(stretch_range);
+        let (first, _) = meshes_at_sample(&scene, &history, 0, stretch_range);
+        let bounds = fitting_bounds(&first).ok_or(ViewError::NoBounds)?;
+        Ok(Replay { title: title.into(), scene, history, series, movements, stretch_range, bounds })
+    }
+
+    /// Time of the last sample, s.
+    pub fn duration_s(&self) -> f64 {
+        self.history.samples.last().map_or(0.0, |s| s.time_s)
+    }
+
+    /// The sample shown at time `t`: the last one at or before it (the
+    /// first before the run's start).
+    pub fn sample_at(&self, t: f64) -> usize {
+        self.history.samples.partition_point(|s| s.time_s <= t).saturating_sub(1)
+    }
+
+    /// The meshes of sample `k` (fetus, floor, pelvis), as the report draws them.
+    pub fn meshes(&self, k: usize) -> Vec<RenderMesh> {
+        meshes_at_sample(&self.scene, &self.history, k, self.stretch_range).0
+    }
+
+    /// What sample `k` shows, in words: its time, the head's station,
+    /// theta and phi (CARDINAL_MOVEMENTS.md), and the movements under way.
+    pub fn readout(&self, k: usize) -> Vec<String> {
+        let s = &self.series;
+        let t = s.time_s[k];
+        let under_way: Vec<&str> = self
+            .movements
+            .iter()
+            .filter(|(_, start, end)| (*start..=*end).contains(&t))
+            .map(|(key, _, _)| *key)
+            .collect();
+        vec![
+            format!("t = {t:.2} s"),
+            format!("station {:+.1} mm", s.station_mm[k]),
+            format!("theta {:.1} deg", s.theta_deg[k]),
+            format!("phi {:.1} deg (flexion positive)", s.phi_deg[k]),
+            if s.head_delivered[k] { "head delivered".into() } else { "head in the canal".into() },
+            match under_way.is_empty() {
+                true => "no movement under way".into(),
+                false => format!("under way: {}", under_way.join(", ").replace('_', " ")),
+            },
+        ]
+    }
+
+    /// The camera of `orbit`, fitted to the canal.
+    pub fn camera(&self, orbit: &Orbit) -> Camera {
+        let mut camera = Camera::fitted(orbit.eye_direction(), Vec3::Z, &self.bounds, orbit.projection);
+        camera.half_extent = camera.half_extent.map(|h| h / orbit.zoom);
+        camera
+    }
+
+    /// Draws the frame at time `t` seen by `orbit` offscreen (a GPU or
+    /// Mesa's lavapipe).
+    pub fn picture(&self, t: f64, orbit: &Orbit, width: u32, height: u32) -> Result<Image, ViewError> {
+        let mut renderer = Renderer::new_headless()?;
+        let scene = Scene::new(self.meshes(self.sample_at(t)));
+        Ok(renderer.render(&scene, &self.camera(orbit), width, height)?)
+    }
+}
+
+/// The viewer's camera: it circles the canal, its azimuth about the
+/// pelvis frame's z (cranial) and its elevation above the transverse
+/// plane, and zooms by shrinking the field kept in view.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Orbit {
+    /// Azimuth, radians: 0 looks from the mother's right (the lateral view).
+    pub azimuth: f32,
+    /// Elevation, radians, kept short of the poles so that up stays up.
+    pub elevation: f32,
+    /// 1 shows the whole canal; 2 half of it.
+    pub zoom: f32,
+    pub projection: Projection,
+}
+
+/// How close to straight up or down the camera may look, radians.
+const MAX_ELEVATION: f32 = 1.45;
+/// Zoom range.
+const ZOOM: (f32, f32) = (0.5, 8.0);
+
+impl Orbit {
+    /// The orbit that looks as a standard view does. From straight below
+    /// or above, where the view's up is anterior, the camera leans off the
+    /// pole (towards the pubis from below, the sacrum from above) so that
+    /// the pubis stays at the top of the picture as in the standard view.
+    pub fn from_view(view: View) -> Orbit {
+        let (eye, up) = view.eye_direction_and_up();
+        let lean = if eye.z < 0.0 { up } else { -up };
+        let azimuth = match eye.x.hypot(eye.y) > 1e-6 {
+            true => eye.y.atan2(eye.x),
+            false => lean.y.atan2(lean.x),
+        };
+        Orbit {
+            azimuth,
+            elevation: eye.z.clamp(-1.0, 1.0).asin().clamp(-MAX_ELEVATION, MAX_ELEVATION),
+            zoom: 1.0,
+            projection: Projection::Orthographic,
+        }
+    }
+
+    /// Unit vector from the canal towards the eye.
+    pub fn eye_direction(&self) -> Vec3 {
+        let (sa, ca) = self.azimuth.sin_cos();
+        let (se, ce) = self.elevation.sin_cos();
+        Vec3::new(ce * ca, ce * sa, se)
+    }
+
+    /// Turns the camera by a drag of `dx`, `dy` radians (right, down).
+    pub fn drag(&mut self, dx: f32, dy: f32) {
+        self.azimuth = (self.azimuth - dx).rem_euclid(std::f32::consts::TAU);
+        self.elevation = (self.elevation + dy).clamp(-MAX_ELEVATION, MAX_ELEVATION);
+    }
+
+    /// Zooms by `factor` (above 1: closer), within the zoom range.
+    pub fn zoom_by(&mut self, factor: f32) {
+        if factor.is_finite() && factor > 0.0 {
+            self.zoom = (self.zoom * factor).clamp(ZOOM.0, ZOOM.1);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;

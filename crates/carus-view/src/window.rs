@@ -1,0 +1,215 @@
+//! The window: egui's controls beside a 3D panel that the renderer's
+//! painter draws into egui's own render pass (an `egui_wgpu` paint
+//! callback), so the scene and the controls share one device and one pass.
+
+use std::sync::Arc;
+
+use carus_render::{Camera, GpuMesh, Lights, MeshPainter, Projection, RenderMesh, TargetFormat, View};
+use eframe::egui;
+use eframe::egui_wgpu::{self, wgpu};
+
+use crate::{Orbit, Replay, ViewError};
+
+/// Depth buffer bits asked of eframe; the painter's pipelines are built for
+/// the format eframe makes of them.
+const DEPTH_BITS: u8 = 24;
+/// Radians the camera turns per point dragged.
+const DRAG_RADIANS_PER_POINT: f32 = 0.01;
+/// Playback speeds offered, simulated seconds per second.
+const SPEEDS: [f32; 5] = [0.25, 0.5, 1.0, 2.0, 4.0];
+
+/// Opens the viewer on `replay` and returns when its window is closed.
+pub fn open(replay: Replay) -> Result<(), ViewError> {
+    let options = eframe::NativeOptions {
+        viewport: egui::ViewportBuilder::default().with_inner_size([1200.0, 800.0]).with_title(replay.title.clone()),
+        depth_buffer: DEPTH_BITS,
+        renderer: eframe::Renderer::Wgpu,
+        ..Default::default()
+    };
+    let title = replay.title.clone();
+    eframe::run_native(
+        &title,
+        options,
+        Box::new(|cc| {
+            let state = cc
+                .wgpu_render_state
+                .as_ref()
+                .ok_or("eframe opened no wgpu device for the window")?;
+            let target = TargetFormat {
+                colour: state.target_format,
+                depth: egui_wgpu::depth_format_from_bits(DEPTH_BITS, 0).ok_or("no depth format for the window")?,
+                sample_count: 1,
+            };
+            let painter = MeshPainter::new(&state.device, &state.queue, target);
+            state.renderer.write().callback_resources.insert(GpuScene { painter, meshes: Vec::new(), shown: None });
+            Ok(Box::new(Viewer::new(replay)))
+        }),
+    )
+    .map_err(|e| ViewError::Window(e.to_string()))
+}
+
+/// The painter and the meshes on the GPU, kept in egui's callback resources.
+struct GpuScene {
+    painter: MeshPainter,
+    meshes: Vec<GpuMesh>,
+    /// The sample whose meshes are uploaded.
+    shown: Option<usize>,
+}
+
+/// One frame of the 3D panel: what to draw and from where.
+struct Frame {
+    sample: usize,
+    meshes: Arc<Vec<RenderMesh>>,
+    camera: Camera,
+    aspect: f32,
+}
+
+impl egui_wgpu::CallbackTrait for Frame {
+    fn prepare(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        _screen: &egui_wgpu::ScreenDescriptor,
+        _encoder: &mut wgpu::CommandEncoder,
+        resources: &mut egui_wgpu::CallbackResources,
+    ) -> Vec<wgpu::CommandBuffer> {
+        let Some(scene) = resources.get_mut::<GpuScene>() else {
+            return Vec::new();
+        };
+        if scene.shown != Some(self.sample) {
+            if scene.meshes.len() == self.meshes.len() {
+                // Only the fetus and the floor move: the pelvis stays as uploaded.
+                for (i, (gpu, mesh)) in scene.meshes.iter_mut().zip(self.meshes.iter()).enumerate() {
+                    // The surfaces keep their counts from sample to sample;
+                    // one that did not is uploaded anew.
+                    if mesh.name != "pelvis" && scene.painter.update(queue, gpu, mesh, i).is_err() {
+                        if let Ok(fresh) = scene.painter.upload(device, mesh, i) {
+                            *gpu = fresh;
+                        }
+                    }
+                }
+            } else {
+                scene.meshes =
+                    self.meshes.iter().enumerate().filter_map(|(i, m)| scene.painter.upload(device, m, i).ok()).collect();
+            }
+            scene.shown = Some(self.sample);
+        }
+        scene.painter.prepare(queue, &self.camera, &Lights::default(), self.aspect);
+        Vec::new()
+    }
+
+    fn paint(
+        &self,
+        _info: egui::PaintCallbackInfo,
+        pass: &mut wgpu::RenderPass<'static>,
+        resources: &egui_wgpu::CallbackResources,
+    ) {
+        if let Some(scene) = resources.get::<GpuScene>() {
+            scene.painter.paint(pass, &scene.meshes, &self.camera);
+        }
+    }
+}
+
+/// The viewer's state between frames.
+struct Viewer {
+    replay: Replay,
+    time_s: f64,
+    playing: bool,
+    speed: f32,
+    orbit: Orbit,
+    /// The meshes of the sample shown, rebuilt when the sample changes.
+    meshes: Option<(usize, Arc<Vec<RenderMesh>>)>,
+}
+
+impl Viewer {
+    fn new(replay: Replay) -> Viewer {
+        Viewer {
+            replay,
+            time_s: 0.0,
+            playing: false,
+            speed: 1.0,
+            orbit: Orbit::from_view(View::Lateral),
+            meshes: None,
+        }
+    }
+
+    fn controls(&mut self, ui: &mut egui::Ui) {
+        let end = self.replay.duration_s();
+        ui.heading(&self.replay.title);
+        ui.horizontal(|ui| {
+            if ui.button(if self.playing { "Pause" } else { "Play" }).clicked() {
+                if !self.playing && self.time_s >= end {
+                    self.time_s = 0.0;
+                }
+                self.playing = !self.playing;
+            }
+            egui::ComboBox::from_label("speed")
+                .selected_text(format!("{}x", self.speed))
+                .show_ui(ui, |ui| {
+                    for s in SPEEDS {
+                        ui.selectable_value(&mut self.speed, s, format!("{s}x"));
+                    }
+                });
+        });
+        ui.add(egui::Slider::new(&mut self.time_s, 0.0..=end).text("t (s)"));
+        ui.separator();
+        for line in self.replay.readout(self.replay.sample_at(self.time_s)) {
+            ui.label(line);
+        }
+        ui.separator();
+        ui.label("View (drag to turn, scroll to zoom)");
+        ui.horizontal_wrapped(|ui| {
+            for view in [View::Lateral, View::Anterior, View::Inferior, View::Superior, View::Oblique] {
+                if ui.button(view.name()).clicked() {
+                    self.orbit = Orbit::from_view(view);
+                }
+            }
+        });
+        let mut perspective = matches!(self.orbit.projection, Projection::Perspective { .. });
+        if ui.checkbox(&mut perspective, "perspective").changed() {
+            self.orbit.projection = match perspective {
+                true => Projection::Perspective { fov_y: 0.6 },
+                false => Projection::Orthographic,
+            };
+        }
+    }
+
+    fn scene(&mut self, ui: &mut egui::Ui) {
+        let (rect, response) = ui.allocate_exact_size(ui.available_size(), egui::Sense::drag());
+        let drag = response.drag_delta();
+        self.orbit.drag(drag.x * DRAG_RADIANS_PER_POINT, drag.y * DRAG_RADIANS_PER_POINT);
+        if response.hovered() {
+            let scroll = ui.input(|i| i.smooth_scroll_delta.y);
+            self.orbit.zoom_by((scroll * 0.002).exp());
+        }
+        let sample = self.replay.sample_at(self.time_s);
+        let meshes = match &self.meshes {
+            Some((k, meshes)) if *k == sample => meshes.clone(),
+            _ => {
+                let meshes = Arc::new(self.replay.meshes(sample));
+                self.meshes = Some((sample, meshes.clone()));
+                meshes
+            }
+        };
+        let frame = Frame {
+            sample,
+            meshes,
+            camera: self.replay.camera(&self.orbit),
+            aspect: rect.width().max(1.0) / rect.height().max(1.0),
+        };
+        ui.painter().add(egui_wgpu::Callback::new_paint_callback(rect, frame));
+    }
+}
+
+impl eframe::App for Viewer {
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        if self.playing {
+            let dt = ui.input(|i| i.stable_dt) as f64 * self.speed as f64;
+            self.time_s = (self.time_s + dt).min(self.replay.duration_s());
+            self.playing = self.time_s < self.replay.duration_s();
+            ui.ctx().request_repaint();
+        }
+        egui::Panel::left("controls").default_size(300.0).show(ui, |ui| self.controls(ui));
+        egui::CentralPanel::default().show(ui, |ui| self.scene(ui));
+    }
+}
