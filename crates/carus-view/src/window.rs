@@ -2,7 +2,8 @@
 //! painter draws into egui's own render pass (an `egui_wgpu` paint
 //! callback), so the scene and the controls share one device and one pass.
 
-use std::sync::Arc;
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
 
 use carus_render::{Camera, GpuMesh, Lights, MeshPainter, Projection, RenderMesh, TargetFormat, View};
 use eframe::egui;
@@ -18,8 +19,15 @@ const DRAG_RADIANS_PER_POINT: f32 = 0.01;
 /// Playback speeds offered, simulated seconds per second.
 const SPEEDS: [f32; 5] = [0.25, 0.5, 1.0, 2.0, 4.0];
 
-/// Opens the viewer on `replay` and returns when its window is closed.
-pub fn open(replay: Replay) -> Result<(), ViewError> {
+/// Frames drawn before a screenshot is taken, so that the scene's meshes
+/// are uploaded and the layout has settled.
+const FRAMES_BEFORE_SCREENSHOT: u32 = 5;
+
+/// Opens the viewer on `replay` at time `start_s` and returns when its
+/// window is closed. With `screenshot`, the window saves a PNG of itself
+/// once drawn and closes (what the tests check, and a picture of the
+/// viewer for docs).
+pub fn open(replay: Replay, start_s: f64, screenshot: Option<PathBuf>) -> Result<(), ViewError> {
     let options = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default().with_inner_size([1200.0, 800.0]).with_title(replay.title.clone()),
         depth_buffer: DEPTH_BITS,
@@ -27,6 +35,8 @@ pub fn open(replay: Replay) -> Result<(), ViewError> {
         ..Default::default()
     };
     let title = replay.title.clone();
+    let saved: Arc<Mutex<Option<Result<(), String>>>> = Arc::default();
+    let shot = screenshot.clone().map(|path| Screenshot { path, frames_left: FRAMES_BEFORE_SCREENSHOT, asked: false, saved: saved.clone() });
     eframe::run_native(
         &title,
         options,
@@ -42,10 +52,52 @@ pub fn open(replay: Replay) -> Result<(), ViewError> {
             };
             let painter = MeshPainter::new(&state.device, &state.queue, target);
             state.renderer.write().callback_resources.insert(GpuScene { painter, meshes: Vec::new(), shown: None });
-            Ok(Box::new(Viewer::new(replay)))
+            Ok(Box::new(Viewer { screenshot: shot, time_s: start_s, ..Viewer::new(replay) }))
         }),
     )
-    .map_err(|e| ViewError::Window(e.to_string()))
+    .map_err(|e| ViewError::Window(e.to_string()))?;
+    let outcome = saved.lock().ok().and_then(|s| s.clone());
+    match (screenshot, outcome) {
+        (None, _) => Ok(()),
+        (Some(_), Some(Ok(()))) => Ok(()),
+        (Some(path), Some(Err(e))) => Err(ViewError::Window(format!("the screenshot {} was not saved: {e}", path.display()))),
+        (Some(path), _) => Err(ViewError::Window(format!("the window closed before the screenshot {} was taken", path.display()))),
+    }
+}
+
+/// A screenshot the window takes of itself, then closes.
+struct Screenshot {
+    path: PathBuf,
+    frames_left: u32,
+    asked: bool,
+    /// Written by egui's screenshot callback: saved, or why not.
+    saved: Arc<Mutex<Option<Result<(), String>>>>,
+}
+
+impl Screenshot {
+    /// One frame's step: wait, ask for the picture, close once it is saved.
+    fn step(&mut self, ctx: &egui::Context) {
+        if self.frames_left > 0 {
+            self.frames_left -= 1;
+        } else if !self.asked {
+            self.asked = true;
+            let (path, saved, repaint) = (self.path.clone(), self.saved.clone(), ctx.clone());
+            ctx.request_screenshot(move |image| {
+                let [w, h] = image.size;
+                let rgba = image.pixels.iter().flat_map(|p| p.to_srgba_unmultiplied()).collect();
+                let result = carus_render::Image::from_rgba(w as u32, h as u32, rgba)
+                    .and_then(|picture| picture.save_png(&path))
+                    .map_err(|e| e.to_string());
+                if let Ok(mut slot) = saved.lock() {
+                    *slot = Some(result);
+                }
+                repaint.request_repaint();
+            });
+        } else if self.saved.lock().is_ok_and(|s| s.is_some()) {
+            ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+        }
+        ctx.request_repaint();
+    }
 }
 
 /// The painter and the meshes on the GPU, kept in egui's callback resources.
@@ -119,6 +171,7 @@ struct Viewer {
     orbit: Orbit,
     /// The meshes of the sample shown, rebuilt when the sample changes.
     meshes: Option<(usize, Arc<Vec<RenderMesh>>)>,
+    screenshot: Option<Screenshot>,
 }
 
 impl Viewer {
@@ -130,6 +183,7 @@ impl Viewer {
             speed: 1.0,
             orbit: Orbit::from_view(View::Lateral),
             meshes: None,
+            screenshot: None,
         }
     }
 
@@ -211,5 +265,8 @@ impl eframe::App for Viewer {
         }
         egui::Panel::left("controls").default_size(300.0).show(ui, |ui| self.controls(ui));
         egui::CentralPanel::default().show(ui, |ui| self.scene(ui));
+        if let Some(shot) = &mut self.screenshot {
+            shot.step(ui.ctx());
+        }
     }
 }

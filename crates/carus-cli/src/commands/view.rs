@@ -1,5 +1,6 @@
-//! `carus view RUN [--at T --picture FILE.png]`: a run replayed in a
-//! window (crate carus-view), or one of its frames drawn to a picture.
+//! `carus view RUN [--at T] [--screenshot FILE.png]`, `carus view RUN --at
+//! T --picture FILE.png`: a run replayed in a window (crate carus-view),
+//! or one of its frames drawn to a picture without one.
 
 use std::path::PathBuf;
 
@@ -13,8 +14,8 @@ use super::Status;
 pub struct ViewArgs {
     /// A run folder, as `carus run` writes it.
     pub run: PathBuf,
-    /// Draw the frame at this time (s) to --picture instead of opening a window.
-    #[arg(long, requires = "picture")]
+    /// The time shown first, s; with --picture, the frame drawn.
+    #[arg(long)]
     pub at: Option<f64>,
     /// The PNG file the frame at --at is drawn to.
     #[arg(long, requires = "at")]
@@ -22,6 +23,9 @@ pub struct ViewArgs {
     /// The view the picture is drawn from.
     #[arg(long, value_enum, default_value = "lateral")]
     pub view: ViewName,
+    /// Open the window, save a PNG of it once drawn, and close it.
+    #[arg(long, conflicts_with = "picture")]
+    pub screenshot: Option<PathBuf>,
     /// Width and height of the picture, px.
     #[arg(long, num_args = 2, default_values = ["800", "600"], value_names = ["WIDTH", "HEIGHT"])]
     pub size: Vec<u32>,
@@ -33,17 +37,20 @@ pub fn run(args: &ViewArgs) -> anyhow::Result<Status> {
     let frames = carus_labour::floor_frames(&args.run, &record);
     let replay = Replay::new(run_title(&record), report_scene(&record, &frames)?, record.history.clone(), record.detector.as_ref())
         .map_err(|e| anyhow::anyhow!("{}: {e}", args.run.display()))?;
-    let (Some(at), Some(path)) = (args.at, &args.picture) else {
-        carus_view::open(replay)?;
-        return Ok(Status::Success);
-    };
-    if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
-        anyhow::bail!("--picture {}: the frame is written as a PNG picture; name the file *.png", path.display());
+    for (flag, path) in [("--picture", &args.picture), ("--screenshot", &args.screenshot)] {
+        if let Some(path) = path.as_ref().filter(|p| !p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png"))) {
+            anyhow::bail!("{flag} {}: the picture is written as a PNG; name the file *.png", path.display());
+        }
     }
     let end = replay.duration_s();
+    let at = args.at.unwrap_or(0.0);
     if !(at.is_finite() && (0.0..=end).contains(&at)) {
         anyhow::bail!("--at {at}: the run was recorded from 0 to {end:.2} s; give a time in that range");
     }
+    let Some(path) = &args.picture else {
+        carus_view::open(replay, at, args.screenshot.clone())?;
+        return Ok(Status::Success);
+    };
     let [width, height] = [args.size[0], args.size[1]];
     let picture = replay.picture(at, &Orbit::from_view(args.view.into()), width, height)?;
     picture.save_png(path)?;
@@ -57,7 +64,7 @@ mod tests {
     use super::*;
 
     fn args(run: PathBuf, at: f64, picture: PathBuf) -> ViewArgs {
-        ViewArgs { run, at: Some(at), picture: Some(picture), view: ViewName::Inferior, size: vec![120, 90] }
+        ViewArgs { run, at: Some(at), picture: Some(picture), screenshot: None, view: ViewName::Inferior, size: vec![120, 90] }
     }
 
     /// A run's frame is drawn to a PNG of the size asked, with the floor
@@ -96,8 +103,9 @@ mod tests {
             view: ViewArgs,
         }
         use clap::Parser;
-        assert!(Cli::try_parse_from(["view", "runs/x", "--at", "1"]).is_err());
+        assert_eq!(Cli::try_parse_from(["view", "runs/x", "--at", "1"]).unwrap().view.at, Some(1.0));
         assert!(Cli::try_parse_from(["view", "runs/x", "--picture", "a.png"]).is_err());
+        assert!(Cli::try_parse_from(["view", "runs/x", "--at", "1", "--picture", "a.png", "--screenshot", "b.png"]).is_err());
         let both = Cli::try_parse_from(["view", "runs/x", "--at", "1", "--picture", "a.png"]).unwrap();
         assert_eq!((both.view.at, both.view.size.as_slice(), both.view.view), (Some(1.0), &[800, 600][..], ViewName::Lateral));
         assert!(Cli::try_parse_from(["view", "runs/x"]).unwrap().view.picture.is_none());
