@@ -10,13 +10,19 @@ use std::time::{Duration, Instant};
 /// An Xvfb server, stopped when dropped.
 struct VirtualDisplay {
     server: Child,
+    number: u32,
     name: String,
 }
 
 impl Drop for VirtualDisplay {
+    /// Asks the server to end (SIGTERM, so that it removes its lock and
+    /// socket), and removes them itself if it could not.
     fn drop(&mut self) {
-        let _ = self.server.kill();
+        // SAFETY: a plain signal to the child this test started.
+        unsafe { libc::kill(self.server.id() as libc::pid_t, libc::SIGTERM) };
         let _ = self.server.wait();
+        let _ = std::fs::remove_file(format!("/tmp/.X{}-lock", self.number));
+        let _ = std::fs::remove_file(format!("/tmp/.X11-unix/X{}", self.number));
     }
 }
 
@@ -34,10 +40,13 @@ fn virtual_display() -> VirtualDisplay {
         .unwrap_or_else(|e| {
             panic!("cannot start Xvfb ({e}): this test opens the viewer's window on a virtual display; install it with `apt-get install xvfb` (.ci/run does)")
         });
-    let display = VirtualDisplay { server, name };
+    let mut display = VirtualDisplay { server, number, name };
     let socket = PathBuf::from(format!("/tmp/.X11-unix/X{number}"));
     let started = Instant::now();
     while !socket.exists() {
+        if let Some(status) = display.server.try_wait().unwrap() {
+            panic!("Xvfb {} ended at once ({status})", display.name);
+        }
         assert!(started.elapsed() < Duration::from_secs(30), "Xvfb {} did not start", display.name);
         std::thread::sleep(Duration::from_millis(50));
     }

@@ -104,7 +104,10 @@ pub fn floor_frames(out_dir: &Path, record: &RunRecord) -> Vec<FloorAtMoment> {
     else {
         return Vec::new();
     };
-    collection.frames().iter().filter_map(|(t, file)| read_floor_frame(&out_dir.join(file), *t)).collect()
+    let mut frames: Vec<FloorAtMoment> =
+        collection.frames().iter().filter_map(|(t, file)| read_floor_frame(&out_dir.join(file), *t)).collect();
+    frames.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
+    frames
 }
 
 /// A floor VTU frame as the run wrote it; None if it is gone or unreadable

@@ -22,6 +22,8 @@ const PELVIS_RGB: [f32; 3] = [0.89, 0.85, 0.76];
 const PELVIS_OPACITY: f32 = 0.35;
 const HEAD_RGB: [f32; 3] = [0.93, 0.72, 0.62];
 const TRUNK_RGB: [f32; 3] = [0.86, 0.64, 0.56];
+/// Name of the pelvis's mesh, which stays still while the fetus moves.
+pub const PELVIS: &str = "pelvis";
 /// Name of the trunk's mesh, which the camera's fit leaves out.
 const TRUNK: &str = "fetal trunk";
 const LOWER_TRUNK: &str = "fetal lower trunk";
@@ -145,8 +147,8 @@ pub fn meshes_at_sample(
     sample: usize,
     stretch_range: Option<[f64; 2]>,
 ) -> (Vec<RenderMesh>, Option<f64>) {
-    let time_s = history.samples[sample].time_s;
     let sample = &history.samples[sample];
+    let time_s = sample.time_s;
     let mut meshes = vec![posed_mesh(
         "fetal head",
         &scene.head,
@@ -168,7 +170,7 @@ pub fn meshes_at_sample(
     if let Some(pelvis) = &scene.pelvis {
         meshes.push(
             RenderMesh::new(
-                "pelvis",
+                PELVIS,
                 to_f32(pelvis.vertices.iter().copied()),
                 indices(&pelvis.triangles),
                 PELVIS_RGB,

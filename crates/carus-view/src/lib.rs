@@ -31,6 +31,8 @@ pub enum ViewError {
     Render(#[from] RenderError),
     #[error("the window could not be opened: {0}\n  hint: the viewer needs a display (X11) and a Vulkan driver; without a display, `carus view RUN --at T --picture FILE` draws a frame to a PNG")]
     Window(String),
+    #[error("the screenshot {path} was not saved: {problem}")]
+    Screenshot { path: std::path::PathBuf, problem: String },
 }
 
 /// A recorded run, ready to be shown at any of its samples.
@@ -58,7 +60,7 @@ impl Replay {
         if history.samples.is_empty() {
             return Err(ViewError::NoSamples);
         }
-        let series = Series::from_history(&history);
+        let series = detector.map_or_else(|| Series::from_history(&history), |d| d.series.clone());
         let movements = detector.map_or_else(Vec::new, |d| {
             d.movements
                 .by_key()
@@ -106,6 +108,7 @@ impl Replay {
             format!("theta {:.1} deg", s.theta_deg[k]),
             format!("phi {:.1} deg (flexion positive)", s.phi_deg[k]),
             if s.head_delivered[k] { "head delivered".into() } else { "head in the canal".into() },
+            self.floor_shown(t),
             match under_way.is_empty() {
                 true => "no movement under way".into(),
                 false => format!("under way: {}", under_way.join(", ").replace('_', " ")),
@@ -113,19 +116,43 @@ impl Replay {
         ]
     }
 
-    /// The camera of `orbit`, fitted to the canal.
+    /// Which state of the floor a frame at time `t` shows: the recorded
+    /// one nearest in time (docs/VIEWER.md).
+    fn floor_shown(&self, t: f64) -> String {
+        let Some(floor) = &self.scene.floor else {
+            return "no pelvic floor".into();
+        };
+        floor
+            .frames
+            .iter()
+            .map(|f| f.time_s)
+            .min_by(|a, b| (a - t).abs().total_cmp(&(b - t).abs()))
+            .map_or("floor at rest (no state recorded)".into(), |at| format!("floor as at t = {at:.2} s"))
+    }
+
+    /// The camera of `orbit`, fitted to the canal: zoom narrows the field
+    /// kept in view, or in perspective the field of view from the same eye.
     pub fn camera(&self, orbit: &Orbit) -> Camera {
         let mut camera = Camera::fitted(orbit.eye_direction(), Vec3::Z, &self.bounds, orbit.projection);
         camera.half_extent = camera.half_extent.map(|h| h / orbit.zoom);
+        if let Projection::Perspective { fov_y } = orbit.projection {
+            camera.projection = Projection::Perspective { fov_y: 2.0 * ((0.5 * fov_y).tan() / orbit.zoom).atan() };
+        }
         camera
     }
 
-    /// Draws the frame at time `t` seen by `orbit` offscreen (a GPU or
+    /// A standard view of the canal, as the report's pictures and `carus
+    /// render` draw it.
+    pub fn standard_camera(&self, view: View) -> Camera {
+        Camera::standard(view, &self.bounds)
+    }
+
+    /// Draws the frame at time `t` seen by `camera` offscreen (a GPU or
     /// Mesa's lavapipe).
-    pub fn picture(&self, t: f64, orbit: &Orbit, width: u32, height: u32) -> Result<Image, ViewError> {
+    pub fn picture(&self, t: f64, camera: &Camera, width: u32, height: u32) -> Result<Image, ViewError> {
         let mut renderer = Renderer::new_headless()?;
         let scene = Scene::new(self.meshes(self.sample_at(t)));
-        Ok(renderer.render(&scene, &self.camera(orbit), width, height)?)
+        Ok(renderer.render(&scene, camera, width, height)?)
     }
 }
 

@@ -1,4 +1,4 @@
-use carus_render::{Projection, View};
+use carus_render::{Camera, Projection, View};
 use carus_report::demo::Demo;
 use glam::Vec3;
 
@@ -52,6 +52,8 @@ fn the_readout_names_the_head_s_place_and_the_movements_under_way() {
     assert!(lines[0].starts_with("t = ") && lines[1].starts_with("station ") && lines[2].starts_with("theta "));
     assert!(lines.iter().any(|l| l.contains("internal rotation")), "{lines:?}");
     assert_eq!(replay.readout(0)[4], "head in the canal");
+    // The demonstration records no floor state: it is drawn at rest, and said so.
+    assert_eq!(replay.readout(0)[5], "floor at rest (no state recorded)");
     assert_eq!(replay.readout(demo.history.samples.len() - 1)[4], "head delivered");
 }
 
@@ -93,8 +95,14 @@ fn the_orbit_starts_from_the_standard_views_and_keeps_up_up() {
     near.zoom_by(2.0);
     let (whole, half) = (replay.camera(&lateral), replay.camera(&near));
     assert!((whole.half_extent[0] - 2.0 * half.half_extent[0]).abs() < 1e-6);
+    // In perspective, zoom narrows the field of view from the same eye.
     let perspective = Orbit { projection: Projection::Perspective { fov_y: 0.6 }, ..lateral };
-    assert!(!replay.camera(&perspective).is_orthographic());
+    let closer = Orbit { zoom: 2.0, ..perspective };
+    let (wide, narrow) = (replay.camera(&perspective), replay.camera(&closer));
+    assert!(!wide.is_orthographic() && (wide.eye() - narrow.eye()).length() < 1e-6);
+    let point = wide.target + 0.02 * Vec3::Y;
+    let off = |c: &Camera| c.project(point, 100, 100)[0] - 50.0;
+    assert!((off(&narrow) - 2.0 * off(&wide)).abs() < 0.05 * off(&wide).abs(), "{} {}", off(&narrow), off(&wide));
 }
 
 /// A frame drawn offscreen shows the scene: the picture is not all
@@ -103,9 +111,9 @@ fn the_orbit_starts_from_the_standard_views_and_keeps_up_up() {
 #[test]
 fn a_frame_is_drawn_offscreen() {
     let (replay, demo) = textbook();
-    let orbit = Orbit::from_view(View::Lateral);
-    let early = replay.picture(0.0, &orbit, 160, 120).unwrap();
-    let late = replay.picture(replay.duration_s(), &orbit, 160, 120).unwrap();
+    let camera = replay.standard_camera(View::Lateral);
+    let early = replay.picture(0.0, &camera, 160, 120).unwrap();
+    let late = replay.picture(replay.duration_s(), &camera, 160, 120).unwrap();
     let background = early.pixels()[..4].to_vec();
     let drawn = early.pixels().chunks(4).filter(|p| *p != &background[..]).count();
     assert!(drawn > 160 * 120 / 20, "only {drawn} pixels drawn");

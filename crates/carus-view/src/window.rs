@@ -4,8 +4,10 @@
 
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
 
 use carus_render::{Camera, GpuMesh, Lights, MeshPainter, Projection, RenderMesh, TargetFormat, View};
+use carus_report::pictures::PELVIS;
 use eframe::egui;
 use eframe::egui_wgpu::{self, wgpu};
 
@@ -22,12 +24,17 @@ const SPEEDS: [f32; 5] = [0.25, 0.5, 1.0, 2.0, 4.0];
 /// Frames drawn before a screenshot is taken, so that the scene's meshes
 /// are uploaded and the layout has settled.
 const FRAMES_BEFORE_SCREENSHOT: u32 = 5;
+/// How long the window waits for egui to hand back the screenshot.
+const SCREENSHOT_DEADLINE: Duration = Duration::from_secs(30);
+/// The longest step of playback, s of wall time: after a stall the replay
+/// goes on where it was rather than jumping.
+const MAX_PLAYBACK_STEP_S: f32 = 0.1;
 
-/// Opens the viewer on `replay` at time `start_s` and returns when its
-/// window is closed. With `screenshot`, the window saves a PNG of itself
-/// once drawn and closes (what the tests check, and a picture of the
-/// viewer for docs).
-pub fn open(replay: Replay, start_s: f64, screenshot: Option<PathBuf>) -> Result<(), ViewError> {
+/// Opens the viewer on `replay` at time `start_s` from `view`, and returns
+/// when its window is closed. With `screenshot`, the window saves a PNG of
+/// itself once drawn and closes (what the tests check, and a picture of
+/// the viewer for docs).
+pub fn open(replay: Replay, start_s: f64, view: View, screenshot: Option<PathBuf>) -> Result<(), ViewError> {
     let options = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default().with_inner_size([1200.0, 800.0]).with_title(replay.title.clone()),
         depth_buffer: DEPTH_BITS,
@@ -36,7 +43,7 @@ pub fn open(replay: Replay, start_s: f64, screenshot: Option<PathBuf>) -> Result
     };
     let title = replay.title.clone();
     let saved: Arc<Mutex<Option<Result<(), String>>>> = Arc::default();
-    let shot = screenshot.clone().map(|path| Screenshot { path, frames_left: FRAMES_BEFORE_SCREENSHOT, asked: false, saved: saved.clone() });
+    let shot = screenshot.clone().map(|path| Screenshot { path, frames_left: FRAMES_BEFORE_SCREENSHOT, asked: None, saved: saved.clone() });
     eframe::run_native(
         &title,
         options,
@@ -52,7 +59,7 @@ pub fn open(replay: Replay, start_s: f64, screenshot: Option<PathBuf>) -> Result
             };
             let painter = MeshPainter::new(&state.device, &state.queue, target);
             state.renderer.write().callback_resources.insert(GpuScene { painter, meshes: Vec::new(), shown: None });
-            Ok(Box::new(Viewer { screenshot: shot, time_s: start_s, ..Viewer::new(replay) }))
+            Ok(Box::new(Viewer { screenshot: shot, time_s: start_s, orbit: Orbit::from_view(view), ..Viewer::new(replay) }))
         }),
     )
     .map_err(|e| ViewError::Window(e.to_string()))?;
@@ -60,8 +67,8 @@ pub fn open(replay: Replay, start_s: f64, screenshot: Option<PathBuf>) -> Result
     match (screenshot, outcome) {
         (None, _) => Ok(()),
         (Some(_), Some(Ok(()))) => Ok(()),
-        (Some(path), Some(Err(e))) => Err(ViewError::Window(format!("the screenshot {} was not saved: {e}", path.display()))),
-        (Some(path), _) => Err(ViewError::Window(format!("the window closed before the screenshot {} was taken", path.display()))),
+        (Some(path), Some(Err(problem))) => Err(ViewError::Screenshot { path, problem }),
+        (Some(path), None) => Err(ViewError::Screenshot { path, problem: "the window closed before it was taken".into() }),
     }
 }
 
@@ -69,7 +76,8 @@ pub fn open(replay: Replay, start_s: f64, screenshot: Option<PathBuf>) -> Result
 struct Screenshot {
     path: PathBuf,
     frames_left: u32,
-    asked: bool,
+    /// When the picture was asked for.
+    asked: Option<Instant>,
     /// Written by egui's screenshot callback: saved, or why not.
     saved: Arc<Mutex<Option<Result<(), String>>>>,
 }
@@ -79,8 +87,8 @@ impl Screenshot {
     fn step(&mut self, ctx: &egui::Context) {
         if self.frames_left > 0 {
             self.frames_left -= 1;
-        } else if !self.asked {
-            self.asked = true;
+        } else if self.asked.is_none() {
+            self.asked = Some(Instant::now());
             let (path, saved, repaint) = (self.path.clone(), self.saved.clone(), ctx.clone());
             ctx.request_screenshot(move |image| {
                 let [w, h] = image.size;
@@ -93,8 +101,13 @@ impl Screenshot {
                 }
                 repaint.request_repaint();
             });
-        } else if self.saved.lock().is_ok_and(|s| s.is_some()) {
-            ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+        } else if let Ok(mut saved) = self.saved.lock() {
+            if saved.is_none() && self.asked.is_some_and(|at| at.elapsed() > SCREENSHOT_DEADLINE) {
+                *saved = Some(Err(format!("the window gave no picture within {} s", SCREENSHOT_DEADLINE.as_secs())));
+            }
+            if saved.is_some() {
+                ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+            }
         }
         ctx.request_repaint();
     }
@@ -134,15 +147,21 @@ impl egui_wgpu::CallbackTrait for Frame {
                 for (i, (gpu, mesh)) in scene.meshes.iter_mut().zip(self.meshes.iter()).enumerate() {
                     // The surfaces keep their counts from sample to sample;
                     // one that did not is uploaded anew.
-                    if mesh.name != "pelvis" && scene.painter.update(queue, gpu, mesh, i).is_err() {
+                    if mesh.name != PELVIS && scene.painter.update(queue, gpu, mesh, i).is_err() {
                         if let Ok(fresh) = scene.painter.upload(device, mesh, i) {
                             *gpu = fresh;
                         }
                     }
                 }
             } else {
-                scene.meshes =
-                    self.meshes.iter().enumerate().filter_map(|(i, m)| scene.painter.upload(device, m, i).ok()).collect();
+                // All or nothing, so that each uploaded mesh stays at its index.
+                scene.meshes = self
+                    .meshes
+                    .iter()
+                    .enumerate()
+                    .map(|(i, m)| scene.painter.upload(device, m, i))
+                    .collect::<Result<_, _>>()
+                    .unwrap_or_default();
             }
             scene.shown = Some(self.sample);
         }
@@ -205,6 +224,7 @@ impl Viewer {
                     }
                 });
         });
+        ui.spacing_mut().slider_width = ui.available_width() - 60.0;
         ui.add(egui::Slider::new(&mut self.time_s, 0.0..=end).text("t (s)"));
         ui.separator();
         for line in self.replay.readout(self.replay.sample_at(self.time_s)) {
@@ -258,7 +278,7 @@ impl Viewer {
 impl eframe::App for Viewer {
     fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
         if self.playing {
-            let dt = ui.input(|i| i.stable_dt) as f64 * self.speed as f64;
+            let dt = ui.input(|i| i.stable_dt.min(MAX_PLAYBACK_STEP_S)) as f64 * self.speed as f64;
             self.time_s = (self.time_s + dt).min(self.replay.duration_s());
             self.playing = self.time_s < self.replay.duration_s();
             ui.ctx().request_repaint();

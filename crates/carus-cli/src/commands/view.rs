@@ -4,7 +4,7 @@
 
 use std::path::PathBuf;
 
-use carus_view::{Orbit, Replay};
+use carus_view::Replay;
 
 use super::render::ViewName;
 use super::run::{read_record, report_scene, run_title};
@@ -15,19 +15,19 @@ pub struct ViewArgs {
     /// A run folder, as `carus run` writes it.
     pub run: PathBuf,
     /// The time shown first, s; with --picture, the frame drawn.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub at: Option<f64>,
     /// The PNG file the frame at --at is drawn to.
     #[arg(long, requires = "at")]
     pub picture: Option<PathBuf>,
-    /// The view the picture is drawn from.
+    /// The view the picture is drawn from, or the window first shows.
     #[arg(long, value_enum, default_value = "lateral")]
     pub view: ViewName,
     /// Open the window, save a PNG of it once drawn, and close it.
     #[arg(long, conflicts_with = "picture")]
     pub screenshot: Option<PathBuf>,
     /// Width and height of the picture, px.
-    #[arg(long, num_args = 2, default_values = ["800", "600"], value_names = ["WIDTH", "HEIGHT"])]
+    #[arg(long, requires = "picture", num_args = 2, default_values = ["800", "600"], value_names = ["WIDTH", "HEIGHT"])]
     pub size: Vec<u32>,
 }
 
@@ -45,14 +45,18 @@ pub fn run(args: &ViewArgs) -> anyhow::Result<Status> {
     let end = replay.duration_s();
     let at = args.at.unwrap_or(0.0);
     if !(at.is_finite() && (0.0..=end).contains(&at)) {
-        anyhow::bail!("--at {at}: the run was recorded from 0 to {end:.2} s; give a time in that range");
+        let shown = if at.abs() < 1e6 { at.to_string() } else { format!("{at:e}") };
+        anyhow::bail!("--at {shown}: the run was recorded from 0 to {end:.2} s; give a time in that range");
     }
     let Some(path) = &args.picture else {
-        carus_view::open(replay, at, args.screenshot.clone())?;
+        if let Some(folder) = args.screenshot.as_ref().and_then(|p| p.parent()).filter(|f| !f.as_os_str().is_empty()) {
+            anyhow::ensure!(folder.is_dir(), "--screenshot: the folder {} does not exist; make it first", folder.display());
+        }
+        carus_view::open(replay, at, args.view.into(), args.screenshot.clone())?;
         return Ok(Status::Success);
     };
     let [width, height] = [args.size[0], args.size[1]];
-    let picture = replay.picture(at, &Orbit::from_view(args.view.into()), width, height)?;
+    let picture = replay.picture(at, &replay.standard_camera(args.view.into()), width, height)?;
     picture.save_png(path)?;
     let k = replay.sample_at(at);
     println!("{} ({width} x {height}): {}", path.display(), replay.readout(k).join(", "));
@@ -89,6 +93,12 @@ mod tests {
         let refused = |a: ViewArgs| format!("{:#}", run(&a).err().expect("refused"));
         let e = refused(args(dir.path().to_path_buf(), 5.0, png.clone()));
         assert!(e.contains("--at 5") && e.contains("from 0 to 0.30 s"), "{e}");
+        let e = refused(args(dir.path().to_path_buf(), -1e300, png.clone()));
+        assert!(e.contains("--at -1e300:"), "{e}");
+        let mut window = args(dir.path().to_path_buf(), 0.1, png.clone());
+        (window.picture, window.screenshot) = (None, Some(dir.path().join("no-such-folder/w.png")));
+        let e = refused(window);
+        assert!(e.contains("no-such-folder") && e.contains("does not exist"), "{e}");
         let e = refused(args(dir.path().to_path_buf(), 0.1, dir.path().join("frame.jpg")));
         assert!(e.contains("*.png"), "{e}");
         let e = refused(args(dir.path().join("nothing"), 0.1, png));
@@ -106,6 +116,8 @@ mod tests {
         assert_eq!(Cli::try_parse_from(["view", "runs/x", "--at", "1"]).unwrap().view.at, Some(1.0));
         assert!(Cli::try_parse_from(["view", "runs/x", "--picture", "a.png"]).is_err());
         assert!(Cli::try_parse_from(["view", "runs/x", "--at", "1", "--picture", "a.png", "--screenshot", "b.png"]).is_err());
+        assert!(Cli::try_parse_from(["view", "runs/x", "--size", "10", "10"]).is_err());
+        assert_eq!(Cli::try_parse_from(["view", "runs/x", "--at", "-1"]).unwrap().view.at, Some(-1.0));
         let both = Cli::try_parse_from(["view", "runs/x", "--at", "1", "--picture", "a.png"]).unwrap();
         assert_eq!((both.view.at, both.view.size.as_slice(), both.view.view), (Some(1.0), &[800, 600][..], ViewName::Lateral));
         assert!(Cli::try_parse_from(["view", "runs/x"]).unwrap().view.picture.is_none());
