@@ -18,6 +18,8 @@ use crate::{Orbit, Replay, ViewError};
 const DEPTH_BITS: u8 = 24;
 /// Radians the camera turns per point dragged.
 const DRAG_RADIANS_PER_POINT: f32 = 0.01;
+/// Width of the time slider, points.
+const SLIDER_WIDTH: f32 = 200.0;
 /// Playback speeds offered, simulated seconds per second.
 const SPEEDS: [f32; 5] = [0.25, 0.5, 1.0, 2.0, 4.0];
 
@@ -224,7 +226,9 @@ impl Viewer {
                     }
                 });
         });
-        ui.spacing_mut().slider_width = ui.available_width() - 60.0;
+        // Wider than egui's default, for a finer hold on a long run; fixed,
+        // since a width taken from the panel would grow the panel.
+        ui.spacing_mut().slider_width = SLIDER_WIDTH;
         ui.add(egui::Slider::new(&mut self.time_s, 0.0..=end).text("t (s)"));
         ui.separator();
         for line in self.replay.readout(self.replay.sample_at(self.time_s)) {
