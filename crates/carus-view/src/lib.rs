@@ -134,7 +134,10 @@ impl Replay {
     /// kept in view, or in perspective the field of view from the same eye.
     pub fn camera(&self, orbit: &Orbit) -> Camera {
         let mut camera = Camera::fitted(orbit.eye_direction(), Vec3::Z, &self.bounds, orbit.projection);
-        camera.half_extent = camera.half_extent.map(|h| h / orbit.zoom);
+        // Half the canal's longest side, not its box as seen from here,
+        // so the scale holds while the camera circles.
+        let longest = (0..3).map(|i| self.bounds.max[i] - self.bounds.min[i]).fold(0.0, f32::max);
+        camera.half_extent = [0.5 * longest * ORBIT_MARGIN / orbit.zoom; 2];
         if let Projection::Perspective { fov_y } = orbit.projection {
             camera.projection = Projection::Perspective { fov_y: 2.0 * ((0.5 * fov_y).tan() / orbit.zoom).atan() };
         }
@@ -170,6 +173,8 @@ pub struct Orbit {
     pub projection: Projection,
 }
 
+/// Room around the canal in the window's view.
+const ORBIT_MARGIN: f32 = 1.1;
 /// How close to straight up or down the camera may look, radians.
 const MAX_ELEVATION: f32 = 1.45;
 /// Zoom range.

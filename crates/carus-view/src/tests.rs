@@ -82,6 +82,11 @@ fn the_orbit_starts_from_the_standard_views_and_keeps_up_up() {
     let side = replay.camera(&lateral);
     assert!(side.project(side.target + 0.05 * Vec3::Z, 100, 100)[1] < 50.0);
 
+    // The scale holds while the camera circles.
+    let mut turned = lateral;
+    turned.drag(0.7, -0.4);
+    assert_eq!(replay.camera(&turned).half_extent, replay.camera(&lateral).half_extent);
+
     let mut orbit = lateral;
     orbit.drag(0.3, 10.0);
     assert!((orbit.azimuth - (std::f32::consts::TAU - 0.3)).abs() < 1e-5);

@@ -16,6 +16,8 @@ use crate::{Orbit, Replay, ViewError};
 /// Depth buffer bits asked of eframe; the painter's pipelines are built for
 /// the format eframe makes of them.
 const DEPTH_BITS: u8 = 24;
+/// Samples per pixel in the window, as in the report's pictures.
+const SAMPLES: u32 = 4;
 /// Radians the camera turns per point dragged.
 const DRAG_RADIANS_PER_POINT: f32 = 0.01;
 /// Width of the time slider, points.
@@ -40,6 +42,7 @@ pub fn open(replay: Replay, start_s: f64, view: View, screenshot: Option<PathBuf
     let options = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default().with_inner_size([1200.0, 800.0]).with_title(replay.title.clone()),
         depth_buffer: DEPTH_BITS,
+        multisampling: SAMPLES as u16,
         renderer: eframe::Renderer::Wgpu,
         ..Default::default()
     };
@@ -57,7 +60,7 @@ pub fn open(replay: Replay, start_s: f64, view: View, screenshot: Option<PathBuf
             let target = TargetFormat {
                 colour: state.target_format,
                 depth: egui_wgpu::depth_format_from_bits(DEPTH_BITS, 0).ok_or("no depth format for the window")?,
-                sample_count: 1,
+                sample_count: SAMPLES,
             };
             let painter = MeshPainter::new(&state.device, &state.queue, target);
             state.renderer.write().callback_resources.insert(GpuScene { painter, meshes: Vec::new(), shown: None });
