@@ -575,7 +575,8 @@ fn print_summary(record: &RunRecord, out_dir: &Path) {
         record.detector.as_ref().and_then(|d| d.head_born),
     );
     println!(
-        "results in {} (report.html, run.json, movements.json, pose_history.csv, *.pvd)",
+        "results in {} (report.html, run.json, movements.json, pose_history.csv, *.pvd); replay it with `carus view {}`",
+        out_dir.display(),
         out_dir.display()
     );
 }
