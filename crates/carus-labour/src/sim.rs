@@ -525,10 +525,11 @@ impl<'a> Simulation<'a> {
             }
         }
 
-        let head_before = (self.state.bodies.linear_velocity[HEAD], self.state.bodies.angular_momentum[HEAD]);
+        let imposed = self.mode() == Mode::Imposed;
+        let head_before = imposed.then(|| (self.state.bodies.linear_velocity[HEAD], self.state.bodies.angular_momentum[HEAD]));
         self.state.bodies.step(&scene.bodies, &wrenches, self.dt)?;
-        if self.mode() == Mode::Imposed {
-            forces.guide = self.impose_head(head_before, wrenches[HEAD]);
+        if let Some(before) = head_before {
+            forces.guide = self.impose_head(before, wrenches[HEAD]);
         }
         if let Some(b) = self.state.bodies.first_not_finite() {
             return Err(LabourError::Diverged { time_s: t, body: Body::of(b).name() });
