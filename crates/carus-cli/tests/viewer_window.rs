@@ -80,7 +80,7 @@ fn the_viewer_opens_its_window_and_draws_a_run() {
 
     let display = virtual_display();
     let shot = dir.path().join("window.png");
-    let mut viewer = carus().arg("view").arg(&run).arg("--screenshot").arg(&shot).env("DISPLAY", &display.name).spawn().unwrap();
+    let mut viewer = carus().arg("view").arg(&run).args(["--landmarks", "--forces"]).arg("--screenshot").arg(&shot).env("DISPLAY", &display.name).spawn().unwrap();
     let started = Instant::now();
     let status = loop {
         if let Some(status) = viewer.try_wait().unwrap() {

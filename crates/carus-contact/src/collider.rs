@@ -11,7 +11,7 @@
 
 use glam::DVec3;
 use parry3d_f64::bounding_volume::Aabb;
-use parry3d_f64::query::PointQueryWithLocation;
+use parry3d_f64::query::{PointQueryWithLocation, Ray, RayCast};
 use parry3d_f64::shape::{TriMesh, TrianglePointLocation};
 
 use crate::error::ContactError;
@@ -163,6 +163,19 @@ impl TriangleCollider {
             triangle,
         })
     }
+
+    /// Where the line through `point` along `direction` enters the surface:
+    /// its first crossing met coming from far back along `-direction`.
+    /// This is where a force along `direction` acting on that line meets
+    /// the body it pushes. `None` when the line misses the surface.
+    pub fn entry_point(&self, point: DVec3, direction: DVec3) -> Option<DVec3> {
+        let along = direction.try_normalize()?;
+        let bounds = self.mesh.local_aabb();
+        let reach = point.distance(bounds.center()) + bounds.half_extents().length() + 1.0;
+        let start = point - reach * along;
+        let time = self.mesh.cast_local_ray(&Ray::new(start, along), 2.0 * reach, false)?;
+        Some(start + time * along)
+    }
 }
 
 /// Checks indices, finiteness and non-zero triangle areas.
@@ -301,6 +314,32 @@ pub(crate) mod tests {
             if hit.signed_distance < -1e-9 {
                 prop_assert!((p + hit.normal * -hit.signed_distance - hit.point).length() < 1e-9);
             }
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+
+        /// A line through a sphere enters it where the exact line-sphere
+        /// crossing on its back side lies (to the faceting's depth); a line
+        /// that passes it by misses it.
+        #[test]
+        fn a_line_enters_a_sphere_on_its_back_side(
+            q in prop::array::uniform3(-0.05f64..0.05),
+            d in prop::array::uniform3(-1.0f64..1.0),
+        ) {
+            let (v, t) = uv_sphere(0.1, 24, 32);
+            let collider = TriangleCollider::new("sphere", &v, &t).unwrap();
+            let (p, along) = (DVec3::from_array(q), DVec3::from_array(d));
+            prop_assume!(along.length() > 0.1);
+            let u = along.normalize();
+            // |p - s u| = r with s the smaller root.
+            let (b, c) = (p.dot(u), p.length_squared() - 0.01);
+            let exact = p - (b + (b * b - c).sqrt()) * u;
+            let entry = collider.entry_point(p, along).unwrap();
+            prop_assert!(entry.distance(exact) < 2e-3, "{} against {}", entry, exact);
+            let aside = p + 0.2 * u.any_orthonormal_vector();
+            prop_assert!(collider.entry_point(aside, along).is_none());
         }
     }
 

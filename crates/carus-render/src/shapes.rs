@@ -1,5 +1,6 @@
 //! Simple marker shapes for pictures: spheres for landmarks, tubes for
-//! curves such as the pelvic axis, filled polygons for planes.
+//! curves such as the pelvic axis, filled polygons for planes, arrows for
+//! forces.
 
 use glam::Vec3;
 
@@ -12,6 +13,10 @@ const SPHERE_SEGMENTS: u32 = 24;
 
 /// Sides of a tube's cross-section.
 const TUBE_SIDES: u32 = 12;
+
+/// An arrow's head: its radius and its longest length, in shaft radii.
+const ARROW_HEAD_RADIUS: f32 = 2.5;
+const ARROW_HEAD_LENGTH: f32 = 6.0;
 
 impl RenderMesh {
     /// A sphere (landmark marker), counter-clockwise from outside.
@@ -97,6 +102,55 @@ impl RenderMesh {
         RenderMesh::new(name, positions, indices, rgb).with_normals(normals)
     }
 
+    /// An arrow from `tail` to `tip` with a shaft of `radius` and a cone for
+    /// its head (at most half its length), closed at the cone's base. Every
+    /// arrow has the same vertices and triangles in number, so one uploaded
+    /// arrow can be rewritten in place as another. A zero-length arrow has
+    /// no vertices.
+    pub fn arrow(name: impl Into<String>, tail: [f32; 3], tip: [f32; 3], radius: f32, rgb: [f32; 3]) -> Self {
+        let (tail, tip) = (Vec3::from(tail), Vec3::from(tip));
+        let Some(along) = (tip - tail).try_normalize() else {
+            return RenderMesh::new(name, Vec::new(), Vec::new(), rgb);
+        };
+        let head_length = (ARROW_HEAD_LENGTH * radius).min(0.5 * tail.distance(tip));
+        let head_radius = ARROW_HEAD_RADIUS * radius;
+        let neck = tip - head_length * along;
+        let side = along.any_orthonormal_vector();
+        let other = along.cross(side);
+        let radial = |k: u32| {
+            let angle = std::f32::consts::TAU * k as f32 / TUBE_SIDES as f32;
+            side * angle.cos() + other * angle.sin()
+        };
+        // The cone's surface normal leans forwards by its half-angle.
+        let slant = |k: u32| (head_length * radial(k) + head_radius * along).normalize();
+        let mut positions = Vec::new();
+        let mut normals = Vec::new();
+        let mut ring = |centre: Vec3, r: f32, normal: &dyn Fn(u32) -> Vec3| {
+            for k in 0..TUBE_SIDES {
+                positions.push((centre + r * radial(k)).to_array());
+                normals.push(normal(k).to_array());
+            }
+        };
+        ring(tail, radius, &radial);
+        ring(neck, radius, &radial);
+        ring(neck, head_radius, &slant);
+        ring(tip, 0.0, &slant);
+        ring(neck, head_radius, &|_| -along);
+        positions.push(neck.to_array());
+        normals.push((-along).to_array());
+        let n = TUBE_SIDES;
+        let centre_of_base = 5 * n;
+        let mut indices = Vec::new();
+        for k in 0..n {
+            let k1 = (k + 1) % n;
+            // Shaft, then cone (each side to its own apex vertex), then the base.
+            indices.extend([k, k1, n + k1, k, n + k1, n + k]);
+            indices.extend([2 * n + k, 2 * n + k1, 3 * n + k]);
+            indices.extend([centre_of_base, 4 * n + k1, 4 * n + k]);
+        }
+        RenderMesh::new(name, positions, indices, rgb).with_normals(normals)
+    }
+
     /// A filled polygon (fan from its centroid), for a plane's outline such
     /// as the pelvic inlet; faces the side from which the outline runs
     /// counter-clockwise.
@@ -172,6 +226,39 @@ mod tests {
             .unwrap_err()
             .to_string()
             .contains("no vertices"));
+    }
+
+    #[test]
+    fn arrow_runs_from_tail_to_tip_and_faces_outwards() {
+        let (tail, tip) = (Vec3::new(0.1, 0.2, 0.3), Vec3::new(0.1, 0.2, 1.3));
+        let mesh = RenderMesh::arrow("force", tail.to_array(), tip.to_array(), 0.02, [1.0, 0.0, 0.0]);
+        mesh.validate(0).unwrap();
+        let along = |p: &[f32; 3]| (Vec3::from(*p) - tail).dot(Vec3::Z);
+        let reach = mesh.positions.iter().map(along).fold(f32::MIN, f32::max);
+        let start = mesh.positions.iter().map(along).fold(f32::MAX, f32::min);
+        assert!((reach - 1.0).abs() < 1e-6 && start.abs() < 1e-6, "{start} .. {reach}");
+        // Nothing strays wider than the head.
+        let widest = mesh.positions.iter().map(|p| Vec3::from(*p).truncate().distance(tail.truncate())).fold(0.0, f32::max);
+        assert!((widest - ARROW_HEAD_RADIUS * 0.02).abs() < 1e-6, "{widest}");
+        // Every triangle faces away from the shaft's axis, or backwards at the head's base.
+        for tri in mesh.indices.chunks_exact(3) {
+            let [a, b, c] = [tri[0], tri[1], tri[2]].map(|i| Vec3::from(mesh.positions[i as usize]));
+            let n = (b - a).cross(c - a);
+            let centroid = (a + b + c) / 3.0;
+            let axis_point = tail + Vec3::Z * (centroid - tail).z;
+            let outwards = match tri.contains(&(5 * TUBE_SIDES)) {
+                true => -Vec3::Z,
+                false => centroid - axis_point,
+            };
+            assert!(n.dot(outwards) > 0.0, "{tri:?}");
+        }
+        // A short arrow has as many vertices and triangles as a long one,
+        // its head at most half of it.
+        let short = RenderMesh::arrow("force", [0.0; 3], [0.01, 0.0, 0.0], 0.02, [1.0; 3]);
+        assert_eq!((short.positions.len(), short.indices.len()), (mesh.positions.len(), mesh.indices.len()));
+        let neck = Vec3::from(short.positions[TUBE_SIDES as usize]);
+        assert!((neck.x - 0.005).abs() < 1e-7, "{neck}");
+        assert!(RenderMesh::arrow("none", [1.0; 3], [1.0; 3], 0.02, [1.0; 3]).positions.is_empty());
     }
 
     #[test]

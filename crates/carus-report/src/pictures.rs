@@ -27,6 +27,8 @@ pub const PELVIS: &str = "pelvis";
 /// Name of the trunk's mesh, which the camera's fit leaves out.
 const TRUNK: &str = "fetal trunk";
 const LOWER_TRUNK: &str = "fetal lower trunk";
+/// Name of the pelvic floor's mesh.
+pub const FLOOR: &str = "pelvic floor";
 /// Muscle colour for a floor without recorded stretch.
 const FLOOR_RGB: [f32; 3] = [0.78, 0.50, 0.50];
 /// Smallest upper end of the stretch colour scale, so a floor at rest is
@@ -210,7 +212,7 @@ fn floor_mesh(
     match (nearest, range) {
         (Some(frame), Some(range)) => (
             RenderMesh::new(
-                "pelvic floor",
+                FLOOR,
                 to_f32(frame.positions_m.iter().copied()),
                 triangles,
                 FLOOR_RGB,
@@ -224,7 +226,7 @@ fn floor_mesh(
         ),
         _ => (
             RenderMesh::new(
-                "pelvic floor",
+                FLOOR,
                 to_f32(floor.rest_positions_m.iter().copied()),
                 triangles,
                 FLOOR_RGB,

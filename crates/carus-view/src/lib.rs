@@ -9,12 +9,19 @@
 //! draws any frame offscreen (`carus view RUN --at T --picture FILE`). The
 //! window ([`open`]) only adds egui's controls; it draws the same meshes
 //! with the renderer's painter inside egui's render pass.
+//!
+//! Two layers can be laid over a frame ([`Layers`]): the pelvis's
+//! landmarks, obstetric planes and axis ([`Replay::with_markers`]), and
+//! the forces on the fetus as arrows ([`Replay::with_forces`], module
+//! [`forces`]).
 
+pub mod forces;
 mod window;
 
 use carus_analysis::{DetectorReport, PoseHistory, Series};
 use carus_render::{Bounds, Camera, Image, Projection, RenderError, RenderMesh, Renderer, Scene, View};
-use carus_report::pictures::{fitting_bounds, meshes_at_sample, stretch_range};
+use forces::Forces;
+use carus_report::pictures::{fitting_bounds, meshes_at_sample, stretch_range, FLOOR};
 use carus_report::ReportScene;
 use glam::Vec3;
 
@@ -29,7 +36,9 @@ pub enum ViewError {
     NoBounds,
     #[error(transparent)]
     Render(#[from] RenderError),
-    #[error("the window could not be opened: {0}\n  hint: the viewer needs a display (X11) and a Vulkan driver; without a display, `carus view RUN --at T --picture FILE` draws a frame to a PNG")]
+    #[error("the forces cannot be drawn: {0}")]
+    Contact(#[from] carus_contact::ContactError),
+    #[error("the window could not be opened: {0}\n  hint: the viewer needs a display (X11) and a Vulkan driver (a GPU's, or Mesa's: `apt-get install mesa-vulkan-drivers libvulkan1`); without a display, `carus view RUN --at T --picture FILE` draws a frame to a PNG")]
     Window(String),
     #[error("the screenshot {path} was not saved: {problem}")]
     Screenshot { path: std::path::PathBuf, problem: String },
@@ -46,6 +55,19 @@ pub struct Replay {
     stretch_range: Option<[f64; 2]>,
     /// What the camera is fitted to: the canal at the start.
     bounds: Bounds,
+    /// The pelvis's landmarks, planes and axis (pelvis frame), if given.
+    markers: Vec<RenderMesh>,
+    /// The run's loads, if given.
+    forces: Option<Forces>,
+}
+
+/// What is laid over a frame besides the anatomy.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
+pub struct Layers {
+    /// The pelvis's landmarks, obstetric planes and axis.
+    pub markers: bool,
+    /// The forces on the fetus as arrows.
+    pub forces: bool,
 }
 
 impl Replay {
@@ -72,7 +94,42 @@ impl Replay {
         let stretch_range = scene.floor.as_ref().and_then(stretch_range);
         let (first, _) = meshes_at_sample(&scene, &history, 0, stretch_range);
         let bounds = fitting_bounds(&first).ok_or(ViewError::NoBounds)?;
-        Ok(Replay { title: title.into(), scene, history, series, movements, stretch_range, bounds })
+        Ok(Replay {
+            title: title.into(),
+            scene,
+            history,
+            series,
+            movements,
+            stretch_range,
+            bounds,
+            markers: Vec::new(),
+            forces: None,
+        })
+    }
+
+    /// The replay with the pelvis's landmarks, planes and axis to lay over
+    /// it (meshes in the pelvis frame).
+    pub fn with_markers(mut self, markers: Vec<RenderMesh>) -> Replay {
+        self.markers = markers;
+        self
+    }
+
+    /// The replay with the run's loads (`run.json`'s `loads`), drawn as
+    /// arrows: `pivot_in_head_m` is the point their moments are taken
+    /// about, and `expulsion_at_pivot` says where the expulsion acts.
+    pub fn with_forces(
+        mut self,
+        loads: Vec<carus_labour::loads::LoadSample>,
+        pivot_in_head_m: glam::DVec3,
+        expulsion_at_pivot: bool,
+    ) -> Result<Replay, ViewError> {
+        self.forces = Some(Forces::new(loads, pivot_in_head_m, expulsion_at_pivot, &self.scene)?);
+        Ok(self)
+    }
+
+    /// The layers this replay can lay over its frames.
+    pub fn layers_available(&self) -> Layers {
+        Layers { markers: !self.markers.is_empty(), forces: self.forces.is_some() }
     }
 
     /// Time of the last sample, s.
@@ -86,9 +143,33 @@ impl Replay {
         self.history.samples.partition_point(|s| s.time_s <= t).saturating_sub(1)
     }
 
-    /// The meshes of sample `k` (fetus, floor, pelvis), as the report draws them.
-    pub fn meshes(&self, k: usize) -> Vec<RenderMesh> {
-        meshes_at_sample(&self.scene, &self.history, k, self.stretch_range).0
+    /// The meshes of sample `k` (fetus, floor, pelvis), as the report draws
+    /// them, then the layers asked for that the replay has: the markers,
+    /// then one arrow per force drawn.
+    pub fn meshes(&self, k: usize, layers: Layers) -> Vec<RenderMesh> {
+        let mut meshes = meshes_at_sample(&self.scene, &self.history, k, self.stretch_range).0;
+        if layers.markers {
+            meshes.extend(self.markers.iter().cloned());
+        }
+        if let Some(forces) = self.forces.as_ref().filter(|_| layers.forces) {
+            // The floor pushes from around the head: see-through, it shows
+            // the arrows it would hide.
+            for floor in meshes.iter_mut().filter(|m| m.name == FLOOR) {
+                floor.colour[3] = FLOOR_OPACITY_UNDER_FORCES;
+            }
+            meshes.extend(forces.arrows(&self.history, k).iter().map(|a| a.mesh()));
+        }
+        meshes
+    }
+
+    /// The forces of sample `k` in words, largest first (none without loads).
+    pub fn force_readout(&self, k: usize) -> Vec<String> {
+        self.forces.as_ref().map_or_else(Vec::new, |f| f.readout(&self.history, k))
+    }
+
+    /// The arrows of sample `k` (none without loads).
+    pub fn arrows(&self, k: usize) -> Vec<forces::Arrow> {
+        self.forces.as_ref().map_or_else(Vec::new, |f| f.arrows(&self.history, k))
     }
 
     /// What sample `k` shows, in words: its time, the head's station,
@@ -150,11 +231,11 @@ impl Replay {
         Camera::standard(view, &self.bounds)
     }
 
-    /// Draws the frame at time `t` seen by `camera` offscreen (a GPU or
-    /// Mesa's lavapipe).
-    pub fn picture(&self, t: f64, camera: &Camera, width: u32, height: u32) -> Result<Image, ViewError> {
+    /// Draws the frame at time `t` with `layers` seen by `camera`
+    /// offscreen (a GPU or Mesa's lavapipe).
+    pub fn picture(&self, t: f64, camera: &Camera, layers: Layers, width: u32, height: u32) -> Result<Image, ViewError> {
         let mut renderer = Renderer::new_headless()?;
-        let scene = Scene::new(self.meshes(self.sample_at(t)));
+        let scene = Scene::new(self.meshes(self.sample_at(t), layers));
         Ok(renderer.render(&scene, camera, width, height)?)
     }
 }
@@ -173,6 +254,8 @@ pub struct Orbit {
     pub projection: Projection,
 }
 
+/// The floor's opacity while the forces are shown.
+const FLOOR_OPACITY_UNDER_FORCES: f32 = 0.45;
 /// Room around the canal in the window's view.
 const ORBIT_MARGIN: f32 = 1.1;
 /// How close to straight up or down the camera may look, radians.

@@ -28,7 +28,7 @@ fn the_sample_shown_is_the_last_one_at_or_before_the_time() {
 fn a_frame_has_the_fetus_where_the_history_puts_it() {
     let (replay, demo) = textbook();
     let k = demo.history.samples.len() / 2;
-    let meshes = replay.meshes(k);
+    let meshes = replay.meshes(k, Layers::default());
     let names: Vec<&str> = meshes.iter().map(|m| m.name.as_str()).collect();
     assert_eq!(names, ["fetal head", "fetal trunk", "pelvic floor", "pelvis"]);
     // The head's vertices are its surface moved by the sample's pose.
@@ -37,7 +37,7 @@ fn a_frame_has_the_fetus_where_the_history_puts_it() {
     let drawn = meshes[0].positions[0];
     assert!((Vec3::from(drawn) - first.as_vec3()).length() < 1e-6, "{drawn:?} against {first}");
     // The same counts at every sample: the window updates in place.
-    let last = replay.meshes(demo.history.samples.len() - 1);
+    let last = replay.meshes(demo.history.samples.len() - 1, Layers::default());
     for (a, b) in meshes.iter().zip(&last) {
         assert_eq!((a.positions.len(), a.indices.len()), (b.positions.len(), b.indices.len()), "{}", a.name);
     }
@@ -117,11 +117,142 @@ fn the_orbit_starts_from_the_standard_views_and_keeps_up_up() {
 fn a_frame_is_drawn_offscreen() {
     let (replay, demo) = textbook();
     let camera = replay.standard_camera(View::Lateral);
-    let early = replay.picture(0.0, &camera, 160, 120).unwrap();
-    let late = replay.picture(replay.duration_s(), &camera, 160, 120).unwrap();
+    let early = replay.picture(0.0, &camera, Layers::default(), 160, 120).unwrap();
+    let late = replay.picture(replay.duration_s(), &camera, Layers::default(), 160, 120).unwrap();
     let background = early.pixels()[..4].to_vec();
     let drawn = early.pixels().chunks(4).filter(|p| *p != &background[..]).count();
     assert!(drawn > 160 * 120 / 20, "only {drawn} pixels drawn");
     assert_ne!(early.pixels(), late.pixels(), "the fetus did not move between the first and last samples");
     assert!(demo.history.samples.len() > 2);
+}
+
+mod forces {
+    use carus_analysis::ContactSite;
+    use carus_labour::loads::{AxialMoments, Body, GuideLoad, LoadSample, SiteLoad};
+    use glam::DVec3;
+
+    use super::*;
+    use crate::forces::{ARROW_M_PER_N, EXPULSION_RGB};
+
+    /// Any point of the head frame will do as the pivot: the moments are
+    /// taken about it consistently.
+    const PIVOT_IN_HEAD: DVec3 = DVec3::new(-0.02, 0.0, -0.03);
+
+    fn site(body: Body, site: ContactSite, at: DVec3, force_n: DVec3, pivot: DVec3) -> SiteLoad {
+        SiteLoad {
+            body,
+            site,
+            points: 3,
+            force_n,
+            friction_force_n: DVec3::ZERO,
+            moment_about_pivot_nm: (at - pivot).cross(force_n),
+        }
+    }
+
+    /// The textbook replay with, at sample `k`, the sacrum pushing on the
+    /// head's surface point farthest back (-y), the symphysis pushing the
+    /// trunk at its vertex farthest forward (+y), a 1 N touch too small to
+    /// draw, and a guide through the head's centre; and a push of 80 N on
+    /// the trunk at every sample. Returns the points pushed.
+    fn loaded(k: usize) -> (Replay, Demo, DVec3, DVec3) {
+        let (_, demo) = textbook();
+        let scene = demo.input("textbook").scene.unwrap();
+        let mut history = demo.history.clone();
+        for s in &mut history.samples {
+            let spine = s.trunk.unwrap().orientation * demo.history.trunk.as_ref().unwrap().spine;
+            s.expulsion_force_n = -80.0 * spine;
+        }
+        let sample = history.samples[k].clone();
+        let pivot = sample.head.point(PIVOT_IN_HEAD);
+        let farthest = |surface: &carus_anatomy::TriSurface, pose: &carus_analysis::RigidPose, along: DVec3| {
+            surface.vertices.iter().map(|&v| pose.point(v)).max_by(|a, b| a.dot(along).total_cmp(&b.dot(along))).unwrap()
+        };
+        let on_head = farthest(&scene.head, &sample.head, -DVec3::Y);
+        let trunk = sample.trunk.unwrap();
+        let on_trunk = farthest(scene.trunk.as_ref().unwrap(), &trunk, DVec3::Y);
+        let loads = history
+            .samples
+            .iter()
+            .enumerate()
+            .map(|(i, s)| LoadSample {
+                time_s: s.time_s,
+                sites: match i == k {
+                    true => vec![
+                        site(Body::Head, ContactSite::Sacrum, on_head, (sample.head.position_m - on_head).normalize() * 40.0, pivot),
+                        site(Body::Trunk, ContactSite::Symphysis, on_trunk, (trunk.position_m - on_trunk).normalize() * 25.0, pivot),
+                        site(Body::Head, ContactSite::PelvicSidewall, on_head, DVec3::X, pivot),
+                    ],
+                    false => Vec::new(),
+                },
+                head_axial: AxialMoments::default(),
+                head_trunk_force_n: DVec3::ZERO,
+                neck: None,
+                spine: None,
+                guide: (i == k).then_some(GuideLoad { force_n: DVec3::new(0.0, 0.0, -10.0), moment_nm: DVec3::ZERO }),
+            })
+            .collect();
+        let replay = Replay::new("textbook", scene, history, Some(&demo.detector))
+            .unwrap()
+            .with_forces(loads, PIVOT_IN_HEAD, false)
+            .unwrap();
+        (replay, demo, on_head, on_trunk)
+    }
+
+    /// Each force's arrow lies on its line of action, points along it and
+    /// ends where that line enters the body pushed: the sacrum's and the
+    /// symphysis's at the points they push, the expulsion on the trunk's
+    /// surface in line with its centre, the guide on the head in line with
+    /// its centre. A 1 N touch is not drawn.
+    #[test]
+    fn an_arrow_ends_where_its_force_meets_the_body() {
+        let k = 7;
+        let (replay, _, on_head, on_trunk) = loaded(k);
+        let arrows = replay.arrows(k);
+        let labels: Vec<&str> = arrows.iter().map(|a| a.label.as_str()).collect();
+        assert_eq!(labels, ["expulsion", "guide", "sacrum", "symphysis on the trunk"]);
+        assert!(arrows[2].tip_m.distance(on_head) < 1e-6, "{} against {on_head}", arrows[2].tip_m);
+        assert!(arrows[3].tip_m.distance(on_trunk) < 1e-6, "{} against {on_trunk}", arrows[3].tip_m);
+        let sample = &replay.history.samples[k];
+        let in_line = |a: &crate::forces::Arrow, centre: DVec3| (a.tip_m - centre).cross(a.force_n.normalize()).length();
+        let (trunk, head) = (sample.trunk.unwrap(), sample.head);
+        assert!(in_line(&arrows[0], trunk.position_m) < 1e-9 && in_line(&arrows[1], head.position_m) < 1e-9);
+        // The expulsion pushes the breech: its arrow ends behind the trunk's centre.
+        assert!((arrows[0].tip_m - trunk.position_m).dot(arrows[0].force_n) < 0.0);
+        assert_eq!(arrows[0].rgb, EXPULSION_RGB);
+        // Drawn as a mesh from tail to tip, as long as its scale says.
+        let mesh = arrows[2].mesh();
+        let ends = mesh.positions.iter().map(|p| DVec3::from(Vec3::from(*p).as_dvec3()));
+        let back = -arrows[2].force_n.normalize();
+        let reach = ends.map(|p| (p - arrows[2].tip_m).dot(back)).fold(0.0, f64::max);
+        assert!((reach - 40.0 * ARROW_M_PER_N).abs() < 1e-5, "{reach}");
+        // Another sample has only the expulsion.
+        assert_eq!(replay.arrows(k + 1).len(), 1);
+    }
+
+    #[test]
+    fn the_layers_are_laid_over_the_anatomy_when_asked() {
+        let k = 7;
+        let (replay, _, _, _) = loaded(k);
+        let marker = RenderMesh::sphere("sacral_promontory", [0.0, 0.0, 0.1], 0.003, [1.0, 0.0, 0.0]);
+        let replay = replay.with_markers(vec![marker]);
+        assert_eq!(replay.layers_available(), Layers { markers: true, forces: true });
+        let names = |layers| replay.meshes(k, layers).iter().map(|m| m.name.clone()).collect::<Vec<_>>();
+        let anatomy = ["fetal head", "fetal trunk", "pelvic floor", "pelvis"];
+        assert_eq!(names(Layers::default()), anatomy);
+        assert_eq!(names(Layers { markers: true, forces: false })[4..], ["sacral_promontory"]);
+        let both = names(Layers { markers: true, forces: true });
+        assert_eq!(both[..5], names(Layers { markers: true, forces: false })[..]);
+        assert_eq!(both[5..], ["force: expulsion", "force: guide", "force: sacrum", "force: symphysis on the trunk"]);
+        // The floor turns see-through only under the forces.
+        let floor_opacity = |layers| replay.meshes(k, layers)[2].colour[3];
+        assert_eq!(floor_opacity(Layers::default()), 1.0);
+        assert!(floor_opacity(Layers { markers: false, forces: true }) < 1.0);
+        // Said in words, largest first.
+        assert_eq!(replay.force_readout(k), ["expulsion 80 N", "sacrum 40 N", "symphysis on the trunk 25 N", "guide 10 N"]);
+        // Without loads there is nothing to lay over.
+        let (bare, _) = textbook();
+        assert_eq!(bare.layers_available(), Layers::default());
+        assert_eq!(bare.meshes(k, Layers { markers: true, forces: true }).len(), 4);
+        assert!(bare.force_readout(k).is_empty());
+    }
 }

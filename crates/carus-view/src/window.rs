@@ -11,7 +11,7 @@ use carus_report::pictures::PELVIS;
 use eframe::egui;
 use eframe::egui_wgpu::{self, wgpu};
 
-use crate::{Orbit, Replay, ViewError};
+use crate::{Layers, Orbit, Replay, ViewError};
 
 /// Depth buffer bits asked of eframe; the painter's pipelines are built for
 /// the format eframe makes of them.
@@ -34,16 +34,17 @@ const SCREENSHOT_DEADLINE: Duration = Duration::from_secs(30);
 /// goes on where it was rather than jumping.
 const MAX_PLAYBACK_STEP_S: f32 = 0.1;
 
-/// Opens the viewer on `replay` at time `start_s` from `view`, and returns
-/// when its window is closed. With `screenshot`, the window saves a PNG of
-/// itself once drawn and closes (what the tests check, and a picture of
-/// the viewer for docs).
-pub fn open(replay: Replay, start_s: f64, view: View, screenshot: Option<PathBuf>) -> Result<(), ViewError> {
+/// Opens the viewer on `replay` at time `start_s` from `view` with
+/// `layers` shown, and returns when its window is closed. With
+/// `screenshot`, the window saves a PNG of itself once drawn and closes
+/// (what the tests check, and a picture of the viewer for docs).
+pub fn open(replay: Replay, start_s: f64, view: View, layers: Layers, screenshot: Option<PathBuf>) -> Result<(), ViewError> {
     let options = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default().with_inner_size([1200.0, 800.0]).with_title(replay.title.clone()),
         depth_buffer: DEPTH_BITS,
         multisampling: SAMPLES as u16,
         renderer: eframe::Renderer::Wgpu,
+        wgpu_options: egui_wgpu::WgpuConfiguration { wgpu_setup: window_backends(), ..Default::default() },
         ..Default::default()
     };
     let title = replay.title.clone();
@@ -64,7 +65,7 @@ pub fn open(replay: Replay, start_s: f64, view: View, screenshot: Option<PathBuf
             };
             let painter = MeshPainter::new(&state.device, &state.queue, target);
             state.renderer.write().callback_resources.insert(GpuScene { painter, meshes: Vec::new(), shown: None });
-            Ok(Box::new(Viewer { screenshot: shot, time_s: start_s, orbit: Orbit::from_view(view), ..Viewer::new(replay) }))
+            Ok(Box::new(Viewer { screenshot: shot, time_s: start_s, orbit: Orbit::from_view(view), layers, ..Viewer::new(replay) }))
         }),
     )
     .map_err(|e| ViewError::Window(e.to_string()))?;
@@ -75,6 +76,16 @@ pub fn open(replay: Replay, start_s: f64, view: View, screenshot: Option<PathBuf
         (Some(path), Some(Err(problem))) => Err(ViewError::Screenshot { path, problem }),
         (Some(path), None) => Err(ViewError::Screenshot { path, problem: "the window closed before it was taken".into() }),
     }
+}
+
+/// Vulkan, Metal or DX12 (wgpu's primary backends), or what `WGPU_BACKEND`
+/// names. Without them eframe would fall back to OpenGL, whose window
+/// stayed black on a virtual X display with Mesa (docs/VIEWER.md); left
+/// out, the viewer says instead that it needs a Vulkan driver.
+fn window_backends() -> egui_wgpu::WgpuSetup {
+    let mut setup = egui_wgpu::WgpuSetupCreateNew::without_display_handle();
+    setup.instance_descriptor.backends = wgpu::Backends::from_env().unwrap_or(wgpu::Backends::PRIMARY);
+    egui_wgpu::WgpuSetup::CreateNew(setup)
 }
 
 /// A screenshot the window takes of itself, then closes.
@@ -122,13 +133,16 @@ impl Screenshot {
 struct GpuScene {
     painter: MeshPainter,
     meshes: Vec<GpuMesh>,
-    /// The sample whose meshes are uploaded.
-    shown: Option<usize>,
+    /// The sample and layers whose meshes are uploaded.
+    shown: Option<Shown>,
 }
+
+/// A sample and the layers laid over it.
+type Shown = (usize, Layers);
 
 /// One frame of the 3D panel: what to draw and from where.
 struct Frame {
-    sample: usize,
+    shown: Shown,
     meshes: Arc<Vec<RenderMesh>>,
     camera: Camera,
     aspect: f32,
@@ -146,29 +160,30 @@ impl egui_wgpu::CallbackTrait for Frame {
         let Some(scene) = resources.get_mut::<GpuScene>() else {
             return Vec::new();
         };
-        if scene.shown != Some(self.sample) {
-            if scene.meshes.len() == self.meshes.len() {
-                // Only the fetus and the floor move: the pelvis stays as uploaded.
-                for (i, (gpu, mesh)) in scene.meshes.iter_mut().zip(self.meshes.iter()).enumerate() {
-                    // The surfaces keep their counts from sample to sample;
-                    // one that did not is uploaded anew.
-                    if mesh.name != PELVIS && scene.painter.update(queue, gpu, mesh, i).is_err() {
-                        if let Ok(fresh) = scene.painter.upload(device, mesh, i) {
-                            *gpu = fresh;
+        if scene.shown != Some(self.shown) {
+            // The pelvis keeps its index (the anatomy comes first, the
+            // layers after it) and stays as uploaded. The rest is rewritten
+            // in place where it kept its counts (the fetus, the floor, an
+            // arrow redrawn), uploaded anew where not, and what is no
+            // longer shown is dropped.
+            for (i, mesh) in self.meshes.iter().enumerate() {
+                match scene.meshes.get_mut(i) {
+                    Some(_) if mesh.name == PELVIS => {}
+                    Some(gpu) => {
+                        if scene.painter.update(queue, gpu, mesh, i).is_err() {
+                            if let Ok(fresh) = scene.painter.upload(device, mesh, i) {
+                                *gpu = fresh;
+                            }
                         }
                     }
+                    None => match scene.painter.upload(device, mesh, i) {
+                        Ok(gpu) => scene.meshes.push(gpu),
+                        Err(_) => break,
+                    },
                 }
-            } else {
-                // All or nothing, so that each uploaded mesh stays at its index.
-                scene.meshes = self
-                    .meshes
-                    .iter()
-                    .enumerate()
-                    .map(|(i, m)| scene.painter.upload(device, m, i))
-                    .collect::<Result<_, _>>()
-                    .unwrap_or_default();
             }
-            scene.shown = Some(self.sample);
+            scene.meshes.truncate(self.meshes.len());
+            scene.shown = Some(self.shown);
         }
         scene.painter.prepare(queue, &self.camera, &Lights::default(), self.aspect);
         Vec::new()
@@ -193,8 +208,10 @@ struct Viewer {
     playing: bool,
     speed: f32,
     orbit: Orbit,
-    /// The meshes of the sample shown, rebuilt when the sample changes.
-    meshes: Option<(usize, Arc<Vec<RenderMesh>>)>,
+    /// What is laid over the anatomy.
+    layers: Layers,
+    /// The meshes of the sample and layers shown, rebuilt when either changes.
+    meshes: Option<(Shown, Arc<Vec<RenderMesh>>)>,
     screenshot: Option<Screenshot>,
 }
 
@@ -206,6 +223,7 @@ impl Viewer {
             playing: false,
             speed: 1.0,
             orbit: Orbit::from_view(View::Lateral),
+            layers: Layers::default(),
             meshes: None,
             screenshot: None,
         }
@@ -234,8 +252,16 @@ impl Viewer {
         ui.spacing_mut().slider_width = SLIDER_WIDTH;
         ui.add(egui::Slider::new(&mut self.time_s, 0.0..=end).text("t (s)"));
         ui.separator();
-        for line in self.replay.readout(self.replay.sample_at(self.time_s)) {
+        let sample = self.replay.sample_at(self.time_s);
+        for line in self.replay.readout(sample) {
             ui.label(line);
+        }
+        ui.separator();
+        let available = self.replay.layers_available();
+        ui.add_enabled(available.markers, egui::Checkbox::new(&mut self.layers.markers, "landmarks, planes and axis"));
+        ui.add_enabled(available.forces, egui::Checkbox::new(&mut self.layers.forces, "forces on the fetus"));
+        if self.layers.forces {
+            self.force_legend(ui, sample);
         }
         ui.separator();
         ui.label("View (drag to turn, scroll to zoom)");
@@ -255,6 +281,25 @@ impl Viewer {
         }
     }
 
+    /// Each force drawn, in its arrow's colour, largest first, and the
+    /// arrows' scale.
+    fn force_legend(&self, ui: &mut egui::Ui, sample: usize) {
+        let mut arrows = self.replay.arrows(sample);
+        arrows.sort_by(|a, b| b.force_n.length().total_cmp(&a.force_n.length()));
+        for arrow in &arrows {
+            ui.horizontal(|ui| {
+                let (swatch, _) = ui.allocate_exact_size(egui::vec2(12.0, 12.0), egui::Sense::hover());
+                let [r, g, b] = arrow.rgb.map(|c| (c * 255.0).round() as u8);
+                ui.painter().rect_filled(swatch, 2.0, egui::Color32::from_rgb(r, g, b));
+                ui.label(format!("{} {:.0} N", arrow.label, arrow.force_n.length()));
+            });
+        }
+        if arrows.is_empty() {
+            ui.label(format!("no force of {} N or more", crate::forces::SMALLEST_DRAWN_N));
+        }
+        ui.label(format!("arrows: 10 mm per {:.0} N", 0.01 / crate::forces::ARROW_M_PER_N));
+    }
+
     fn scene(&mut self, ui: &mut egui::Ui) {
         let (rect, response) = ui.allocate_exact_size(ui.available_size(), egui::Sense::drag());
         let drag = response.drag_delta();
@@ -263,17 +308,17 @@ impl Viewer {
             let scroll = ui.input(|i| i.smooth_scroll_delta.y);
             self.orbit.zoom_by((scroll * 0.002).exp());
         }
-        let sample = self.replay.sample_at(self.time_s);
+        let shown = (self.replay.sample_at(self.time_s), self.layers);
         let meshes = match &self.meshes {
-            Some((k, meshes)) if *k == sample => meshes.clone(),
+            Some((k, meshes)) if *k == shown => meshes.clone(),
             _ => {
-                let meshes = Arc::new(self.replay.meshes(sample));
-                self.meshes = Some((sample, meshes.clone()));
+                let meshes = Arc::new(self.replay.meshes(shown.0, shown.1));
+                self.meshes = Some((shown, meshes.clone()));
                 meshes
             }
         };
         let frame = Frame {
-            sample,
+            shown,
             meshes,
             camera: self.replay.camera(&self.orbit),
             aspect: rect.width().max(1.0) / rect.height().max(1.0),

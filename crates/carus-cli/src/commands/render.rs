@@ -231,6 +231,14 @@ fn surface_mesh(
 fn pelvis_meshes(pelvis: &Pelvis, bone_opacity: f32) -> Vec<RenderMesh> {
     let mut meshes =
         vec![surface_mesh("pelvis", &pelvis.surface, |v| v, BONE_RGB).with_opacity(bone_opacity)];
+    meshes.extend(pelvis_markers(pelvis));
+    meshes
+}
+
+/// The pelvis's landmarks, its four obstetric planes and the pelvic axis,
+/// without the bone (the viewer lays them over a run).
+pub(super) fn pelvis_markers(pelvis: &Pelvis) -> Vec<RenderMesh> {
+    let mut meshes = Vec::new();
     for (name, p) in pelvis.landmarks.named() {
         let rgb = if CONVENTIONS_LANDMARKS.contains(&name) {
             LANDMARK_RGB

@@ -252,7 +252,7 @@ pub(super) fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result
                 trunk_nm: l.head_axial.trunk_nm,
             })
             .collect(),
-        scene: Some(report_scene(record, &[])?),
+        scene: Some(report_scene(record, &carus_labour::Scene::build(&record.scenario)?, &[])),
     };
     Ok(carus_report::write_report_file(
         &input,
@@ -270,19 +270,23 @@ pub(super) fn run_title(record: &RunRecord) -> String {
     }
 }
 
-/// The surfaces a run's pictures and its replay draw, rebuilt from its
-/// scenario (deterministic) in the body frames its poses refer to, with
+/// The surfaces a run's pictures and its replay draw, from `scene` (built
+/// again from the run's scenario, which is deterministic) in the body
+/// frames its poses refer to, with
 /// the floor's states the run kept nearest its key moments and `more`.
-pub(super) fn report_scene(record: &RunRecord, more: &[FloorAtMoment]) -> anyhow::Result<carus_report::ReportScene> {
-    let scene = carus_labour::Scene::build(&record.scenario)?;
+pub(super) fn report_scene(
+    record: &RunRecord,
+    scene: &carus_labour::Scene,
+    more: &[FloorAtMoment],
+) -> carus_report::ReportScene {
     let kept = record.key_moments.iter().filter_map(|m| m.floor.as_ref());
-    Ok(carus_report::ReportScene {
+    carus_report::ReportScene {
         pelvis: Some(scene.pelvis.surface.clone()),
         head: scene.head.surface.clone(),
         trunk: scene.trunk.as_ref().map(|t| t.surface.clone()),
         lower_trunk: scene.lower_trunk.as_ref().map(|t| t.surface.clone()),
         floor: scene.floor.as_ref().map(|floor| floor_surface(floor, kept.chain(more).collect())),
-    })
+    }
 }
 
 /// The floor for pictures: its outer faces, at rest and in the given

@@ -1,12 +1,13 @@
-//! `carus view RUN [--at T] [--screenshot FILE.png]`, `carus view RUN --at
-//! T --picture FILE.png`: a run replayed in a window (crate carus-view),
-//! or one of its frames drawn to a picture without one.
+//! `carus view RUN [--at T] [--landmarks] [--forces] [--screenshot
+//! FILE.png]`, `carus view RUN --at T --picture FILE.png`: a run replayed
+//! in a window (crate carus-view), or one of its frames drawn to a picture
+//! without one.
 
 use std::path::PathBuf;
 
-use carus_view::Replay;
+use carus_view::{Layers, Replay};
 
-use super::render::ViewName;
+use super::render::{pelvis_markers, ViewName};
 use super::run::{read_record, report_scene, run_title};
 use super::Status;
 
@@ -29,14 +30,26 @@ pub struct ViewArgs {
     /// Width and height of the picture, px.
     #[arg(long, requires = "picture", num_args = 2, default_values = ["800", "600"], value_names = ["WIDTH", "HEIGHT"])]
     pub size: Vec<u32>,
+    /// Show the pelvis's landmarks, obstetric planes and axis (a check box in the window).
+    #[arg(long)]
+    pub landmarks: bool,
+    /// Show the forces on the fetus as arrows: each part of the canal, the
+    /// expulsion and any guide (a check box in the window).
+    #[arg(long)]
+    pub forces: bool,
 }
 
 pub fn run(args: &ViewArgs) -> anyhow::Result<Status> {
     let record = read_record(&args.run)?;
     // The floor at every VTU frame the run wrote, besides its key moments'.
     let frames = carus_labour::floor_frames(&args.run, &record);
-    let replay = Replay::new(run_title(&record), report_scene(&record, &frames)?, record.history.clone(), record.detector.as_ref())
-        .map_err(|e| anyhow::anyhow!("{}: {e}", args.run.display()))?;
+    let scene = carus_labour::Scene::build(&record.scenario)?;
+    let expulsion_at_pivot = scene.trunk.is_none() || record.scenario.expulsion.acts_on == carus_labour::scenario::ActsOn::Pivot;
+    let replay = Replay::new(run_title(&record), report_scene(&record, &scene, &frames), record.history.clone(), record.detector.as_ref())
+        .and_then(|r| r.with_forces(record.loads.clone(), scene.pivot_in_head, expulsion_at_pivot))
+        .map_err(|e| anyhow::anyhow!("{}: {e}", args.run.display()))?
+        .with_markers(pelvis_markers(&scene.pelvis));
+    let layers = Layers { markers: args.landmarks, forces: args.forces };
     for (flag, path) in [("--picture", &args.picture), ("--screenshot", &args.screenshot)] {
         if let Some(path) = path.as_ref().filter(|p| !p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png"))) {
             anyhow::bail!("{flag} {}: the picture is written as a PNG; name the file *.png", path.display());
@@ -52,14 +65,17 @@ pub fn run(args: &ViewArgs) -> anyhow::Result<Status> {
         if let Some(folder) = args.screenshot.as_ref().and_then(|p| p.parent()).filter(|f| !f.as_os_str().is_empty()) {
             anyhow::ensure!(folder.is_dir(), "--screenshot: the folder {} does not exist; make it first", folder.display());
         }
-        carus_view::open(replay, at, args.view.into(), args.screenshot.clone())?;
+        carus_view::open(replay, at, args.view.into(), layers, args.screenshot.clone())?;
         return Ok(Status::Success);
     };
     let [width, height] = [args.size[0], args.size[1]];
-    let picture = replay.picture(at, &replay.standard_camera(args.view.into()), width, height)?;
+    let picture = replay.picture(at, &replay.standard_camera(args.view.into()), layers, width, height)?;
     picture.save_png(path)?;
     let k = replay.sample_at(at);
     println!("{} ({width} x {height}): {}", path.display(), replay.readout(k).join(", "));
+    if args.forces {
+        println!("forces: {}", replay.force_readout(k).join(", "));
+    }
     Ok(Status::Success)
 }
 
@@ -68,7 +84,7 @@ mod tests {
     use super::*;
 
     fn args(run: PathBuf, at: f64, picture: PathBuf) -> ViewArgs {
-        ViewArgs { run, at: Some(at), picture: Some(picture), screenshot: None, view: ViewName::Inferior, size: vec![120, 90] }
+        ViewArgs { run, at: Some(at), picture: Some(picture), screenshot: None, view: ViewName::Inferior, size: vec![120, 90], landmarks: true, forces: true }
     }
 
     /// A run's frame is drawn to a PNG of the size asked, with the floor
@@ -120,6 +136,9 @@ mod tests {
         assert_eq!(Cli::try_parse_from(["view", "runs/x", "--at", "-1"]).unwrap().view.at, Some(-1.0));
         let both = Cli::try_parse_from(["view", "runs/x", "--at", "1", "--picture", "a.png"]).unwrap();
         assert_eq!((both.view.at, both.view.size.as_slice(), both.view.view), (Some(1.0), &[800, 600][..], ViewName::Lateral));
-        assert!(Cli::try_parse_from(["view", "runs/x"]).unwrap().view.picture.is_none());
+        let bare = Cli::try_parse_from(["view", "runs/x"]).unwrap().view;
+        assert!(bare.picture.is_none() && !bare.landmarks && !bare.forces);
+        let layers = Cli::try_parse_from(["view", "runs/x", "--landmarks", "--forces"]).unwrap().view;
+        assert!(layers.landmarks && layers.forces);
     }
 }
