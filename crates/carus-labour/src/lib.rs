@@ -24,7 +24,7 @@ pub mod sim;
 pub mod trajectory;
 
 pub use record::{KeyMoment, RunRecord, RunSummary};
-pub use run::{floor_frames, resume, run, run_from_start, Observer, RunOptions, SilentObserver};
+pub use run::{floor_frames, floor_frames_at, resume, run, run_from_start, Observer, RunOptions, SilentObserver};
 pub use scenario::{FloorCoupling, Scenario, ScenarioError, BUILTINS};
 pub use scene::Scene;
 pub use sim::{SimState, Simulation, StageTimes};

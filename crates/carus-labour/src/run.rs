@@ -8,7 +8,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Instant;
 
-use carus_analysis::{detect, DetectorReport, Outcome, PoseHistory};
+use carus_analysis::{detect, DetectorReport, Outcome, PoseHistory, PoseSample};
 use carus_contact::RigidPose;
 
 use crate::output::{self, Checkpoint};
@@ -108,6 +108,17 @@ pub fn floor_frames(out_dir: &Path, record: &RunRecord) -> Vec<FloorAtMoment> {
         collection.frames().iter().filter_map(|(t, file)| read_floor_frame(&out_dir.join(file), *t)).collect();
     frames.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
     frames
+}
+
+/// The floor's VTU frames written so far at `times` (a checkpoint's
+/// `frame_times`): a run that has not written its record yet has no PVD
+/// to list them.
+pub fn floor_frames_at(out_dir: &Path, times: &[f64]) -> Vec<FloorAtMoment> {
+    times
+        .iter()
+        .enumerate()
+        .filter_map(|(k, &t)| read_floor_frame(&out_dir.join(output::frame_name("floor", k)), t))
+        .collect()
 }
 
 /// A floor VTU frame as the run wrote it; None if it is gone or unreadable
@@ -494,12 +505,17 @@ fn write_frame(
 
 /// The pose history of the run so far.
 pub fn history(sim: &Simulation<'_>) -> PoseHistory {
-    let scene = sim.scene;
+    history_of(sim.scene, sim.state.samples.clone())
+}
+
+/// The pose history of `samples` recorded in `scene` (a run's, or a
+/// checkpoint's so far).
+pub fn history_of(scene: &Scene, samples: Vec<PoseSample>) -> PoseHistory {
     PoseHistory {
         head: scene.head_geometry.clone(),
         trunk: scene.trunk_geometry.clone(),
         canal: scene.canal.clone(),
-        samples: sim.state.samples.clone(),
+        samples,
     }
 }
 

@@ -25,7 +25,7 @@ use carus_report::pictures::{fitting_bounds, meshes_at_sample, stretch_range, FL
 use carus_report::ReportScene;
 use glam::Vec3;
 
-pub use window::open;
+pub use window::{open, Follow};
 
 /// Why a run cannot be replayed.
 #[derive(Debug, thiserror::Error)]

@@ -33,12 +33,28 @@ const SCREENSHOT_DEADLINE: Duration = Duration::from_secs(30);
 /// The longest step of playback, s of wall time: after a stall the replay
 /// goes on where it was rather than jumping.
 const MAX_PLAYBACK_STEP_S: f32 = 0.1;
+/// How often the window asks a run still going for more, s of wall time.
+const FOLLOW_EVERY: Duration = Duration::from_secs(1);
+
+/// A run still going, as the window follows it: each call gives the run's
+/// replay again if it has written more since the last call, and whether
+/// it still goes on (false once it has written its record).
+pub type Follow = Box<dyn FnMut() -> Option<(Replay, bool)>>;
 
 /// Opens the viewer on `replay` at time `start_s` from `view` with
 /// `layers` shown, and returns when its window is closed. With
 /// `screenshot`, the window saves a PNG of itself once drawn and closes
-/// (what the tests check, and a picture of the viewer for docs).
-pub fn open(replay: Replay, start_s: f64, view: View, layers: Layers, screenshot: Option<PathBuf>) -> Result<(), ViewError> {
+/// (what the tests check, and a picture of the viewer for docs). With
+/// `follow`, the window asks it for more every second and shows what it
+/// gives, at the newest time while "follow the run" is ticked.
+pub fn open(
+    replay: Replay,
+    start_s: f64,
+    view: View,
+    layers: Layers,
+    screenshot: Option<PathBuf>,
+    follow: Option<Follow>,
+) -> Result<(), ViewError> {
     let options = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default().with_inner_size([1200.0, 800.0]).with_title(replay.title.clone()),
         depth_buffer: DEPTH_BITS,
@@ -65,7 +81,14 @@ pub fn open(replay: Replay, start_s: f64, view: View, layers: Layers, screenshot
             };
             let painter = MeshPainter::new(&state.device, &state.queue, target);
             state.renderer.write().callback_resources.insert(GpuScene { painter, meshes: Vec::new(), shown: None });
-            Ok(Box::new(Viewer { screenshot: shot, time_s: start_s, orbit: Orbit::from_view(view), layers, ..Viewer::new(replay) }))
+            Ok(Box::new(Viewer {
+                screenshot: shot,
+                time_s: start_s,
+                orbit: Orbit::from_view(view),
+                layers,
+                follow: follow.map(|f| Following { more: f, asked: Instant::now(), to_newest: true }),
+                ..Viewer::new(replay)
+            }))
         }),
     )
     .map_err(|e| ViewError::Window(e.to_string()))?;
@@ -137,8 +160,9 @@ struct GpuScene {
     shown: Option<Shown>,
 }
 
-/// A sample and the layers laid over it.
-type Shown = (usize, Layers);
+/// A replay (counted up each time a followed run gives a new one), one of
+/// its samples and the layers laid over it.
+type Shown = (u64, usize, Layers);
 
 /// One frame of the 3D panel: what to draw and from where.
 struct Frame {
@@ -213,6 +237,19 @@ struct Viewer {
     /// The meshes of the sample and layers shown, rebuilt when either changes.
     meshes: Option<(Shown, Arc<Vec<RenderMesh>>)>,
     screenshot: Option<Screenshot>,
+    /// A run still going, followed.
+    follow: Option<Following>,
+    /// How many replays a followed run has given.
+    generation: u64,
+}
+
+/// A run followed as it goes on.
+struct Following {
+    more: Follow,
+    /// When it was last asked for more.
+    asked: Instant,
+    /// Keep the slider at the newest time.
+    to_newest: bool,
 }
 
 impl Viewer {
@@ -226,7 +263,32 @@ impl Viewer {
             layers: Layers::default(),
             meshes: None,
             screenshot: None,
+            follow: None,
+            generation: 0,
         }
+    }
+
+    /// Asks a followed run for more, once a second, and shows it.
+    fn follow(&mut self, ctx: &egui::Context) {
+        let Some(follow) = &mut self.follow else {
+            return;
+        };
+        if follow.asked.elapsed() >= FOLLOW_EVERY {
+            follow.asked = Instant::now();
+            if let Some((replay, goes_on)) = (follow.more)() {
+                let at_newest = self.time_s >= self.replay.duration_s();
+                self.replay = replay;
+                self.generation += 1;
+                self.meshes = None;
+                let newest = self.replay.duration_s();
+                self.time_s = if follow.to_newest || at_newest { newest } else { self.time_s.min(newest) };
+                if !goes_on {
+                    self.follow = None;
+                    return;
+                }
+            }
+        }
+        ctx.request_repaint_after(FOLLOW_EVERY);
     }
 
     fn controls(&mut self, ui: &mut egui::Ui) {
@@ -251,6 +313,9 @@ impl Viewer {
         // since a width taken from the panel would grow the panel.
         ui.spacing_mut().slider_width = SLIDER_WIDTH;
         ui.add(egui::Slider::new(&mut self.time_s, 0.0..=end).text("t (s)"));
+        if let Some(follow) = &mut self.follow {
+            ui.checkbox(&mut follow.to_newest, "follow the run: keep to its newest time");
+        }
         ui.separator();
         let sample = self.replay.sample_at(self.time_s);
         for line in self.replay.readout(sample) {
@@ -308,11 +373,11 @@ impl Viewer {
             let scroll = ui.input(|i| i.smooth_scroll_delta.y);
             self.orbit.zoom_by((scroll * 0.002).exp());
         }
-        let shown = (self.replay.sample_at(self.time_s), self.layers);
+        let shown = (self.generation, self.replay.sample_at(self.time_s), self.layers);
         let meshes = match &self.meshes {
             Some((k, meshes)) if *k == shown => meshes.clone(),
             _ => {
-                let meshes = Arc::new(self.replay.meshes(shown.0, shown.1));
+                let meshes = Arc::new(self.replay.meshes(shown.1, shown.2));
                 self.meshes = Some((shown, meshes.clone()));
                 meshes
             }
@@ -329,6 +394,7 @@ impl Viewer {
 
 impl eframe::App for Viewer {
     fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        self.follow(ui.ctx());
         if self.playing {
             let dt = ui.input(|i| i.stable_dt.min(MAX_PLAYBACK_STEP_S)) as f64 * self.speed as f64;
             self.time_s = (self.time_s + dt).min(self.replay.duration_s());

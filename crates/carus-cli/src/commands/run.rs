@@ -196,7 +196,7 @@ pub(super) fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result
     };
     let summary = &record.summary;
     let input = carus_report::ReportInput {
-        title: run_title(record),
+        title: run_title(&record.scenario),
         notice: summary.failure.as_ref().map(|f| {
             format!(
                 "The run ended early at t = {:.2} s: {f}",
@@ -262,9 +262,9 @@ pub(super) fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result
 
 /// A run's title: its scenario, and when the head was not moved by the
 /// physics alone, how it was (said first).
-pub(super) fn run_title(record: &RunRecord) -> String {
-    let name = &record.summary.scenario;
-    match record.scenario.trajectory.mode {
+pub(super) fn run_title(scenario: &Scenario) -> String {
+    let name = &scenario.name;
+    match scenario.trajectory.mode {
         Mode::Forward => format!("Carus: {name}"),
         mode => format!("Carus: {name} ({} trajectory, not the physics alone)", mode.name()),
     }
@@ -280,12 +280,17 @@ pub(super) fn report_scene(
     more: &[FloorAtMoment],
 ) -> carus_report::ReportScene {
     let kept = record.key_moments.iter().filter_map(|m| m.floor.as_ref());
+    scene_with_floors(scene, kept.chain(more).collect())
+}
+
+/// The surfaces of `scene` for pictures, with the floor in `floors`.
+pub(super) fn scene_with_floors(scene: &carus_labour::Scene, floors: Vec<&FloorAtMoment>) -> carus_report::ReportScene {
     carus_report::ReportScene {
         pelvis: Some(scene.pelvis.surface.clone()),
         head: scene.head.surface.clone(),
         trunk: scene.trunk.as_ref().map(|t| t.surface.clone()),
         lower_trunk: scene.lower_trunk.as_ref().map(|t| t.surface.clone()),
-        floor: scene.floor.as_ref().map(|floor| floor_surface(floor, kept.chain(more).collect())),
+        floor: scene.floor.as_ref().map(|floor| floor_surface(floor, floors)),
     }
 }
 

@@ -1,14 +1,23 @@
 //! `carus view RUN [--at T] [--landmarks] [--forces] [--screenshot
 //! FILE.png]`, `carus view RUN --at T --picture FILE.png`: a run replayed
 //! in a window (crate carus-view), or one of its frames drawn to a picture
-//! without one.
+//! without one. A run still going is shown from its last checkpoint, and
+//! the window follows it as it writes more.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::time::SystemTime;
 
-use carus_view::{Layers, Replay};
+use anyhow::Context;
+use carus_analysis::{DetectorReport, PoseSample};
+use carus_labour::loads::LoadSample;
+use carus_labour::output::{read_checkpoint, CHECKPOINT_FILE, RUN_FILE};
+use carus_labour::record::FloorAtMoment;
+use carus_labour::scenario::ActsOn;
+use carus_labour::{Scenario, Scene};
+use carus_view::{Follow, Layers, Replay};
 
 use super::render::{pelvis_markers, ViewName};
-use super::run::{read_record, report_scene, run_title};
+use super::run::{read_record, run_title, scene_with_floors};
 use super::Status;
 
 #[derive(clap::Args)]
@@ -40,15 +49,9 @@ pub struct ViewArgs {
 }
 
 pub fn run(args: &ViewArgs) -> anyhow::Result<Status> {
-    let record = read_record(&args.run)?;
-    // The floor at every VTU frame the run wrote, besides its key moments'.
-    let frames = carus_labour::floor_frames(&args.run, &record);
-    let scene = carus_labour::Scene::build(&record.scenario)?;
-    let expulsion_at_pivot = scene.trunk.is_none() || record.scenario.expulsion.acts_on == carus_labour::scenario::ActsOn::Pivot;
-    let replay = Replay::new(run_title(&record), report_scene(&record, &scene, &frames), record.history.clone(), record.detector.as_ref())
-        .and_then(|r| r.with_forces(record.loads.clone(), scene.pivot_in_head, expulsion_at_pivot))
-        .map_err(|e| anyhow::anyhow!("{}: {e}", args.run.display()))?
-        .with_markers(pelvis_markers(&scene.pelvis));
+    let shown = RunShown::read(&args.run)?;
+    let scene = Scene::build(&shown.scenario)?;
+    let replay = shown.replay(&scene).with_context(|| args.run.display().to_string())?;
     let layers = Layers { markers: args.landmarks, forces: args.forces };
     for (flag, path) in [("--picture", &args.picture), ("--screenshot", &args.screenshot)] {
         if let Some(path) = path.as_ref().filter(|p| !p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png"))) {
@@ -65,7 +68,8 @@ pub fn run(args: &ViewArgs) -> anyhow::Result<Status> {
         if let Some(folder) = args.screenshot.as_ref().and_then(|p| p.parent()).filter(|f| !f.as_os_str().is_empty()) {
             anyhow::ensure!(folder.is_dir(), "--screenshot: the folder {} does not exist; make it first", folder.display());
         }
-        carus_view::open(replay, at, args.view.into(), layers, args.screenshot.clone())?;
+        let follow = shown.in_progress.then(|| follow(args.run.clone(), scene));
+        carus_view::open(replay, at, args.view.into(), layers, args.screenshot.clone(), follow)?;
         return Ok(Status::Success);
     };
     let [width, height] = [args.size[0], args.size[1]];
@@ -77,6 +81,96 @@ pub fn run(args: &ViewArgs) -> anyhow::Result<Status> {
         println!("forces: {}", replay.force_readout(k).join(", "));
     }
     Ok(Status::Success)
+}
+
+/// What the viewer shows of a run folder: its record once the run has
+/// written one, or while the run is still going, its last checkpoint.
+struct RunShown {
+    scenario: Scenario,
+    samples: Vec<PoseSample>,
+    /// The record's; a run in progress is read by the detector as it stands.
+    detector: Option<DetectorReport>,
+    loads: Vec<LoadSample>,
+    /// The floor's states kept: the key moments' and the VTU frames'.
+    floors: Vec<FloorAtMoment>,
+    /// Read from the checkpoint: the run has not written its record.
+    in_progress: bool,
+}
+
+impl RunShown {
+    fn read(dir: &Path) -> anyhow::Result<RunShown> {
+        if !in_progress(dir) {
+            let record = read_record(dir)?;
+            let mut floors = carus_labour::floor_frames(dir, &record);
+            floors.extend(record.key_moments.iter().filter_map(|m| m.floor.clone()));
+            return Ok(RunShown {
+                scenario: record.scenario,
+                samples: record.history.samples,
+                detector: record.detector,
+                loads: record.loads,
+                floors,
+                in_progress: false,
+            });
+        }
+        let checkpoint = read_checkpoint(dir)?;
+        Ok(RunShown {
+            scenario: Scenario::parse(&dir.join(CHECKPOINT_FILE), &checkpoint.scenario_toml, checkpoint.base_dir.clone())?,
+            floors: carus_labour::floor_frames_at(dir, &checkpoint.frame_times),
+            samples: checkpoint.state.samples,
+            detector: None,
+            loads: checkpoint.state.loads,
+            in_progress: true,
+        })
+    }
+
+    /// The replay of the run in `scene`, built from its scenario.
+    fn replay(&self, scene: &Scene) -> anyhow::Result<Replay> {
+        let history = carus_labour::run::history_of(scene, self.samples.clone());
+        let detected = match (&self.detector, history.samples.len() >= 2) {
+            (None, true) => carus_analysis::detect(&history).ok(),
+            _ => None,
+        };
+        let expulsion_at_pivot = scene.trunk.is_none() || self.scenario.expulsion.acts_on == ActsOn::Pivot;
+        let mut title = run_title(&self.scenario);
+        if self.in_progress {
+            title.push_str(" - in progress, from its last checkpoint");
+        }
+        let floors = scene_with_floors(scene, self.floors.iter().collect());
+        Ok(Replay::new(title, floors, history, self.detector.as_ref().or(detected.as_ref()))?
+            .with_forces(self.loads.clone(), scene.pivot_in_head, expulsion_at_pivot)?
+            .with_markers(pelvis_markers(&scene.pelvis)))
+    }
+}
+
+/// Whether the run in `dir` is still going (or was killed before it wrote
+/// its record): its checkpoint is newer than its record, or it has none.
+fn in_progress(dir: &Path) -> bool {
+    match (modified(&dir.join(CHECKPOINT_FILE)), modified(&dir.join(RUN_FILE))) {
+        (Some(checkpoint), Some(record)) => checkpoint > record,
+        (Some(_), None) => true,
+        _ => false,
+    }
+}
+
+fn modified(path: &Path) -> Option<SystemTime> {
+    std::fs::metadata(path).and_then(|m| m.modified()).ok()
+}
+
+/// The window's follower of a run still going: each call reads the run
+/// again if it wrote a checkpoint or its record since the last call, and
+/// says whether it still goes on.
+fn follow(dir: PathBuf, scene: Scene) -> Follow {
+    let seen = |dir: &Path| (modified(&dir.join(CHECKPOINT_FILE)), modified(&dir.join(RUN_FILE)));
+    let mut last = seen(&dir);
+    Box::new(move || {
+        let now = seen(&dir);
+        if now == last {
+            return None;
+        }
+        last = now;
+        let shown = RunShown::read(&dir).ok()?;
+        Some((shown.replay(&scene).ok()?, shown.in_progress))
+    })
 }
 
 #[cfg(test)]
@@ -119,6 +213,43 @@ mod tests {
         assert!(e.contains("*.png"), "{e}");
         let e = refused(args(dir.path().join("nothing"), 0.1, png));
         assert!(e.contains("run.json"), "{e}");
+    }
+
+    /// A run still going is shown from its checkpoint, and followed: the
+    /// follower gives nothing until the run writes more, then the run as
+    /// it now stands, and once the run has written its record, that.
+    #[test]
+    fn a_run_still_going_is_followed_from_its_checkpoints() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut s = crate::commands::coarse_normal(0.3);
+        s.numerics.checkpoint_every_s = 0.05;
+        s.output.vtu = true;
+        s.output.vtu_every_s = 0.05;
+        let stopped_at = |t| carus_labour::RunOptions { stop: None, stop_at_s: Some(t) };
+        carus_labour::run(&s, dir.path(), &stopped_at(0.1), &mut carus_labour::SilentObserver).unwrap();
+        // A run killed before it wrote its record, or still going.
+        std::fs::remove_file(dir.path().join(RUN_FILE)).unwrap();
+        assert!(in_progress(dir.path()));
+        let shown = RunShown::read(dir.path()).unwrap();
+        assert!(shown.in_progress && shown.detector.is_none());
+        assert_eq!(shown.floors.len(), 3, "the floor frames at 0, 0.05 and 0.1 s");
+        let scene = Scene::build(&shown.scenario).unwrap();
+        let replay = shown.replay(&scene).unwrap();
+        assert!((replay.duration_s() - 0.1).abs() < 1e-9 && replay.title.ends_with("in progress, from its last checkpoint"));
+        assert!(replay.layers_available().forces);
+        // A picture of it, from the checkpoint.
+        let png = dir.path().join("going.png");
+        run(&args(dir.path().to_path_buf(), 0.05, png.clone())).unwrap();
+        assert!(std::fs::read(&png).unwrap().starts_with(b"\x89PNG"));
+
+        let mut more = follow(dir.path().to_path_buf(), scene);
+        assert!(more().is_none(), "nothing new was written");
+        carus_labour::resume(dir.path(), &stopped_at(0.2), &mut carus_labour::SilentObserver).unwrap();
+        let (replay, goes_on) = more().expect("the run wrote more");
+        assert!((replay.duration_s() - 0.2).abs() < 1e-9 && !goes_on, "{}", replay.duration_s());
+        assert!(!replay.title.contains("in progress"), "the run wrote its record: {}", replay.title);
+        assert!(more().is_none());
+        assert!(!in_progress(dir.path()));
     }
 
     #[test]
