@@ -139,10 +139,24 @@ fn largest_eigenvalue(a: DMat3) -> f64 {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StableStep {
     pub dt_s: f64,
-    /// The [`NeckStiffness`] field that sets it.
+    /// The [`NeckStiffness`] field that sets it: a spring's, or a damper's.
     pub limited_by: &'static str,
     /// That field's value.
     pub stiffness: f64,
+}
+
+impl StableStep {
+    /// The limit of a spring of stiffness `k` (`spring` names its field
+    /// and value) with a damper on a point of `inverse_mass`, set by the
+    /// damper when it alone would allow a shorter step than the spring
+    /// alone (2 / (c / m) below 2 / omega), by the spring otherwise.
+    fn of(spring: (&'static str, f64), k: f64, damper: (&'static str, f64), inverse_mass: f64) -> StableStep {
+        let (limited_by, stiffness) = match damper.1 * inverse_mass > (k * inverse_mass).sqrt() {
+            true => damper,
+            false => spring,
+        };
+        StableStep { dt_s: damped_stable_step(k, inverse_mass, damper.1), limited_by, stiffness }
+    }
 }
 
 /// The head's anatomical axes in the head's body frame (CONVENTIONS.md):
@@ -389,26 +403,18 @@ impl Neck {
         let across = DMat3::IDENTITY - DMat3::from_cols(axis * axis.x, axis * axis.y, axis * axis.z);
         let along_inverse_mass = axis.dot(w * axis);
         let across_inverse_mass = largest_eigenvalue(across * w * across);
-        let c = s.linear_damping_n_s_per_m;
+        let damper = ("linear_damping_n_s_per_m", s.linear_damping_n_s_per_m);
+        // Past its limit the column's stop adds to the spring.
+        let compression = match s.end_range_compression_n_per_m > s.compression_n_per_m {
+            true => ("end_range_compression_n_per_m", s.end_range_compression_n_per_m),
+            false => ("compression_n_per_m", s.compression_n_per_m),
+        };
         let linear = [
-            // Past its limit the column's stop adds to the spring.
-            (
-                if s.end_range_compression_n_per_m > s.compression_n_per_m {
-                    "end_range_compression_n_per_m"
-                } else {
-                    "compression_n_per_m"
-                },
-                s.compression_n_per_m + s.end_range_compression_n_per_m,
-                along_inverse_mass,
-            ),
-            ("tension_n_per_m", s.tension_n_per_m, along_inverse_mass),
-            ("shear_n_per_m", s.shear_n_per_m, across_inverse_mass),
+            (compression, s.compression_n_per_m + s.end_range_compression_n_per_m, along_inverse_mass),
+            (("tension_n_per_m", s.tension_n_per_m), s.tension_n_per_m, along_inverse_mass),
+            (("shear_n_per_m", s.shear_n_per_m), s.shear_n_per_m, across_inverse_mass),
         ]
-        .map(|(name, k, inverse_mass)| StableStep {
-            dt_s: damped_stable_step(k, inverse_mass, c),
-            limited_by: name,
-            stiffness: k,
-        });
+        .map(|(spring, k, inverse_mass)| StableStep::of(spring, k, damper, inverse_mass));
 
         let (name, k) = [
             ("flexion_nm_per_deg", s.flexion_nm_per_deg),
@@ -422,16 +428,17 @@ impl Neck {
         let turning_inverse_inertia = largest_eigenvalue(
             model.inverse_inertia_world(h, state.orientation[h]) + model.inverse_inertia_world(t, state.orientation[t]),
         );
-        let rotational = StableStep {
-            // Past a limit the end-of-range spring adds to the joint's own.
-            dt_s: damped_stable_step(
-                (k + end_range) * 180.0 / std::f64::consts::PI,
-                turning_inverse_inertia,
-                s.rotational_damping_nm_s_per_rad,
-            ),
-            limited_by: if end_range > k { "end_range_stiffness_nm_per_deg" } else { name },
-            stiffness: k.max(end_range),
+        // Past a limit the end-of-range spring adds to the joint's own.
+        let spring = match end_range > k {
+            true => ("end_range_stiffness_nm_per_deg", end_range),
+            false => (name, k),
         };
+        let rotational = StableStep::of(
+            spring,
+            (k + end_range) * 180.0 / std::f64::consts::PI,
+            ("rotational_damping_nm_s_per_rad", s.rotational_damping_nm_s_per_rad),
+            turning_inverse_inertia,
+        );
         linear.into_iter().chain([rotational]).fold(
             StableStep { dt_s: f64::INFINITY, limited_by: "", stiffness: 0.0 },
             |a, b| if b.dt_s < a.dt_s { b } else { a },
@@ -773,7 +780,24 @@ mod tests {
         axial_only.stiffness.end_range_stiffness_nm_per_deg = 0.0;
         let step = axial_only.stable_step(&model, &state);
         assert_eq!(step.limited_by, "end_range_compression_n_per_m");
-        assert_eq!(step.stiffness, s.compression_n_per_m + s.end_range_compression_n_per_m);
+        // The value named is the field's own, as the scenario gives it; the
+        // step counts both springs.
+        assert_eq!(step.stiffness, s.end_range_compression_n_per_m);
+        axial_only.stiffness.end_range_compression_n_per_m = 0.0;
+        assert!(axial_only.stable_step(&model, &state).dt_s > 2.0 * step.dt_s);
+    }
+
+    /// A damper that alone allows a shorter step than its spring is named
+    /// as the limit, with its own value.
+    #[test]
+    fn a_damper_stronger_than_its_spring_sets_the_step() {
+        let (model, state, mut neck) = setup();
+        neck.stiffness.linear_damping_n_s_per_m *= 1e4;
+        let step = neck.stable_step(&model, &state);
+        assert_eq!((step.limited_by, step.stiffness), ("linear_damping_n_s_per_m", neck.stiffness.linear_damping_n_s_per_m));
+        neck.stiffness.linear_damping_n_s_per_m = 0.0;
+        neck.stiffness.rotational_damping_nm_s_per_rad *= 1e5;
+        assert_eq!(neck.stable_step(&model, &state).limited_by, "rotational_damping_nm_s_per_rad");
     }
 
     #[test]

@@ -35,7 +35,7 @@ pub enum FemError {
         last_good_time_s: f64,
         what: String,
     },
-    #[error("time step {dt_s:.6e} s is above the critical time step {critical_s:.6e} s; use a step at or below it, or let the solver sub-step (StepControl::SubStep)")]
+    #[error("time step {dt_s:.6e} s is above the critical time step {critical_s:.6e} s; use a step at or below it, or let the solver split it into sub-steps (in a `carus solve` job, `sub_stepping = true` under [solver])")]
     TimeStepAboveCritical { dt_s: f64, critical_s: f64 },
     #[error("time step must be positive and finite, got {dt_s}")]
     InvalidTimeStep { dt_s: f64 },

@@ -245,6 +245,13 @@ fn job_errors_name_the_key_the_line_and_the_fix() {
         assert!(err.contains(expected), "{err}\n  expected: {expected}");
         assert!(err.contains("fix:") || err.contains("hint:"), "{err}");
     }
+    // The critical-step error names the job's own way out.
+    let too_long = write_job(&dir, &format!("{BASE}\n[solver]\nend_time_s = 1.0\ntime_step_s = 0.5\n"));
+    let err = run_job(&too_long, &dir.join("out"), &RunOptions::default(), &mut |_| {}).unwrap_err().to_string();
+    assert!(err.contains("sub_stepping = true") && !err.contains("StepControl"), "{err}");
+    // The density is also read as scenarios spell it.
+    let spelt = write_job(&dir, &format!("{}\n[solver]\nend_time_s = 1e-4\n", BASE.replace("density_kg_m3", "density_kg_per_m3")));
+    run_job(&spelt, &dir.join("out-spelt"), &RunOptions::default(), &mut |_| {}).unwrap();
     let unit = write_job(&dir, &BASE.replace("\"mm\"", "\"cm\""));
     let err = run_job(&unit, &dir.join("out"), &RunOptions::default(), &mut |_| {})
         .unwrap_err()

@@ -106,7 +106,7 @@ pub enum LabourError {
     Diverged { time_s: f64, body: &'static str },
     /// A joint stiffer than the rigid step can integrate: the run would
     /// blow up within its first steps.
-    #[error("`{section}.{key}` = {stiffness}: its spring is unstable at the rigid step numerics.rigid_dt_s = {dt_s} s; the step must be below {limit_s:.3e} s for it\n  hint: set numerics.rigid_dt_s below {limit_s:.3e}, or lower {section}.{key}")]
+    #[error("`{section}.{key}` = {stiffness}: the joint is unstable at the rigid step numerics.rigid_dt_s = {dt_s} s; the step must be below {limit_s:.3e} s for it\n  hint: {}", unstable_joint_fix(section, key, *limit_s))]
     UnstableJoint {
         section: &'static str,
         key: &'static str,
@@ -115,4 +115,15 @@ pub enum LabourError {
         dt_s: f64,
         limit_s: f64,
     },
+}
+
+/// How to steady an unstable joint: a shorter rigid step where one that
+/// can still finish a run would do, else the value that the step cannot
+/// integrate brought back down.
+fn unstable_joint_fix(section: &str, key: &str, limit_s: f64) -> String {
+    let lower = format!("lower {section}.{key} back towards its default (`carus scenarios show normal` lists it)");
+    match limit_s >= scenario::SMALLEST_RIGID_DT_S {
+        true => format!("set numerics.rigid_dt_s below {limit_s:.3e}, or {lower}"),
+        false => format!("{lower}; the step it needs is below the smallest that can finish a run ({} s)", scenario::SMALLEST_RIGID_DT_S),
+    }
 }

@@ -215,9 +215,15 @@ pub fn resume(
 
 /// A resumed run continues the scenario it started with, which its
 /// checkpoint keeps; an edit of the folder's scenario.toml since would be
-/// silently ignored, so it is refused instead.
+/// silently ignored, so it is refused instead, and a deleted one is
+/// written again.
 fn check_scenario_file_unchanged(out_dir: &Path, scenario: &Scenario, base_dir: &Path) -> Result<(), LabourError> {
     let path = out_dir.join(output::SCENARIO_FILE);
+    // One deleted since is written again from the checkpoint's, so the
+    // folder keeps the scenario that reproduces it.
+    if !path.exists() {
+        return output::write_text(&path, &scenario.to_toml()?);
+    }
     let Ok(text) = std::fs::read_to_string(&path) else {
         return Ok(());
     };
@@ -693,6 +699,23 @@ mod tests {
         let scene = Scene::build(&s).unwrap();
         let e = Simulation::new(&scene).err().expect("refused").to_string();
         assert!(e.contains("`spine.joint_stiffness_n_per_m` = 100000000"), "{e}");
+
+        // A damper too strong is named, not the spring beside it; a value
+        // is shown as given, and a step too fine to finish a run is not
+        // offered as the fix.
+        s.spine.enabled = false;
+        s.neck.linear_damping_n_s_per_m = 1e8;
+        let e = Simulation::new(&Scene::build(&s).unwrap()).err().expect("refused").to_string();
+        assert!(e.contains("`neck.linear_damping_n_s_per_m` = 100000000") && e.contains("lower neck.linear_damping_n_s_per_m"), "{e}");
+        assert!(!e.contains("set numerics.rigid_dt_s below") && e.contains("smallest that can finish a run"), "{e}");
+        s.neck.linear_damping_n_s_per_m = carus_contact::NeckStiffness::default().linear_damping_n_s_per_m;
+        s.neck.compression_n_per_m = 1e12;
+        let e = Simulation::new(&Scene::build(&s).unwrap()).err().expect("refused").to_string();
+        assert!(e.contains("`neck.compression_n_per_m` = 1000000000000:"), "{e}");
+        s.neck.compression_n_per_m = carus_contact::NeckStiffness::default().compression_n_per_m;
+        s.neck.rotational_damping_nm_s_per_rad = 1e3;
+        let e = Simulation::new(&Scene::build(&s).unwrap()).err().expect("refused").to_string();
+        assert!(e.contains("`neck.rotational_damping_nm_s_per_rad`"), "{e}");
     }
 
     #[test]
@@ -1140,7 +1163,10 @@ mod tests {
         let e = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).expect_err("refused").to_string();
         assert!(e.contains("not one its scenario can reach") && e.contains("edited or damaged"), "{e}");
         std::fs::write(&path, &text).unwrap();
+        // A scenario.toml deleted since is written again, as the run started.
+        std::fs::remove_file(&scenario).unwrap();
         assert!(resume(dir.path(), &RunOptions::default(), &mut SilentObserver).is_ok());
+        assert_eq!(std::fs::read_to_string(&scenario).unwrap(), original);
     }
 
     /// The last step may end a hair past end_time_s when the rigid step

@@ -229,6 +229,11 @@ impl SpineSection {
     }
 }
 
+/// The finest rigid step a scenario may ask for, s: each rigid step takes
+/// about 0.4 ms of wall time (docs/PERFORMANCE.md), so a finer one could
+/// not finish a run.
+pub const SMALLEST_RIGID_DT_S: f64 = 1e-5;
+
 /// `[start]`: where the fetus starts (an input, CARDINAL_MOVEMENTS.md).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -745,7 +750,8 @@ impl<'de> DeserializeSeed<'de> for PelvisKey<'_> {
         let clash = |diameter: &str| {
             D::Error::custom(format!(
                 "`import` and `{diameter}` cannot be combined: an imported pelvis takes its diameters from its \
-                 landmarks; remove one"
+                 landmarks; remove one (from the command line, `--set 'pelvis={{{diameter}=...}}'` puts a \
+                 generated pelvis in place of the whole [pelvis] table)"
             ))
         };
         if key == "import" {
@@ -811,6 +817,18 @@ impl Scenario {
         let text = std::fs::read_to_string(path).map_err(|source| ScenarioError::Io {
             path: path.to_path_buf(),
             source: match source.kind() {
+                _ if path.is_dir() => std::io::Error::other(match path.join(crate::output::SCENARIO_FILE).is_file() {
+                    true => format!(
+                        "a folder, a run's by its look: `carus run --resume {0}` continues a run stopped part \
+                         way, `carus view {0}` replays it, and `carus run {1} --out NEW_FOLDER` runs its \
+                         scenario again",
+                        path.display(),
+                        path.join(crate::output::SCENARIO_FILE).display()
+                    ),
+                    false => "a folder, not a scenario file; give a scenario's TOML file or a built-in's name \
+                              (`carus scenarios` lists them)"
+                        .into(),
+                }),
                 std::io::ErrorKind::InvalidData => std::io::Error::new(
                     source.kind(),
                     "not a text file (UTF-8); a scenario is a TOML text file: `carus scenarios show normal \
@@ -1088,6 +1106,25 @@ impl Scenario {
                 ));
             }
         }
+        // A joint's angles are read within a half turn, so a limit past it is
+        // never reached: most likely degrees mistaken for something else.
+        for (key, value) in [
+            ("neck.flexion_limit_deg", self.neck.flexion_limit_deg),
+            ("neck.extension_limit_deg", self.neck.extension_limit_deg),
+            ("neck.lateral_bending_limit_deg", self.neck.lateral_bending_limit_deg),
+            ("neck.axial_rotation_limit_deg", self.neck.axial_rotation_limit_deg),
+            ("spine.bending_limit_deg", self.spine.bending_limit_deg),
+            ("spine.axial_rotation_limit_deg", self.spine.axial_rotation_limit_deg),
+        ] {
+            if value > 180.0 {
+                return Err(err(
+                    key,
+                    value,
+                    "is past a half turn, which no joint angle reaches, so the limit would never act",
+                    "degrees from 0 to 180; `carus scenarios show normal` gives the defaults",
+                ));
+            }
+        }
         let crushed = self.floor.crushed_volume_ratio;
         if !(crushed.is_finite() && (0.0..1.0).contains(&crushed)) {
             return Err(err(
@@ -1221,9 +1258,7 @@ impl Scenario {
                 "0.5 to 0.9",
             ));
         }
-        // Steps so small that a run could not finish: each rigid step takes
-        // about 0.4 ms of wall time (docs/PERFORMANCE.md).
-        if self.numerics.rigid_dt_s < 1e-5 {
+        if self.numerics.rigid_dt_s < SMALLEST_RIGID_DT_S {
             return Err(err(
                 "numerics.rigid_dt_s",
                 self.numerics.rigid_dt_s,
@@ -1499,6 +1534,11 @@ fn set_key(table: &mut toml::Table, key: &str, value: &str) -> Result<(), Scenar
                 ))
             }
         };
+    }
+    // An imported pelvis takes all its diameters from its landmarks: the
+    // import replaces a generated pelvis's table rather than joining it.
+    if key == "pelvis.import" {
+        section.clear();
     }
     section.insert(leaf.to_string(), parsed);
     Ok(())
@@ -1932,6 +1972,7 @@ mod tests {
         for (text, named) in [
             ("[contact]\nsample_spacing_mm = 0.004\n", "`contact.sample_spacing_mm` = 0.004"),
             ("[neck]\naxial_rotation_limit_deg = nan\n", "`neck.axial_rotation_limit_deg` = NaN"),
+            ("[neck]\naxial_rotation_limit_deg = 1000.0\n", "`neck.axial_rotation_limit_deg` = 1000"),
             ("[neck]\nlinear_damping_n_s_per_m = -1.0\n", "`neck.linear_damping_n_s_per_m` = -1"),
             ("[numerics]\nrigid_dt_s = 1e-300\n", "`numerics.rigid_dt_s` = 1e-300"),
             ("[numerics]\nfloor_step_fraction = 0.001\n", "`numerics.floor_step_fraction` = 0.001"),
@@ -2018,6 +2059,31 @@ mod tests {
 
     /// A mistake in `[pelvis]` is named at its own line and dotted path, as
     /// in every other table, whether the pelvis is generated or imported.
+    /// A folder given for a scenario file is named as one; a run's folder
+    /// gets the commands that use it.
+    #[test]
+    fn a_folder_given_for_a_scenario_says_what_to_do_with_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let e = Scenario::from_file(dir.path()).unwrap_err().to_string();
+        assert!(e.contains("a folder, not a scenario file") && e.contains("carus scenarios"), "{e}");
+        std::fs::write(dir.path().join(crate::output::SCENARIO_FILE), "").unwrap();
+        let e = Scenario::from_file(dir.path()).unwrap_err().to_string();
+        assert!(e.contains(&format!("carus run --resume {}", dir.path().display())) && e.contains("--out NEW_FOLDER"), "{e}");
+    }
+
+    /// From the command line an import replaces a generated pelvis, and a
+    /// generated pelvis's table replaces an import.
+    #[test]
+    fn a_pelvis_is_swapped_whole_from_the_command_line() {
+        let normal = Scenario::builtin("normal").unwrap();
+        let real = normal.with_setting("pelvis.import", "visible-human-female").unwrap();
+        assert!(matches!(real.pelvis, PelvisSpec::Imported { .. }), "{:?}", real.pelvis);
+        let back = real.with_setting("pelvis", "{inlet_ap_mm = 105.0}").unwrap();
+        assert_eq!(back.pelvis, PelvisSpec::Generated(PelvisDiameters { inlet_ap_mm: 105.0, ..Default::default() }));
+        let e = real.with_setting("pelvis.inlet_ap_mm", "105").unwrap_err().to_string();
+        assert!(e.contains("cannot be combined") && e.contains("--set 'pelvis={inlet_ap_mm=...}'"), "{e}");
+    }
+
     #[test]
     fn a_mistake_in_the_pelvis_table_names_its_line_and_key() {
         let s = parse("name = \"x\"\n[pelvis]\ninlet_ap_mm = 100.0\n").unwrap();

@@ -55,6 +55,10 @@ pub fn open(
     screenshot: Option<PathBuf>,
     follow: Option<Follow>,
 ) -> Result<(), ViewError> {
+    #[cfg(all(unix, not(target_os = "macos")))]
+    if std::env::var_os("DISPLAY").is_none_or(|d| d.is_empty()) {
+        return Err(ViewError::Window("no display: DISPLAY is not set".into()));
+    }
     let options = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default().with_inner_size([1200.0, 800.0]).with_title(replay.title.clone()),
         depth_buffer: DEPTH_BITS,
@@ -91,13 +95,26 @@ pub fn open(
             }))
         }),
     )
-    .map_err(|e| ViewError::Window(e.to_string()))?;
+    .map_err(|e| ViewError::Window(without_source_path(&e.to_string())))?;
     let outcome = saved.lock().ok().and_then(|s| s.clone());
     match (screenshot, outcome) {
         (None, _) => Ok(()),
         (Some(_), Some(Ok(()))) => Ok(()),
         (Some(path), Some(Err(problem))) => Err(ViewError::Screenshot { path, problem }),
         (Some(path), None) => Err(ViewError::Screenshot { path, problem: "the window closed before it was taken".into() }),
+    }
+}
+
+/// winit's errors say where in its source they arose ("os error at
+/// /root/.cargo/.../mod.rs:788: Failed to open connection to X server"):
+/// the user is told what failed, not where.
+fn without_source_path(message: &str) -> String {
+    match message.split_once(" at ").map(|(before, after)| (before, after.split_once(".rs:"))) {
+        Some((before, Some((_, rest)))) => {
+            let what = rest.split_once(": ").map_or(rest, |(_, what)| what);
+            format!("{before}: {what}")
+        }
+        _ => message.to_string(),
     }
 }
 
@@ -406,5 +423,18 @@ impl eframe::App for Viewer {
         if let Some(shot) = &mut self.screenshot {
             shot.step(ui.ctx());
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::without_source_path;
+
+    #[test]
+    fn a_window_error_says_what_failed_not_where() {
+        let winit = "winit EventLoopError: os error at /root/.cargo/registry/src/x/winit-0.30.13/src/platform_impl/linux/mod.rs:788: Failed to open connection to X server";
+        assert_eq!(without_source_path(winit), "winit EventLoopError: os error: Failed to open connection to X server");
+        let plain = "WGPU error: Failed to create surface for any enabled backend";
+        assert_eq!(without_source_path(plain), plain);
     }
 }

@@ -310,6 +310,41 @@ fn check_size(path: &Path, units: Units, landmarks: &PelvisLandmarks) -> Result<
     ))
 }
 
+/// How far a landmark may lie from the imported bone's surface, mm. Landmarks
+/// are points of the bone; one picked by hand in a viewer can sit a few
+/// millimetres off, while a mesh in another unit than the landmarks puts
+/// them tens of millimetres or more away.
+const LANDMARK_SURFACE_GAP_MAX_MM: f64 = 10.0;
+
+/// The landmarks must lie on the mesh: a mesh in another unit, or from
+/// another pelvis, leaves them off it, and the canal would not be the one
+/// they describe.
+fn check_landmarks_on_bone(path: &Path, mesh_path: &Path, units: Units, pelvis: &Pelvis) -> Result<(), ImportError> {
+    let (name, gap_mm) = pelvis
+        .landmarks
+        .named()
+        .into_iter()
+        .map(|(name, p)| (name, 1e3 * crate::pelvis::measure::distance_to_surface(&pelvis.surface, p)))
+        .fold(("", 0.0), |worst, next| if next.1 > worst.1 { next } else { worst });
+    if gap_mm <= LANDMARK_SURFACE_GAP_MAX_MM {
+        return Ok(());
+    }
+    let declared = match units {
+        Units::Millimetres => "mm",
+        Units::Metres => "m",
+    };
+    Err(file_error(
+        path,
+        format!(
+            "landmark `{name}` lies {gap_mm:.1} mm from the bone of {} (at most {LANDMARK_SURFACE_GAP_MAX_MM} mm \
+             allowed): the landmarks are not on this mesh; check that the mesh is in the landmarks' unit \
+             (`units = \"{declared}\"` is read for both; rescale the mesh if not) and that it is the pelvis \
+             they were picked on",
+            mesh_path.display()
+        ),
+    ))
+}
+
 /// [`import_pelvis`] for a landmarks file already read and its mesh's
 /// triangles (e.g. embedded in the program); `path` names the landmarks
 /// file in errors, `mesh_path` the mesh.
@@ -338,6 +373,7 @@ pub fn assemble_pelvis(
         path: path.to_path_buf(),
         source,
     })?;
+    check_landmarks_on_bone(path, &mesh_path, file.units, &pelvis)?;
     Ok(ImportedPelvis {
         pelvis,
         report,

@@ -371,6 +371,19 @@ fn landmark_file_mistakes_are_named_with_their_fix() {
     let err = import_pelvis(&metres).unwrap_err().to_string();
     assert!(err.contains("obstetric conjugate") && err.contains("units = \"m\""), "{err}");
 
+    // The landmarks (mm) over the same bone in metres: they lie far off it.
+    let glb = anatomy_assets_dir().join("visible-human-female-pelvis.glb");
+    let other_unit = edited_landmarks(&dir, |t| {
+        let stl = anatomy_assets_dir().join("visible-human-female-pelvis.stl");
+        t.replace(&format!("mesh = {:?}", stl.to_str().unwrap()), &format!("mesh = {:?}", glb.to_str().unwrap()))
+    });
+    let err = import_pelvis(&other_unit).unwrap_err().to_string();
+    assert!(
+        err.contains("edited.landmarks.toml") && err.contains("from the bone of") && err.contains("visible-human-female-pelvis.glb")
+            && err.contains("units = \"mm\""),
+        "{err}"
+    );
+
     let missing = edited_landmarks(&dir, |t| {
         t.lines()
             .filter(|l| !l.starts_with("coccyx_tip") && !l.starts_with("sacral_apex"))

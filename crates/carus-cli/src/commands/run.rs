@@ -160,7 +160,11 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
 /// A run stopped by its output (a full disk, a folder made read-only)
 /// keeps its last checkpoint: the error says how to go on from it.
 fn resumable(error: anyhow::Error, out_dir: &Path) -> anyhow::Error {
-    let by_output = matches!(error.downcast_ref::<LabourError>(), Some(LabourError::Output { .. }));
+    // Not when it is the checkpoint itself that cannot be read.
+    let by_output = matches!(
+        error.downcast_ref::<LabourError>(),
+        Some(LabourError::Output { path, .. }) if !path.ends_with(carus_labour::output::CHECKPOINT_FILE)
+    );
     if by_output && out_dir.join(carus_labour::output::CHECKPOINT_FILE).is_file() {
         anyhow::anyhow!(
             "{error:#}\n  hint: the last checkpoint is kept; once that is mended (space freed, \
@@ -782,6 +786,12 @@ mod tests {
         assert!(e.contains("No space left") && e.contains(&format!("carus run --resume {}", dir.path().display())), "{e}");
         let other = anyhow::anyhow!("the fetal head left the birth canal");
         assert!(!format!("{:#}", resumable(other, dir.path())).contains("--resume"));
+        // A checkpoint that cannot be read is no place to go on from.
+        let damaged = anyhow::Error::from(LabourError::Output {
+            path: dir.path().join("checkpoint.json"),
+            message: "not a whole JSON file; run the scenario again from the start".into(),
+        });
+        assert!(!format!("{:#}", resumable(damaged, dir.path())).contains("--resume"));
     }
 
     /// An out dir filled between its choice and its making (another run

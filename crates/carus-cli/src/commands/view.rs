@@ -52,6 +52,13 @@ pub fn run(args: &ViewArgs) -> anyhow::Result<Status> {
     let shown = RunShown::read(&args.run)?;
     let scene = Scene::build(&shown.scenario)?;
     let replay = shown.replay(&scene).with_context(|| args.run.display().to_string())?;
+    if args.forces && !replay.layers_available().forces {
+        anyhow::bail!(
+            "--forces: {} records no loads (a run written by a carus from before they were recorded); \
+             run its scenario again to draw its forces, or leave out --forces",
+            args.run.join(RUN_FILE).display()
+        );
+    }
     let layers = Layers { markers: args.landmarks, forces: args.forces };
     for (flag, path) in [("--picture", &args.picture), ("--screenshot", &args.screenshot)] {
         if let Some(path) = path.as_ref().filter(|p| !p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png"))) {
@@ -72,6 +79,9 @@ pub fn run(args: &ViewArgs) -> anyhow::Result<Status> {
         carus_view::open(replay, at, args.view.into(), layers, args.screenshot.clone(), follow)?;
         return Ok(Status::Success);
     };
+    if let Some(folder) = path.parent().filter(|f| !f.as_os_str().is_empty()) {
+        anyhow::ensure!(folder.is_dir(), "--picture: the folder {} does not exist; make it first", folder.display());
+    }
     let [width, height] = [args.size[0], args.size[1]];
     let picture = replay.picture(at, &replay.standard_camera(args.view.into()), layers, width, height)?;
     picture.save_png(path)?;
@@ -136,9 +146,13 @@ impl RunShown {
             title.push_str(" - in progress, from its last checkpoint");
         }
         let floors = scene_with_floors(scene, self.floors.iter().collect());
-        Ok(Replay::new(title, floors, history, self.detector.as_ref().or(detected.as_ref()))?
-            .with_forces(self.loads.clone(), scene.pivot_in_head, expulsion_at_pivot)?
-            .with_markers(pelvis_markers(&scene.pelvis)))
+        let replay = Replay::new(title, floors, history, self.detector.as_ref().or(detected.as_ref()))?;
+        // A run written before the loads were recorded has none to draw.
+        let replay = match self.loads.is_empty() {
+            true => replay,
+            false => replay.with_forces(self.loads.clone(), scene.pivot_in_head, expulsion_at_pivot)?,
+        };
+        Ok(replay.with_markers(pelvis_markers(&scene.pelvis)))
     }
 }
 

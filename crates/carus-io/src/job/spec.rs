@@ -56,6 +56,8 @@ pub enum Law {
 pub struct MaterialSpec {
     pub element_set: Option<String>,
     pub law: Law,
+    /// Also read as `density_kg_per_m3`, as scenarios spell it.
+    #[serde(alias = "density_kg_per_m3")]
     pub density_kg_m3: f64,
     pub shear_modulus_pa: Option<f64>,
     pub bulk_modulus_pa: Option<f64>,
