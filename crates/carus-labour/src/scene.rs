@@ -88,6 +88,9 @@ pub struct Scene {
     pub head_axes: HeadAxes,
     /// The atlanto-occipital pivot in the head's centre-of-mass frame.
     pub pivot_in_head: DVec3,
+    /// The head's landmarks (fontanelles, eminences, occiput...) in its
+    /// centre-of-mass frame, for pictures.
+    pub head_landmarks: Vec<(&'static str, DVec3)>,
     /// The whole trunk, or the thorax when the spine bends.
     pub trunk: Option<FetalBody>,
     /// The shoulders, the trunk's centre and its spine axis, in the frame
@@ -150,6 +153,7 @@ impl Scene {
             vertex: DVec3::Z,
         };
         let pivot_in_head = head_anatomy.landmarks.atlanto_occipital + head.frame_origin;
+        let head_landmarks = head_anatomy.landmarks.named().map(|(name, p)| (name, p + head.frame_origin)).to_vec();
 
         let mut bodies = RigidBodyModel::default();
         bodies.add(head.mass)?;
@@ -224,6 +228,7 @@ impl Scene {
             head_geometry,
             head_axes,
             pivot_in_head,
+            head_landmarks,
             trunk,
             trunk_geometry,
             lower_trunk,

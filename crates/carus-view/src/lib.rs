@@ -57,14 +57,25 @@ pub struct Replay {
     bounds: Bounds,
     /// The pelvis's landmarks, planes and axis (pelvis frame), if given.
     markers: Vec<RenderMesh>,
+    /// The head's landmarks in its body frame, moved with it.
+    head_markers: HeadMarkers,
     /// The run's loads, if given.
     forces: Option<Forces>,
+}
+
+/// The head's landmarks, drawn where the head is.
+#[derive(Debug, Clone, Default)]
+struct HeadMarkers {
+    points: Vec<(String, glam::DVec3)>,
+    radius_m: f32,
+    rgb: [f32; 3],
 }
 
 /// What is laid over a frame besides the anatomy.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
 pub struct Layers {
-    /// The pelvis's landmarks, obstetric planes and axis.
+    /// The pelvis's landmarks, obstetric planes and axis, and the head's
+    /// landmarks.
     pub markers: bool,
     /// The forces on the fetus as arrows.
     pub forces: bool,
@@ -103,6 +114,7 @@ impl Replay {
             stretch_range,
             bounds,
             markers: Vec::new(),
+            head_markers: HeadMarkers::default(),
             forces: None,
         })
     }
@@ -127,9 +139,20 @@ impl Replay {
         Ok(self)
     }
 
+    /// The replay with the head's landmarks (name, point in the head's
+    /// body frame) drawn with it as spheres of `radius_m` in `rgb`, with the
+    /// pelvis's markers.
+    pub fn with_head_markers(mut self, points: Vec<(String, glam::DVec3)>, radius_m: f32, rgb: [f32; 3]) -> Replay {
+        self.head_markers = HeadMarkers { points, radius_m, rgb };
+        self
+    }
+
     /// The layers this replay can lay over its frames.
     pub fn layers_available(&self) -> Layers {
-        Layers { markers: !self.markers.is_empty(), forces: self.forces.is_some() }
+        Layers {
+            markers: !self.markers.is_empty() || !self.head_markers.points.is_empty(),
+            forces: self.forces.is_some(),
+        }
     }
 
     /// Time of the last sample, s.
@@ -150,6 +173,9 @@ impl Replay {
         let mut meshes = meshes_at_sample(&self.scene, &self.history, k, self.stretch_range).0;
         if layers.markers {
             meshes.extend(self.markers.iter().cloned());
+            let head = &self.history.samples[k].head;
+            let HeadMarkers { points, radius_m, rgb } = &self.head_markers;
+            meshes.extend(points.iter().map(|(name, p)| RenderMesh::sphere(name.clone(), head.point(*p).as_vec3().to_array(), *radius_m, *rgb)));
         }
         if let Some(forces) = self.forces.as_ref().filter(|_| layers.forces) {
             // The floor pushes from around the head: see-through, it shows

@@ -234,15 +234,21 @@ mod forces {
         let k = 7;
         let (replay, _, _, _) = loaded(k);
         let marker = RenderMesh::sphere("sacral_promontory", [0.0, 0.0, 0.1], 0.003, [1.0, 0.0, 0.0]);
-        let replay = replay.with_markers(vec![marker]);
+        let lambda = DVec3::new(-0.05, 0.0, 0.03);
+        let replay = replay.with_markers(vec![marker]).with_head_markers(vec![("lambda".into(), lambda)], 0.0025, [1.0, 0.0, 0.0]);
         assert_eq!(replay.layers_available(), Layers { markers: true, forces: true });
         let names = |layers| replay.meshes(k, layers).iter().map(|m| m.name.clone()).collect::<Vec<_>>();
         let anatomy = ["fetal head", "fetal trunk", "pelvic floor", "pelvis"];
         assert_eq!(names(Layers::default()), anatomy);
-        assert_eq!(names(Layers { markers: true, forces: false })[4..], ["sacral_promontory"]);
+        assert_eq!(names(Layers { markers: true, forces: false })[4..], ["sacral_promontory", "lambda"]);
         let both = names(Layers { markers: true, forces: true });
-        assert_eq!(both[..5], names(Layers { markers: true, forces: false })[..]);
-        assert_eq!(both[5..], ["force: expulsion", "force: guide", "force: sacrum", "force: symphysis on the trunk"]);
+        assert_eq!(both[..6], names(Layers { markers: true, forces: false })[..]);
+        assert_eq!(both[6..], ["force: expulsion", "force: guide", "force: sacrum", "force: symphysis on the trunk"]);
+        // The head's landmark moves with the head.
+        let sphere = &replay.meshes(k, Layers { markers: true, forces: false })[5];
+        let centre = sphere.positions.iter().map(|p| Vec3::from(*p)).sum::<Vec3>() / sphere.positions.len() as f32;
+        let at = replay.history.samples[k].head.point(lambda).as_vec3();
+        assert!(centre.distance(at) < 1e-4, "{centre} against {at}");
         // The floor turns see-through only under the forces.
         let floor_opacity = |layers| replay.meshes(k, layers)[2].colour[3];
         assert_eq!(floor_opacity(Layers::default()), 1.0);

@@ -340,7 +340,7 @@ impl Viewer {
         }
         ui.separator();
         let available = self.replay.layers_available();
-        ui.add_enabled(available.markers, egui::Checkbox::new(&mut self.layers.markers, "landmarks, planes and axis"));
+        ui.add_enabled(available.markers, egui::Checkbox::new(&mut self.layers.markers, "landmarks (pelvis and head), planes and axis"));
         ui.add_enabled(available.forces, egui::Checkbox::new(&mut self.layers.forces, "forces on the fetus"));
         if self.layers.forces {
             self.force_legend(ui, sample);

@@ -163,7 +163,7 @@ const TRUNK_RGB: [f32; 3] = [0.86, 0.64, 0.56];
 const LEVATOR_RGB: [f32; 3] = [0.78, 0.42, 0.42];
 const PERINEAL_BODY_RGB: [f32; 3] = [0.55, 0.27, 0.35];
 /// Landmarks of CONVENTIONS.md, and the further ones the planes and obliques use.
-const LANDMARK_RGB: [f32; 3] = [0.80, 0.08, 0.10];
+pub(super) const LANDMARK_RGB: [f32; 3] = [0.80, 0.08, 0.10];
 const AUXILIARY_LANDMARK_RGB: [f32; 3] = [0.15, 0.30, 0.75];
 const ATTACHED_RGB: [f32; 3] = [0.20, 0.20, 0.20];
 const AXIS_RGB: [f32; 3] = [0.10, 0.55, 0.25];
@@ -177,7 +177,7 @@ const PLANE_RGB: [[f32; 3]; 4] = [
 const PLANE_OPACITY: f32 = 0.3;
 /// Marker sizes, m: visible on a 384 px tile of the whole pelvis.
 const PELVIS_MARKER_M: f32 = 3.5e-3;
-const HEAD_MARKER_M: f32 = 2.5e-3;
+pub(super) const HEAD_MARKER_M: f32 = 2.5e-3;
 const ATTACHED_MARKER_M: f32 = 1.2e-3;
 const AXIS_RADIUS_M: f32 = 1.5e-3;
 /// Points along the pelvic axis tube and round each plane's outline.

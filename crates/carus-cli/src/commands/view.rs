@@ -16,7 +16,7 @@ use carus_labour::scenario::ActsOn;
 use carus_labour::{Scenario, Scene};
 use carus_view::{Follow, Layers, Replay};
 
-use super::render::{pelvis_markers, ViewName};
+use super::render::{pelvis_markers, ViewName, HEAD_MARKER_M, LANDMARK_RGB};
 use super::run::{read_record, run_title, scene_with_floors};
 use super::Status;
 
@@ -39,7 +39,7 @@ pub struct ViewArgs {
     /// Width and height of the picture, px.
     #[arg(long, requires = "picture", num_args = 2, default_values = ["800", "600"], value_names = ["WIDTH", "HEIGHT"])]
     pub size: Vec<u32>,
-    /// Show the pelvis's landmarks, obstetric planes and axis (a check box in the window).
+    /// Show the pelvis's landmarks, obstetric planes and axis, and the head's landmarks (a check box in the window).
     #[arg(long)]
     pub landmarks: bool,
     /// Show the forces on the fetus as arrows: each part of the canal, the
@@ -152,7 +152,10 @@ impl RunShown {
             true => replay,
             false => replay.with_forces(self.loads.clone(), scene.pivot_in_head, expulsion_at_pivot)?,
         };
-        Ok(replay.with_markers(pelvis_markers(&scene.pelvis)))
+        let head_landmarks = scene.head_landmarks.iter().map(|(name, p)| (name.to_string(), *p)).collect();
+        Ok(replay
+            .with_markers(pelvis_markers(&scene.pelvis))
+            .with_head_markers(head_landmarks, HEAD_MARKER_M, LANDMARK_RGB))
     }
 }
 
