@@ -61,15 +61,22 @@ pub struct Checkpoint {
 }
 
 pub fn write_checkpoint(dir: &Path, checkpoint: &Checkpoint) -> Result<(), LabourError> {
-    // Write then rename, so an interrupted write never leaves a broken checkpoint.
-    let path = dir.join(CHECKPOINT_FILE);
-    let partial = dir.join("checkpoint.json.partial");
-    if let Err(e) = write_json(&partial, checkpoint) {
+    write_json_whole(&dir.join(CHECKPOINT_FILE), checkpoint)
+}
+
+/// Writes `value` as JSON beside `path`, then renames it there, so that an
+/// interrupted write never leaves a broken file and a reader (the viewer
+/// following a run) never meets a half-written one.
+pub fn write_json_whole<T: Serialize>(path: &Path, value: &T) -> Result<(), LabourError> {
+    let mut partial = path.as_os_str().to_owned();
+    partial.push(".partial");
+    let partial = std::path::PathBuf::from(partial);
+    if let Err(e) = write_json(&partial, value) {
         // On a full disk the half-written copy must not keep the space.
         let _ = std::fs::remove_file(&partial);
         return Err(e);
     }
-    std::fs::rename(&partial, &path).map_err(|e| output_error(&path, e))
+    std::fs::rename(&partial, path).map_err(|e| output_error(path, e))
 }
 
 /// How a run ended, as its run.json's summary says.

@@ -630,7 +630,7 @@ fn finish(
             checkpoint: output::CHECKPOINT_FILE.into(),
         },
     };
-    output::write_json(&out_dir.join(output::RUN_FILE), &record)?;
+    output::write_json_whole(&out_dir.join(output::RUN_FILE), &record)?;
     Ok(record)
 }
 

@@ -6,7 +6,8 @@
 //! atlanto-occipital pivot (`run.json`'s `loads`). Such a pair acts along
 //! one line, its central axis (Poinsot), up to a couple about that line;
 //! the arrow lies on that line and ends where the line enters the body it
-//! pushes, so it points at the surface the force is applied to.
+//! pushes, so it points at the surface the force is applied to (or, for a
+//! line that passes the body by, at the body's point nearest it).
 
 use carus_analysis::{ContactSite, PoseHistory, RigidPose};
 use carus_contact::TriangleCollider;
@@ -132,11 +133,13 @@ impl Forces {
             let (Some(pose), Some(surface)) = (pose(body), self.bodies[body as usize].as_ref()) else {
                 return;
             };
-            let tip_m = entry_point(surface, &pose, line_point, force_n).unwrap_or(line_point);
+            let tip_m = entry_point(surface, &pose, line_point, force_n);
             arrows.push(Arrow { label, force_n, tip_m, rgb });
         };
-        let expulsion_on = match (self.expulsion_at_pivot, sample.trunk) {
-            (false, Some(trunk)) => (Body::Trunk, trunk.position_m),
+        // The push acts on the breech's body: the lower trunk when the spine bends.
+        let breech = sample.lower_trunk.map(|p| (Body::LowerTrunk, p)).or(sample.trunk.map(|p| (Body::Trunk, p)));
+        let expulsion_on = match (self.expulsion_at_pivot, breech) {
+            (false, Some((body, pose))) => (body, pose.position_m),
             _ => (Body::Head, pivot),
         };
         draw("expulsion".into(), expulsion_on.0, sample.expulsion_force_n, expulsion_on.1, EXPULSION_RGB);
@@ -180,9 +183,15 @@ fn central_axis_point(force: DVec3, moment: DVec3, centre: DVec3) -> DVec3 {
     centre + force.cross(moment) / force.length_squared()
 }
 
-/// Where the line through `point` along `force` enters the posed body.
-fn entry_point(surface: &TriangleCollider, pose: &RigidPose, point: DVec3, force: DVec3) -> Option<DVec3> {
+/// Where the line through `point` along `force` enters the posed body; a
+/// line that passes the body by (a large couple about a small force) ends
+/// on the body's surface point nearest `point`.
+fn entry_point(surface: &TriangleCollider, pose: &RigidPose, point: DVec3, force: DVec3) -> DVec3 {
     let to_body = pose.orientation.inverse();
-    let entry = surface.entry_point(to_body * (point - pose.position_m), to_body * force)?;
-    Some(pose.point(entry))
+    let local = to_body * (point - pose.position_m);
+    let entry = surface
+        .entry_point(local, to_body * force)
+        .or_else(|| surface.closest_point(local, f64::MAX).map(|p| p.point))
+        .unwrap_or(local);
+    pose.point(entry)
 }

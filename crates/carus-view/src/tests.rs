@@ -181,6 +181,8 @@ mod forces {
                         site(Body::Head, ContactSite::Sacrum, on_head, (sample.head.position_m - on_head).normalize() * 40.0, pivot),
                         site(Body::Trunk, ContactSite::Symphysis, on_trunk, (trunk.position_m - on_trunk).normalize() * 25.0, pivot),
                         site(Body::Head, ContactSite::PelvicSidewall, on_head, DVec3::X, pivot),
+                        // Along the surface, off the head's centre: its moment places it.
+                        site(Body::Head, ContactSite::PubicArch, on_head, DVec3::new(12.0, 0.0, 16.0), pivot),
                     ],
                     false => Vec::new(),
                 },
@@ -209,11 +211,15 @@ mod forces {
         let (replay, _, on_head, on_trunk) = loaded(k);
         let arrows = replay.arrows(k);
         let labels: Vec<&str> = arrows.iter().map(|a| a.label.as_str()).collect();
-        assert_eq!(labels, ["expulsion", "guide", "sacrum", "symphysis on the trunk"]);
+        assert_eq!(labels, ["expulsion", "guide", "sacrum", "symphysis on the trunk", "pubic arch"]);
         assert!(arrows[2].tip_m.distance(on_head) < 1e-6, "{} against {on_head}", arrows[2].tip_m);
         assert!(arrows[3].tip_m.distance(on_trunk) < 1e-6, "{} against {on_trunk}", arrows[3].tip_m);
         let sample = &replay.history.samples[k];
         let in_line = |a: &crate::forces::Arrow, centre: DVec3| (a.tip_m - centre).cross(a.force_n.normalize()).length();
+        // An off-centre force's arrow lies on its own line, through the
+        // point it pushes, not through the head's centre.
+        assert!(in_line(&arrows[4], on_head) < 1e-9, "{}", in_line(&arrows[4], on_head));
+        assert!(in_line(&arrows[4], replay.history.samples[k].head.position_m) > 1e-3);
         let (trunk, head) = (sample.trunk.unwrap(), sample.head);
         assert!(in_line(&arrows[0], trunk.position_m) < 1e-9 && in_line(&arrows[1], head.position_m) < 1e-9);
         // The expulsion pushes the breech: its arrow ends behind the trunk's centre.
@@ -243,7 +249,7 @@ mod forces {
         assert_eq!(names(Layers { markers: true, forces: false })[4..], ["sacral_promontory", "lambda"]);
         let both = names(Layers { markers: true, forces: true });
         assert_eq!(both[..6], names(Layers { markers: true, forces: false })[..]);
-        assert_eq!(both[6..], ["force: expulsion", "force: guide", "force: sacrum", "force: symphysis on the trunk"]);
+        assert_eq!(both[6..], ["force: expulsion", "force: guide", "force: sacrum", "force: symphysis on the trunk", "force: pubic arch"]);
         // The head's landmark moves with the head.
         let sphere = &replay.meshes(k, Layers { markers: true, forces: false })[5];
         let centre = sphere.positions.iter().map(|p| Vec3::from(*p)).sum::<Vec3>() / sphere.positions.len() as f32;
@@ -254,7 +260,7 @@ mod forces {
         assert_eq!(floor_opacity(Layers::default()), 1.0);
         assert!(floor_opacity(Layers { markers: false, forces: true }) < 1.0);
         // Said in words, largest first.
-        assert_eq!(replay.force_readout(k), ["expulsion 80 N", "sacrum 40 N", "symphysis on the trunk 25 N", "guide 10 N"]);
+        assert_eq!(replay.force_readout(k), ["expulsion 80 N", "sacrum 40 N", "symphysis on the trunk 25 N", "pubic arch 20 N", "guide 10 N"]);
         // Without loads there is nothing to lay over.
         let (bare, _) = textbook();
         assert_eq!(bare.layers_available(), Layers::default());

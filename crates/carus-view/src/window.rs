@@ -84,7 +84,7 @@ pub fn open(
                 sample_count: SAMPLES,
             };
             let painter = MeshPainter::new(&state.device, &state.queue, target);
-            state.renderer.write().callback_resources.insert(GpuScene { painter, meshes: Vec::new(), shown: None });
+            state.renderer.write().callback_resources.insert(GpuScene { painter, meshes: Vec::new(), shown: None, pelvis_at: None });
             Ok(Box::new(Viewer {
                 screenshot: shot,
                 time_s: start_s,
@@ -175,6 +175,8 @@ struct GpuScene {
     meshes: Vec<GpuMesh>,
     /// The sample and layers whose meshes are uploaded.
     shown: Option<Shown>,
+    /// Where the pelvis is uploaded.
+    pelvis_at: Option<usize>,
 }
 
 /// A replay (counted up each time a followed run gives a new one), one of
@@ -202,29 +204,35 @@ impl egui_wgpu::CallbackTrait for Frame {
             return Vec::new();
         };
         if scene.shown != Some(self.shown) {
-            // The pelvis keeps its index (the anatomy comes first, the
-            // layers after it) and stays as uploaded. The rest is rewritten
-            // in place where it kept its counts (the fetus, the floor, an
-            // arrow redrawn), uploaded anew where not, and what is no
-            // longer shown is dropped.
+            // The pelvis stays as uploaded where it was uploaded. The rest is
+            // rewritten in place where it kept its counts (the fetus, the
+            // floor, an arrow redrawn), uploaded anew where not, and what is
+            // no longer shown is dropped. A mesh that cannot be uploaded
+            // ends the list there, and the next frame tries again.
+            let mut complete = true;
             for (i, mesh) in self.meshes.iter().enumerate() {
-                match scene.meshes.get_mut(i) {
-                    Some(_) if mesh.name == PELVIS => {}
+                let kept = match scene.meshes.get_mut(i) {
+                    Some(_) if mesh.name == PELVIS && scene.pelvis_at == Some(i) => true,
                     Some(gpu) => {
-                        if scene.painter.update(queue, gpu, mesh, i).is_err() {
-                            if let Ok(fresh) = scene.painter.upload(device, mesh, i) {
-                                *gpu = fresh;
-                            }
-                        }
+                        scene.painter.update(queue, gpu, mesh, i).is_ok()
+                            || scene.painter.upload(device, mesh, i).map(|fresh| *gpu = fresh).is_ok()
                     }
-                    None => match scene.painter.upload(device, mesh, i) {
-                        Ok(gpu) => scene.meshes.push(gpu),
-                        Err(_) => break,
-                    },
+                    None => scene.painter.upload(device, mesh, i).map(|gpu| scene.meshes.push(gpu)).is_ok(),
+                };
+                if !kept {
+                    scene.meshes.truncate(i);
+                    complete = false;
+                    break;
+                }
+                if mesh.name == PELVIS {
+                    scene.pelvis_at = Some(i);
+                } else if scene.pelvis_at == Some(i) {
+                    scene.pelvis_at = None;
                 }
             }
             scene.meshes.truncate(self.meshes.len());
-            scene.shown = Some(self.shown);
+            scene.pelvis_at = scene.pelvis_at.filter(|&i| i < scene.meshes.len());
+            scene.shown = complete.then_some(self.shown);
         }
         scene.painter.prepare(queue, &self.camera, &Lights::default(), self.aspect);
         Vec::new()

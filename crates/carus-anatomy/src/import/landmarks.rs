@@ -338,8 +338,9 @@ fn check_landmarks_on_bone(path: &Path, mesh_path: &Path, units: Units, pelvis: 
         format!(
             "landmark `{name}` lies {gap_mm:.1} mm from the bone of {} (at most {LANDMARK_SURFACE_GAP_MAX_MM} mm \
              allowed): the landmarks are not on this mesh; check that the mesh is in the landmarks' unit \
-             (`units = \"{declared}\"` is read for both; rescale the mesh if not) and that it is the pelvis \
-             they were picked on",
+             (`units = \"{declared}\"` is read for both; rescale the mesh if not), that it is the pelvis \
+             they were picked on, and that it has the bone `{name}` lies on (a segmentation can leave out \
+             the coccyx or the pubic rami)",
             mesh_path.display()
         ),
     ))

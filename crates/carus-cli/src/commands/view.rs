@@ -10,14 +10,14 @@ use std::time::SystemTime;
 use anyhow::Context;
 use carus_analysis::{DetectorReport, PoseSample};
 use carus_labour::loads::LoadSample;
-use carus_labour::output::{read_checkpoint, CHECKPOINT_FILE, RUN_FILE};
+use carus_labour::output::{read_checkpoint, run_ending, CHECKPOINT_FILE, RUN_FILE};
 use carus_labour::record::FloorAtMoment;
 use carus_labour::scenario::ActsOn;
 use carus_labour::{Scenario, Scene};
 use carus_view::{Follow, Layers, Replay};
 
 use super::render::{pelvis_markers, ViewName, HEAD_MARKER_M, LANDMARK_RGB};
-use super::run::{read_record, run_title, scene_with_floors};
+use super::run::{read_record, run_ended, run_title, scene_with_floors};
 use super::Status;
 
 #[derive(clap::Args)]
@@ -75,7 +75,7 @@ pub fn run(args: &ViewArgs) -> anyhow::Result<Status> {
         if let Some(folder) = args.screenshot.as_ref().and_then(|p| p.parent()).filter(|f| !f.as_os_str().is_empty()) {
             anyhow::ensure!(folder.is_dir(), "--screenshot: the folder {} does not exist; make it first", folder.display());
         }
-        let follow = shown.in_progress.then(|| follow(args.run.clone(), scene));
+        let follow = (!run_ended(&args.run)).then(|| follow(args.run.clone(), scene));
         carus_view::open(replay, at, args.view.into(), layers, args.screenshot.clone(), follow)?;
         return Ok(Status::Success);
     };
@@ -109,20 +109,16 @@ struct RunShown {
 
 impl RunShown {
     fn read(dir: &Path) -> anyhow::Result<RunShown> {
-        if !in_progress(dir) {
-            let record = read_record(dir)?;
-            let mut floors = carus_labour::floor_frames(dir, &record);
-            floors.extend(record.key_moments.iter().filter_map(|m| m.floor.clone()));
-            return Ok(RunShown {
-                scenario: record.scenario,
-                samples: record.history.samples,
-                detector: record.detector,
-                loads: record.loads,
-                floors,
-                in_progress: false,
-            });
+        if !checkpoint_is_newer(dir) {
+            return RunShown::from_record(dir);
         }
         let checkpoint = read_checkpoint(dir)?;
+        // A folder copied without its files' times can date the checkpoint
+        // after a record that holds as much: the record is then the run.
+        let checkpoint_s = checkpoint.state.samples.last().map_or(0.0, |s| s.time_s);
+        if run_ending(dir).is_some_and(|e| e.simulated_s >= checkpoint_s) {
+            return RunShown::from_record(dir);
+        }
         Ok(RunShown {
             scenario: Scenario::parse(&dir.join(CHECKPOINT_FILE), &checkpoint.scenario_toml, checkpoint.base_dir.clone())?,
             floors: carus_labour::floor_frames_at(dir, &checkpoint.frame_times),
@@ -130,6 +126,20 @@ impl RunShown {
             detector: None,
             loads: checkpoint.state.loads,
             in_progress: true,
+        })
+    }
+
+    fn from_record(dir: &Path) -> anyhow::Result<RunShown> {
+        let record = read_record(dir)?;
+        let mut floors = carus_labour::floor_frames(dir, &record);
+        floors.extend(record.key_moments.iter().filter_map(|m| m.floor.clone()));
+        Ok(RunShown {
+            scenario: record.scenario,
+            samples: record.history.samples,
+            detector: record.detector,
+            loads: record.loads,
+            floors,
+            in_progress: false,
         })
     }
 
@@ -159,23 +169,27 @@ impl RunShown {
     }
 }
 
-/// Whether the run in `dir` is still going (or was killed before it wrote
-/// its record): its checkpoint is newer than its record, or it has none.
-fn in_progress(dir: &Path) -> bool {
-    match (modified(&dir.join(CHECKPOINT_FILE)), modified(&dir.join(RUN_FILE))) {
+/// Whether the run in `dir` may hold more in its checkpoint than in its
+/// record (a run still going, or killed before it wrote its record): the
+/// checkpoint is newer than the record, or there is no record, and the
+/// run is not over (`RunShown::read` then compares what the two hold).
+fn checkpoint_is_newer(dir: &Path) -> bool {
+    let newer = match (modified(&dir.join(CHECKPOINT_FILE)), modified(&dir.join(RUN_FILE))) {
         (Some(checkpoint), Some(record)) => checkpoint > record,
         (Some(_), None) => true,
         _ => false,
-    }
+    };
+    newer && !run_ended(dir)
 }
 
 fn modified(path: &Path) -> Option<SystemTime> {
     std::fs::metadata(path).and_then(|m| m.modified()).ok()
 }
 
-/// The window's follower of a run still going: each call reads the run
-/// again if it wrote a checkpoint or its record since the last call, and
-/// says whether it still goes on.
+/// The window's follower of a run not over (going, or stopped part way and
+/// perhaps resumed): each call reads the run again if it wrote a
+/// checkpoint or its record since the last call read it, and says whether
+/// the run may still go on.
 fn follow(dir: PathBuf, scene: Scene) -> Follow {
     let seen = |dir: &Path| (modified(&dir.join(CHECKPOINT_FILE)), modified(&dir.join(RUN_FILE)));
     let mut last = seen(&dir);
@@ -184,9 +198,10 @@ fn follow(dir: PathBuf, scene: Scene) -> Follow {
         if now == last {
             return None;
         }
+        let replay = RunShown::read(&dir).and_then(|shown| shown.replay(&scene)).ok()?;
+        // Only once read: a write under way is read again at the next call.
         last = now;
-        let shown = RunShown::read(&dir).ok()?;
-        Some((shown.replay(&scene).ok()?, shown.in_progress))
+        Some((replay, !run_ended(&dir)))
     })
 }
 
@@ -246,7 +261,7 @@ mod tests {
         carus_labour::run(&s, dir.path(), &stopped_at(0.1), &mut carus_labour::SilentObserver).unwrap();
         // A run killed before it wrote its record, or still going.
         std::fs::remove_file(dir.path().join(RUN_FILE)).unwrap();
-        assert!(in_progress(dir.path()));
+        assert!(checkpoint_is_newer(dir.path()));
         let shown = RunShown::read(dir.path()).unwrap();
         assert!(shown.in_progress && shown.detector.is_none());
         assert_eq!(shown.floors.len(), 3, "the floor frames at 0, 0.05 and 0.1 s");
@@ -263,10 +278,20 @@ mod tests {
         assert!(more().is_none(), "nothing new was written");
         carus_labour::resume(dir.path(), &stopped_at(0.2), &mut carus_labour::SilentObserver).unwrap();
         let (replay, goes_on) = more().expect("the run wrote more");
-        assert!((replay.duration_s() - 0.2).abs() < 1e-9 && !goes_on, "{}", replay.duration_s());
+        // Stopped part way again: it may be resumed, so it is still followed.
+        assert!((replay.duration_s() - 0.2).abs() < 1e-9 && goes_on, "{}", replay.duration_s());
         assert!(!replay.title.contains("in progress"), "the run wrote its record: {}", replay.title);
         assert!(more().is_none());
-        assert!(!in_progress(dir.path()));
+        assert!(!checkpoint_is_newer(dir.path()));
+        // A copy that dates its checkpoint after its record shows the
+        // record, which holds as much.
+        let checkpoint = std::fs::read(dir.path().join(CHECKPOINT_FILE)).unwrap();
+        std::fs::write(dir.path().join(CHECKPOINT_FILE), checkpoint).unwrap();
+        assert!(checkpoint_is_newer(dir.path()) && !RunShown::read(dir.path()).unwrap().in_progress);
+        // Run to its end, it is over.
+        carus_labour::resume(dir.path(), &carus_labour::RunOptions::default(), &mut carus_labour::SilentObserver).unwrap();
+        let (replay, goes_on) = more().expect("the run wrote more");
+        assert!((replay.duration_s() - 0.3).abs() < 1e-9 && !goes_on, "{}", replay.duration_s());
     }
 
     #[test]
