@@ -75,7 +75,7 @@ pub fn run(args: &ViewArgs) -> anyhow::Result<Status> {
         if let Some(folder) = args.screenshot.as_ref().and_then(|p| p.parent()).filter(|f| !f.as_os_str().is_empty()) {
             anyhow::ensure!(folder.is_dir(), "--screenshot: the folder {} does not exist; make it first", folder.display());
         }
-        let follow = (!run_ended(&args.run)).then(|| follow(args.run.clone(), scene));
+        let follow = (!run_ended(&args.run)).then(|| follow_in_background(args.run.clone(), scene));
         carus_view::open(replay, at, args.view.into(), layers, args.screenshot.clone(), follow)?;
         return Ok(Status::Success);
     };
@@ -190,10 +190,10 @@ fn modified(path: &Path) -> Option<SystemTime> {
 /// perhaps resumed): each call reads the run again if it wrote a
 /// checkpoint or its record since the last call read it, and says whether
 /// the run may still go on.
-fn follow(dir: PathBuf, scene: Scene) -> Follow {
+fn follow(dir: PathBuf, scene: Scene) -> impl FnMut() -> Option<(Replay, bool)> + Send {
     let seen = |dir: &Path| (modified(&dir.join(CHECKPOINT_FILE)), modified(&dir.join(RUN_FILE)));
     let mut last = seen(&dir);
-    Box::new(move || {
+    move || {
         let now = seen(&dir);
         if now == last {
             return None;
@@ -202,7 +202,25 @@ fn follow(dir: PathBuf, scene: Scene) -> Follow {
         // Only once read: a write under way is read again at the next call.
         last = now;
         Some((replay, !run_ended(&dir)))
-    })
+    }
+}
+
+/// `follow` on a thread of its own, asking once a second, so that reading
+/// a checkpoint (megabytes of JSON, the detector, the replay's surfaces)
+/// never holds up the window; the window takes what it has read.
+fn follow_in_background(dir: PathBuf, scene: Scene) -> Follow {
+    let (sender, read) = std::sync::mpsc::channel();
+    let mut more = follow(dir, scene);
+    std::thread::spawn(move || loop {
+        if let Some((replay, goes_on)) = more() {
+            // The window closed: nothing is waiting for more.
+            if sender.send((replay, goes_on)).is_err() || !goes_on {
+                return;
+            }
+        }
+        std::thread::sleep(std::time::Duration::from_secs(1));
+    });
+    Box::new(move || read.try_iter().last())
 }
 
 #[cfg(test)]
