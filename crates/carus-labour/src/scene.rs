@@ -551,6 +551,12 @@ impl Scene {
         }
     }
 
+    /// Whether the expulsion force acts at the neck's pivot (no trunk, or
+    /// `expulsion.acts_on = "pivot"`) rather than on the breech's body.
+    pub fn expulsion_at_pivot(&self) -> bool {
+        self.trunk.is_none() || self.scenario.expulsion.acts_on == crate::scenario::ActsOn::Pivot
+    }
+
     /// The body the expulsion pushes when it acts on the trunk: the
     /// segment with the breech.
     pub fn breech_body(&self) -> usize {

@@ -115,6 +115,7 @@ impl Demo {
                     .map(|_| self.fetus.trunk.surface.clone()),
                 lower_trunk: None,
                 floor: Some(self.floor.clone()),
+                forces: Vec::new(),
             }),
         }
     }

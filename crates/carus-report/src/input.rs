@@ -84,6 +84,20 @@ pub struct ReportScene {
     pub lower_trunk: Option<TriSurface>,
     /// The pelvic floor, deforming, coloured by stretch.
     pub floor: Option<FloorSurface>,
+    /// The forces on the fetus at pose samples, drawn as arrows in the
+    /// pictures of the key moments at those samples (empty: none drawn).
+    pub forces: Vec<SampleForces>,
+}
+
+/// The forces on the fetus at one pose sample, as arrows and in words.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SampleForces {
+    /// Index of the pose sample.
+    pub sample: usize,
+    /// The arrows, in the pelvis frame.
+    pub arrows: Vec<carus_render::RenderMesh>,
+    /// What pushes, its size in newtons and its arrow's colour (sRGB), largest first.
+    pub listed: Vec<(String, f64, [f32; 3])>,
 }
 
 /// The pelvic floor's boundary surface and its state at recorded instants.

@@ -270,6 +270,14 @@ fn pictures(w: &mut String, parts: &Parts) {
                      <span class=\"ramp\"></span> {low:.2} &ndash; {high:.2}"
                 );
             }
+            if moments.iter().any(|m| !m.forces.is_empty()) {
+                let _ = write!(
+                    w,
+                    ". Arrows: the forces on the fetus, each on its line of action and ending where \
+                     it meets the fetal surface, 10 mm per {:.0} N, listed under each moment in their colours",
+                    0.01 / crate::pictures::ARROW_M_PER_N
+                );
+            }
             let _ = write!(w, ".</p><div class=\"moments\">");
             for m in moments {
                 let _ = write!(
@@ -283,6 +291,17 @@ fn pictures(w: &mut String, parts: &Parts) {
                 );
                 if let Some(t) = m.floor_time_s {
                     let _ = write!(w, "<br><small>floor as recorded at {t:.2} s</small>");
+                }
+                if !m.forces.is_empty() {
+                    let listed: Vec<String> = m
+                        .forces
+                        .iter()
+                        .map(|(what, newtons, rgb)| {
+                            let [r, g, b] = rgb.map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8);
+                            format!("<span style=\"color:#{r:02x}{g:02x}{b:02x}\">&#9632;</span> {} {newtons:.0} N", escape(what))
+                        })
+                        .collect();
+                    let _ = write!(w, "<br><small class=\"forces\">{}</small>", listed.join(", "));
                 }
                 let _ = write!(w, "</figcaption>");
                 match &m.pictures {

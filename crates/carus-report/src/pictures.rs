@@ -29,6 +29,22 @@ const TRUNK: &str = "fetal trunk";
 const LOWER_TRUNK: &str = "fetal lower trunk";
 /// Name of the pelvic floor's mesh.
 pub const FLOOR: &str = "pelvic floor";
+/// Arrow length per newton of force, m: 10 mm per 20 N, so the canal's
+/// pushes of tens of newtons are a head's radius or less and the default
+/// expulsion's 120 N peak is 60 mm, beside a 95 mm head.
+pub const ARROW_M_PER_N: f64 = 0.5e-3;
+
+/// The floor's opacity while forces are drawn: the floor pushes from
+/// around the head, and see-through it shows the arrows it would hide.
+pub const FLOOR_OPACITY_UNDER_FORCES: f32 = 0.45;
+
+/// Makes the floor among `meshes` see-through, for arrows drawn with it.
+pub fn see_through_floor(meshes: &mut [RenderMesh]) {
+    for floor in meshes.iter_mut().filter(|m| m.name == FLOOR) {
+        floor.colour[3] = FLOOR_OPACITY_UNDER_FORCES;
+    }
+}
+
 /// Muscle colour for a floor without recorded stretch.
 const FLOOR_RGB: [f32; 3] = [0.78, 0.50, 0.50];
 /// Smallest upper end of the stretch colour scale, so a floor at rest is
@@ -47,6 +63,9 @@ pub struct Picture {
 #[derive(Debug, Clone, PartialEq)]
 pub struct MomentPictures {
     pub moment: KeyMoment,
+    /// The forces drawn as arrows: what pushes, its size in newtons and its
+    /// arrow's colour, largest first (empty: none drawn).
+    pub forces: Vec<(String, f64, [f32; 3])>,
     /// Time of the floor frame drawn, when it is not the moment's own.
     pub floor_time_s: Option<f64>,
     pub pictures: Result<Vec<Picture>, String>,
@@ -82,6 +101,7 @@ pub fn draw(
         .zip(posed)
         .map(|(moment, (meshes, floor_time_s))| MomentPictures {
             moment: *moment,
+            forces: scene.forces.iter().find(|f| f.sample == moment.sample).map_or_else(Vec::new, |f| f.listed.clone()),
             floor_time_s,
             pictures: bounds
                 .ok_or_else(|| "the scene has no vertices".to_string())
@@ -133,7 +153,11 @@ fn meshes_at(
     moment: &KeyMoment,
     stretch_range: Option<[f64; 2]>,
 ) -> (Vec<RenderMesh>, Option<f64>) {
-    let (meshes, frame_time) = meshes_at_sample(scene, history, moment.sample, stretch_range);
+    let (mut meshes, frame_time) = meshes_at_sample(scene, history, moment.sample, stretch_range);
+    if let Some(forces) = scene.forces.iter().find(|f| f.sample == moment.sample) {
+        see_through_floor(&mut meshes);
+        meshes.extend(forces.arrows.iter().cloned());
+    }
     // A frame within half the captions' tenth of a second of its
     // moment needs no note.
     (meshes, frame_time.filter(|t| (t - moment.time_s).abs() >= FLOOR_NOTE_FROM_S))

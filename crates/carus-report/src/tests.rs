@@ -3,7 +3,7 @@
 //! pictures inline, nothing fetched from elsewhere.
 
 use crate::demo::Demo;
-use crate::{write_report, write_report_with, AxialMomentSample, FloorFrame, ReportError};
+use crate::{write_report, write_report_with, AxialMomentSample, FloorFrame, ReportError, SampleForces};
 
 fn movement_row(html: &str, key: &str) -> String {
     let start = html
@@ -271,4 +271,38 @@ fn how_the_head_was_born_is_noted() {
     assert!(note.contains("The head was born at") && note.contains("occiput OA") && note.contains("flexion positive"), "{note}");
     demo.detector.head_born = None;
     assert!(!write_report_with(&demo.input("held"), None).unwrap().html.contains("head-born"));
+}
+
+/// Forces given for a key moment's sample are drawn as arrows in its
+/// pictures and listed under it in their colours, with the scale said once;
+/// a page without them says nothing of arrows.
+#[test]
+fn the_forces_at_a_key_moment_are_drawn_and_listed() {
+    let demo = Demo::textbook().unwrap();
+    let plain = write_report(&demo.input("no forces")).unwrap().html;
+    assert!(!plain.contains("Arrows:") && !plain.contains("class=\"forces\""));
+
+    let mut input = demo.input("forces");
+    let (moments, _) = crate::moments::key_moments(&demo.detector);
+    let sample = moments[1].sample;
+    let head = demo.history.samples[sample].head.position_m.as_vec3().to_array();
+    let arrow = carus_render::RenderMesh::arrow("force: sacrum", [head[0], head[1] - 0.1, head[2]], [head[0], head[1] - 0.05, head[2]], 0.0015, [0.15, 0.35, 0.9]);
+    input.scene.as_mut().unwrap().forces = vec![SampleForces {
+        sample,
+        arrows: vec![arrow],
+        listed: vec![("sacrum".into(), 100.0, [0.15, 0.35, 0.9])],
+    }];
+    let report = write_report(&input).unwrap();
+    assert!(report.warnings.is_empty(), "{:?}", report.warnings);
+    let html = &report.html;
+    assert!(html.contains("Arrows: the forces on the fetus") && html.contains("10 mm per 20 N"), "legend");
+    assert_eq!(html.matches("class=\"forces\"").count(), 1);
+    assert!(html.contains("<span style=\"color:#2659e6\">&#9632;</span> sacrum 100 N"));
+    // The arrow is in that moment's pictures, and only there.
+    let pictures = |html: &str| -> Vec<String> {
+        html.split("src=\"data:image/png;base64,").skip(1).map(|rest| rest[..rest.find('"').unwrap()].to_string()).collect()
+    };
+    let (with, without) = (pictures(html), pictures(&plain));
+    let changed: Vec<usize> = (0..with.len()).filter(|&i| with[i] != without[i]).collect();
+    assert!(!changed.is_empty() && changed.iter().all(|&i| i / 2 == 1), "{changed:?}");
 }

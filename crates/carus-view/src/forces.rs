@@ -18,10 +18,7 @@ use glam::DVec3;
 
 use crate::ViewError;
 
-/// Arrow length per newton of force: 10 mm per 20 N, so the sites' tens
-/// of newtons are a head's radius or less and the default expulsion's
-/// 120 N peak is 60 mm, beside a 95 mm head.
-pub const ARROW_M_PER_N: f64 = 0.5e-3;
+pub use carus_report::pictures::ARROW_M_PER_N;
 /// Forces smaller than this are not drawn, N: they would be shorter than
 /// their own head.
 pub const SMALLEST_DRAWN_N: f64 = 2.0;

@@ -21,7 +21,7 @@ mod window;
 use carus_analysis::{DetectorReport, PoseHistory, Series};
 use carus_render::{Bounds, Camera, Image, Projection, RenderError, RenderMesh, Renderer, Scene, View};
 use forces::Forces;
-use carus_report::pictures::{fitting_bounds, meshes_at_sample, stretch_range, FLOOR};
+use carus_report::pictures::{fitting_bounds, meshes_at_sample, see_through_floor, stretch_range};
 use carus_report::ReportScene;
 use glam::Vec3;
 
@@ -178,11 +178,7 @@ impl Replay {
             meshes.extend(points.iter().map(|(name, p)| RenderMesh::sphere(name.clone(), head.point(*p).as_vec3().to_array(), *radius_m, *rgb)));
         }
         if let Some(forces) = self.forces.as_ref().filter(|_| layers.forces) {
-            // The floor pushes from around the head: see-through, it shows
-            // the arrows it would hide.
-            for floor in meshes.iter_mut().filter(|m| m.name == FLOOR) {
-                floor.colour[3] = FLOOR_OPACITY_UNDER_FORCES;
-            }
+            see_through_floor(&mut meshes);
             meshes.extend(forces.arrows(&self.history, k).iter().map(|a| a.mesh()));
         }
         meshes
@@ -280,8 +276,6 @@ pub struct Orbit {
     pub projection: Projection,
 }
 
-/// The floor's opacity while the forces are shown.
-const FLOOR_OPACITY_UNDER_FORCES: f32 = 0.45;
 /// Room around the canal in the window's view.
 const ORBIT_MARGIN: f32 = 1.1;
 /// How close to straight up or down the camera may look, radians.

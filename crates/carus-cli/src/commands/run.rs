@@ -256,7 +256,7 @@ pub(super) fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result
                 trunk_nm: l.head_axial.trunk_nm,
             })
             .collect(),
-        scene: Some(report_scene(record, &carus_labour::Scene::build(&record.scenario)?, &[])),
+        scene: Some(report_scene_with_forces(record, detector)?),
     };
     Ok(carus_report::write_report_file(
         &input,
@@ -272,6 +272,32 @@ pub(super) fn run_title(scenario: &Scenario) -> String {
         Mode::Forward => format!("Carus: {name}"),
         mode => format!("Carus: {name} ({} trajectory, not the physics alone)", mode.name()),
     }
+}
+
+/// The report's scene, with the forces on the fetus at its key moments
+/// drawn as the viewer draws them (docs/VIEWER.md, "How a force is
+/// drawn"); none for a run that recorded no loads.
+fn report_scene_with_forces(record: &RunRecord, detector: &carus_analysis::DetectorReport) -> anyhow::Result<carus_report::ReportScene> {
+    let scene = Scene::build(&record.scenario)?;
+    let mut pictured = report_scene(record, &scene, &[]);
+    if record.loads.is_empty() {
+        return Ok(pictured);
+    }
+    let forces = carus_view::forces::Forces::new(record.loads.clone(), scene.pivot_in_head, scene.expulsion_at_pivot(), &pictured)?;
+    let (moments, _) = carus_report::moments::key_moments(detector);
+    pictured.forces = moments
+        .iter()
+        .map(|m| {
+            let mut arrows = forces.arrows(&record.history, m.sample);
+            arrows.sort_by(|a, b| b.force_n.length().total_cmp(&a.force_n.length()));
+            carus_report::SampleForces {
+                sample: m.sample,
+                arrows: arrows.iter().map(|a| a.mesh()).collect(),
+                listed: arrows.iter().map(|a| (a.label.clone(), a.force_n.length(), a.rgb)).collect(),
+            }
+        })
+        .collect();
+    Ok(pictured)
 }
 
 /// The surfaces a run's pictures and its replay draw, from `scene` (built
@@ -295,6 +321,7 @@ pub(super) fn scene_with_floors(scene: &carus_labour::Scene, floors: Vec<&FloorA
         trunk: scene.trunk.as_ref().map(|t| t.surface.clone()),
         lower_trunk: scene.lower_trunk.as_ref().map(|t| t.surface.clone()),
         floor: scene.floor.as_ref().map(|floor| floor_surface(floor, floors)),
+        forces: Vec::new(),
     }
 }
 

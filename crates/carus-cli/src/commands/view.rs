@@ -12,7 +12,6 @@ use carus_analysis::{DetectorReport, PoseSample};
 use carus_labour::loads::LoadSample;
 use carus_labour::output::{read_checkpoint, run_ending, CHECKPOINT_FILE, RUN_FILE};
 use carus_labour::record::FloorAtMoment;
-use carus_labour::scenario::ActsOn;
 use carus_labour::{Scenario, Scene};
 use carus_view::{Follow, Layers, Replay};
 
@@ -150,7 +149,6 @@ impl RunShown {
             (None, true) => carus_analysis::detect(&history).ok(),
             _ => None,
         };
-        let expulsion_at_pivot = scene.trunk.is_none() || self.scenario.expulsion.acts_on == ActsOn::Pivot;
         let mut title = run_title(&self.scenario);
         if self.in_progress {
             title.push_str(" - in progress, from its last checkpoint");
@@ -160,7 +158,7 @@ impl RunShown {
         // A run written before the loads were recorded has none to draw.
         let replay = match self.loads.is_empty() {
             true => replay,
-            false => replay.with_forces(self.loads.clone(), scene.pivot_in_head, expulsion_at_pivot)?,
+            false => replay.with_forces(self.loads.clone(), scene.pivot_in_head, scene.expulsion_at_pivot())?,
         };
         let head_landmarks = scene.head_landmarks.iter().map(|(name, p)| (name.to_string(), *p)).collect();
         Ok(replay
