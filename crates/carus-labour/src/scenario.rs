@@ -1038,6 +1038,16 @@ impl Scenario {
                 return Err(err(key, value, "must be a positive, finite number", hint));
             }
         }
+        // A joint's angles are read within a half turn, so a limit past it is
+        // never reached: most likely degrees mistaken for something else.
+        let angle_limits = [
+            ("neck.flexion_limit_deg", self.neck.flexion_limit_deg),
+            ("neck.extension_limit_deg", self.neck.extension_limit_deg),
+            ("neck.lateral_bending_limit_deg", self.neck.lateral_bending_limit_deg),
+            ("neck.axial_rotation_limit_deg", self.neck.axial_rotation_limit_deg),
+            ("spine.bending_limit_deg", self.spine.bending_limit_deg),
+            ("spine.axial_rotation_limit_deg", self.spine.axial_rotation_limit_deg),
+        ];
         for (key, value) in [
             ("contact.friction", self.contact.friction),
             (
@@ -1072,10 +1082,6 @@ impl Scenario {
             ),
             ("neck.tension_n_per_m", self.neck.tension_n_per_m),
             ("neck.shear_n_per_m", self.neck.shear_n_per_m),
-            ("neck.flexion_limit_deg", self.neck.flexion_limit_deg),
-            ("neck.extension_limit_deg", self.neck.extension_limit_deg),
-            ("neck.lateral_bending_limit_deg", self.neck.lateral_bending_limit_deg),
-            ("neck.axial_rotation_limit_deg", self.neck.axial_rotation_limit_deg),
             ("neck.rotational_damping_nm_s_per_rad", self.neck.rotational_damping_nm_s_per_rad),
             ("neck.linear_damping_n_s_per_m", self.neck.linear_damping_n_s_per_m),
             (
@@ -1084,8 +1090,6 @@ impl Scenario {
             ),
             ("spine.bending_nm_per_deg", self.spine.bending_nm_per_deg),
             ("spine.axial_rotation_nm_per_deg", self.spine.axial_rotation_nm_per_deg),
-            ("spine.bending_limit_deg", self.spine.bending_limit_deg),
-            ("spine.axial_rotation_limit_deg", self.spine.axial_rotation_limit_deg),
             (
                 "spine.end_range_stiffness_nm_per_deg",
                 self.spine.end_range_stiffness_nm_per_deg,
@@ -1096,7 +1100,10 @@ impl Scenario {
                 self.spine.rotational_damping_nm_s_per_rad,
             ),
             ("spine.linear_damping_n_s_per_m", self.spine.linear_damping_n_s_per_m),
-        ] {
+        ]
+        .into_iter()
+        .chain(angle_limits)
+        {
             if !(value.is_finite() && value >= 0.0) {
                 return Err(err(
                     key,
@@ -1106,16 +1113,7 @@ impl Scenario {
                 ));
             }
         }
-        // A joint's angles are read within a half turn, so a limit past it is
-        // never reached: most likely degrees mistaken for something else.
-        for (key, value) in [
-            ("neck.flexion_limit_deg", self.neck.flexion_limit_deg),
-            ("neck.extension_limit_deg", self.neck.extension_limit_deg),
-            ("neck.lateral_bending_limit_deg", self.neck.lateral_bending_limit_deg),
-            ("neck.axial_rotation_limit_deg", self.neck.axial_rotation_limit_deg),
-            ("spine.bending_limit_deg", self.spine.bending_limit_deg),
-            ("spine.axial_rotation_limit_deg", self.spine.axial_rotation_limit_deg),
-        ] {
+        for (key, value) in angle_limits {
             if value > 180.0 {
                 return Err(err(
                     key,

@@ -165,13 +165,19 @@ impl Forces {
     /// The forces drawn at sample `k` in words, largest first:
     /// "expulsion 96 N", "sacrum 31 N", ...
     pub fn readout(&self, history: &PoseHistory, k: usize) -> Vec<String> {
-        let mut arrows = self.arrows(history, k);
+        let arrows = largest_first(self.arrows(history, k));
         if arrows.is_empty() {
             return vec![format!("no force of {SMALLEST_DRAWN_N} N or more")];
         }
-        arrows.sort_by(|a, b| b.force_n.length().total_cmp(&a.force_n.length()));
         arrows.iter().map(|a| format!("{} {:.0} N", a.label, a.force_n.length())).collect()
     }
+}
+
+/// `arrows` ordered by the size of their forces, largest first, as they
+/// are listed beside the pictures.
+pub fn largest_first(mut arrows: Vec<Arrow>) -> Vec<Arrow> {
+    arrows.sort_by(|a, b| b.force_n.length().total_cmp(&a.force_n.length()));
+    arrows
 }
 
 /// The point of a force's line of action nearest `centre`, for a force

@@ -374,8 +374,7 @@ impl Viewer {
     /// Each force drawn, in its arrow's colour, largest first, and the
     /// arrows' scale.
     fn force_legend(&self, ui: &mut egui::Ui, sample: usize) {
-        let mut arrows = self.replay.arrows(sample);
-        arrows.sort_by(|a, b| b.force_n.length().total_cmp(&a.force_n.length()));
+        let arrows = crate::forces::largest_first(self.replay.arrows(sample));
         for arrow in &arrows {
             ui.horizontal(|ui| {
                 let (swatch, _) = ui.allocate_exact_size(egui::vec2(12.0, 12.0), egui::Sense::hover());

@@ -295,10 +295,7 @@ fn check_size(path: &Path, units: Units, landmarks: &PelvisLandmarks) -> Result<
     if (least..=most).contains(&conjugate_mm) {
         return Ok(());
     }
-    let declared = match units {
-        Units::Millimetres => "mm",
-        Units::Metres => "m",
-    };
+    let declared = units.name();
     Err(file_error(
         path,
         format!(
@@ -329,10 +326,7 @@ fn check_landmarks_on_bone(path: &Path, mesh_path: &Path, units: Units, pelvis: 
     if gap_mm <= LANDMARK_SURFACE_GAP_MAX_MM {
         return Ok(());
     }
-    let declared = match units {
-        Units::Millimetres => "mm",
-        Units::Metres => "m",
-    };
+    let declared = units.name();
     Err(file_error(
         path,
         format!(

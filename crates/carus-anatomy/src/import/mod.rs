@@ -35,6 +35,14 @@ pub enum Units {
 }
 
 impl Units {
+    /// The unit as a landmarks file writes it (`units = "mm"`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Units::Millimetres => "mm",
+            Units::Metres => "m",
+        }
+    }
+
     /// Metres per file unit.
     pub fn to_metres(self) -> f64 {
         match self {

@@ -279,7 +279,8 @@ pub(super) fn run_title(scenario: &Scenario) -> String {
 /// drawn"); none for a run that recorded no loads.
 fn report_scene_with_forces(record: &RunRecord, detector: &carus_analysis::DetectorReport) -> anyhow::Result<carus_report::ReportScene> {
     let scene = Scene::build(&record.scenario)?;
-    let mut pictured = report_scene(record, &scene, &[]);
+    let kept = record.key_moments.iter().filter_map(|m| m.floor.as_ref());
+    let mut pictured = scene_with_floors(&scene, kept.collect());
     if record.loads.is_empty() {
         return Ok(pictured);
     }
@@ -288,8 +289,7 @@ fn report_scene_with_forces(record: &RunRecord, detector: &carus_analysis::Detec
     pictured.forces = moments
         .iter()
         .map(|m| {
-            let mut arrows = forces.arrows(&record.history, m.sample);
-            arrows.sort_by(|a, b| b.force_n.length().total_cmp(&a.force_n.length()));
+            let arrows = carus_view::forces::largest_first(forces.arrows(&record.history, m.sample));
             carus_report::SampleForces {
                 sample: m.sample,
                 arrows: arrows.iter().map(|a| a.mesh()).collect(),
@@ -302,18 +302,7 @@ fn report_scene_with_forces(record: &RunRecord, detector: &carus_analysis::Detec
 
 /// The surfaces a run's pictures and its replay draw, from `scene` (built
 /// again from the run's scenario, which is deterministic) in the body
-/// frames its poses refer to, with
-/// the floor's states the run kept nearest its key moments and `more`.
-pub(super) fn report_scene(
-    record: &RunRecord,
-    scene: &carus_labour::Scene,
-    more: &[FloorAtMoment],
-) -> carus_report::ReportScene {
-    let kept = record.key_moments.iter().filter_map(|m| m.floor.as_ref());
-    scene_with_floors(scene, kept.chain(more).collect())
-}
-
-/// The surfaces of `scene` for pictures, with the floor in `floors`.
+/// frames its poses refer to, with the floor in the states `floors`.
 pub(super) fn scene_with_floors(scene: &carus_labour::Scene, floors: Vec<&FloorAtMoment>) -> carus_report::ReportScene {
     carus_report::ReportScene {
         pelvis: Some(scene.pelvis.surface.clone()),

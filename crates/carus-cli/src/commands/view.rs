@@ -49,7 +49,7 @@ pub struct ViewArgs {
 
 pub fn run(args: &ViewArgs) -> anyhow::Result<Status> {
     let shown = RunShown::read(&args.run)?;
-    let scene = Scene::build(&shown.scenario)?;
+    let scene = RunScene::build(&shown.scenario)?;
     let replay = shown.replay(&scene).with_context(|| args.run.display().to_string())?;
     if args.forces && !replay.layers_available().forces {
         anyhow::bail!(
@@ -142,28 +142,40 @@ impl RunShown {
         })
     }
 
-    /// The replay of the run in `scene`, built from its scenario.
-    fn replay(&self, scene: &Scene) -> anyhow::Result<Replay> {
-        let history = carus_labour::run::history_of(scene, self.samples.clone());
-        let detected = match (&self.detector, history.samples.len() >= 2) {
-            (None, true) => carus_analysis::detect(&history).ok(),
-            _ => None,
-        };
+    /// The replay of the run in `run_scene`, built from its scenario.
+    fn replay(self, run_scene: &RunScene) -> anyhow::Result<Replay> {
+        let scene = &run_scene.scene;
+        let history = carus_labour::run::history_of(scene, self.samples);
+        let detector = self.detector.or_else(|| (history.samples.len() >= 2).then(|| carus_analysis::detect(&history).ok()).flatten());
         let mut title = run_title(&self.scenario);
         if self.in_progress {
             title.push_str(" - in progress, from its last checkpoint");
         }
         let floors = scene_with_floors(scene, self.floors.iter().collect());
-        let replay = Replay::new(title, floors, history, self.detector.as_ref().or(detected.as_ref()))?;
+        let replay = Replay::new(title, floors, history, detector.as_ref())?;
         // A run written before the loads were recorded has none to draw.
         let replay = match self.loads.is_empty() {
             true => replay,
-            false => replay.with_forces(self.loads.clone(), scene.pivot_in_head, scene.expulsion_at_pivot())?,
+            false => replay.with_forces(self.loads, scene.pivot_in_head, scene.expulsion_at_pivot())?,
         };
         let head_landmarks = scene.head_landmarks.iter().map(|(name, p)| (name.to_string(), *p)).collect();
         Ok(replay
-            .with_markers(pelvis_markers(&scene.pelvis))
+            .with_markers(run_scene.pelvis_markers.clone())
             .with_head_markers(head_landmarks, HEAD_MARKER_M, LANDMARK_RGB))
+    }
+}
+
+/// A run's scene, and what of it every replay of the run draws the same:
+/// built once, however often a followed run is read again.
+struct RunScene {
+    scene: Scene,
+    pelvis_markers: Vec<carus_render::RenderMesh>,
+}
+
+impl RunScene {
+    fn build(scenario: &Scenario) -> anyhow::Result<RunScene> {
+        let scene = Scene::build(scenario)?;
+        Ok(RunScene { pelvis_markers: pelvis_markers(&scene.pelvis), scene })
     }
 }
 
@@ -188,7 +200,7 @@ fn modified(path: &Path) -> Option<SystemTime> {
 /// perhaps resumed): each call reads the run again if it wrote a
 /// checkpoint or its record since the last call read it, and says whether
 /// the run may still go on.
-fn follow(dir: PathBuf, scene: Scene) -> impl FnMut() -> Option<(Replay, bool)> + Send {
+fn follow(dir: PathBuf, scene: RunScene) -> impl FnMut() -> Option<(Replay, bool)> + Send {
     let seen = |dir: &Path| (modified(&dir.join(CHECKPOINT_FILE)), modified(&dir.join(RUN_FILE)));
     let mut last = seen(&dir);
     move || {
@@ -206,7 +218,7 @@ fn follow(dir: PathBuf, scene: Scene) -> impl FnMut() -> Option<(Replay, bool)> 
 /// `follow` on a thread of its own, asking once a second, so that reading
 /// a checkpoint (megabytes of JSON, the detector, the replay's surfaces)
 /// never holds up the window; the window takes what it has read.
-fn follow_in_background(dir: PathBuf, scene: Scene) -> Follow {
+fn follow_in_background(dir: PathBuf, scene: RunScene) -> Follow {
     let (sender, read) = std::sync::mpsc::channel();
     let mut more = follow(dir, scene);
     std::thread::spawn(move || loop {
@@ -281,7 +293,7 @@ mod tests {
         let shown = RunShown::read(dir.path()).unwrap();
         assert!(shown.in_progress && shown.detector.is_none());
         assert_eq!(shown.floors.len(), 3, "the floor frames at 0, 0.05 and 0.1 s");
-        let scene = Scene::build(&shown.scenario).unwrap();
+        let scene = RunScene::build(&shown.scenario).unwrap();
         let replay = shown.replay(&scene).unwrap();
         assert!((replay.duration_s() - 0.1).abs() < 1e-9 && replay.title.ends_with("in progress, from its last checkpoint"));
         assert!(replay.layers_available().forces);
