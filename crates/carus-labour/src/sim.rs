@@ -518,14 +518,14 @@ impl<'a> Simulation<'a> {
 
         // Passive resistance of the surroundings, implicit so that it is
         // stable at any step (it only damps).
+        let imposed = self.mode() == Mode::Imposed;
         for (b, w) in wrenches.iter_mut().enumerate() {
             // An imposed head's drag is taken at the path's motion (impose_head).
-            if !(b == HEAD && self.mode() == Mode::Imposed) {
+            if !(b == HEAD && imposed) {
                 *w += self.implicit_drag(b, *w);
             }
         }
 
-        let imposed = self.mode() == Mode::Imposed;
         let head_before = imposed.then(|| (self.state.bodies.linear_velocity[HEAD], self.state.bodies.angular_momentum[HEAD]));
         self.state.bodies.step(&scene.bodies, &wrenches, self.dt)?;
         if let Some(before) = head_before {
