@@ -103,8 +103,19 @@ impl Replay {
                 .collect()
         });
         let stretch_range = scene.floor.as_ref().and_then(stretch_range);
-        let (first, _) = meshes_at_sample(&scene, &history, 0, stretch_range);
-        let bounds = fitting_bounds(&first).ok_or(ViewError::NoBounds)?;
+        // The head's path to its birth stays in view: the canal and the head
+        // at the start, and the head as it is born (or at its deepest, if it
+        // never is); after birth it may swing out of the canal's picture.
+        let born_or_deepest = series.head_delivered.iter().position(|&born| born).unwrap_or_else(|| {
+            (0..series.station_mm.len())
+                .max_by(|&a, &b| series.station_mm[a].total_cmp(&series.station_mm[b]))
+                .unwrap_or(0)
+        });
+        let framed: Vec<RenderMesh> = [0, born_or_deepest]
+            .into_iter()
+            .flat_map(|k| meshes_at_sample(&scene, &history, k, stretch_range).0)
+            .collect();
+        let bounds = fitting_bounds(&framed).ok_or(ViewError::NoBounds)?;
         Ok(Replay {
             title: title.into(),
             scene,

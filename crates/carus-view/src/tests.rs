@@ -43,6 +43,26 @@ fn a_frame_has_the_fetus_where_the_history_puts_it() {
     }
 }
 
+/// The standard views keep the head in the picture from above the inlet
+/// until it is born, not only while it is in the canal.
+#[test]
+fn the_standard_views_hold_the_head_s_path_to_its_birth() {
+    let (replay, demo) = textbook();
+    let born = replay.series.head_delivered.iter().position(|&b| b).expect("the textbook head is born");
+    let (width, height) = (800, 600);
+    for view in [View::Lateral, View::Anterior, View::Inferior] {
+        let camera = replay.standard_camera(view);
+        for k in [0, born / 2, born] {
+            let head = &replay.meshes(k, Layers::default())[0];
+            for &p in &head.positions {
+                let [x, y] = camera.project(Vec3::from(p), width, height);
+                let inside = (0.0..=width as f32).contains(&x) && (0.0..=height as f32).contains(&y);
+                assert!(inside, "{view:?}: head vertex at sample {k} drawn at ({x}, {y})");
+            }
+        }
+    }
+}
+
 #[test]
 fn the_readout_names_the_head_s_place_and_the_movements_under_way() {
     let (replay, demo) = textbook();
