@@ -85,6 +85,16 @@ pub struct LoadSample {
     /// The trunk's contact force on the head, N (zero without that contact).
     #[serde(default)]
     pub head_trunk_force_n: DVec3,
+    /// The moment of that force about the atlanto-occipital pivot, N m,
+    /// which places its line of action (none in runs recorded before it was).
+    #[serde(default)]
+    pub head_trunk_moment_about_pivot_nm: Option<DVec3>,
+    /// The neck's force on the head, N, acting at the atlanto-occipital
+    /// pivot: the trunk's push (or pull) passed on through the neck's
+    /// springs and dampers (zero without a trunk; none in runs recorded
+    /// before it was).
+    #[serde(default)]
+    pub neck_force_n: Option<DVec3>,
     /// The neck's joint angles from its rest pose (none without a trunk).
     #[serde(default)]
     pub neck: Option<NeckAngles>,

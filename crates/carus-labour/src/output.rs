@@ -267,6 +267,9 @@ pub fn write_history_csv(
         "head_trunk_fy_n",
         "head_trunk_fz_n",
         "head_axial_moment_trunk_nm",
+        "neck_fx_n",
+        "neck_fy_n",
+        "neck_fz_n",
     ];
     header.extend_from_slice(&poses);
     let mut csv = CsvWriter::create(path, &header).map_err(|e| output_error(path, e))?;
@@ -307,6 +310,10 @@ pub fn write_history_csv(
                 values.push(l.head_axial.trunk_nm);
             }
             None => values.extend([f64::NAN; 4]),
+        }
+        match loads.get(k).and_then(|l| l.neck_force_n) {
+            Some(f) => values.extend(f.to_array()),
+            None => values.extend([f64::NAN; 3]),
         }
         csv.row(&values).map_err(|e| output_error(path, e))?;
     }

@@ -966,26 +966,40 @@ mod tests {
     /// The trunk's push reaches the head through the chin on the chest as
     /// well as the neck: the contact's force is recorded, pushes the head
     /// down the canal (along the expulsion at that instant) when it acts,
-    /// and is written to the pose history with its axial moment.
+    /// and is written to the pose history with its axial moment; its moment
+    /// about the pivot (`loads::moment_about`, tested there) places it for
+    /// the viewer. The neck's force on the head is recorded too, and pushes
+    /// the head along the expulsion once a contraction is under way.
     #[test]
-    fn the_head_trunk_contact_is_recorded() {
+    fn the_head_trunk_contact_and_the_neck_force_are_recorded() {
         let s = coarse(2.4);
         let (dir, record) = run_in(&s, &RunOptions::default());
         let mut pushing = 0;
+        let (mut neck_pushing, mut contracting) = (0, 0);
         for (l, p) in record.loads.iter().zip(&record.history.samples) {
             if l.head_trunk_force_n.length() > 1.0 && p.expulsion_force_n.length() > 1.0 {
                 assert!(l.head_trunk_force_n.dot(p.expulsion_force_n) > 0.0, "t = {}: {:?}", l.time_s, l.head_trunk_force_n);
                 pushing += 1;
             }
+            let neck = l.neck_force_n.expect("a trunk's run records the neck's force");
+            if p.expulsion_force_n.length() > 50.0 {
+                contracting += 1;
+                neck_pushing += usize::from(neck.dot(p.expulsion_force_n) > 0.0);
+            }
+            assert!(l.head_trunk_moment_about_pivot_nm.is_some(), "t = {}", l.time_s);
         }
         assert!(pushing > 0, "the chin never met the chest");
+        assert!(contracting > 0 && neck_pushing == contracting, "{neck_pushing} of {contracting}");
         let csv = std::fs::read_to_string(dir.path().join(output::HISTORY_CSV)).unwrap();
         let mut lines = csv.lines();
-        assert!(lines.next().unwrap().ends_with(",head_trunk_fx_n,head_trunk_fy_n,head_trunk_fz_n,head_axial_moment_trunk_nm"));
+        assert!(lines
+            .next()
+            .unwrap()
+            .ends_with(",head_trunk_fx_n,head_trunk_fy_n,head_trunk_fz_n,head_axial_moment_trunk_nm,neck_fx_n,neck_fy_n,neck_fz_n"));
         for (line, l) in lines.zip(&record.loads) {
-            let values: Vec<f64> = line.rsplit(',').take(4).map(|v| v.parse().unwrap()).collect();
-            let f = l.head_trunk_force_n;
-            assert_eq!(values, vec![l.head_axial.trunk_nm, f.z, f.y, f.x], "t = {}", l.time_s);
+            let values: Vec<f64> = line.rsplit(',').take(7).map(|v| v.parse().unwrap()).collect();
+            let (f, n) = (l.head_trunk_force_n, l.neck_force_n.unwrap());
+            assert_eq!(values, vec![n.z, n.y, n.x, l.head_axial.trunk_nm, f.z, f.y, f.x], "t = {}", l.time_s);
         }
     }
 

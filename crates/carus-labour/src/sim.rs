@@ -169,6 +169,10 @@ struct StepForces {
     /// The trunk's contact on the head, about the head's centre of mass.
     head_trunk: Wrench,
     neck: Option<NeckAngles>,
+    /// The neck's force on the head, at the pivot.
+    neck_force: DVec3,
+    /// The trunk's contact moment on the head about the pivot.
+    head_trunk_about_pivot: DVec3,
     spine: Option<NeckAngles>,
     /// What moved the head besides the physics (imposed and hybrid modes).
     guide: Option<Wrench>,
@@ -262,9 +266,9 @@ impl<'a> Simulation<'a> {
             loads: Vec::new(),
         };
         let mut sim = Simulation::from_state(scene, state)?;
-        let angles = |j: &Neck| j.load(&scene.bodies, &sim.state.bodies).angles;
-        let neck = sim.state.neck.as_ref().map(angles);
-        let spine = sim.state.spine.as_ref().map(angles);
+        let load = |j: &Neck| j.load(&scene.bodies, &sim.state.bodies);
+        let neck_load = sim.state.neck.as_ref().map(load);
+        let spine = sim.state.spine.as_ref().map(|j| load(j).angles);
         sim.record(StepForces {
             expulsion: sim.expulsion.force(0.0, sim.spine()),
             bone: DVec3::ZERO,
@@ -274,7 +278,9 @@ impl<'a> Simulation<'a> {
             sites: Vec::new(),
             head_axial: AxialMoments::default(),
             head_trunk: Wrench::default(),
-            neck,
+            neck: neck_load.as_ref().map(|l| l.angles),
+            neck_force: neck_load.as_ref().map_or(DVec3::ZERO, |l| l.on_head.force),
+            head_trunk_about_pivot: DVec3::ZERO,
             spine,
             guide: None,
         });
@@ -807,6 +813,8 @@ impl<'a> Simulation<'a> {
             head_axial: AxialMoments::default(),
             head_trunk: Wrench::default(),
             neck: None,
+            neck_force: DVec3::ZERO,
+            head_trunk_about_pivot: DVec3::ZERO,
             spine: None,
             guide: None,
         }
@@ -848,6 +856,8 @@ impl<'a> Simulation<'a> {
             }),
         };
         forces.neck = neck.map(|l| l.angles);
+        forces.neck_force = neck.map_or(DVec3::ZERO, |l| l.on_head.force);
+        forces.head_trunk_about_pivot = loads::moment_about(&forces.head_trunk, s.bodies.position[HEAD], pivot);
     }
 
     fn record(&mut self, forces: StepForces) {
@@ -869,7 +879,9 @@ impl<'a> Simulation<'a> {
             sites: forces.sites,
             head_axial: forces.head_axial,
             head_trunk_force_n: forces.head_trunk.force,
+            head_trunk_moment_about_pivot_nm: Some(forces.head_trunk_about_pivot),
             neck: forces.neck,
+            neck_force_n: Some(forces.neck_force),
             spine: forces.spine,
             guide: forces.guide.map(|g| GuideLoad { force_n: g.force, moment_nm: g.torque }),
         });

@@ -34,14 +34,17 @@ pub const FLOOR: &str = "pelvic floor";
 /// expulsion's 120 N peak is 60 mm, beside a 95 mm head.
 pub const ARROW_M_PER_N: f64 = 0.5e-3;
 
-/// The floor's opacity while forces are drawn: the floor pushes from
-/// around the head, and see-through it shows the arrows it would hide.
-pub const FLOOR_OPACITY_UNDER_FORCES: f32 = 0.45;
+/// The floor's and the trunk's opacity while forces are drawn: the floor
+/// pushes from around the head, and the trunk's push reaches the head
+/// through the neck, inside the trunk; see-through they show the arrows
+/// they would hide.
+pub const OPACITY_UNDER_FORCES: f32 = 0.45;
 
-/// Makes the floor among `meshes` see-through, for arrows drawn with it.
-pub fn see_through_floor(meshes: &mut [RenderMesh]) {
-    for floor in meshes.iter_mut().filter(|m| m.name == FLOOR) {
-        floor.colour[3] = FLOOR_OPACITY_UNDER_FORCES;
+/// Makes the floor and the trunk among `meshes` see-through, for arrows
+/// drawn with them.
+pub fn see_through_under_forces(meshes: &mut [RenderMesh]) {
+    for mesh in meshes.iter_mut().filter(|m| [FLOOR, TRUNK, LOWER_TRUNK].contains(&m.name.as_str())) {
+        mesh.colour[3] = OPACITY_UNDER_FORCES;
     }
 }
 
@@ -155,7 +158,7 @@ fn meshes_at(
 ) -> (Vec<RenderMesh>, Option<f64>) {
     let (mut meshes, frame_time) = meshes_at_sample(scene, history, moment.sample, stretch_range);
     if let Some(forces) = scene.forces.iter().find(|f| f.sample == moment.sample) {
-        see_through_floor(&mut meshes);
+        see_through_under_forces(&mut meshes);
         meshes.extend(forces.arrows.iter().cloned());
     }
     // A frame within half the captions' tenth of a second of its

@@ -1,6 +1,8 @@
 //! Forces on the fetus as arrows: what each part of the canal puts on each
 //! fetal body (the sum of its contacts, drawn on its line of action), the
-//! expulsion force and, in imposed and hybrid runs, the guide's.
+//! expulsion force, what the trunk puts on the head (through the neck, at
+//! the atlanto-occipital pivot, and by touching it) and, in imposed and
+//! hybrid runs, the guide's.
 //!
 //! A site's contacts add up to a force and a moment about the
 //! atlanto-occipital pivot (`run.json`'s `loads`). Such a pair acts along
@@ -28,6 +30,11 @@ const SHAFT_RADIUS_M: f32 = 1.5e-3;
 pub const EXPULSION_RGB: [f32; 3] = [0.2, 0.2, 0.2];
 /// The guide's (the teacher's hand) colour: magenta.
 pub const GUIDE_RGB: [f32; 3] = [0.85, 0.1, 0.85];
+/// The neck's force on the head (the trunk's push at the pivot): olive.
+pub const NECK_RGB: [f32; 3] = [0.45, 0.5, 0.1];
+/// The trunk's own surface on the head (chin on chest, shoulders on the
+/// skull): dark teal.
+pub const TRUNK_ON_HEAD_RGB: [f32; 3] = [0.0, 0.35, 0.35];
 
 /// The colour of a site's arrows, one per part of the canal.
 pub fn site_rgb(site: ContactSite) -> [f32; 3] {
@@ -112,8 +119,9 @@ impl Forces {
         }
     }
 
-    /// The arrows of sample `k`: the expulsion, the guide, then each site
-    /// on each body, those under `SMALLEST_DRAWN_N` left out.
+    /// The arrows of sample `k`: the expulsion, the guide, the neck and the
+    /// trunk on the head, then each site on each body, those under
+    /// `SMALLEST_DRAWN_N` left out.
     pub fn arrows(&self, history: &PoseHistory, k: usize) -> Vec<Arrow> {
         let sample = &history.samples[k];
         let pivot = sample.head.point(self.pivot_in_head_m);
@@ -143,9 +151,19 @@ impl Forces {
         let Some(load) = self.load_at(history, k) else {
             return arrows;
         };
+        let head_centre = sample.head.position_m;
         if let Some(guide) = &load.guide {
-            let centre = sample.head.position_m;
-            draw("guide".into(), Body::Head, guide.force_n, central_axis_point(guide.force_n, guide.moment_nm, centre), GUIDE_RGB);
+            draw("guide".into(), Body::Head, guide.force_n, central_axis_point(guide.force_n, guide.moment_nm, head_centre), GUIDE_RGB);
+        }
+        // The fetus's own parts on the head: the trunk's push through the
+        // neck, at the pivot, and the trunk's surface where it touches.
+        if let Some(neck) = load.neck_force_n {
+            draw("neck".into(), Body::Head, neck, pivot, NECK_RGB);
+        }
+        if let Some(about_pivot) = load.head_trunk_moment_about_pivot_nm {
+            let force = load.head_trunk_force_n;
+            let moment = about_pivot + (pivot - head_centre).cross(force);
+            draw("trunk on the head".into(), Body::Head, force, central_axis_point(force, moment, head_centre), TRUNK_ON_HEAD_RGB);
         }
         for site in &load.sites {
             let Some(centre) = pose(site.body).map(|p| p.position_m) else {

@@ -21,7 +21,7 @@ mod window;
 use carus_analysis::{DetectorReport, PoseHistory, Series};
 use carus_render::{Bounds, Camera, Image, Projection, RenderError, RenderMesh, Renderer, Scene, View};
 use forces::Forces;
-use carus_report::pictures::{fitting_bounds, meshes_at_sample, see_through_floor, stretch_range};
+use carus_report::pictures::{fitting_bounds, meshes_at_sample, see_through_under_forces, stretch_range};
 use carus_report::ReportScene;
 use glam::Vec3;
 
@@ -189,7 +189,7 @@ impl Replay {
             meshes.extend(points.iter().map(|(name, p)| RenderMesh::sphere(name.clone(), head.point(*p).as_vec3().to_array(), *radius_m, *rgb)));
         }
         if let Some(forces) = self.forces.as_ref().filter(|_| layers.forces) {
-            see_through_floor(&mut meshes);
+            see_through_under_forces(&mut meshes);
             meshes.extend(forces.arrows(&self.history, k).iter().map(|a| a.mesh()));
         }
         meshes

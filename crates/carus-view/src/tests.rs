@@ -47,7 +47,7 @@ fn a_frame_has_the_fetus_where_the_history_puts_it() {
 /// until it is born, not only while it is in the canal.
 #[test]
 fn the_standard_views_hold_the_head_s_path_to_its_birth() {
-    let (replay, demo) = textbook();
+    let (replay, _) = textbook();
     let born = replay.series.head_delivered.iter().position(|&b| b).expect("the textbook head is born");
     let (width, height) = (800, 600);
     for view in [View::Lateral, View::Anterior, View::Inferior] {
@@ -172,8 +172,10 @@ mod forces {
     /// The textbook replay with, at sample `k`, the sacrum pushing on the
     /// head's surface point farthest back (-y), the symphysis pushing the
     /// trunk at its vertex farthest forward (+y), a 1 N touch too small to
-    /// draw, and a guide through the head's centre; and a push of 80 N on
-    /// the trunk at every sample. Returns the points pushed.
+    /// draw, a guide through the head's centre, the neck pushing the head
+    /// at the pivot along the expulsion (60 N) and the trunk touching the
+    /// head's side (+x, 30 N); and a push of 80 N on the trunk at every
+    /// sample. Returns the points pushed.
     fn loaded(k: usize) -> (Replay, Demo, DVec3, DVec3) {
         let (_, demo) = textbook();
         let scene = demo.input("textbook").scene.unwrap();
@@ -190,6 +192,9 @@ mod forces {
         let on_head = farthest(&scene.head, &sample.head, -DVec3::Y);
         let trunk = sample.trunk.unwrap();
         let on_trunk = farthest(scene.trunk.as_ref().unwrap(), &trunk, DVec3::Y);
+        let touched = farthest(&scene.head, &sample.head, DVec3::X);
+        let touch = (sample.head.position_m - touched).normalize() * 30.0;
+        let neck = sample.expulsion_force_n.normalize() * 60.0;
         let loads = history
             .samples
             .iter()
@@ -207,8 +212,11 @@ mod forces {
                     false => Vec::new(),
                 },
                 head_axial: AxialMoments::default(),
-                head_trunk_force_n: DVec3::ZERO,
+                head_trunk_force_n: if i == k { touch } else { DVec3::ZERO },
+                head_trunk_moment_about_pivot_nm: (i == k).then(|| (touched - pivot).cross(touch)),
                 neck: None,
+                // The other samples are as a run recorded before the neck's force was.
+                neck_force_n: (i == k).then_some(neck),
                 spine: None,
                 guide: (i == k).then_some(GuideLoad { force_n: DVec3::new(0.0, 0.0, -10.0), moment_nm: DVec3::ZERO }),
             })
@@ -231,27 +239,38 @@ mod forces {
         let (replay, _, on_head, on_trunk) = loaded(k);
         let arrows = replay.arrows(k);
         let labels: Vec<&str> = arrows.iter().map(|a| a.label.as_str()).collect();
-        assert_eq!(labels, ["expulsion", "guide", "sacrum", "symphysis on the trunk", "pubic arch"]);
-        assert!(arrows[2].tip_m.distance(on_head) < 1e-6, "{} against {on_head}", arrows[2].tip_m);
-        assert!(arrows[3].tip_m.distance(on_trunk) < 1e-6, "{} against {on_trunk}", arrows[3].tip_m);
+        assert_eq!(labels, ["expulsion", "guide", "neck", "trunk on the head", "sacrum", "symphysis on the trunk", "pubic arch"]);
+        assert!(arrows[4].tip_m.distance(on_head) < 1e-6, "{} against {on_head}", arrows[4].tip_m);
+        assert!(arrows[5].tip_m.distance(on_trunk) < 1e-6, "{} against {on_trunk}", arrows[5].tip_m);
         let sample = &replay.history.samples[k];
         let in_line = |a: &crate::forces::Arrow, centre: DVec3| (a.tip_m - centre).cross(a.force_n.normalize()).length();
         // An off-centre force's arrow lies on its own line, through the
         // point it pushes, not through the head's centre.
-        assert!(in_line(&arrows[4], on_head) < 1e-9, "{}", in_line(&arrows[4], on_head));
-        assert!(in_line(&arrows[4], replay.history.samples[k].head.position_m) > 1e-3);
+        assert!(in_line(&arrows[6], on_head) < 1e-9, "{}", in_line(&arrows[6], on_head));
+        assert!(in_line(&arrows[6], replay.history.samples[k].head.position_m) > 1e-3);
         let (trunk, head) = (sample.trunk.unwrap(), sample.head);
         assert!(in_line(&arrows[0], trunk.position_m) < 1e-9 && in_line(&arrows[1], head.position_m) < 1e-9);
+        // The neck pushes at the pivot, inside the head: its arrow is on the
+        // line through the pivot and ends where that line enters the head,
+        // before the pivot.
+        let pivot = head.point(PIVOT_IN_HEAD);
+        assert!(in_line(&arrows[2], pivot) < 1e-9);
+        assert!((arrows[2].tip_m - pivot).dot(arrows[2].force_n) < -1e-3);
+        // The trunk's touch ends where it touches, on its own line.
+        let touched = arrows[3].tip_m;
+        assert!(in_line(&arrows[3], head.position_m) < 1e-9, "a push aimed at the centre");
+        assert!((touched - head.position_m).dot(DVec3::X) > 0.03, "{touched}");
         // The expulsion pushes the breech: its arrow ends behind the trunk's centre.
         assert!((arrows[0].tip_m - trunk.position_m).dot(arrows[0].force_n) < 0.0);
         assert_eq!(arrows[0].rgb, EXPULSION_RGB);
         // Drawn as a mesh from tail to tip, as long as its scale says.
-        let mesh = arrows[2].mesh();
+        let mesh = arrows[4].mesh();
         let ends = mesh.positions.iter().map(|p| DVec3::from(Vec3::from(*p).as_dvec3()));
-        let back = -arrows[2].force_n.normalize();
-        let reach = ends.map(|p| (p - arrows[2].tip_m).dot(back)).fold(0.0, f64::max);
+        let back = -arrows[4].force_n.normalize();
+        let reach = ends.map(|p| (p - arrows[4].tip_m).dot(back)).fold(0.0, f64::max);
         assert!((reach - 40.0 * ARROW_M_PER_N).abs() < 1e-5, "{reach}");
-        // Another sample has only the expulsion.
+        // Another sample has only the expulsion: a run recorded before the
+        // neck's force and the touch's moment were has no arrows for them.
         assert_eq!(replay.arrows(k + 1).len(), 1);
     }
 
@@ -269,18 +288,26 @@ mod forces {
         assert_eq!(names(Layers { markers: true, forces: false })[4..], ["sacral_promontory", "lambda"]);
         let both = names(Layers { markers: true, forces: true });
         assert_eq!(both[..6], names(Layers { markers: true, forces: false })[..]);
-        assert_eq!(both[6..], ["force: expulsion", "force: guide", "force: sacrum", "force: symphysis on the trunk", "force: pubic arch"]);
+        assert_eq!(
+            both[6..],
+            ["force: expulsion", "force: guide", "force: neck", "force: trunk on the head", "force: sacrum", "force: symphysis on the trunk", "force: pubic arch"]
+        );
         // The head's landmark moves with the head.
         let sphere = &replay.meshes(k, Layers { markers: true, forces: false })[5];
         let centre = sphere.positions.iter().map(|p| Vec3::from(*p)).sum::<Vec3>() / sphere.positions.len() as f32;
         let at = replay.history.samples[k].head.point(lambda).as_vec3();
         assert!(centre.distance(at) < 1e-4, "{centre} against {at}");
-        // The floor turns see-through only under the forces.
-        let floor_opacity = |layers| replay.meshes(k, layers)[2].colour[3];
-        assert_eq!(floor_opacity(Layers::default()), 1.0);
-        assert!(floor_opacity(Layers { markers: false, forces: true }) < 1.0);
+        // The floor and the trunk turn see-through only under the forces.
+        for (mesh, name) in [(1, "fetal trunk"), (2, "pelvic floor")] {
+            let opacity = |layers| replay.meshes(k, layers)[mesh].colour[3];
+            assert_eq!(opacity(Layers::default()), 1.0, "{name}");
+            assert!(opacity(Layers { markers: false, forces: true }) < 1.0, "{name}");
+        }
         // Said in words, largest first.
-        assert_eq!(replay.force_readout(k), ["expulsion 80 N", "sacrum 40 N", "symphysis on the trunk 25 N", "pubic arch 20 N", "guide 10 N"]);
+        assert_eq!(
+            replay.force_readout(k),
+            ["expulsion 80 N", "neck 60 N", "sacrum 40 N", "trunk on the head 30 N", "symphysis on the trunk 25 N", "pubic arch 20 N", "guide 10 N"]
+        );
         // Without loads there is nothing to lay over.
         let (bare, _) = textbook();
         assert_eq!(bare.layers_available(), Layers::default());

@@ -704,6 +704,36 @@ mod tests {
         assert_eq!(inverted_corners(&record), format!("up to 5 of 48, from t = {t:.1} s"));
     }
 
+    /// The report's pictures carry the forces at each key moment the run
+    /// reached, at that moment's sample: an arrow per force listed, largest
+    /// first, the neck's push among them; a record without loads has none.
+    #[test]
+    fn the_report_draws_the_forces_at_each_key_moment() {
+        let s = crate::commands::coarse_normal(4.0);
+        let dir = tempfile::tempdir().unwrap();
+        let mut record =
+            carus_labour::run(&s, dir.path(), &RunOptions::default(), &mut carus_labour::SilentObserver).unwrap();
+        let detector = record.detector.clone().unwrap();
+        let (moments, _) = carus_report::moments::key_moments(&detector);
+        assert!(!moments.is_empty(), "the run reached no key moment");
+        let scene = report_scene_with_forces(&record, &detector).unwrap();
+        let samples: Vec<usize> = scene.forces.iter().map(|f| f.sample).collect();
+        assert_eq!(samples, moments.iter().map(|m| m.sample).collect::<Vec<_>>());
+        for forces in &scene.forces {
+            assert!(!forces.listed.is_empty());
+            assert_eq!(forces.arrows.len(), forces.listed.len());
+            let sizes: Vec<f64> = forces.listed.iter().map(|(_, n, _)| *n).collect();
+            assert!(sizes.windows(2).all(|w| w[0] >= w[1]), "{sizes:?}");
+            for ((label, _, _), arrow) in forces.listed.iter().zip(&forces.arrows) {
+                assert_eq!(arrow.name, format!("force: {label}"));
+            }
+        }
+        let labels: Vec<&str> = scene.forces.iter().flat_map(|f| f.listed.iter().map(|(l, _, _)| l.as_str())).collect();
+        assert!(labels.contains(&"expulsion") && labels.contains(&"neck"), "{labels:?}");
+        record.loads.clear();
+        assert!(report_scene_with_forces(&record, &detector).unwrap().forces.is_empty());
+    }
+
     /// `--json` and the text summary say how the head was moved: the mode
     /// always, and how hard the guide worked when there was one.
     #[test]
