@@ -91,7 +91,7 @@ pub struct LoadSample {
     pub head_trunk_moment_about_pivot_nm: Option<DVec3>,
     /// The neck's force on the head, N, acting at the atlanto-occipital
     /// pivot: the trunk's push (or pull) passed on through the neck's
-    /// springs and dampers (zero without a trunk; none in runs recorded
+    /// springs and dampers (none without a trunk, and in runs recorded
     /// before it was).
     #[serde(default)]
     pub neck_force_n: Option<DVec3>,

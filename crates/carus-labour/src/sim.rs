@@ -169,8 +169,8 @@ struct StepForces {
     /// The trunk's contact on the head, about the head's centre of mass.
     head_trunk: Wrench,
     neck: Option<NeckAngles>,
-    /// The neck's force on the head, at the pivot.
-    neck_force: DVec3,
+    /// The neck's force on the head, at the pivot (none without a trunk).
+    neck_force: Option<DVec3>,
     /// The trunk's contact moment on the head about the pivot.
     head_trunk_about_pivot: DVec3,
     spine: Option<NeckAngles>,
@@ -279,7 +279,7 @@ impl<'a> Simulation<'a> {
             head_axial: AxialMoments::default(),
             head_trunk: Wrench::default(),
             neck: neck_load.as_ref().map(|l| l.angles),
-            neck_force: neck_load.as_ref().map_or(DVec3::ZERO, |l| l.on_head.force),
+            neck_force: neck_load.as_ref().map(|l| l.on_head.force),
             head_trunk_about_pivot: DVec3::ZERO,
             spine,
             guide: None,
@@ -813,7 +813,7 @@ impl<'a> Simulation<'a> {
             head_axial: AxialMoments::default(),
             head_trunk: Wrench::default(),
             neck: None,
-            neck_force: DVec3::ZERO,
+            neck_force: None,
             head_trunk_about_pivot: DVec3::ZERO,
             spine: None,
             guide: None,
@@ -856,7 +856,7 @@ impl<'a> Simulation<'a> {
             }),
         };
         forces.neck = neck.map(|l| l.angles);
-        forces.neck_force = neck.map_or(DVec3::ZERO, |l| l.on_head.force);
+        forces.neck_force = neck.map(|l| l.on_head.force);
         forces.head_trunk_about_pivot = loads::moment_about(&forces.head_trunk, s.bodies.position[HEAD], pivot);
     }
 
@@ -881,7 +881,7 @@ impl<'a> Simulation<'a> {
             head_trunk_force_n: forces.head_trunk.force,
             head_trunk_moment_about_pivot_nm: Some(forces.head_trunk_about_pivot),
             neck: forces.neck,
-            neck_force_n: Some(forces.neck_force),
+            neck_force_n: forces.neck_force,
             spine: forces.spine,
             guide: forces.guide.map(|g| GuideLoad { force_n: g.force, moment_nm: g.torque }),
         });

@@ -274,7 +274,8 @@ fn pictures(w: &mut String, parts: &Parts) {
                 let _ = write!(
                     w,
                     ". Arrows: the forces on the fetus, each on its line of action and ending where \
-                     it meets the fetal surface, 10 mm per {:.0} N, listed under each moment in their colours",
+                     it meets the fetal surface, 10 mm per {:.0} N, listed under each moment in their colours; \
+                     the floor and the fetal trunk see-through under them",
                     0.01 / crate::pictures::ARROW_M_PER_N
                 );
             }

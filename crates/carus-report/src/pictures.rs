@@ -1,5 +1,6 @@
 //! Pictures of the key moments: the pelvis semi-transparent, the fetus
-//! opaque where the history places it, the floor coloured by stretch;
+//! opaque where the history places it (the trunk see-through when forces
+//! are drawn), the floor coloured by stretch;
 //! every picture of a report from one camera scale, so sizes compare.
 
 use base64::engine::general_purpose::STANDARD;

@@ -12,8 +12,8 @@
 //! line that passes the body by, at the body's point nearest it).
 
 use carus_analysis::{ContactSite, PoseHistory, RigidPose};
-use carus_contact::TriangleCollider;
-use carus_labour::loads::{Body, LoadSample};
+use carus_contact::{TriangleCollider, Wrench};
+use carus_labour::loads::{moment_about, Body, LoadSample};
 use carus_render::RenderMesh;
 use carus_report::ReportScene;
 use glam::DVec3;
@@ -162,15 +162,14 @@ impl Forces {
         }
         if let Some(about_pivot) = load.head_trunk_moment_about_pivot_nm {
             let force = load.head_trunk_force_n;
-            let moment = about_pivot + (pivot - head_centre).cross(force);
+            let moment = about_centre(force, about_pivot, pivot, head_centre);
             draw("trunk on the head".into(), Body::Head, force, central_axis_point(force, moment, head_centre), TRUNK_ON_HEAD_RGB);
         }
         for site in &load.sites {
             let Some(centre) = pose(site.body).map(|p| p.position_m) else {
                 continue;
             };
-            // The moment about the body's centre, from the one about the pivot.
-            let moment = site.moment_about_pivot_nm + (pivot - centre).cross(site.force_n);
+            let moment = about_centre(site.force_n, site.moment_about_pivot_nm, pivot, centre);
             let label = match site.body {
                 Body::Head => site.site.name().replace('_', " "),
                 body => format!("{} on the {}", site.site.name().replace('_', " "), body.name().replace('_', " ")),
@@ -196,6 +195,12 @@ impl Forces {
 pub fn largest_first(mut arrows: Vec<Arrow>) -> Vec<Arrow> {
     arrows.sort_by(|a, b| b.force_n.length().total_cmp(&a.force_n.length()));
     arrows
+}
+
+/// The moment about a body's `centre` of a force whose moment about the
+/// `pivot` is `about_pivot`.
+fn about_centre(force: DVec3, about_pivot: DVec3, pivot: DVec3, centre: DVec3) -> DVec3 {
+    moment_about(&Wrench { force, torque: about_pivot }, pivot, centre)
 }
 
 /// The point of a force's line of action nearest `centre`, for a force

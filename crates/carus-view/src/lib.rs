@@ -106,12 +106,14 @@ impl Replay {
         // The head's path to its birth stays in view: the canal and the head
         // at the start, and the head as it is born (or at its deepest, if it
         // never is); after birth it may swing out of the canal's picture.
+        let last = history.samples.len() - 1;
         let born_or_deepest = series.head_delivered.iter().position(|&born| born).unwrap_or_else(|| {
             (0..series.station_mm.len())
+                .filter(|&k| series.station_mm[k].is_finite())
                 .max_by(|&a, &b| series.station_mm[a].total_cmp(&series.station_mm[b]))
                 .unwrap_or(0)
         });
-        let framed: Vec<RenderMesh> = [0, born_or_deepest]
+        let framed: Vec<RenderMesh> = [0, born_or_deepest.min(last)]
             .into_iter()
             .flat_map(|k| meshes_at_sample(&scene, &history, k, stretch_range).0)
             .collect();

@@ -43,16 +43,13 @@ fn a_frame_has_the_fetus_where_the_history_puts_it() {
     }
 }
 
-/// The standard views keep the head in the picture from above the inlet
-/// until it is born, not only while it is in the canal.
-#[test]
-fn the_standard_views_hold_the_head_s_path_to_its_birth() {
-    let (replay, _) = textbook();
-    let born = replay.series.head_delivered.iter().position(|&b| b).expect("the textbook head is born");
+/// Whether every vertex of the head at samples `ks` is inside an 800 x
+/// 600 picture from each standard view.
+fn head_in_view(replay: &Replay, ks: &[usize]) {
     let (width, height) = (800, 600);
     for view in [View::Lateral, View::Anterior, View::Inferior] {
         let camera = replay.standard_camera(view);
-        for k in [0, born / 2, born] {
+        for &k in ks {
             let head = &replay.meshes(k, Layers::default())[0];
             for &p in &head.positions {
                 let [x, y] = camera.project(Vec3::from(p), width, height);
@@ -61,6 +58,23 @@ fn the_standard_views_hold_the_head_s_path_to_its_birth() {
             }
         }
     }
+}
+
+/// The standard views keep the head in the picture from above the inlet
+/// until it is born, not only while it is in the canal; in a run whose
+/// head is never born, down to its deepest.
+#[test]
+fn the_standard_views_hold_the_head_s_path_to_its_birth() {
+    let (replay, demo) = textbook();
+    let born = replay.series.head_delivered.iter().position(|&b| b).expect("the textbook head is born");
+    head_in_view(&replay, &[0, born / 2, born]);
+
+    let scene = demo.input("textbook").scene.unwrap();
+    let mut short = demo.history.clone();
+    short.samples.truncate(born);
+    let unborn = Replay::new("textbook", scene, short, None).unwrap();
+    assert!(!unborn.series.head_delivered.iter().any(|&b| b));
+    head_in_view(&unborn, &[0, born - 1]);
 }
 
 #[test]

@@ -705,8 +705,8 @@ mod tests {
     }
 
     /// The report's pictures carry the forces at each key moment the run
-    /// reached, at that moment's sample: an arrow per force listed, largest
-    /// first, the neck's push among them; a record without loads has none.
+    /// reached, at that moment's sample, listed largest first, the neck's
+    /// push among them; a record without loads has none.
     #[test]
     fn the_report_draws_the_forces_at_each_key_moment() {
         let s = crate::commands::coarse_normal(4.0);
@@ -720,13 +720,8 @@ mod tests {
         let samples: Vec<usize> = scene.forces.iter().map(|f| f.sample).collect();
         assert_eq!(samples, moments.iter().map(|m| m.sample).collect::<Vec<_>>());
         for forces in &scene.forces {
-            assert!(!forces.listed.is_empty());
-            assert_eq!(forces.arrows.len(), forces.listed.len());
             let sizes: Vec<f64> = forces.listed.iter().map(|(_, n, _)| *n).collect();
-            assert!(sizes.windows(2).all(|w| w[0] >= w[1]), "{sizes:?}");
-            for ((label, _, _), arrow) in forces.listed.iter().zip(&forces.arrows) {
-                assert_eq!(arrow.name, format!("force: {label}"));
-            }
+            assert!(!sizes.is_empty() && sizes.windows(2).all(|w| w[0] >= w[1]), "{sizes:?}");
         }
         let labels: Vec<&str> = scene.forces.iter().flat_map(|f| f.listed.iter().map(|(l, _, _)| l.as_str())).collect();
         assert!(labels.contains(&"expulsion") && labels.contains(&"neck"), "{labels:?}");
