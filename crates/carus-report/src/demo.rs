@@ -105,6 +105,7 @@ impl Demo {
             detector: &self.detector,
             floor_peak_stretch: Vec::new(),
             head_axial_moments: Vec::new(),
+            head_canal_forces: Vec::new(),
             scene: Some(ReportScene {
                 pelvis: Some(self.pelvis.surface.clone()),
                 head: self.fetus.head.surface.clone(),

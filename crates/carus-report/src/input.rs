@@ -29,8 +29,31 @@ pub struct ReportInput<'a> {
     /// What spun the head about the pelvic axis over time; empty when the
     /// history does not know (an imposed trajectory has no forces).
     pub head_axial_moments: Vec<AxialMomentSample>,
+    /// What pushed the head down the canal (and what held it back) over
+    /// time; empty when not known (no forces recorded, or a run recorded
+    /// before the neck's force was).
+    pub head_canal_forces: Vec<CanalForceSample>,
     /// The meshes for the pictures of the key moments; `None`: no pictures.
     pub scene: Option<ReportScene>,
+}
+
+/// Forces on the head along the pelvic axis at one instant, N: the
+/// component of each source's force along the axis's tangent at the head,
+/// pointing down the canal. Positive pushes the head deeper.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct CanalForceSample {
+    pub time_s: f64,
+    /// The push that reaches the head at the atlanto-occipital pivot: the
+    /// neck's force (the trunk's push passed on), and the expulsion itself
+    /// where it acts at the pivot (no trunk, or `acts_on = "pivot"`).
+    pub push_n: f64,
+    /// The trunk pressing on the head (chin on chest).
+    pub trunk_n: f64,
+    /// The bony pelvis and its ligaments, friction included.
+    pub bone_n: f64,
+    pub floor_n: f64,
+    /// The guide of an imposed or hybrid run (zero in forward mode).
+    pub guide_n: f64,
 }
 
 /// Moments on the head about the pelvic axis at one instant, N m: the

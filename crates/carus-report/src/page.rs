@@ -8,7 +8,7 @@ use carus_analysis::{ArrestStage, DetectorReport, Outcome, THETA_ILL_CONDITIONED
 use plotters::style::RGBColor;
 
 use crate::error::ReportError;
-use crate::input::{AxialMomentSample, ReportInput};
+use crate::input::{AxialMomentSample, CanalForceSample, ReportInput};
 use crate::moments::{KeyMoment, MissedMoment};
 use crate::movements::{css, ill_conditioned_rotations, shown, size_text, Shown};
 use crate::pictures::{MomentPictures, PICTURE_SIZE};
@@ -491,6 +491,7 @@ fn plots_section(
     }
     floor_plot(w, input, &axis)?;
     axial_moment_plot(w, input, &axis)?;
+    canal_force_plot(w, input, &axis)?;
     let _ = writeln!(w, "</div></section>");
     Ok(())
 }
@@ -670,6 +671,56 @@ fn axial_moment_plot(
          <span style=\"color:#35b779\">&#9632; the trunk on the head (chin on chest)</span> \
          <span style=\"color:#1f5799\">&#9632; neck</span>, of which \
          <span style=\"color:#5faadc\">&#9632; the push through the pivot</span></small>\
+         </figcaption>{svg}</figure>"
+    );
+    Ok(())
+}
+
+/// What pushed the head down the canal and what held it back: how much of
+/// the expulsion reached the head through the neck, against the canal.
+fn canal_force_plot(w: &mut String, input: &ReportInput, axis: &TimeAxis) -> Result<(), ReportError> {
+    let f = &input.head_canal_forces;
+    if f.is_empty() {
+        return Ok(());
+    }
+    let column = |g: fn(&CanalForceSample) -> f64| f.iter().map(g).collect::<Vec<f64>>();
+    let (time_s, push, trunk, bone, floor, guide) = (
+        column(|s| s.time_s),
+        column(|s| s.push_n),
+        column(|s| s.trunk_n),
+        column(|s| s.bone_n),
+        column(|s| s.floor_n),
+        column(|s| s.guide_n),
+    );
+    if let Some(&bad) = [&time_s, &push, &trunk, &bone, &floor, &guide].iter().flat_map(|c| c.iter()).find(|v| !v.is_finite()) {
+        return Err(ReportError::NotFinite { what: "head_canal_forces", value: bad });
+    }
+    let curve = |values, colour| Curve { values, colour };
+    let mut curves = vec![
+        curve(&push, RGBColor(31, 87, 153)),
+        curve(&trunk, RGBColor(53, 183, 121)),
+        curve(&bone, RGBColor(200, 82, 0)),
+        curve(&floor, RGBColor(68, 1, 84)),
+    ];
+    let guided = guide.iter().any(|&g| g != 0.0);
+    if guided {
+        curves.push(curve(&guide, RGBColor(217, 26, 217)));
+    }
+    let svg = plots::svg(&axis.spec("canal-forces", "force (N)", &time_s, curves, vec![0.0]))?;
+    let guide_key = match guided {
+        true => " <span style=\"color:#d91ad9\">&#9632; the guide (not the physics)</span>",
+        false => "",
+    };
+    let _ = write!(
+        w,
+        "<figure class=\"plot\" id=\"plot-canal-forces\"><figcaption><b>What pushes the head \
+         down the canal</b> <small>forces on the head along the pelvic axis, positive deeper: \
+         <span style=\"color:#1f5799\">&#9632; the push that reaches it at the pivot (through \
+         the neck from the trunk)</span> \
+         <span style=\"color:#35b779\">&#9632; the trunk on the head (chin on chest)</span> \
+         <span style=\"color:#c85200\">&#9632; bone (friction included)</span> \
+         <span style=\"color:#440154\">&#9632; pelvic floor</span>{guide_key}; what they leave \
+         of the expulsion moves the fetus against the drag of its surroundings</small>\
          </figcaption>{svg}</figure>"
     );
     Ok(())

@@ -3,7 +3,7 @@
 //! pictures inline, nothing fetched from elsewhere.
 
 use crate::demo::Demo;
-use crate::{write_report, write_report_with, AxialMomentSample, FloorFrame, ReportError, SampleForces};
+use crate::{write_report, write_report_with, AxialMomentSample, CanalForceSample, FloorFrame, ReportError, ReportInput, SampleForces};
 
 fn movement_row(html: &str, key: &str) -> String {
     let start = html
@@ -186,6 +186,35 @@ fn a_floor_stretched_past_the_cited_crowning_levels_is_marked() {
     let html = write_report_with(&input, None).unwrap().html;
     assert!(html.contains("3.26 (Lien et al. 2004) and 4.64 (Jing et al. 2012)"));
     assert_eq!(count_lines(&html), rest_only + 2);
+}
+
+#[test]
+fn what_pushes_the_head_is_plotted_when_known() {
+    let demo = Demo::straight_push().unwrap();
+    let mut input = demo.input("with canal forces");
+    let plots = |input: &ReportInput| write_report_with(input, None).unwrap().html.matches("<svg").count();
+    let without = plots(&input);
+    input.head_canal_forces = (0..3)
+        .map(|k| CanalForceSample {
+            time_s: 10.0 * k as f64,
+            push_n: 30.0,
+            trunk_n: 1.0,
+            bone_n: -5.0 * k as f64,
+            floor_n: -10.0,
+            guide_n: 0.0,
+        })
+        .collect();
+    let html = write_report_with(&input, None).unwrap().html;
+    assert_eq!(plots(&input), without + 1);
+    assert!(html.contains("id=\"plot-canal-forces\"") && html.contains("the push that reaches it at the pivot"));
+    assert!(!html.contains("the guide (not the physics)"));
+    input.head_canal_forces[1].guide_n = 4.0;
+    assert!(write_report_with(&input, None).unwrap().html.contains("the guide (not the physics)"));
+    input.head_canal_forces[2].floor_n = f64::NAN;
+    assert!(matches!(
+        write_report_with(&input, None),
+        Err(ReportError::NotFinite { what: "head_canal_forces", .. })
+    ));
 }
 
 #[test]

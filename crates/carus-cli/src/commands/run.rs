@@ -199,6 +199,7 @@ pub(super) fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result
         ]);
     };
     let summary = &record.summary;
+    let scene = Scene::build(&record.scenario)?;
     let input = carus_report::ReportInput {
         title: run_title(&record.scenario),
         notice: summary.failure.as_ref().map(|f| {
@@ -256,7 +257,8 @@ pub(super) fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result
                 trunk_nm: l.head_axial.trunk_nm,
             })
             .collect(),
-        scene: Some(report_scene_with_forces(record, detector)?),
+        head_canal_forces: head_canal_forces(record, &scene),
+        scene: Some(report_scene_with_forces(record, &scene, detector)?),
     };
     Ok(carus_report::write_report_file(
         &input,
@@ -277,10 +279,13 @@ pub(super) fn run_title(scenario: &Scenario) -> String {
 /// The report's scene, with the forces on the fetus at its key moments
 /// drawn as the viewer draws them (docs/VIEWER.md, "How a force is
 /// drawn"); none for a run that recorded no loads.
-fn report_scene_with_forces(record: &RunRecord, detector: &carus_analysis::DetectorReport) -> anyhow::Result<carus_report::ReportScene> {
-    let scene = Scene::build(&record.scenario)?;
+fn report_scene_with_forces(
+    record: &RunRecord,
+    scene: &Scene,
+    detector: &carus_analysis::DetectorReport,
+) -> anyhow::Result<carus_report::ReportScene> {
     let kept = record.key_moments.iter().filter_map(|m| m.floor.as_ref());
-    let mut pictured = scene_with_floors(&scene, kept.collect());
+    let mut pictured = scene_with_floors(scene, kept.collect());
     if record.loads.is_empty() {
         return Ok(pictured);
     }
@@ -298,6 +303,42 @@ fn report_scene_with_forces(record: &RunRecord, detector: &carus_analysis::Detec
         })
         .collect();
     Ok(pictured)
+}
+
+/// What pushed the head down the canal at each recorded instant: each
+/// source's force on the head along the pelvic axis's tangent at the head
+/// (the report's plot). None for a run with a trunk recorded before the
+/// neck's force was.
+fn head_canal_forces(record: &RunRecord, scene: &Scene) -> Vec<carus_report::CanalForceSample> {
+    use carus_analysis::ContactSite;
+    use carus_labour::loads::{down_the_canal, Body};
+    let at_pivot = scene.expulsion_at_pivot();
+    let mut samples = Vec::with_capacity(record.loads.len());
+    for (load, sample) in record.loads.iter().zip(&record.history.samples) {
+        let neck = match (load.neck_force_n, &scene.trunk) {
+            (Some(neck), _) => neck,
+            (None, None) => glam::DVec3::ZERO,
+            (None, Some(_)) => return Vec::new(),
+        };
+        let down = down_the_canal(scene.canal.axis(), sample.head.position_m);
+        let on_head = |floor: bool| -> f64 {
+            load.sites
+                .iter()
+                .filter(|s| s.body == Body::Head && (s.site == ContactSite::PelvicFloor) == floor)
+                .map(|s| s.force_n.dot(down))
+                .sum()
+        };
+        let expulsion = if at_pivot { sample.expulsion_force_n } else { glam::DVec3::ZERO };
+        samples.push(carus_report::CanalForceSample {
+            time_s: load.time_s,
+            push_n: (neck + expulsion).dot(down),
+            trunk_n: load.head_trunk_force_n.dot(down),
+            bone_n: on_head(false),
+            floor_n: on_head(true),
+            guide_n: load.guide.map_or(0.0, |g| g.force_n.dot(down)),
+        });
+    }
+    samples
 }
 
 /// The surfaces a run's pictures and its replay draw, from `scene` (built
@@ -716,7 +757,8 @@ mod tests {
         let detector = record.detector.clone().unwrap();
         let (moments, _) = carus_report::moments::key_moments(&detector);
         assert!(!moments.is_empty(), "the run reached no key moment");
-        let scene = report_scene_with_forces(&record, &detector).unwrap();
+        let built = Scene::build(&record.scenario).unwrap();
+        let scene = report_scene_with_forces(&record, &built, &detector).unwrap();
         let samples: Vec<usize> = scene.forces.iter().map(|f| f.sample).collect();
         assert_eq!(samples, moments.iter().map(|m| m.sample).collect::<Vec<_>>());
         for forces in &scene.forces {
@@ -725,8 +767,27 @@ mod tests {
         }
         let labels: Vec<&str> = scene.forces.iter().flat_map(|f| f.listed.iter().map(|(l, _, _)| l.as_str())).collect();
         assert!(labels.contains(&"expulsion") && labels.contains(&"neck"), "{labels:?}");
+
+        // The plot of what pushes the head: during a contraction the push
+        // reaching it drives it down the canal, no more than the expulsion.
+        let canal = head_canal_forces(&record, &built);
+        assert_eq!(canal.len(), record.loads.len());
+        let mut pushed = 0;
+        for (f, sample) in canal.iter().zip(&record.history.samples) {
+            let expulsion = sample.expulsion_force_n.length();
+            if expulsion > 50.0 {
+                assert!(f.push_n > 0.0 && f.push_n < expulsion, "t = {}: {f:?}", f.time_s);
+                pushed += 1;
+            }
+            assert_eq!(f.guide_n, 0.0);
+        }
+        assert!(pushed > 0);
+        // A run recorded before the neck's force was has no such plot.
+        let mut older = record.clone();
+        older.loads.iter_mut().for_each(|l| l.neck_force_n = None);
+        assert!(head_canal_forces(&older, &built).is_empty());
         record.loads.clear();
-        assert!(report_scene_with_forces(&record, &detector).unwrap().forces.is_empty());
+        assert!(report_scene_with_forces(&record, &built, &detector).unwrap().forces.is_empty());
     }
 
     /// `--json` and the text summary say how the head was moved: the mode
