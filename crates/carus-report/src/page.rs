@@ -540,12 +540,7 @@ fn floor_plot(w: &mut String, input: &ReportInput, axis: &TimeAxis) -> Result<()
         return Ok(());
     }
     let (time_s, stretch): (Vec<f64>, Vec<f64>) = input.floor_peak_stretch.iter().copied().unzip();
-    if let Some(&bad) = stretch.iter().chain(&time_s).find(|v| !v.is_finite()) {
-        return Err(ReportError::NotFinite {
-            what: "floor_peak_stretch",
-            value: bad,
-        });
-    }
+    all_finite("floor_peak_stretch", &[&stretch, &time_s])?;
     let peak = input
         .floor_peak_stretch
         .iter()
@@ -595,6 +590,14 @@ fn floor_plot(w: &mut String, input: &ReportInput, axis: &TimeAxis) -> Result<()
     Ok(())
 }
 
+/// A plot's data must be numbers: the first that is not is named with `what`.
+fn all_finite(what: &'static str, columns: &[&[f64]]) -> Result<(), ReportError> {
+    match columns.iter().flat_map(|c| c.iter()).find(|v| !v.is_finite()) {
+        Some(&value) => Err(ReportError::NotFinite { what, value }),
+        None => Ok(()),
+    }
+}
+
 /// What spun the head about the pelvic axis: bone, floor, neck and trunk, the
 /// causes a reader checks when internal rotation does or does not happen.
 fn axial_moment_plot(
@@ -615,16 +618,7 @@ fn axial_moment_plot(
         column(|s| s.neck_push_nm),
         column(|s| s.trunk_nm),
     );
-    if let Some(&bad) = [&time_s, &bone, &floor, &neck, &push, &trunk]
-        .iter()
-        .flat_map(|c| c.iter())
-        .find(|v| !v.is_finite())
-    {
-        return Err(ReportError::NotFinite {
-            what: "head_axial_moments",
-            value: bad,
-        });
-    }
+    all_finite("head_axial_moments", &[&time_s, &bone, &floor, &neck, &push, &trunk])?;
     let (bone_colour, floor_colour, neck_colour, push_colour, trunk_colour) = (
         RGBColor(200, 82, 0),
         RGBColor(68, 1, 84),
@@ -692,9 +686,7 @@ fn canal_force_plot(w: &mut String, input: &ReportInput, axis: &TimeAxis) -> Res
         column(|s| s.floor_n),
         column(|s| s.guide_n),
     );
-    if let Some(&bad) = [&time_s, &push, &trunk, &bone, &floor, &guide].iter().flat_map(|c| c.iter()).find(|v| !v.is_finite()) {
-        return Err(ReportError::NotFinite { what: "head_canal_forces", value: bad });
-    }
+    all_finite("head_canal_forces", &[&time_s, &push, &trunk, &bone, &floor, &guide])?;
     let curve = |values, colour| Curve { values, colour };
     let mut curves = vec![
         curve(&push, RGBColor(31, 87, 153)),

@@ -53,7 +53,8 @@ pub struct Replay {
     /// The seven movements: key, start and end (observed ones only).
     movements: Vec<(&'static str, f64, f64)>,
     stretch_range: Option<[f64; 2]>,
-    /// What the camera is fitted to: the canal at the start.
+    /// What the camera is fitted to: the canal, and the head from the start
+    /// to its birth.
     bounds: Bounds,
     /// The pelvis's landmarks, planes and axis (pelvis frame), if given.
     markers: Vec<RenderMesh>,

@@ -729,14 +729,18 @@ pub(super) fn serde_name<T: serde::Serialize>(value: &T) -> String {
 mod tests {
     use super::*;
 
+    /// The coarse normal scenario run for `end_s`, its folder gone.
+    fn coarse_record(end_s: f64) -> RunRecord {
+        let dir = tempfile::tempdir().unwrap();
+        let s = crate::commands::coarse_normal(end_s);
+        carus_labour::run(&s, dir.path(), &RunOptions::default(), &mut carus_labour::SilentObserver).unwrap()
+    }
+
     /// The report's row names the most elements with an inverted corner at
     /// one sample, out of the floor's, and when the first appeared.
     #[test]
     fn the_report_counts_inverted_corners() {
-        let s = crate::commands::coarse_normal(0.3);
-        let dir = tempfile::tempdir().unwrap();
-        let mut record =
-            carus_labour::run(&s, dir.path(), &RunOptions::default(), &mut carus_labour::SilentObserver).unwrap();
+        let mut record = coarse_record(0.3);
         assert_eq!(record.summary.floor_elements, 48);
         assert_eq!(inverted_corners(&record), "none of 48");
         record.floor[1].inverted_corner_elements = 2;
@@ -750,10 +754,7 @@ mod tests {
     /// push among them; a record without loads has none.
     #[test]
     fn the_report_draws_the_forces_at_each_key_moment() {
-        let s = crate::commands::coarse_normal(4.0);
-        let dir = tempfile::tempdir().unwrap();
-        let mut record =
-            carus_labour::run(&s, dir.path(), &RunOptions::default(), &mut carus_labour::SilentObserver).unwrap();
+        let mut record = coarse_record(4.0);
         let detector = record.detector.clone().unwrap();
         let (moments, _) = carus_report::moments::key_moments(&detector);
         assert!(!moments.is_empty(), "the run reached no key moment");
