@@ -77,8 +77,11 @@ pub struct NeckStiffness {
     /// (the spine's neutral zone, Panjabi 1992, J. Spinal Disord. 5:383),
     /// and on its own it lets the push of REFERENCE_DATA.md shorten the
     /// neck by more than its length (120 N over 1064.5 N/m is 113 mm; the
-    /// neck is 24 mm, 0.2 S, from the pivot to T1 in carus-anatomy's trunk).
-    /// Engineering estimate: a quarter of that length, 6 mm, well short of
+    /// neck is 37 mm from the pivot to T1, the cervical spine at birth, in
+    /// carus-anatomy's trunk). Engineering estimate: 6 mm, a sixth of that
+    /// length (set as a quarter of the 24 mm neck estimated before the
+    /// thirtieth session, and kept when the neck took its measured length
+    /// so that one change is measured at a time), well short of
     /// the 70 % strain at which developing cervical spines failed in
     /// compression (Nuckley et al. 2007, Spine 32(6), baboon). No neonatal
     /// figure was found; the outcome turns on it (docs/LABOUR.md,

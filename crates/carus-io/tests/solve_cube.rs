@@ -100,6 +100,24 @@ fn the_example_job_matches_the_direct_api_and_writes_readable_results() {
     // A second run into the same folder is refused unless forced.
     let again = run_job(&example(), &out, &RunOptions::default(), &mut |_| {});
     assert!(matches!(again, Err(JobError::OutDirExists { .. })));
+
+    // A run stopped part way (Ctrl-C) writes its state then as the last
+    // frame, its history and summary, and says it was stopped.
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let options = RunOptions { force: true, stop: Some(stop.clone()) };
+    let stopped = run_job(&example(), &out, &options, &mut |p| {
+        if p.steps >= 1000 {
+            stop.store(true, std::sync::atomic::Ordering::Relaxed);
+        }
+    })
+    .unwrap();
+    assert!(stopped.failure.as_deref().is_some_and(|f| f.contains("stopped by the user")), "{:?}", stopped.failure);
+    assert!(stopped.steps >= 1000 && stopped.steps < 5000, "{}", stopped.steps);
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["steps"], stopped.steps);
+    let pvd = std::fs::read_to_string(out.join("solution.pvd")).unwrap();
+    assert_eq!(pvd.matches("<DataSet").count(), stopped.frames);
     std::fs::remove_dir_all(&out).unwrap();
 }
 
@@ -210,7 +228,7 @@ fn a_run_that_inverts_an_element_stops_with_its_last_good_frame() {
 #[test]
 fn job_errors_name_the_key_the_line_and_the_fix() {
     let dir = fresh_dir("errors");
-    let cases: [(&str, &str); 8] = [
+    let cases: [(&str, &str); 9] = [
         (
             "\n[solver]\nend_time_s = 1.0\ntime_stepp_s = 1e-3\n",
             "job.toml:17:1: `solver.time_stepp_s`: unknown field `time_stepp_s`",
@@ -229,6 +247,11 @@ fn job_errors_name_the_key_the_line_and_the_fix() {
             "`pressure[0].load`: unknown field `ramp`",
         ),
         ("\n[solver]\nend_time_s = 1.0\nhourglass_coefficient = \"high\"\n", "`solver.hourglass_coefficient`: invalid type"),
+        // A node held twice: one table would silently override the other.
+        (
+            "\n[[displacement]]\nnode_set = \"x0\"\nx_m = 0.001\nload = { shape = \"step\" }\n[solver]\nend_time_s = 1.0\n",
+            "`displacement[0].node_set`",
+        ),
         // Steps so small that the run could not end, set or implied.
         ("\n[solver]\nend_time_s = 1.0\ntime_step_s = 1e-300\n", "`solver.time_step_s`: 1e-300 s would take 1.0e300 steps"),
         (
@@ -236,8 +259,8 @@ fn job_errors_name_the_key_the_line_and_the_fix() {
             "`materials`: the stable time step is 1.875e-157 s, so 1 s would take 5.3e156 steps",
         ),
     ];
-    for (i, (extra, expected)) in cases.into_iter().enumerate() {
-        let base = if i == 7 { BASE.replace("density_kg_m3 = 1000.0", "density_kg_m3 = 1e-300") } else { BASE.to_string() };
+    for (extra, expected) in cases {
+        let base = if expected.starts_with("`materials`") { BASE.replace("density_kg_m3 = 1000.0", "density_kg_m3 = 1e-300") } else { BASE.to_string() };
         let job = write_job(&dir, &format!("{base}{extra}"));
         let err = run_job(&job, &dir.join("out"), &RunOptions::default(), &mut |_| {})
             .unwrap_err()

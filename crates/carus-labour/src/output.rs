@@ -167,11 +167,18 @@ pub fn write_surface_vtu(
     write_text(path, &s)
 }
 
-/// The floor's current state as a VTU frame (displacement, von Mises
-/// stress, maximum principal stretch, J).
+/// The floor's current state as a VTU frame: the mesh where it is now, as
+/// the fetal frames are posed, so that the series opens in ParaView as the
+/// scene was; the displacement from the rest shape, von Mises stress,
+/// maximum principal stretch and J ride on it.
 pub fn write_floor_vtu(path: &Path, mesh: &Mesh, solver: &TledSolver) -> Result<(), LabourError> {
     let u = solver.displacements();
     let fields = solver.element_fields();
+    let mut placed = mesh.clone();
+    for (node, d) in placed.nodes.iter_mut().zip(&u) {
+        *node = std::array::from_fn(|i| node[i] + d[i]);
+    }
+    let mesh = &placed;
     let frame = FrameFields {
         displacement_m: &u,
         von_mises_pa: &fields.von_mises_pa,

@@ -116,6 +116,10 @@ pub struct TrunkSection {
     pub bisacromial_mm: f64,
     /// Engineering estimate 95 mm (carus-anatomy TrunkDiameters).
     pub bitrochanteric_mm: f64,
+    /// The neck, from the atlanto-occipital pivot to the first thoracic
+    /// vertebra: 37 mm, the cervical spine's length at birth (Roche,
+    /// carus-anatomy TrunkDiameters).
+    pub cervical_spine_mm: f64,
 }
 
 impl Default for TrunkSection {
@@ -125,6 +129,7 @@ impl Default for TrunkSection {
             enabled: true,
             bisacromial_mm: d.bisacromial_mm,
             bitrochanteric_mm: d.bitrochanteric_mm,
+            cervical_spine_mm: d.cervical_spine_mm,
         }
     }
 }
@@ -401,6 +406,21 @@ impl Default for ContactSection {
 /// bisacromial, 124 +- 10 mm (REFERENCE_DATA.md), from a preterm trunk to
 /// twice the mean, so that a width given in cm is refused.
 pub const FETAL_TRUNK_WIDTH_MM: (f64, f64) = (50.0, 250.0);
+
+/// The symphysis and sacral lengths a scenario may give, mm: from under
+/// half the symphysis's 40-50 mm (the imported Visible Human pelvis
+/// measures 26 mm) to over twice the sacrum's 100-110 mm
+/// (REFERENCE_DATA.md), so that a length given in cm is refused.
+pub const PELVIC_WALL_LENGTH_MM: (f64, f64) = (15.0, 250.0);
+
+/// The finest VTU frame interval a scenario may give, s: a frame is a few
+/// hundred kB, so finer ones fill a disk in minutes.
+pub const MIN_VTU_EVERY_S: f64 = 0.01;
+
+/// The neck lengths a scenario may give, mm: from half to three times the
+/// newborn's 37 mm cervical spine (carus-anatomy TrunkDiameters), so that a
+/// length given in cm is refused.
+pub const FETAL_NECK_LENGTH_MM: (f64, f64) = (15.0, 110.0);
 
 /// The longest scenario name, bytes: a folder name of runs/ may take 255.
 const MAX_NAME_BYTES: usize = 200;
@@ -926,7 +946,7 @@ impl Scenario {
             problem: problem.into(),
             hint: hint.into(),
         };
-        let positive: [(&'static str, f64, &str); 21] = [
+        let positive: [(&'static str, f64, &str); 22] = [
             (
                 "trunk.bisacromial_mm",
                 self.trunk.bisacromial_mm,
@@ -936,6 +956,11 @@ impl Scenario {
                 "trunk.bitrochanteric_mm",
                 self.trunk.bitrochanteric_mm,
                 "a diameter in mm, e.g. 95.0",
+            ),
+            (
+                "trunk.cervical_spine_mm",
+                self.trunk.cervical_spine_mm,
+                "a length in mm, e.g. 37.0",
             ),
             (
                 "expulsion.period_s",
@@ -1010,7 +1035,7 @@ impl Scenario {
             (
                 "output.every_s",
                 self.output.every_s,
-                "seconds between samples, e.g. 0.1",
+                "seconds between samples, e.g. 0.01 (the default)",
             ),
             (
                 "output.vtu_every_s",
@@ -1137,7 +1162,7 @@ impl Scenario {
                 "contact.friction",
                 self.contact.friction,
                 "is not a plausible Coulomb coefficient",
-                "0 to about 1; REFERENCE_DATA.md: 0.35",
+                "0 to 2; REFERENCE_DATA.md: 0.35 (muscle on bone), 0.009 (wetted tissue)",
             ));
         }
         if self.expulsion.force_min_n > self.expulsion.force_max_n
@@ -1195,6 +1220,15 @@ impl Scenario {
                 "is not a diameter of a pelvic canal",
                 "mm (not cm): the gynecoid inlet is 110 mm front to back and 130-135 mm across",
             )?;
+            in_band(
+                &[
+                    ("pelvis.symphysis_length_mm", p.symphysis_length_mm),
+                    ("pelvis.sacral_length_mm", p.sacral_length_mm),
+                ],
+                PELVIC_WALL_LENGTH_MM,
+                "is not the length of a pelvic wall",
+                "mm (not cm): REFERENCE_DATA.md gives the symphysis 40-50 mm and the sacrum 100-110 mm",
+            )?;
         }
         in_band(
             &[
@@ -1204,6 +1238,12 @@ impl Scenario {
             FETAL_TRUNK_WIDTH_MM,
             "is not the width of a fetal trunk",
             "mm (not cm): the newborn's bisacromial is 124 +- 10 mm",
+        )?;
+        in_band(
+            &[("trunk.cervical_spine_mm", self.trunk.cervical_spine_mm)],
+            FETAL_NECK_LENGTH_MM,
+            "is not the length of a fetal neck",
+            "mm (not cm): the newborn's cervical spine is 37 mm long",
         )?;
         in_band(
             &[("contact.sample_spacing_mm", self.contact.sample_spacing_mm)],
@@ -1272,13 +1312,24 @@ impl Scenario {
                 "0.5 to 0.9",
             ));
         }
-        if self.numerics.rigid_dt_s > 5e-3 {
+        if self.numerics.rigid_dt_s > 2e-3 {
             return Err(err(
                 "numerics.rigid_dt_s",
                 self.numerics.rigid_dt_s,
-                "is above the contact's stable step (about 2 ms, docs/CONTACT.md)",
-                "1e-4 to 1e-3 s",
+                "is above the contact's stable step (about 2 ms for the head pushed through its centre; a head wedged in the canal chatters from 1 ms, docs/CONTACT.md)",
+                "1e-4 to 1e-3 s; the default is 5e-4",
             ));
+        }
+        // Finer than a step records nothing new; frames far finer than the
+        // motion fill a disk (each is a few hundred kB).
+        for (key, every_s, finest_s, hint) in [
+            ("output.every_s", self.output.every_s, self.numerics.rigid_dt_s, "at least the rigid step; 0.01 is the default"),
+            ("numerics.checkpoint_every_s", self.numerics.checkpoint_every_s, self.numerics.rigid_dt_s, "at least the rigid step; 5.0 is the default"),
+            ("output.vtu_every_s", self.output.vtu_every_s, MIN_VTU_EVERY_S.max(self.numerics.rigid_dt_s), "at least 0.01 s (frames every 10 ms write some 36 MB a simulated second); 1.0 is the default"),
+        ] {
+            if every_s < finest_s * (1.0 - 1e-9) {
+                return Err(err(key, every_s, "is finer than can be recorded", hint));
+            }
         }
         if !(3..=6).contains(&self.numerics.head_subdivisions) {
             return Err(err(
@@ -2011,6 +2062,16 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("trunk.bisacromial_mm") && e.contains("not cm"), "{e}");
+        let e = parse("name = \"x\"\n[trunk]\ncervical_spine_mm = 3.7\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("trunk.cervical_spine_mm") && e.contains("37 mm"), "{e}");
+        let e = parse("name = \"x\"\n[pelvis]\nsymphysis_length_mm = 4.5\n").unwrap_err().to_string();
+        assert!(e.contains("pelvis.symphysis_length_mm") && e.contains("not cm"), "{e}");
+        let e = parse("name = \"x\"\n[output]\nvtu_every_s = 1e-9\n").unwrap_err().to_string();
+        assert!(e.contains("output.vtu_every_s") && e.contains("0.01"), "{e}");
+        let e = parse("name = \"x\"\n[output]\nevery_s = 1e-5\n").unwrap_err().to_string();
+        assert!(e.contains("output.every_s") && e.contains("rigid step"), "{e}");
         // A density in g/cm^3.
         for table in ["fetus", "floor"] {
             let e = parse(&format!("name = \"x\"\n[{table}]\ndensity_kg_per_m3 = 1.05\n"))

@@ -164,6 +164,7 @@ impl Scene {
             let d = TrunkDiameters {
                 bisacromial_mm: s.trunk.bisacromial_mm,
                 bitrochanteric_mm: s.trunk.bitrochanteric_mm,
+                cervical_spine_mm: s.trunk.cervical_spine_mm,
             };
             let anatomy =
                 Trunk::new(&d).map_err(|e| LabourError::Anatomy(format!("fetal trunk: {e}")))?;
@@ -815,8 +816,11 @@ mod tests {
         assert_eq!(contact_at(s.start.attitude_deg).0.active, 0);
         // The axis that turns the head towards flexion (phi up).
         let (axis, _) = (orient(41.0) * orient(40.0).inverse()).to_axis_angle();
-        // The chin first meets the chest near phi 45 deg (normal runs rest there).
-        let (r, centre) = contact_at(55.0);
+        // The chin first meets the chest near phi 62 deg (with the measured
+        // 37 mm neck; 45 deg with the 24 mm estimated before), well past the
+        // neck's 19 deg of flexion in labour.
+        assert_eq!(contact_at(60.0).0.active, 0);
+        let (r, centre) = contact_at(75.0);
         assert!(r.active > 10 && r.too_deep == 0, "{r:?}");
         let about_pivot = r.on_obstacle.torque + (centre - pivot).cross(r.on_obstacle.force);
         assert!(about_pivot.dot(axis) < -0.2, "{about_pivot} about {axis}");
@@ -843,9 +847,9 @@ mod tests {
     fn a_start_with_the_chin_in_the_chest_is_refused() {
         let mut s = Scenario::builtin("normal").unwrap();
         s.numerics.head_subdivisions = 3;
-        s.start.attitude_deg = 60.0;
+        s.start.attitude_deg = 80.0;
         let e = Scene::build(&s).expect_err("refused").to_string();
-        for part in ["start.attitude_deg = 60", "inside the trunk", "contact.head_trunk = false"] {
+        for part in ["start.attitude_deg = 80", "inside the trunk", "contact.head_trunk = false"] {
             assert!(e.contains(part), "{e}");
         }
         s.contact.head_trunk = false;

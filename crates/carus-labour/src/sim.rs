@@ -153,6 +153,9 @@ pub struct Simulation<'a> {
     substeps: u32,
     /// Rigid steps between pose samples.
     sample_every: u64,
+    /// The step at `numerics.end_time_s`, sampled too, so that a run's
+    /// history ends at its last state wherever the interval falls.
+    end_step: u64,
 }
 
 /// What one step found, for the record.
@@ -361,6 +364,7 @@ impl<'a> Simulation<'a> {
             solver.restore(&floor.solver)?;
         }
         let sample_every = ((scene.scenario.output.every_s / dt).round() as u64).max(1);
+        let end_step = (scene.scenario.numerics.end_time_s / dt).round() as u64;
         Ok(Simulation {
             scene,
             state,
@@ -370,11 +374,17 @@ impl<'a> Simulation<'a> {
             dt,
             substeps,
             sample_every,
+            end_step,
         })
     }
 
     pub fn time_s(&self) -> f64 {
         self.state.step as f64 * self.dt
+    }
+
+    /// Whether the state after `step` steps is a pose sample.
+    fn samples_at(&self, step: u64) -> bool {
+        step % self.sample_every == 0 || step == self.end_step
     }
 
     pub fn dt_s(&self) -> f64 {
@@ -517,7 +527,7 @@ impl<'a> Simulation<'a> {
                 forces.guide = Some(guide);
             }
         }
-        if (self.state.step + 1) % self.sample_every == 0 {
+        if self.samples_at(self.state.step + 1) {
             self.site_loads(&mut forces, &reports, neck_load.as_ref(), pivot);
         }
         lap.charge(&mut self.stage_times.recording_s);
@@ -555,7 +565,7 @@ impl<'a> Simulation<'a> {
         self.couple_floor(&mut lap)?;
         lap.charge(&mut self.stage_times.floor_tled_s);
         self.state.step += 1;
-        if self.state.step % self.sample_every == 0 {
+        if self.samples_at(self.state.step) {
             self.record(forces);
         }
         lap.charge(&mut self.stage_times.recording_s);

@@ -107,7 +107,7 @@ pub fn page(input: &ReportInput, parts: &Parts) -> Result<String, ReportError> {
         w,
         "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n\
          <meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n\
-         <title>Carus report: {title}</title>\n<style>{STYLE}</style>\n</head>\n<body>\n<main>\n\
+         <title>{title} (report)</title>\n<style>{STYLE}</style>\n</head>\n<body>\n<main>\n\
          <header><p class=\"kicker\">Carus labour report</p><h1>{title}</h1>"
     );
     if let Some(notice) = &input.notice {
@@ -125,8 +125,13 @@ pub fn page(input: &ReportInput, parts: &Parts) -> Result<String, ReportError> {
         escape(&headline),
         input.run.simulated_s
     );
-    if let Some(period) = d.contraction_period_s {
-        let _ = write!(w, " &middot; contraction period {period:.1} s");
+    match d.contraction_period_s {
+        Some(period) => {
+            let _ = write!(w, " &middot; contraction period {period:.1} s");
+        }
+        None => {
+            let _ = write!(w, " &middot; contraction period not read (fewer than three whole contractions)");
+        }
     }
     let _ = writeln!(w, "</p></header>");
 
@@ -526,6 +531,9 @@ impl<'a> TimeAxis<'a> {
     }
 }
 
+/// A peak stretch that rounds to 1.000 in the legend: the floor at rest.
+const UNSTRETCHED_BELOW: f64 = 1.0005;
+
 fn floor_plot(w: &mut String, input: &ReportInput, axis: &TimeAxis) -> Result<(), ReportError> {
     let _ = write!(
         w,
@@ -541,11 +549,12 @@ fn floor_plot(w: &mut String, input: &ReportInput, axis: &TimeAxis) -> Result<()
     }
     let (time_s, stretch): (Vec<f64>, Vec<f64>) = input.floor_peak_stretch.iter().copied().unzip();
     all_finite("floor_peak_stretch", &[&stretch, &time_s])?;
+    // The first sample of the greatest stretch, not the last of a tie.
     let peak = input
         .floor_peak_stretch
         .iter()
-        .max_by(|a, b| a.1.total_cmp(&b.1))
-        .copied();
+        .copied()
+        .reduce(|best, sample| if sample.1 > best.1 { sample } else { best });
     let greatest = peak.map_or(1.0, |(_, s)| s);
     // Only the levels the run passes: a level above the data would squash
     // the curve of a floor that stays near rest.
@@ -568,7 +577,9 @@ fn floor_plot(w: &mut String, input: &ReportInput, axis: &TimeAxis) -> Result<()
     );
     let svg = plots::svg(&spec)?;
     let _ = write!(w, "{svg}");
-    if let Some((t, s)) = peak {
+    if peak.is_some_and(|(_, s)| s < UNSTRETCHED_BELOW) {
+        let _ = write!(w, "<p class=\"legend\">The floor was not stretched (1.000 throughout).");
+    } else if let Some((t, s)) = peak {
         let _ = write!(w, "<p class=\"legend\">Greatest: {s:.3} at {t:.1} s.");
         if !passed.is_empty() {
             let levels: Vec<String> = passed

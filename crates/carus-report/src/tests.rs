@@ -161,6 +161,12 @@ fn floor_stretch_and_the_scenario_appear_when_given() {
     assert!(!html.contains("Lien et al."), "a floor near rest passes no cited level");
     assert!(!html.contains("plot-axial-moments"), "no moments given, no plot");
     assert!(html.contains("max_n = 120 # &lt;max&gt;"));
+    // A floor the fetus never touched is said to be at rest, not dated to a tie.
+    let untouched = vec![(0.0, 1.0), (10.0, 1.0), (20.0, 1.0)];
+    let mut at_rest = demo.input("untouched floor");
+    at_rest.floor_peak_stretch = untouched;
+    let html = write_report_with(&at_rest, None).unwrap().html;
+    assert!(html.contains("The floor was not stretched") && !html.contains("Greatest:"), "{html}");
     input.floor_peak_stretch[1].1 = f64::NAN;
     assert!(matches!(
         write_report_with(&input, None),

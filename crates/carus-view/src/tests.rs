@@ -185,7 +185,7 @@ mod forces {
 
     /// The textbook replay with, at sample `k`, the sacrum pushing on the
     /// head's surface point farthest back (-y), the symphysis pushing the
-    /// trunk at its vertex farthest forward (+y), a 1 N touch too small to
+    /// trunk at its chest's vertex farthest forward (+y), a 1 N touch too small to
     /// draw, a guide through the head's centre, the neck pushing the head
     /// at the pivot along the expulsion (60 N) and the trunk touching the
     /// head's side (+x, 30 N); and a push of 80 N on the trunk at every
@@ -205,7 +205,14 @@ mod forces {
         };
         let on_head = farthest(&scene.head, &sample.head, -DVec3::Y);
         let trunk = sample.trunk.unwrap();
-        let on_trunk = farthest(scene.trunk.as_ref().unwrap(), &trunk, DVec3::Y);
+        // On the chest, level with the trunk's centre, where the line from
+        // the point to the centre enters the body at that point (from the
+        // vertex farthest forward overall it can enter elsewhere first).
+        let chest = carus_anatomy::TriSurface::new(
+            scene.trunk.as_ref().unwrap().vertices.iter().copied().filter(|v| v.z.abs() < 0.02).collect(),
+            Vec::new(),
+        );
+        let on_trunk = farthest(&chest, &trunk, DVec3::Y);
         let touched = farthest(&scene.head, &sample.head, DVec3::X);
         let touch = (sample.head.position_m - touched).normalize() * 30.0;
         let neck = sample.expulsion_force_n.normalize() * 60.0;

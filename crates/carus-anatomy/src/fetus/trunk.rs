@@ -1,6 +1,6 @@
 //! The fetal trunk: neck, shoulders, chest, abdomen and hips as a closed
 //! surface of superellipse rings, built from the bisacromial and
-//! bitrochanteric diameters.
+//! bitrochanteric diameters and the length of the cervical spine.
 //!
 //! Trunk frame (metres): origin at the atlanto-occipital pivot, where the
 //! trunk carries the head; x ventral, y towards the fetal left, z cranial, so
@@ -14,8 +14,8 @@ use serde::{Deserialize, Serialize};
 use crate::axis::Plane;
 use crate::surface::TriSurface;
 
-/// Shoulder and hip widths of the fetus, millimetres, canonical names of
-/// CONVENTIONS.md.
+/// Shoulder and hip widths of the fetus (canonical names of CONVENTIONS.md)
+/// and the length of its neck, millimetres.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct TrunkDiameters {
@@ -26,6 +26,12 @@ pub struct TrunkDiameters {
     /// figure of about 9.5 cm quoted in obstetric texts for the term breech;
     /// not yet in REFERENCE_DATA.md.
     pub bitrochanteric_mm: f64,
+    /// From the atlanto-occipital pivot down to the first thoracic
+    /// vertebra, where the neck meets the chest. "At birth, the cervical
+    /// spine measures 3.7 cm in length" (Roche, Cervical Spine, Medical
+    /// Radiology, Springer; doi 10.1007/978-3-540-68897-6_6). Not scaled
+    /// with the shoulders: a wider girdle is not a longer neck.
+    pub cervical_spine_mm: f64,
 }
 
 impl Default for TrunkDiameters {
@@ -33,6 +39,7 @@ impl Default for TrunkDiameters {
         TrunkDiameters {
             bisacromial_mm: 120.0,
             bitrochanteric_mm: 95.0,
+            cervical_spine_mm: 37.0,
         }
     }
 }
@@ -40,7 +47,7 @@ impl Default for TrunkDiameters {
 /// Why a trunk cannot be built.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum TrunkError {
-    #[error("{name} = {value} mm: trunk diameters must be positive, finite lengths")]
+    #[error("{name} = {value} mm: the trunk's diameters and neck must be positive, finite lengths")]
     NotPositive { name: &'static str, value: f64 },
 }
 
@@ -49,6 +56,7 @@ impl TrunkDiameters {
         for (name, value) in [
             ("bisacromial_mm", self.bisacromial_mm),
             ("bitrochanteric_mm", self.bitrochanteric_mm),
+            ("cervical_spine_mm", self.cervical_spine_mm),
         ] {
             if !(value.is_finite() && value > 0.0) {
                 return Err(TrunkError::NotPositive { name, value });
@@ -74,29 +82,37 @@ struct Section {
     centre_x: f64,
 }
 
-/// Cross-sections from the neck down, as fractions of the bisacromial
-/// diameter S (engineering estimates shaped on a term neonate: neck about
-/// 48 mm thick, chest about 108 x 88 mm and abdomen about 100 x 92 mm, i.e.
-/// circumferences near 31-33 cm, sitting height of the trunk about 1.75 S),
-/// except the shoulder and hip widths, which are the diameters themselves.
+/// Cross-sections from the neck down: the pivot, then the neck base at the
+/// cervical spine's length below it, then the trunk at depths below the
+/// neck base. Depths and sizes are fractions of the bisacromial diameter S
+/// (engineering estimates shaped on a term neonate: neck about 48 mm
+/// thick, chest about 108 x 88 mm and abdomen about 100 x 92 mm, i.e.
+/// circumferences near 31-33 cm, the trunk below the neck about 1.55 S
+/// long), except the shoulder and hip widths, which are the diameters
+/// themselves.
 fn sections(d: &TrunkDiameters) -> [Section; 8] {
     let s = d.bisacromial_mm * 1e-3;
     let t = d.bitrochanteric_mm * 1e-3;
-    let section = |z: f64, half_width: f64, half_depth: f64, centre: f64| Section {
-        z: z * s,
+    let neck_base = d.cervical_spine_mm * 1e-3;
+    let section = |depth: f64, half_width: f64, half_depth: f64, centre: f64| Section {
+        z: -(neck_base + depth * s),
         half_width,
         half_depth: half_depth * s,
         centre_x: centre * s,
     };
+    let pivot = Section {
+        z: 0.0,
+        ..section(0.0, 0.18 * s, 0.18, 0.05)
+    };
     [
-        section(0.0, 0.18 * s, 0.18, 0.05),
-        section(-0.20, 0.20 * s, 0.19, 0.06),
-        section(-0.32, 0.5 * s, 0.28, 0.12),
-        section(-0.55, 0.45 * s, 0.37, 0.20),
-        section(-0.95, 0.42 * s, 0.38, 0.22),
-        section(-1.35, 0.5 * t, 0.33, 0.18),
-        section(-1.62, 0.36 * t, 0.22, 0.12),
-        section(-1.75, 0.12 * t, 0.08, 0.08),
+        pivot,
+        section(0.0, 0.20 * s, 0.19, 0.06),
+        section(0.12, 0.5 * s, 0.28, 0.12),
+        section(0.35, 0.45 * s, 0.37, 0.20),
+        section(0.75, 0.42 * s, 0.38, 0.22),
+        section(1.15, 0.5 * t, 0.33, 0.18),
+        section(1.42, 0.36 * t, 0.22, 0.12),
+        section(1.55, 0.12 * t, 0.08, 0.08),
     ]
 }
 
@@ -106,7 +122,8 @@ const NECK_BASE: usize = 1;
 const SHOULDER: usize = 2;
 const HIP: usize = 5;
 /// Index of the section at the thoracolumbar junction, below the chest
-/// (0.95 S, 114 mm below the pivot for the 120 mm shoulders). Engineering
+/// (0.75 S below the neck base, 127 mm below the pivot for the default
+/// trunk). Engineering
 /// estimate: in a term neonate the thoracic spine ends about halfway from
 /// the atlas to the sacral tip; the cut is where the trunk bends.
 const THORACOLUMBAR: usize = 4;
@@ -244,9 +261,10 @@ impl Trunk {
     /// Anatomy (the thorax): the aperture is bounded by the first thoracic
     /// vertebra behind and the manubrium's jugular notch in front, and
     /// slopes down and forwards. Here it runs through the back of the neck
-    /// base (0.2 S below the pivot, at T1) and the front of the shoulder
-    /// section (0.32 S), the clavicles lying almost level from the notch to
-    /// the acromions (engineering reading for the fetus), across the
+    /// base (at T1, the cervical spine's length below the pivot) and the
+    /// front of the shoulder section (0.12 S lower), the clavicles lying
+    /// almost level from the notch to the acromions (engineering reading
+    /// for the fetus), across the
     /// shoulders from side to side. Below it bone lies under the skin;
     /// above it the front of the neck is throat, which the jaw presses in
     /// flexion and the neck joint models.
@@ -282,6 +300,7 @@ impl Trunk {
             bitrochanteric_mm: l.trochanter_left.distance(l.trochanter_right) * 1e3,
             width_mm: (hi.y - lo.y) * 1e3,
             length_mm: (hi.z - lo.z) * 1e3,
+            cervical_spine_mm: (l.neck.z - self.surface.vertices[NECK_BASE * RING_POINTS].z) * 1e3,
         }
     }
 }
@@ -295,6 +314,8 @@ pub struct TrunkMeasurement {
     pub width_mm: f64,
     /// Extent along the spine, neck to breech.
     pub length_mm: f64,
+    /// From the pivot down to the neck base (T1).
+    pub cervical_spine_mm: f64,
 }
 
 #[cfg(test)]
@@ -305,19 +326,20 @@ mod tests {
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(32))]
         #[test]
-        fn trunks_are_closed_and_measure_back(s in 90.0..160.0f64, t in 70.0..120.0f64) {
-            let d = TrunkDiameters { bisacromial_mm: s, bitrochanteric_mm: t };
+        fn trunks_are_closed_and_measure_back(s in 90.0..160.0f64, t in 70.0..120.0f64, c in 20.0..50.0f64) {
+            let d = TrunkDiameters { bisacromial_mm: s, bitrochanteric_mm: t, cervical_spine_mm: c };
             let trunk = Trunk::new(&d).unwrap();
             trunk.surface.check_closed().unwrap();
             let m = trunk.measure();
             prop_assert!((m.bisacromial_mm - s).abs() < 0.1);
             prop_assert!((m.bitrochanteric_mm - t).abs() < 0.1);
             prop_assert!((m.width_mm - s.max(t)).abs() < 0.1);
+            prop_assert!((m.cervical_spine_mm - c).abs() < 0.1);
         }
 
         #[test]
-        fn the_segments_close_and_fill_the_trunk(s in 90.0..160.0f64, t in 70.0..120.0f64) {
-            let d = TrunkDiameters { bisacromial_mm: s, bitrochanteric_mm: t };
+        fn the_segments_close_and_fill_the_trunk(s in 90.0..160.0f64, t in 70.0..120.0f64, c in 20.0..50.0f64) {
+            let d = TrunkDiameters { bisacromial_mm: s, bitrochanteric_mm: t, cervical_spine_mm: c };
             let trunk = Trunk::new(&d).unwrap();
             let parts = trunk.segments();
             parts.thorax.check_closed().unwrap();
@@ -355,5 +377,10 @@ mod tests {
             ..Default::default()
         };
         assert!(Trunk::new(&bad).unwrap_err().to_string().contains("bitrochanteric_mm"));
+        let no_neck = TrunkDiameters {
+            cervical_spine_mm: -1.0,
+            ..Default::default()
+        };
+        assert!(Trunk::new(&no_neck).unwrap_err().to_string().contains("cervical_spine_mm"));
     }
 }

@@ -151,14 +151,26 @@ fn obj_line_at_fault(bytes: &[u8]) -> Option<String> {
     None
 }
 
-/// Wavefront OBJ, polygons fan-triangulated by tobj; materials ignored.
+/// Wavefront OBJ, polygons fan-triangulated by tobj; polylines (`l`),
+/// points (`p`) and materials ignored.
 pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: false,
         ..Default::default()
     };
-    let (models, _materials) = tobj::load_obj_buf(&mut BufReader::new(bytes), &options, |_| {
+    // tobj reads a polyline of three or more vertices as a face; polylines
+    // and points are no surface, so they are blanked (the lines keep their
+    // numbers for the errors below).
+    let surface_only = String::from_utf8_lossy(bytes)
+        .lines()
+        .map(|line| match line.split_whitespace().next() {
+            Some("l" | "p") => "",
+            _ => line,
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    let (models, _materials) = tobj::load_obj_buf(&mut BufReader::new(surface_only.as_bytes()), &options, |_| {
         Ok((Vec::new(), Default::default()))
     })
     .map_err(|e| match obj_line_at_fault(bytes) {

@@ -156,6 +156,8 @@ fn a_tetrahedron_round_trips_in_every_format() {
         write(&dir, "binary.stl", &binary_stl()),
         write(&dir, "ascii.stl", ascii_stl().as_bytes()),
         write(&dir, "tetra.obj", obj().as_bytes()),
+        // Polylines and points are not surface: skipped, not made faces.
+        write(&dir, "lines.obj", (obj() + "l 1 2 3 4\np 1 2\n").as_bytes()),
         write(&dir, "ascii.ply", ply_ascii().as_bytes()),
         write(&dir, "binary.ply", &ply_binary()),
         write(&dir, "embedded.gltf", embedded_gltf("").as_bytes()),

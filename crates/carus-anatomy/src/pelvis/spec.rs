@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use super::{Pelvis, PelvisDiameters, PelvisError};
-use crate::import::{import_pelvis, visible_human_female_pelvis, ImportError};
+use crate::import::{import_pelvis, visible_human_female_pelvis, ImportError, ImportedPelvis, MeshReport};
 
 /// The name an imported pelvis takes to mean the shipped Visible Human
 /// Female pelvis, compiled into the program (no file needed at run time).
@@ -42,13 +42,21 @@ impl PelvisSpec {
     /// (the folder of the file the spec came from), except the name
     /// [`VISIBLE_HUMAN_FEMALE`], which is the shipped pelvis.
     pub fn build(&self, base_dir: &Path) -> Result<Pelvis, PelvisBuildError> {
-        match self {
-            PelvisSpec::Generated(d) => Ok(Pelvis::generate(d)?),
+        Ok(self.build_with_report(base_dir)?.0)
+    }
+
+    /// As [`PelvisSpec::build`], with what the importer found in an
+    /// imported pelvis's mesh (holes, dropped triangles), and the mesh file.
+    pub fn build_with_report(&self, base_dir: &Path) -> Result<(Pelvis, Option<(MeshReport, PathBuf)>), PelvisBuildError> {
+        let imported = match self {
+            PelvisSpec::Generated(d) => return Ok((Pelvis::generate(d)?, None)),
             PelvisSpec::Imported { landmarks_file } if landmarks_file.as_os_str() == VISIBLE_HUMAN_FEMALE => {
-                Ok(visible_human_female_pelvis()?.pelvis)
+                visible_human_female_pelvis()?
             }
-            PelvisSpec::Imported { landmarks_file } => Ok(import_pelvis(&base_dir.join(landmarks_file))?.pelvis),
-        }
+            PelvisSpec::Imported { landmarks_file } => import_pelvis(&base_dir.join(landmarks_file))?,
+        };
+        let ImportedPelvis { pelvis, report, mesh_path, .. } = imported;
+        Ok((pelvis, Some((report, mesh_path))))
     }
 }
 

@@ -158,6 +158,26 @@ fn read_text(path: &Path) -> anyhow::Result<String> {
     String::from_utf8(bytes).map_err(|_| not_toml("is not a text file (UTF-8)"))
 }
 
+/// The floor a run builds when its scenario leaves `[floor.mesh]` out, so
+/// that the floor a user inspects is the one the runs simulate.
+fn run_floor() -> FloorParameters {
+    carus_labour::scenario::FloorSection::default().mesh
+}
+
+/// An anatomy file's `[floor]`: its keys over [`run_floor`].
+fn floor_part(path: &Path, table: &toml::Table) -> anyhow::Result<FloorParameters> {
+    let Some(given) = table.get("floor") else {
+        return Ok(run_floor());
+    };
+    let context = || format!("{}: in the [floor] table (keys and units: docs/ANATOMY.md)", path.display());
+    let mut merged = toml::Table::try_from(run_floor()).context("the default floor as a table")?;
+    match given {
+        toml::Value::Table(keys) => merged.extend(keys.clone()),
+        other => anyhow::bail!("{}: `floor` must be a table, not {}", path.display(), other.type_str()),
+    }
+    FloorParameters::deserialize(toml::Value::Table(merged)).with_context(context)
+}
+
 /// The anatomy tables (`[pelvis]`, `[head]`, `[floor]`) of an anatomy or
 /// scenario file, shared with `carus mesh`. Other tables of a scenario file
 /// are left to the commands that use them.
@@ -176,7 +196,7 @@ impl AnatomyFile {
                 path: None,
                 pelvis: PelvisSpec::default(),
                 head: HeadDiameters::default(),
-                floor: FloorParameters::default(),
+                floor: run_floor(),
             });
         };
         let text = read_text(path)?;
@@ -214,16 +234,30 @@ impl AnatomyFile {
         Ok(AnatomyFile {
             pelvis,
             head: part(path, &table, "head")?,
-            floor: part(path, &table, "floor")?,
+            floor: floor_part(path, &table)?,
             path: Some(path.to_path_buf()),
         })
     }
 
     /// Builds the pelvis the file describes (imports resolve next to the file).
+    /// An imported mesh with holes or dropped triangles gets a note on
+    /// standard error: contact samples can slip through a hole.
     pub fn pelvis(&self) -> anyhow::Result<Pelvis> {
         let base = self.path.as_deref().and_then(Path::parent).unwrap_or(Path::new("."));
         let where_ = self.path.as_ref().map_or("the default pelvis".to_string(), |p| format!("{}: [pelvis]", p.display()));
-        self.pelvis.build(base).with_context(|| where_)
+        let (pelvis, report) = self.pelvis.build_with_report(base).with_context(|| where_)?;
+        if let Some((r, mesh)) = report.filter(|(r, _)| r.open_edges > 0 || r.degenerate_dropped > 0) {
+            eprintln!(
+                "note: {}: {} open edges (holes), {} non-manifold edges, {} degenerate triangles dropped of {} read; \
+                 the fetus can slip through a hole: fill the holes (e.g. MeshLab's Close Holes) and export it again",
+                mesh.display(),
+                r.open_edges,
+                r.non_manifold_edges,
+                r.degenerate_dropped,
+                r.triangles_read
+            );
+        }
+        Ok(pelvis)
     }
 
     /// Builds the head the file describes; a failure names the file.
@@ -268,6 +302,11 @@ mod tests {
         assert_eq!(file.head, scenario.head);
         let anatomy = load("[floor]\nsag_mm = 15.0\n").unwrap();
         assert_eq!(anatomy.floor.sag_mm, 15.0);
+        // Keys left out, or no file at all, give the floor a run builds.
+        let run = carus_labour::scenario::FloorSection::default().mesh;
+        assert_eq!(FloorParameters { sag_mm: 15.0, ..run }, anatomy.floor);
+        assert_eq!(AnatomyFile::load(None).unwrap().floor, run);
+        assert_eq!(load("[head]\nbiparietal_mm = 95.0\n").unwrap().floor, run);
         // A tissue key belongs to a scenario; in an anatomy file it is named.
         let error = format!("{:#}", load("[floor]\nshear_modulus_pa = 16500.0\n").err().unwrap());
         assert!(error.contains("[floor]") && error.contains("shear_modulus_pa"), "{error}");

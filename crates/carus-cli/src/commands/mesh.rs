@@ -32,7 +32,8 @@ pub struct MeshArgs {
     #[arg(value_enum)]
     pub part: MeshPart,
     /// Anatomy or scenario file (TOML) with `[pelvis]`, `[head]` or `[floor]`
-    /// tables (docs/ANATOMY.md); without it, the defaults.
+    /// tables (docs/ANATOMY.md); without it, the defaults (the floor a
+    /// labour run builds, 192 elements).
     pub file: Option<PathBuf>,
     /// Folder to write into (created if missing).
     #[arg(long)]

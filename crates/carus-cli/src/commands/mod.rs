@@ -31,9 +31,10 @@ pub fn progress_bar() -> indicatif::ProgressBar {
     bar
 }
 
-/// A stop flag that Ctrl-C sets: a labour run polls it and stops cleanly
-/// with everything so far written; a second Ctrl-C quits at once (exit
-/// status 130). One handler per process, so the flag is shared and
+/// A stop flag that Ctrl-C (or SIGTERM or SIGHUP: a `kill`, a batch
+/// scheduler's time limit, a closed terminal) sets: a labour run polls it
+/// and stops cleanly with everything so far written; a second one quits at
+/// once (exit status 130). One handler per process, so the flag is shared and
 /// cleared for each command that asks for it.
 pub fn ctrl_c_flag() -> std::sync::Arc<std::sync::atomic::AtomicBool> {
     use std::sync::atomic::{AtomicBool, Ordering};

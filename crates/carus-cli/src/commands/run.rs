@@ -23,8 +23,8 @@ use super::{print_json, Status};
 /// Where a labour command writes and what it prints (`carus run`, `carus sweep`, `carus sanity`).
 #[derive(clap::Args)]
 pub struct OutputArgs {
-    /// Output folder; default `runs/<scenario>-<n>` (a sweep's `runs/sweep-<scenario>-<n>`, the sanity
-    /// cases' `runs/sanity-<n>`), the first free n.
+    /// Output folder; default the first free `runs/<scenario>-<n>` for `carus run`,
+    /// `runs/sweep-<scenario>-<n>` for `carus sweep`, `runs/sanity-<n>` for `carus sanity`.
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Print one JSON object on standard output and nothing else there.
@@ -195,7 +195,7 @@ fn inverted_corners(record: &RunRecord) -> String {
 pub(super) fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result<Vec<String>> {
     let Some(detector) = &record.detector else {
         return Ok(vec![
-            "no report: the run stopped before its second pose sample".into(),
+            "no report: the detector has nothing to read (fewer than two pose samples, or the run's failure says why)".into(),
         ]);
     };
     let summary = &record.summary;
@@ -425,13 +425,18 @@ pub(super) fn choose_out_dir(out: Option<&Path>, name: &str, force: bool) -> any
         bail!("{} is a file, not a folder; choose another --out", path.display());
     }
     if holds_files(path)? {
+        // Checked first, so that the hint offers --force only where it would work.
+        let replaceable = check_replaceable(path);
         if !force {
-            bail!(
-                "{} already holds files; choose another --out, or add --force to replace them",
-                path.display()
-            );
+            match replaceable {
+                Ok(()) => bail!(
+                    "{} already holds files; choose another --out, or add --force to replace them",
+                    path.display()
+                ),
+                Err(e) => bail!("{} already holds files; {e}", path.display()),
+            }
         }
-        check_replaceable(path)?;
+        replaceable?;
     }
     Ok(OutDir::Given {
         path: path.to_path_buf(),
@@ -644,11 +649,19 @@ fn print_summary(record: &RunRecord, out_dir: &Path) {
         record.detector.as_ref().and_then(|d| d.internal_rotation_outside_window),
         record.detector.as_ref().and_then(|d| d.head_born),
     );
-    println!(
-        "results in {} (report.html, run.json, movements.json, pose_history.csv, *.pvd); replay it with `carus view {}`",
-        out_dir.display(),
-        out_dir.display()
-    );
+    // Only what this run wrote: a run too short for a report has none.
+    let mut written: Vec<&str> = ["report.html", "run.json", "movements.json", "pose_history.csv"]
+        .into_iter()
+        .filter(|f| out_dir.join(f).is_file())
+        .collect();
+    if record.files.head_pvd.is_some() {
+        written.push("*.pvd");
+    }
+    print!("results in {} ({})", out_dir.display(), written.join(", "));
+    match record.history.samples.len() >= 2 {
+        true => println!("; replay it with `carus view {}`", out_dir.display()),
+        false => println!(),
+    }
 }
 
 /// What moved the head, when not the physics alone: the mode, and how
@@ -842,9 +855,11 @@ mod tests {
         std::fs::write(earlier.join("run.json"), "{}").unwrap();
         assert!(run(&args(earlier.clone(), true)).is_err());
         assert!(earlier.join("run.json").exists());
-        // Without --force an occupied out dir is named first.
+        // Without --force an occupied out dir is named first, and --force
+        // is offered only for a folder it would replace.
         let e = format!("{:#}", run(&args(earlier.clone(), false)).err().unwrap());
-        assert!(e.contains("already holds files"), "{e}");
+        assert!(e.contains("already holds files") && e.contains("not a folder that carus made"), "{e}");
+        assert!(!e.contains("add --force"), "{e}");
     }
 
     /// `--set` changes the scenario a run starts from, and its folder's
@@ -872,6 +887,7 @@ mod tests {
         assert!(e.contains("fiction") && e.contains("carus scenarios show"), "{e}");
         assert!(!misspelt.exists());
         assert!(one_setting_arg("contact.friction=0.1,0.35").unwrap_err().contains("carus sweep"));
+        assert!(one_setting_arg("contact.friction").unwrap_err().contains("KEY=VALUE"));
     }
 
     /// A run stopped by its output says how to go on from its checkpoint,

@@ -48,7 +48,10 @@ pub fn run(args: &SolveArgs) -> anyhow::Result<Status> {
     let report = run_job(
         &args.job,
         &args.out,
-        &RunOptions { force: args.force },
+        &RunOptions {
+            force: args.force,
+            stop: Some(super::ctrl_c_flag()),
+        },
         &mut progress,
     );
     if let Some(bar) = &bar {

@@ -76,6 +76,9 @@ fn setting_arg(text: &str) -> Result<String, String> {
 /// A key and its one value, for commands that run once with it (`carus
 /// run`, `carus sanity`).
 pub(super) fn one_setting(text: &str) -> anyhow::Result<(String, String)> {
+    if !text.contains('=') {
+        bail!("--set {text}: write KEY=VALUE, e.g. --set contact.friction=0.1");
+    }
     let setting = parse_setting(text)?;
     let [value] = setting.values.as_slice() else {
         bail!("--set {text}: one value per key here; `carus sweep` runs several");
@@ -220,7 +223,11 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
     } else {
         combinations(&settings)
     };
-    // Every variant is checked before any runs, so a typo costs nothing.
+    // Every variant is checked before any runs, so a typo costs nothing;
+    // building each one's anatomy takes a moment, so a big sweep says so.
+    if !args.output.quiet && combinations.len() > 1 {
+        eprintln!("checking that each of the {} runs can start", combinations.len());
+    }
     let scenarios = combinations
         .iter()
         .map(|c| base.with_settings(c))
@@ -296,7 +303,8 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
         print_table(&keys, &rows);
         println!("results in {} (sweep.csv, sweep.json, one folder per run)", out_dir.display());
     }
-    if stop.load(Ordering::Relaxed) {
+    // A Ctrl-C after the last run finished stops nothing.
+    if stop.load(Ordering::Relaxed) && done < rows.len() {
         eprintln!(
             "stopped with {done} of {} runs complete; go on with: carus sweep --resume {}",
             rows.len(),

@@ -24,10 +24,13 @@ use crate::pvd::PvdCollection;
 use crate::vtk::{write_vtu, FrameFields};
 
 /// Options of a run that are not part of the job.
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Default)]
 pub struct RunOptions {
     /// Replace an earlier run in the output folder.
     pub force: bool,
+    /// Set from outside (Ctrl-C) to end the run at the next step, with its
+    /// state then written as the last frame and the report saying so.
+    pub stop: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
 }
 
 /// Where a run stands, reported after every frame and history row.
@@ -100,9 +103,15 @@ fn describe(error: &FemError, file: &MeshFile) -> String {
 struct Sets<'a> {
     job: &'a Path,
     mesh: &'a Mesh,
+    /// The mesh file's id of each node, for messages.
+    node_ids: &'a [u64],
 }
 
 impl Sets<'_> {
+    fn mesh_node_id(&self, node: u32) -> u64 {
+        self.node_ids.get(node as usize).copied().unwrap_or(node as u64)
+    }
+
     fn nodes(&self, key: String, name: &str) -> Result<Vec<u32>, JobError> {
         match self.mesh.node_sets.get(name) {
             Some(nodes) if !nodes.is_empty() => Ok(nodes.clone()),
@@ -206,17 +215,43 @@ fn boundary_conditions(
             supports.push((name.to_string(), nodes.to_vec()));
         }
     };
+    // Which table holds each node's component: one held twice would have
+    // one table silently override the other.
+    let mut held: BTreeMap<(u32, usize), String> = BTreeMap::new();
+    let mut hold = |table: String, nodes: &[u32], components: [bool; 3]| -> Result<(), JobError> {
+        for &node in nodes {
+            for axis in (0..3).filter(|&a| components[a]) {
+                if let Some(first) = held.insert((node, axis), table.clone()) {
+                    return Err(JobError::Invalid {
+                        path: sets.job.to_path_buf(),
+                        key: format!("{table}.node_set"),
+                        problem: format!(
+                            "node {} (the mesh file's number) is already held in {} by {first}",
+                            sets.mesh_node_id(node),
+                            ["x", "y", "z"][axis]
+                        ),
+                        fix: "hold each node's component in one table only: drop one, or give `[[fixed]]` \
+                              the `components` the other leaves free"
+                            .into(),
+                    });
+                }
+            }
+        }
+        Ok(())
+    };
     for (i, f) in spec.fixed.iter().enumerate() {
         let nodes = sets.nodes(format!("fixed[{i}].node_set"), &f.node_set)?;
         let mut components = [f.components.is_none(); 3];
         for axis in f.components.iter().flatten() {
             components[*axis as usize] = true;
         }
+        hold(format!("fixed[{i}]"), &nodes, components)?;
         support(&f.node_set, &nodes);
         bcs.fixed.push(FixedDofs { nodes, components });
     }
     for (i, d) in spec.displacements.iter().enumerate() {
         let nodes = sets.nodes(format!("displacement[{i}].node_set"), &d.node_set)?;
+        hold(format!("displacement[{i}]"), &nodes, [d.x_m, d.y_m, d.z_m].map(|c| c.is_some()))?;
         support(&d.node_set, &nodes);
         bcs.displacements.push(ImposedDisplacement {
             nodes,
@@ -368,6 +403,7 @@ fn build_solver(
     let sets = Sets {
         job: job_path,
         mesh,
+        node_ids: &file.node_ids,
     };
     let regions = materials(spec, &sets)?;
     let (bcs, supports) = boundary_conditions(spec, &sets)?;
@@ -490,6 +526,14 @@ pub fn run_job(
     let mut failure = None;
     // Half a step of slack: the run ends on the step nearest end_time_s.
     while solver.time_s() + 0.5 * dt_s < end_s {
+        if options.stop.as_ref().is_some_and(|s| s.load(std::sync::atomic::Ordering::Relaxed)) {
+            failure = Some(format!(
+                "stopped by the user at t = {:.6e} s (step {}); the last frame holds that state",
+                solver.time_s(),
+                solver.steps()
+            ));
+            break;
+        }
         if let Err(e) = solver.step() {
             failure = Some(format!(
                 "{} (step {} of dt = {dt_s:.3e} s; the last frame holds the state at t = {:.6e} s)",
