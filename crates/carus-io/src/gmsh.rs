@@ -352,15 +352,34 @@ impl<'a> Parser<'a> {
         Ok(())
     }
 
-    fn element_nodes(&mut self, code: u32) -> Result<Vec<u64>, ReadError> {
-        let Some((count, _, _)) = element_type(code) else {
+    /// The node tags of element `id`, whose record began on `line`: Gmsh
+    /// writes one element a line, so a record that runs onto the next
+    /// line, or past its count, has the wrong number of nodes.
+    fn element_nodes(&mut self, id: u64, code: u32, line: usize) -> Result<Vec<u64>, ReadError> {
+        let Some((count, _, name)) = element_type(code) else {
             return Err(self
                 .tokens
                 .error(format!("unknown Gmsh element type {code}"), ORDER_FIX));
         };
-        (0..count)
-            .map(|_| self.tokens.parse::<u64>("an element node tag"))
-            .collect()
+        let wrong_count = |tokens: &crate::text::Tokens, listed: &str| {
+            tokens.error_at(
+                line,
+                format!("element {id} (type {code}: {name}) lists {listed} nodes, needs {count}"),
+                "the element's line is damaged: export the mesh again",
+            )
+        };
+        let mut nodes = Vec::with_capacity(count);
+        for k in 0..count {
+            let tag = self.tokens.parse::<u64>("an element node tag");
+            if self.tokens.line() != line {
+                return Err(wrong_count(&self.tokens, &k.to_string()));
+            }
+            nodes.push(tag?);
+        }
+        if !self.tokens.rest_of_line().is_empty() {
+            return Err(wrong_count(&self.tokens, &format!("more than {count}")));
+        }
+        Ok(nodes)
     }
 
     fn elements(&mut self) -> Result<(), ReadError> {
@@ -369,6 +388,7 @@ impl<'a> Parser<'a> {
                 let count: usize = self.tokens.parse("the number of elements")?;
                 for _ in 0..count {
                     let id: u64 = self.tokens.parse("an element tag")?;
+                    let line = self.tokens.line();
                     let code: u32 = self.tokens.parse("an element type")?;
                     let tag_count: usize = self.tokens.parse("the number of element tags")?;
                     let mut tags = Vec::with_capacity(tag_count.min(16));
@@ -382,7 +402,7 @@ impl<'a> Parser<'a> {
                         .filter(|&t| t != 0)
                         .into_iter()
                         .collect();
-                    let nodes = self.element_nodes(code)?;
+                    let nodes = self.element_nodes(id, code, line)?;
                     self.element(id, code, nodes, &physical)?;
                 }
             }
@@ -409,7 +429,8 @@ impl<'a> Parser<'a> {
                         .unwrap_or_default();
                     for _ in 0..count {
                         let id: u64 = self.tokens.parse("an element tag")?;
-                        let nodes = self.element_nodes(code)?;
+                        let line = self.tokens.line();
+                        let nodes = self.element_nodes(id, code, line)?;
                         self.element(id, code, nodes, &physicals)?;
                     }
                 }
@@ -485,9 +506,21 @@ mod tests {
 
     #[test]
     fn second_order_elements_are_refused_naming_the_element() {
-        let quadratic = CUBE_V22.replacen("\n1 5 2 1 1 ", "\n1 11 2 1 1 ", 1);
+        let quadratic = CUBE_V22.replacen("\n1 5 2 1 1 1 2 5 4 7 8 11 10", "\n1 11 2 1 1 1 2 5 4 7 8 11 10 3 6", 1);
         let err = read("q.msh", &quadratic).unwrap_err().to_string();
         assert!(err.contains("element 1 is a 10-node tetrahedron"), "{err}");
+    }
+
+    /// Gmsh writes an element a line: one with a node too few or too many
+    /// is named at its own line, not where the count runs out.
+    #[test]
+    fn an_element_with_the_wrong_node_count_is_named_at_its_line() {
+        let short = CUBE_V22.replacen("\n1 5 2 1 1 1 2 5 4 7 8 11 10", "\n1 5 2 1 1 1 2 5 4 7 8 11", 1);
+        let err = read("s.msh", &short).unwrap_err().to_string();
+        assert!(err.starts_with("s.msh:26: element 1 (type 5: 8-node hexahedron) lists 7 nodes, needs 8"), "{err}");
+        let long = CUBE_V22.replacen("\n2 5 2 1 1 2 3 6 5 8 9 12 11", "\n2 5 2 1 1 2 3 6 5 8 9 12 11 4", 1);
+        let err = read("l.msh", &long).unwrap_err().to_string();
+        assert!(err.starts_with("l.msh:27: element 2 (type 5: 8-node hexahedron) lists more than 8 nodes"), "{err}");
     }
 
     #[test]

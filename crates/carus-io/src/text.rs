@@ -92,9 +92,14 @@ impl<'a> Tokens<'a> {
 
     /// An error at the current line.
     pub(crate) fn error(&self, problem: impl Into<String>, fix: impl Into<String>) -> ReadError {
+        self.error_at(self.line, problem, fix)
+    }
+
+    /// An error at `line` (one already passed, such as a record's first).
+    pub(crate) fn error_at(&self, line: usize, problem: impl Into<String>, fix: impl Into<String>) -> ReadError {
         ReadError::Syntax {
             path: self.path.to_path_buf(),
-            line: self.line,
+            line,
             problem: problem.into(),
             fix: fix.into(),
         }

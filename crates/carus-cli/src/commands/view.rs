@@ -104,6 +104,8 @@ struct RunShown {
     floors: Vec<FloorAtMoment>,
     /// Read from the checkpoint: the run has not written its record.
     in_progress: bool,
+    /// The file the samples were read from, for messages.
+    source: PathBuf,
 }
 
 impl RunShown {
@@ -125,6 +127,7 @@ impl RunShown {
             detector: None,
             loads: checkpoint.state.loads,
             in_progress: true,
+            source: dir.join(CHECKPOINT_FILE),
         })
     }
 
@@ -139,6 +142,7 @@ impl RunShown {
             loads: record.loads,
             floors,
             in_progress: false,
+            source: dir.join(RUN_FILE),
         })
     }
 
@@ -146,6 +150,16 @@ impl RunShown {
     fn replay(self, run_scene: &RunScene) -> anyhow::Result<Replay> {
         let scene = &run_scene.scene;
         let history = carus_labour::run::history_of(scene, self.samples);
+        // A damaged record (edited, or cut short on disk) is named, as
+        // `carus detect` names it, rather than drawn wrong.
+        match history.validate() {
+            Ok(()) | Err(carus_analysis::history::HistoryError::TooFewSamples { .. }) => {}
+            Err(e) => anyhow::bail!(
+                "{}: the pose history is damaged: {e}; run the scenario again, or a stopped run \
+                 with `carus run --resume` from its checkpoint",
+                self.source.display()
+            ),
+        }
         let detector = self.detector.or_else(|| (history.samples.len() >= 2).then(|| carus_analysis::detect(&history).ok()).flatten());
         let mut title = run_title(&self.scenario);
         if self.in_progress {
@@ -271,8 +285,15 @@ mod tests {
         assert!(e.contains("no-such-folder") && e.contains("does not exist"), "{e}");
         let e = refused(args(dir.path().to_path_buf(), 0.1, dir.path().join("frame.jpg")));
         assert!(e.contains("*.png"), "{e}");
-        let e = refused(args(dir.path().join("nothing"), 0.1, png));
+        let e = refused(args(dir.path().join("nothing"), 0.1, png.clone()));
         assert!(e.contains("run.json"), "{e}");
+        // A record damaged after the run (a sample out of time order) is
+        // named, not drawn.
+        let mut damaged = record;
+        damaged.history.samples.swap(3, 4);
+        std::fs::write(dir.path().join(RUN_FILE), serde_json::to_string(&damaged).unwrap()).unwrap();
+        let e = refused(args(dir.path().to_path_buf(), 0.1, png));
+        assert!(e.contains("run.json") && e.contains("pose history is damaged") && e.contains("sample 4"), "{e}");
     }
 
     /// A run still going is shown from its checkpoint, and followed: the
