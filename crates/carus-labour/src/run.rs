@@ -3,7 +3,7 @@
 //! end the pose history, the detector's report and the run record. Reports
 //! progress through an [`Observer`]; never prints.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Instant;
@@ -92,9 +92,10 @@ fn attach_floor(moments: &mut [KeyMoment], snapshots: &[FloorSnapshot], out_dir:
 }
 
 /// The floor's states in the VTU frames a run in `out_dir` wrote (its
-/// floor.pvd), in time order; frames gone or unreadable are left out (a
-/// replay then shows the nearest one it has).
-pub fn floor_frames(out_dir: &Path, record: &RunRecord) -> Vec<FloorAtMoment> {
+/// floor.pvd), in time order, and the frames it lists that are gone or
+/// unreadable (left out: a replay shows the nearest state it has, and
+/// says which it could not read).
+pub fn floor_frames(out_dir: &Path, record: &RunRecord) -> (Vec<FloorAtMoment>, Vec<PathBuf>) {
     let Some(collection) = record
         .files
         .floor_pvd
@@ -102,12 +103,18 @@ pub fn floor_frames(out_dir: &Path, record: &RunRecord) -> Vec<FloorAtMoment> {
         .and_then(|pvd| std::fs::read_to_string(out_dir.join(pvd)).ok())
         .and_then(|xml| carus_io::PvdCollection::parse(&xml))
     else {
-        return Vec::new();
+        return (Vec::new(), Vec::new());
     };
-    let mut frames: Vec<FloorAtMoment> =
-        collection.frames().iter().filter_map(|(t, file)| read_floor_frame(&out_dir.join(file), *t)).collect();
+    let (mut frames, mut unreadable) = (Vec::new(), Vec::new());
+    for (t, file) in collection.frames() {
+        let path = out_dir.join(file);
+        match read_floor_frame(&path, *t) {
+            Some(frame) => frames.push(frame),
+            None => unreadable.push(path),
+        }
+    }
     frames.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
-    frames
+    (frames, unreadable)
 }
 
 /// The floor's VTU frames written so far at `times` (a checkpoint's

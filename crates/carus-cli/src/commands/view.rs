@@ -133,7 +133,15 @@ impl RunShown {
 
     fn from_record(dir: &Path) -> anyhow::Result<RunShown> {
         let record = read_record(dir)?;
-        let mut floors = carus_labour::floor_frames(dir, &record);
+        let (mut floors, unreadable) = carus_labour::floor_frames(dir, &record);
+        if let Some(first) = unreadable.first() {
+            eprintln!(
+                "warning: {} of the floor's frames cannot be read ({} first); the floor is shown at the \
+                 nearest state the run kept: run the scenario again for the whole series",
+                unreadable.len(),
+                first.display()
+            );
+        }
         floors.extend(record.key_moments.iter().filter_map(|m| m.floor.clone()));
         Ok(RunShown {
             scenario: record.scenario,
@@ -266,7 +274,14 @@ mod tests {
         s.output.vtu = true;
         s.output.vtu_every_s = 0.1;
         let record = carus_labour::run(&s, dir.path(), &carus_labour::RunOptions::default(), &mut carus_labour::SilentObserver).unwrap();
-        assert_eq!(carus_labour::floor_frames(dir.path(), &record).len(), 4);
+        assert_eq!(carus_labour::floor_frames(dir.path(), &record).0.len(), 4);
+        // A damaged frame is left out and named.
+        let frame = dir.path().join("frames/floor_0002.vtu");
+        let saved = std::fs::read(&frame).unwrap();
+        std::fs::write(&frame, &saved[..300]).unwrap();
+        let (frames, unreadable) = carus_labour::floor_frames(dir.path(), &record);
+        assert_eq!((frames.len(), unreadable), (3, vec![frame.clone()]));
+        std::fs::write(&frame, saved).unwrap();
         let png = dir.path().join("frame.png");
         run(&args(dir.path().to_path_buf(), 0.2, png.clone())).unwrap();
         let bytes = std::fs::read(&png).unwrap();
