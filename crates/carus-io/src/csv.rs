@@ -119,6 +119,15 @@ mod tests {
     }
 
     #[test]
+    fn a_value_not_recorded_is_an_empty_cell() {
+        let (_dir, path) = temp("gaps.csv");
+        let mut csv = CsvWriter::create(&path, &["a", "b", "c"]).unwrap();
+        csv.row(&[1.5, f64::NAN, -0.25]).unwrap();
+        csv.flush().unwrap();
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "a,b,c\n1.5,,-0.25\n");
+    }
+
+    #[test]
     fn ragged_rows_and_bad_names_are_refused() {
         let (_dir, path) = temp("ragged.csv");
         let mut csv = CsvWriter::create(&path, &["a", "b"]).unwrap();

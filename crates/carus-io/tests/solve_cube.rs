@@ -268,6 +268,9 @@ fn job_errors_name_the_key_the_line_and_the_fix() {
         assert!(err.contains(expected), "{err}\n  expected: {expected}");
         assert!(err.contains("fix:") || err.contains("hint:"), "{err}");
     }
+    // Two fixings of one node agree, so they are not refused.
+    let twice = write_job(&dir, &format!("{BASE}\n[[fixed]]\nnode_set = \"x0\"\ncomponents = [\"x\"]\n[solver]\nend_time_s = 1e-4\n"));
+    run_job(&twice, &dir.join("out-twice"), &RunOptions::default(), &mut |_| {}).unwrap();
     // The critical-step error names the job's own way out.
     let too_long = write_job(&dir, &format!("{BASE}\n[solver]\nend_time_s = 1.0\ntime_step_s = 0.5\n"));
     let err = run_job(&too_long, &dir.join("out"), &RunOptions::default(), &mut |_| {}).unwrap_err().to_string();

@@ -40,6 +40,10 @@ impl Observer for SilentObserver {
     fn progress(&mut self, _simulated_s: f64, _end_s: f64) {}
 }
 
+/// How the failure of a run that could not write its frames or
+/// checkpoints begins; such a run may be resumed.
+pub const OUTPUT_FAILURE: &str = "the run could not write its output";
+
 /// Steps between stop-flag checks and progress calls.
 const POLL_STEPS: u64 = 200;
 
@@ -186,7 +190,9 @@ pub fn resume(
         Some(output::RunEnding { completed: true, simulated_s, .. }) => {
             return Err(LabourError::AlreadyEnded { end_s: simulated_s, scenario })
         }
-        Some(output::RunEnding { failure: Some(failure), simulated_s, .. }) => {
+        // A run that could not write (a full disk) failed in its output,
+        // not its physics: its checkpoint goes on.
+        Some(output::RunEnding { failure: Some(failure), simulated_s, .. }) if !failure.starts_with(OUTPUT_FAILURE) => {
             return Err(LabourError::AlreadyFailed { failed_s: simulated_s, failure, scenario })
         }
         _ => {}
@@ -283,7 +289,7 @@ fn drive(
     let scene = sim.scene;
     let s = &scene.scenario;
     let dt = sim.dt_s();
-    let end_steps = (s.numerics.end_time_s / dt).round() as u64;
+    let end_steps = sim.end_step();
     let checkpoint_every = ((s.numerics.checkpoint_every_s / dt).round() as u64).max(1);
     let frame_every = ((s.output.vtu_every_s / dt).round() as u64).max(1);
     let stop_step = options.stop_at_s.map(|t| (t / dt).round() as u64);
@@ -309,6 +315,7 @@ fn drive(
     }
     let mut completed = true;
     let mut failure = None;
+    let mut output_failed = false;
     while sim.state.step < end_steps {
         if stop_step.is_some_and(|k| sim.state.step >= k)
             || options
@@ -344,8 +351,11 @@ fn drive(
             false => Ok(()),
         });
         if let Err(e) = written {
-            failure = Some(format!("the run could not write its output at t = {:.3} s: {e}", sim.time_s()));
-            completed = false;
+            failure = Some(format!(
+                "{OUTPUT_FAILURE} at t = {:.3} s: {e}; free space (or fix the folder) and go on with `carus run --resume`",
+                sim.time_s()
+            ));
+            (completed, output_failed) = (false, true);
             break;
         }
         if k % POLL_STEPS == 0 {
@@ -360,9 +370,10 @@ fn drive(
         floor_snapshots.extend(FloorSnapshot::take(&sim));
     }
     // A run that ended (at its end, delivered, or failed) shows its last
-    // state in ParaView; one stopped by the user does not, so that its
-    // resumed series numbers its frames as an uninterrupted run's.
-    let ended = completed || failure.is_some();
+    // state in ParaView; one stopped by the user or by its output does
+    // not, so that its resumed series numbers its frames as an
+    // uninterrupted run's.
+    let ended = completed || (failure.is_some() && !output_failed);
     if s.output.vtu && ended && frame_times.last().is_some_and(|&t| t < sim.time_s()) {
         if let Err(e) = timed(&mut || write_frame(&sim, out_dir, &mut frame_times)) {
             match &mut failure {
@@ -372,7 +383,14 @@ fn drive(
         }
     }
     observer.progress(sim.time_s(), s.numerics.end_time_s);
-    timed(&mut || save_checkpoint(&mut sim, out_dir, &frame_times, clock.wall_s()))?;
+    // After an output failure the last checkpoint is tried, not required:
+    // what was simulated is still written below where the disk allows.
+    if let Err(e) = timed(&mut || save_checkpoint(&mut sim, out_dir, &frame_times, clock.wall_s())) {
+        match (&mut failure, output_failed) {
+            (Some(f), true) => f.push_str(&format!(" (the last checkpoint could not be written either: {e}; the run goes on from the one before)")),
+            _ => return Err(e),
+        }
+    }
     let timing = Timing { clock, output_s };
     finish(&mut sim, out_dir, &frame_times, &floor_snapshots, completed, failure, timing)
 }
@@ -1284,22 +1302,36 @@ mod tests {
         assert!(!dir.path().join(output::frame_name("head", 2)).exists());
     }
 
-    /// A frame that cannot be written (here a folder stands where its file
-    /// goes, as a full disk would refuse it) ends the run as a failure,
-    /// with the pose history and the record of what was simulated written.
+    /// A frame or checkpoint that cannot be written (here a folder stands
+    /// where its file goes, as a full disk would refuse it) ends the run as
+    /// a failure of its output, with the pose history and the record of
+    /// what was simulated written; once the way is clear it resumes.
     #[test]
-    fn a_frame_that_cannot_be_written_ends_the_run_with_what_it_simulated() {
+    fn output_that_cannot_be_written_ends_the_run_with_what_it_simulated() {
         let mut s = coarse(0.3);
         s.output.vtu = true;
         s.output.vtu_every_s = 0.1;
+        s.numerics.checkpoint_every_s = 0.1;
         let dir = tempfile::tempdir().unwrap();
-        std::fs::create_dir_all(dir.path().join(output::frame_name("head", 2))).unwrap();
+        let blocked = dir.path().join(output::frame_name("head", 2));
+        std::fs::create_dir_all(&blocked).unwrap();
         let record = run(&s, dir.path(), &RunOptions::default(), &mut SilentObserver).unwrap();
         assert!(!record.summary.completed);
         let failure = record.summary.failure.as_deref().unwrap_or_default();
-        assert!(failure.contains("could not write its output at t = 0.200 s"), "{failure}");
+        assert!(failure.starts_with(OUTPUT_FAILURE) && failure.contains("at t = 0.200 s"), "{failure}");
         assert!(dir.path().join(output::HISTORY_CSV).is_file());
         assert!(record.history.samples.last().is_some_and(|p| p.time_s > 0.19));
+        std::fs::remove_dir(&blocked).unwrap();
+        let resumed = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).unwrap();
+        assert!(resumed.summary.completed && resumed.summary.failure.is_none());
+
+        // Every checkpoint refused: the run still writes its history and record.
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::create_dir_all(dir.path().join(output::CHECKPOINT_FILE)).unwrap();
+        let record = run(&s, dir.path(), &RunOptions::default(), &mut SilentObserver).unwrap();
+        let failure = record.summary.failure.as_deref().unwrap_or_default();
+        assert!(failure.contains("the last checkpoint could not be written either"), "{failure}");
+        assert!(dir.path().join(output::RUN_FILE).is_file() && dir.path().join(output::HISTORY_CSV).is_file());
     }
 
     /// The floor's VTU frames stand where the floor was, as the fetal

@@ -417,7 +417,7 @@ pub const PELVIC_WALL_LENGTH_MM: (f64, f64) = (15.0, 250.0);
 /// hundred kB, so finer ones fill a disk in minutes.
 pub const MIN_VTU_EVERY_S: f64 = 0.01;
 
-/// The neck lengths a scenario may give, mm: from half to three times the
+/// The neck lengths a scenario may give, mm: from 0.4 to 3 times the
 /// newborn's 37 mm cervical spine (carus-anatomy TrunkDiameters), so that a
 /// length given in cm is refused.
 pub const FETAL_NECK_LENGTH_MM: (f64, f64) = (15.0, 110.0);
@@ -547,7 +547,24 @@ pub struct FloorSection {
     /// solids; with the bulk modulus 20 x the shear, about 11 times softer).
     pub hourglass_modulus: carus_fem::HourglassModulus,
     /// Shape and resolution of the mesh (carus-anatomy FloorParameters).
+    /// Keys left out of `[floor.mesh]` take this section's default, not
+    /// the library's finer one (48 x 8 x 2, four times the elements).
+    #[serde(deserialize_with = "floor_mesh_over_default")]
     pub mesh: FloorParameters,
+}
+
+/// `[floor.mesh]` as given, over [`FloorSection`]'s default mesh.
+fn floor_mesh_over_default<'de, D: Deserializer<'de>>(d: D) -> Result<FloorParameters, D::Error> {
+    floor_mesh_from(toml::Table::deserialize(d)?).map_err(D::Error::custom)
+}
+
+/// A floor mesh from the keys of `given` over the built-in scenarios'
+/// (32 x 6 x 1 elements): the floor a run builds where a file leaves a key
+/// out. Unknown keys are refused.
+pub fn floor_mesh_from(given: toml::Table) -> Result<FloorParameters, toml::de::Error> {
+    let mut merged = toml::Table::try_from(FloorSection::default().mesh).expect("a floor mesh is a table of numbers");
+    merged.extend(given);
+    FloorParameters::deserialize(toml::Value::Table(merged))
 }
 
 impl Default for FloorSection {
@@ -2066,6 +2083,9 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("trunk.cervical_spine_mm") && e.contains("37 mm"), "{e}");
+        // A [floor.mesh] of one key keeps the runs' resolution, not the library's.
+        let floor = parse("name = \"x\"\n[floor.mesh]\nsag_mm = 25.0\n").unwrap().floor.mesh;
+        assert_eq!(floor, FloorParameters { sag_mm: 25.0, ..FloorSection::default().mesh });
         let e = parse("name = \"x\"\n[pelvis]\nsymphysis_length_mm = 4.5\n").unwrap_err().to_string();
         assert!(e.contains("pelvis.symphysis_length_mm") && e.contains("not cm"), "{e}");
         let e = parse("name = \"x\"\n[output]\nvtu_every_s = 1e-9\n").unwrap_err().to_string();

@@ -153,8 +153,10 @@ pub struct Simulation<'a> {
     substeps: u32,
     /// Rigid steps between pose samples.
     sample_every: u64,
-    /// The step at `numerics.end_time_s`, sampled too, so that a run's
-    /// history ends at its last state wherever the interval falls.
+    /// The step at `numerics.end_time_s` (the run's last, when it is not
+    /// delivered, stopped or failed before), sampled too, so that a run
+    /// that reaches its end time records that state wherever the sampling
+    /// interval falls.
     end_step: u64,
 }
 
@@ -339,8 +341,8 @@ impl<'a> Simulation<'a> {
         let reached_s = state.step as f64 * dt;
         // As the run counts its steps (run.rs): the last may end a hair past
         // end_time_s when the step does not divide it.
-        let last_step = (scene.scenario.numerics.end_time_s / dt).round() as u64;
-        if state.step > last_step || b.first_not_finite().is_some() {
+        let end_step = (scene.scenario.numerics.end_time_s / dt).round() as u64;
+        if state.step > end_step || b.first_not_finite().is_some() {
             return Err(LabourError::Checkpoint(format!(
                 "the saved state is not one its scenario can reach (its step count puts it at t = \
                  {reached_s:.3e} s, the scenario ends at {} s; or a pose is not finite): the \
@@ -364,7 +366,6 @@ impl<'a> Simulation<'a> {
             solver.restore(&floor.solver)?;
         }
         let sample_every = ((scene.scenario.output.every_s / dt).round() as u64).max(1);
-        let end_step = (scene.scenario.numerics.end_time_s / dt).round() as u64;
         Ok(Simulation {
             scene,
             state,
@@ -380,6 +381,11 @@ impl<'a> Simulation<'a> {
 
     pub fn time_s(&self) -> f64 {
         self.state.step as f64 * self.dt
+    }
+
+    /// The step at `numerics.end_time_s`: the run ends there.
+    pub fn end_step(&self) -> u64 {
+        self.end_step
     }
 
     /// Whether the state after `step` steps is a pose sample.

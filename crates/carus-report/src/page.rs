@@ -130,7 +130,7 @@ pub fn page(input: &ReportInput, parts: &Parts) -> Result<String, ReportError> {
             let _ = write!(w, " &middot; contraction period {period:.1} s");
         }
         None => {
-            let _ = write!(w, " &middot; contraction period not read (fewer than three whole contractions)");
+            let _ = write!(w, " &middot; contraction period not read (a steady push, or fewer than three whole contractions)");
         }
     }
     let _ = writeln!(w, "</p></header>");

@@ -166,16 +166,12 @@ fn run_floor() -> FloorParameters {
 
 /// An anatomy file's `[floor]`: its keys over [`run_floor`].
 fn floor_part(path: &Path, table: &toml::Table) -> anyhow::Result<FloorParameters> {
-    let Some(given) = table.get("floor") else {
-        return Ok(run_floor());
-    };
-    let context = || format!("{}: in the [floor] table (keys and units: docs/ANATOMY.md)", path.display());
-    let mut merged = toml::Table::try_from(run_floor()).context("the default floor as a table")?;
-    match given {
-        toml::Value::Table(keys) => merged.extend(keys.clone()),
-        other => anyhow::bail!("{}: `floor` must be a table, not {}", path.display(), other.type_str()),
+    match table.get("floor") {
+        None => Ok(run_floor()),
+        Some(toml::Value::Table(keys)) => carus_labour::scenario::floor_mesh_from(keys.clone())
+            .with_context(|| format!("{}: in the [floor] table (keys and units: docs/ANATOMY.md)", path.display())),
+        Some(other) => anyhow::bail!("{}: `floor` must be a table, not {}", path.display(), other.type_str()),
     }
-    FloorParameters::deserialize(toml::Value::Table(merged)).with_context(context)
 }
 
 /// The anatomy tables (`[pelvis]`, `[head]`, `[floor]`) of an anatomy or

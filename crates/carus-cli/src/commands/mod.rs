@@ -33,8 +33,9 @@ pub fn progress_bar() -> indicatif::ProgressBar {
 
 /// A stop flag that Ctrl-C (or SIGTERM or SIGHUP: a `kill`, a batch
 /// scheduler's time limit, a closed terminal) sets: a labour run polls it
-/// and stops cleanly with everything so far written; a second one quits at
-/// once (exit status 130). One handler per process, so the flag is shared and
+/// and stops cleanly with everything so far written; a second one (more
+/// than 0.1 s later: one sent to the process and its group arrives twice)
+/// quits at once (exit status 130). One handler per process, so the flag is shared and
 /// cleared for each command that asks for it.
 pub fn ctrl_c_flag() -> std::sync::Arc<std::sync::atomic::AtomicBool> {
     use std::sync::atomic::{AtomicBool, Ordering};
@@ -43,9 +44,16 @@ pub fn ctrl_c_flag() -> std::sync::Arc<std::sync::atomic::AtomicBool> {
     let flag = FLAG.get_or_init(|| {
         let flag = Arc::new(AtomicBool::new(false));
         let seen = flag.clone();
+        // `timeout` and job schedulers signal the process and then its
+        // group, so one stop can arrive twice within microseconds: a second
+        // signal counts only after this long.
+        const SAME_SIGNAL: std::time::Duration = std::time::Duration::from_millis(100);
+        let mut first = std::time::Instant::now();
         // Without a handler (it failed to install) Ctrl-C keeps its default: quit.
         let _ = ctrlc::set_handler(move || {
-            if seen.swap(true, Ordering::Relaxed) {
+            if !seen.swap(true, Ordering::Relaxed) {
+                first = std::time::Instant::now();
+            } else if first.elapsed() > SAME_SIGNAL {
                 std::process::exit(130);
             }
         });

@@ -215,13 +215,15 @@ fn boundary_conditions(
             supports.push((name.to_string(), nodes.to_vec()));
         }
     };
-    // Which table holds each node's component: one held twice would have
-    // one table silently override the other.
-    let mut held: BTreeMap<(u32, usize), String> = BTreeMap::new();
-    let mut hold = |table: String, nodes: &[u32], components: [bool; 3]| -> Result<(), JobError> {
+    // Which table holds each node's component: an imposed displacement on
+    // a component another table holds would have one silently override
+    // the other (two fixings agree, as where fixed faces share an edge).
+    let mut held: BTreeMap<(u32, usize), (String, bool)> = BTreeMap::new();
+    let mut hold = |table: String, nodes: &[u32], components: [bool; 3], displaced: bool| -> Result<(), JobError> {
         for &node in nodes {
             for axis in (0..3).filter(|&a| components[a]) {
-                if let Some(first) = held.insert((node, axis), table.clone()) {
+                let earlier = held.insert((node, axis), (table.clone(), displaced));
+                if let Some((first, _)) = earlier.filter(|(_, was_displaced)| displaced || *was_displaced) {
                     return Err(JobError::Invalid {
                         path: sets.job.to_path_buf(),
                         key: format!("{table}.node_set"),
@@ -245,13 +247,13 @@ fn boundary_conditions(
         for axis in f.components.iter().flatten() {
             components[*axis as usize] = true;
         }
-        hold(format!("fixed[{i}]"), &nodes, components)?;
+        hold(format!("fixed[{i}]"), &nodes, components, false)?;
         support(&f.node_set, &nodes);
         bcs.fixed.push(FixedDofs { nodes, components });
     }
     for (i, d) in spec.displacements.iter().enumerate() {
         let nodes = sets.nodes(format!("displacement[{i}].node_set"), &d.node_set)?;
-        hold(format!("displacement[{i}]"), &nodes, [d.x_m, d.y_m, d.z_m].map(|c| c.is_some()))?;
+        hold(format!("displacement[{i}]"), &nodes, [d.x_m, d.y_m, d.z_m].map(|c| c.is_some()), true)?;
         support(&d.node_set, &nodes);
         bcs.displacements.push(ImposedDisplacement {
             nodes,
