@@ -47,6 +47,11 @@ impl MeshFile {
     pub fn element_id(&self, index: usize) -> Option<u64> {
         self.element_ids.get(index).copied()
     }
+
+    /// The file's id of node `index` of the mesh.
+    pub fn node_id(&self, index: usize) -> Option<u64> {
+        self.node_ids.get(index).copied()
+    }
 }
 
 /// Collects nodes, volume elements and sets under the file's ids.

@@ -341,15 +341,13 @@ fn drive(
         }
         // A frame or checkpoint that cannot be written (a full disk) ends
         // the run as a failure, with what was simulated still written.
-        let written = if s.output.vtu && k % frame_every == 0 {
-            timed(&mut || write_frame(&sim, out_dir, &mut frame_times))
-        } else {
-            Ok(())
+        let mut written = Ok(());
+        if s.output.vtu && k % frame_every == 0 {
+            written = timed(&mut || write_frame(&sim, out_dir, &mut frame_times));
         }
-        .and_then(|()| match k % checkpoint_every == 0 {
-            true => timed(&mut || save_checkpoint(&mut sim, out_dir, &frame_times, clock.wall_s())),
-            false => Ok(()),
-        });
+        if written.is_ok() && k % checkpoint_every == 0 {
+            written = timed(&mut || save_checkpoint(&mut sim, out_dir, &frame_times, clock.wall_s()));
+        }
         if let Err(e) = written {
             failure = Some(format!(
                 "{OUTPUT_FAILURE} at t = {:.3} s: {e}; free space (or fix the folder) and go on with `carus run --resume`",

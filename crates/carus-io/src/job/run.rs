@@ -102,18 +102,12 @@ fn describe(error: &FemError, file: &MeshFile) -> String {
 
 struct Sets<'a> {
     job: &'a Path,
-    mesh: &'a Mesh,
-    /// The mesh file's id of each node, for messages.
-    node_ids: &'a [u64],
+    file: &'a MeshFile,
 }
 
 impl Sets<'_> {
-    fn mesh_node_id(&self, node: u32) -> u64 {
-        self.node_ids.get(node as usize).copied().unwrap_or(node as u64)
-    }
-
     fn nodes(&self, key: String, name: &str) -> Result<Vec<u32>, JobError> {
-        match self.mesh.node_sets.get(name) {
+        match self.file.mesh.node_sets.get(name) {
             Some(nodes) if !nodes.is_empty() => Ok(nodes.clone()),
             Some(_) => Err(JobError::Invalid {
                 path: self.job.to_path_buf(),
@@ -126,13 +120,13 @@ impl Sets<'_> {
                 key,
                 kind: "node set",
                 name: name.to_string(),
-                available: self.mesh.node_sets.keys().cloned().collect(),
+                available: self.file.mesh.node_sets.keys().cloned().collect(),
             }),
         }
     }
 
     fn surface(&self, key: String, name: &str) -> Result<Vec<[u32; 3]>, JobError> {
-        self.mesh
+        self.file.mesh
             .surfaces
             .get(name)
             .cloned()
@@ -141,12 +135,12 @@ impl Sets<'_> {
                 key,
                 kind: "surface",
                 name: name.to_string(),
-                available: self.mesh.surfaces.keys().cloned().collect(),
+                available: self.file.mesh.surfaces.keys().cloned().collect(),
             })
     }
 
     fn check_element_set(&self, key: String, name: &str) -> Result<(), JobError> {
-        if self.mesh.element_sets.contains_key(name) {
+        if self.file.mesh.element_sets.contains_key(name) {
             return Ok(());
         }
         Err(JobError::UnknownSet {
@@ -154,7 +148,7 @@ impl Sets<'_> {
             key,
             kind: "element set",
             name: name.to_string(),
-            available: self.mesh.element_sets.keys().cloned().collect(),
+            available: self.file.mesh.element_sets.keys().cloned().collect(),
         })
     }
 }
@@ -218,18 +212,22 @@ fn boundary_conditions(
     // Which table holds each node's component: an imposed displacement on
     // a component another table holds would have one silently override
     // the other (two fixings agree, as where fixed faces share an edge).
-    let mut held: BTreeMap<(u32, usize), (String, bool)> = BTreeMap::new();
+    // Each held component names its table by index into `tables`.
+    let mut tables: Vec<(String, bool)> = Vec::new();
+    let mut held: BTreeMap<(u32, usize), usize> = BTreeMap::new();
     let mut hold = |table: String, nodes: &[u32], components: [bool; 3], displaced: bool| -> Result<(), JobError> {
+        tables.push((table, displaced));
+        let this = tables.len() - 1;
         for &node in nodes {
             for axis in (0..3).filter(|&a| components[a]) {
-                let earlier = held.insert((node, axis), (table.clone(), displaced));
+                let earlier = held.insert((node, axis), this).map(|i| &tables[i]);
                 if let Some((first, _)) = earlier.filter(|(_, was_displaced)| displaced || *was_displaced) {
                     return Err(JobError::Invalid {
                         path: sets.job.to_path_buf(),
-                        key: format!("{table}.node_set"),
+                        key: format!("{}.node_set", tables[this].0),
                         problem: format!(
                             "node {} (the mesh file's number) is already held in {} by {first}",
-                            sets.mesh_node_id(node),
+                            sets.file.node_id(node as usize).unwrap_or(u64::from(node)),
                             ["x", "y", "z"][axis]
                         ),
                         fix: "hold each node's component in one table only: drop one, or give `[[fixed]]` \
@@ -402,11 +400,7 @@ fn build_solver(
     file: &MeshFile,
 ) -> Result<(TledSolver, Supports), JobError> {
     let mesh = &file.mesh;
-    let sets = Sets {
-        job: job_path,
-        mesh,
-        node_ids: &file.node_ids,
-    };
+    let sets = Sets { job: job_path, file };
     let regions = materials(spec, &sets)?;
     let (bcs, supports) = boundary_conditions(spec, &sets)?;
     let solver_spec = &spec.solver;
