@@ -379,7 +379,14 @@ impl<'a> Simulation<'a> {
         })
     }
 
+    /// The simulated time as reported (samples, events, errors): the clock
+    /// rounded to the nanosecond, so 11040 steps of 0.5 ms read 5.52 s and
+    /// not 5.5200000000000005. The forces read the unrounded clock.
     pub fn time_s(&self) -> f64 {
+        (self.clock_s() * 1e9).round() / 1e9
+    }
+
+    fn clock_s(&self) -> f64 {
         self.state.step as f64 * self.dt
     }
 
@@ -439,7 +446,7 @@ impl<'a> Simulation<'a> {
     pub fn step(&mut self) -> Result<(), LabourError> {
         let mut lap = Lap::start();
         let scene = self.scene;
-        let t = self.time_s();
+        let t = self.clock_s();
         let n = scene.bodies.len();
         let mut wrenches = vec![Wrench::default(); n];
 

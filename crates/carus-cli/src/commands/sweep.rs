@@ -258,6 +258,9 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
     }
     let keys: Vec<&str> = settings.iter().map(|s| s.key.as_str()).collect();
     let dirs: Vec<PathBuf> = combinations.iter().enumerate().map(|(i, c)| out_dir.join(folder_name(i, c))).collect();
+    if args.resume.is_some() {
+        check_runs_match_plan(&out_dir, &scenarios, &dirs)?;
+    }
     let variant = |i: usize| Variant { scenario: &scenarios[i], dir: &dirs[i], keys: &keys, combination: &combinations[i] };
     // A resumed sweep's ended runs are rows from the start, so the tables
     // written as the others end (or are stopped again) keep them; a new
@@ -355,6 +358,38 @@ fn read_plan(dir: &Path) -> anyhow::Result<SweepPlan> {
         )
     })?;
     serde_json::from_str(&text).with_context(|| format!("{} is damaged; run the sweep again", path.display()))
+}
+
+/// A resumed sweep keeps its finished runs and goes on with its stopped
+/// ones, each as it started; a plan edited since would label them with
+/// settings they did not run with, so it is refused, naming the run.
+fn check_runs_match_plan(out_dir: &Path, scenarios: &[Scenario], dirs: &[PathBuf]) -> anyhow::Result<()> {
+    let plan = out_dir.join(PLAN_FILE);
+    let edited = |what: String| {
+        anyhow::anyhow!(
+            "{what}: {} was changed since the sweep started, and --resume goes on with the sweep as it \
+             was planned; undo the change, or run the changed sweep from the start with a new --out",
+            plan.display()
+        )
+    };
+    for (scenario, dir) in scenarios.iter().zip(dirs) {
+        let path = dir.join(carus_labour::output::SCENARIO_FILE);
+        let Ok(text) = std::fs::read_to_string(&path) else {
+            continue;
+        };
+        let ran = Scenario::parse(&path, &text, scenario.base_dir.clone())?;
+        if ran.to_toml()? != scenario.to_toml()? {
+            return Err(edited(format!("{} ran another scenario than the plan now makes", dir.display())));
+        }
+    }
+    let entries = std::fs::read_dir(out_dir).with_context(|| format!("cannot list {}", out_dir.display()))?;
+    for entry in entries.flatten() {
+        let path = entry.path();
+        if path.join(carus_labour::output::SCENARIO_FILE).is_file() && !dirs.contains(&path) {
+            return Err(edited(format!("{} is a run the plan no longer makes", path.display())));
+        }
+    }
+    Ok(())
 }
 
 /// One variant of the sweep and the folder it runs in.
@@ -761,6 +796,26 @@ mod tests {
             serde_json::from_str(&std::fs::read_to_string(out.join("sweep.json")).unwrap()).unwrap();
         assert!(json["runs"].as_array().unwrap().iter().all(|r| r["completed"] == json!(true)), "{json}");
         // Resumed again, the finished runs are kept as they are.
+        assert!(matches!(run(&resume).unwrap(), Status::Success));
+        assert_eq!([history(&first), history(&second)], whole);
+
+        // A plan edited since would label the kept runs with settings they
+        // did not run with: the base scenario, then the values, each refused.
+        let plan_path = out.join(PLAN_FILE);
+        let original = std::fs::read_to_string(&plan_path).unwrap();
+        let mut plan: serde_json::Value = serde_json::from_str(&original).unwrap();
+        let base = plan["scenario_toml"].as_str().unwrap().replace("friction = 0.009", "friction = 0.05");
+        assert_ne!(base, plan["scenario_toml"].as_str().unwrap(), "the coarse scenario sets no wetted friction");
+        plan["scenario_toml"] = json!(base);
+        std::fs::write(&plan_path, plan.to_string()).unwrap();
+        let e = format!("{:#}", run(&resume).err().unwrap());
+        assert!(e.contains("01-expulsion.force_max_n=60 ran another scenario") && e.contains("was changed"), "{e}");
+        let mut plan: serde_json::Value = serde_json::from_str(&original).unwrap();
+        plan["set"] = json!(["expulsion.force_max_n=60,90"]);
+        std::fs::write(&plan_path, plan.to_string()).unwrap();
+        let e = format!("{:#}", run(&resume).err().unwrap());
+        assert!(e.contains("02-expulsion.force_max_n=120 is a run the plan no longer makes"), "{e}");
+        std::fs::write(&plan_path, original).unwrap();
         assert!(matches!(run(&resume).unwrap(), Status::Success));
         assert_eq!([history(&first), history(&second)], whole);
 
