@@ -95,9 +95,12 @@ fn record(sink: &Mutex<Option<Fault>>, fault: Fault) {
 impl Gpu {
     /// Opens an adapter without a window, searching the backends built in
     /// (narrowed by the `WGPU_BACKEND` environment variable, as in wgpu).
+    /// Only the primary ones: the viewer's eframe also builds wgpu's GL
+    /// backend, whose EGL library, once loaded, races the threads ending
+    /// at exit and crashed about one `carus sweep` in 150 (glibc heap).
     pub fn headless(choice: AdapterChoice) -> Result<Gpu, DeviceError> {
         let descriptor = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
-        let backends = descriptor.backends & wgpu::Instance::enabled_backend_features();
+        let backends = descriptor.backends & wgpu::Backends::PRIMARY & wgpu::Instance::enabled_backend_features();
         Self::headless_on(backends, choice)
     }
 

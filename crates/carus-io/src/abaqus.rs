@@ -20,7 +20,7 @@ use crate::text::finite_f64;
 
 /// Reads an Abaqus `.inp` file.
 pub fn read_inp(path: &Path) -> Result<MeshFile, ReadError> {
-    let bytes = std::fs::read(path).map_err(|cause| ReadError::Io {
+    let bytes = crate::input::read_bytes(path).map_err(|cause| ReadError::Io {
         path: path.to_path_buf(),
         cause,
     })?;

@@ -20,7 +20,7 @@ use crate::text::{finite_f64, Tokens};
 
 /// Reads a Gmsh `.msh` file (ASCII 2.2, 4.0 or 4.1).
 pub fn read_msh(path: &Path) -> Result<MeshFile, ReadError> {
-    let bytes = std::fs::read(path).map_err(|cause| ReadError::Io {
+    let bytes = crate::input::read_bytes(path).map_err(|cause| ReadError::Io {
         path: path.to_path_buf(),
         cause,
     })?;

@@ -11,6 +11,7 @@ mod builder;
 pub mod csv;
 pub mod error;
 pub mod gmsh;
+pub mod input;
 pub mod job;
 pub mod pvd;
 mod text;

@@ -67,7 +67,7 @@ fn content_error(path: &Path, problem: impl Into<String>, fix: &str) -> ReadErro
 const RESAVE_FIX: &str = "open it in ParaView and save it again as an unstructured grid (.vtu), or check the file is complete";
 
 fn load_unstructured(path: &Path) -> Result<UnstructuredGridPiece, ReadError> {
-    let bytes = std::fs::read(path).map_err(|cause| ReadError::Io {
+    let bytes = crate::input::read_bytes(path).map_err(|cause| ReadError::Io {
         path: path.to_path_buf(),
         cause,
     })?;

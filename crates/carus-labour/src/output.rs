@@ -106,14 +106,14 @@ pub fn run_ending(dir: &Path) -> Option<RunEnding> {
     struct Record {
         summary: RunEnding,
     }
-    let text = std::fs::read_to_string(dir.join(RUN_FILE)).ok()?;
+    let text = carus_io::input::read_text(&dir.join(RUN_FILE)).ok()?;
     let Record { summary } = serde_json::from_str(&text).ok()?;
     Some(summary)
 }
 
 pub fn read_checkpoint(dir: &Path) -> Result<Checkpoint, LabourError> {
     let path = dir.join(CHECKPOINT_FILE);
-    let text = std::fs::read_to_string(&path)
+    let text = carus_io::input::read_text(&path)
         .map_err(|e| output_error(&path, format!("{e}; is this the out dir of a `carus run`?")))?;
     serde_json::from_str(&text).map_err(|e| {
         let problem = if e.is_eof() || e.is_syntax() {

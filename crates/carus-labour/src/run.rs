@@ -237,7 +237,7 @@ fn check_scenario_file_unchanged(out_dir: &Path, scenario: &Scenario, base_dir: 
     if !path.exists() {
         return output::write_text(&path, &scenario.to_toml()?);
     }
-    let Ok(text) = std::fs::read_to_string(&path) else {
+    let Ok(text) = carus_io::input::read_text(&path) else {
         return Ok(());
     };
     let same = Scenario::parse(&path, &text, base_dir.to_path_buf())

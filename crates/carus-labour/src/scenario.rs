@@ -851,7 +851,7 @@ impl Scenario {
 
     /// Reads a scenario file.
     pub fn from_file(path: &Path) -> Result<Scenario, ScenarioError> {
-        let text = std::fs::read_to_string(path).map_err(|source| ScenarioError::Io {
+        let text = carus_io::input::read_text(path).map_err(|source| ScenarioError::Io {
             path: path.to_path_buf(),
             source: match source.kind() {
                 _ if path.is_dir() => std::io::Error::other(match path.join(crate::output::SCENARIO_FILE).is_file() {
@@ -2148,6 +2148,14 @@ mod tests {
         std::fs::write(dir.path().join(crate::output::SCENARIO_FILE), "").unwrap();
         let e = Scenario::from_file(dir.path()).unwrap_err().to_string();
         assert!(e.contains(&format!("carus run --resume {}", dir.path().display())) && e.contains("--out NEW_FOLDER"), "{e}");
+    }
+
+    /// A device that never ends is named, not read until the memory runs out.
+    #[cfg(unix)]
+    #[test]
+    fn an_endless_device_given_for_a_scenario_is_refused() {
+        let e = Scenario::from_file(Path::new("/dev/zero")).unwrap_err().to_string();
+        assert!(e.contains("/dev/zero") && e.contains("did not end within 256 MiB"), "{e}");
     }
 
     /// From the command line an import replaces a generated pelvis, and a

@@ -52,7 +52,7 @@ impl MeshFormat {
 /// Reads a mesh file of any supported format.
 pub fn read_raw(path: &Path) -> Result<RawMesh, ImportError> {
     let format = MeshFormat::from_path(path)?;
-    let bytes = std::fs::read(path).map_err(|source| ImportError::Io {
+    let bytes = carus_io::input::read_bytes(path).map_err(|source| ImportError::Io {
         path: path.to_path_buf(),
         source,
     })?;
@@ -805,5 +805,5 @@ fn read_uri(path: &Path, uri: &str) -> Result<Vec<u8>, ImportError> {
             .map_err(|e| format_error(path, "glTF", format!("embedded buffer: {e}")));
     }
     let file = path.parent().unwrap_or(Path::new(".")).join(uri);
-    std::fs::read(&file).map_err(|source| ImportError::Io { path: file, source })
+    carus_io::input::read_bytes(&file).map_err(|source| ImportError::Io { path: file, source })
 }

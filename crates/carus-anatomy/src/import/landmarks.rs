@@ -147,7 +147,7 @@ impl LandmarksFile {
                  (docs/IMPORT.md, \"The landmarks file\")",
             ));
         }
-        let text = std::fs::read_to_string(path).map_err(|source| ImportError::Io {
+        let text = carus_io::input::read_text(path).map_err(|source| ImportError::Io {
             path: path.to_path_buf(),
             source,
         })?;

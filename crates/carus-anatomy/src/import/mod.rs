@@ -142,7 +142,7 @@ pub fn read_closed_surface(path: &Path, units: Units) -> Result<ImportedSurface,
 /// Reads a glTF/GLB file's meshes as separate named parts (file units and
 /// axes, node transforms applied), e.g. to tell the bones of a pelvis apart.
 pub fn read_gltf_parts(path: &Path) -> Result<Vec<NamedPart>, ImportError> {
-    let bytes = std::fs::read(path).map_err(|source| ImportError::Io {
+    let bytes = carus_io::input::read_bytes(path).map_err(|source| ImportError::Io {
         path: path.to_path_buf(),
         source,
     })?;

@@ -58,7 +58,7 @@ fn detect_file(path: &Path) -> anyhow::Result<DetectorReport> {
             path.display()
         );
     }
-    let text = std::fs::read_to_string(path).with_context(|| {
+    let text = carus_io::input::read_text(path).with_context(|| {
         format!(
             "cannot read {}: give a pose history (JSON) or a run folder that holds {HISTORY_JSON}",
             path.display()

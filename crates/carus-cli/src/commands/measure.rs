@@ -154,7 +154,7 @@ fn read_text(path: &Path) -> anyhow::Result<String> {
     if path.is_file() && carus_anatomy::import::MeshFormat::from_path(path).is_ok() {
         return Err(not_toml("is a mesh, not an anatomy file"));
     }
-    let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let bytes = carus_io::input::read_bytes(path).with_context(|| format!("cannot read {}", path.display()))?;
     String::from_utf8(bytes).map_err(|_| not_toml("is not a text file (UTF-8)"))
 }
 

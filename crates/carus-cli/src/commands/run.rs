@@ -557,7 +557,7 @@ pub(super) fn run_into(scenario: &Scenario, dir: &Path, stop: &Arc<AtomicBool>) 
 /// The record of the run in `dir`, read from its run.json.
 pub(super) fn read_record(dir: &Path) -> anyhow::Result<RunRecord> {
     let path = dir.join(carus_labour::output::RUN_FILE);
-    let text = std::fs::read_to_string(&path).with_context(|| format!("cannot read {}", path.display()))?;
+    let text = carus_io::input::read_text(&path).with_context(|| format!("cannot read {}", path.display()))?;
     serde_json::from_str(&text).with_context(|| format!("{} is damaged; run the scenario again", path.display()))
 }
 

@@ -67,7 +67,7 @@ pub fn run(args: &SanityArgs) -> anyhow::Result<Status> {
     let plan = match &args.resume {
         Some(dir) => {
             let path = dir.join(PLAN_FILE);
-            let text = std::fs::read_to_string(&path).with_context(|| {
+            let text = carus_io::input::read_text(&path).with_context(|| {
                 format!("cannot read {}: --resume takes the folder of `carus sanity` run by this build", path.display())
             })?;
             serde_json::from_str(&text).with_context(|| format!("{} is damaged; run the cases again", path.display()))?

@@ -350,7 +350,7 @@ fn check_variants_start(scenarios: &[Scenario], combinations: &[Vec<(String, Str
 /// The sweep's plan in `dir`, with what to do when it is not there.
 fn read_plan(dir: &Path) -> anyhow::Result<SweepPlan> {
     let path = dir.join(PLAN_FILE);
-    let text = std::fs::read_to_string(&path).with_context(|| {
+    let text = carus_io::input::read_text(&path).with_context(|| {
         format!(
             "cannot read {}: --resume takes the folder of a sweep this build of carus made (older sweeps \
              have no plan: run their stopped runs with carus run --resume on each run's folder)",

@@ -8,7 +8,7 @@ use super::JobError;
 
 /// Reads and checks a job file.
 pub fn load_job(path: &Path) -> Result<JobSpec, JobError> {
-    let text = std::fs::read_to_string(path).map_err(|cause| JobError::Io {
+    let text = crate::input::read_text(path).map_err(|cause| JobError::Io {
         path: path.to_path_buf(),
         cause,
     })?;
