@@ -109,27 +109,28 @@ pub fn floor_frames(out_dir: &Path, record: &RunRecord) -> (Vec<FloorAtMoment>, 
     else {
         return (Vec::new(), Vec::new());
     };
-    let (mut frames, mut unreadable) = (Vec::new(), Vec::new());
-    for (t, file) in collection.frames() {
-        let path = out_dir.join(file);
-        match read_floor_frame(&path, *t) {
-            Some(frame) => frames.push(frame),
-            None => unreadable.push(path),
-        }
-    }
+    let (mut frames, unreadable) =
+        read_floor_frames(collection.frames().iter().map(|(t, file)| (*t, out_dir.join(file))));
     frames.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
     (frames, unreadable)
 }
 
 /// The floor's VTU frames written so far at `times` (a checkpoint's
-/// `frame_times`): a run that has not written its record yet has no PVD
-/// to list them.
-pub fn floor_frames_at(out_dir: &Path, times: &[f64]) -> Vec<FloorAtMoment> {
-    times
-        .iter()
-        .enumerate()
-        .filter_map(|(k, &t)| read_floor_frame(&out_dir.join(output::frame_name("floor", k)), t))
-        .collect()
+/// `frame_times`: a run that has not written its record yet has no PVD
+/// to list them), and those that are gone or unreadable.
+pub fn floor_frames_at(out_dir: &Path, times: &[f64]) -> (Vec<FloorAtMoment>, Vec<PathBuf>) {
+    read_floor_frames(times.iter().enumerate().map(|(k, &t)| (t, out_dir.join(output::frame_name("floor", k)))))
+}
+
+fn read_floor_frames(frames: impl Iterator<Item = (f64, PathBuf)>) -> (Vec<FloorAtMoment>, Vec<PathBuf>) {
+    let (mut read, mut unreadable) = (Vec::new(), Vec::new());
+    for (t, path) in frames {
+        match read_floor_frame(&path, t) {
+            Some(frame) => read.push(frame),
+            None => unreadable.push(path),
+        }
+    }
+    (read, unreadable)
 }
 
 /// A floor VTU frame as the run wrote it; None if it is gone or unreadable

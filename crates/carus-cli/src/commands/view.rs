@@ -108,6 +108,19 @@ struct RunShown {
     source: PathBuf,
 }
 
+/// Frames a run wrote but that cannot be read now (deleted, damaged):
+/// the replay goes on without them, and says so.
+fn warn_unreadable_floor_frames(unreadable: &[PathBuf]) {
+    if let Some(first) = unreadable.first() {
+        eprintln!(
+            "warning: {} of the floor's frames cannot be read ({} first); the floor is shown at the \
+             nearest state the run kept: run the scenario again for the whole series",
+            unreadable.len(),
+            first.display()
+        );
+    }
+}
+
 impl RunShown {
     fn read(dir: &Path) -> anyhow::Result<RunShown> {
         if !checkpoint_is_newer(dir) {
@@ -120,9 +133,11 @@ impl RunShown {
         if run_ending(dir).is_some_and(|e| e.simulated_s >= checkpoint_s) {
             return RunShown::from_record(dir);
         }
+        let (floors, unreadable) = carus_labour::floor_frames_at(dir, &checkpoint.frame_times);
+        warn_unreadable_floor_frames(&unreadable);
         Ok(RunShown {
             scenario: Scenario::parse(&dir.join(CHECKPOINT_FILE), &checkpoint.scenario_toml, checkpoint.base_dir.clone())?,
-            floors: carus_labour::floor_frames_at(dir, &checkpoint.frame_times),
+            floors,
             samples: checkpoint.state.samples,
             detector: None,
             loads: checkpoint.state.loads,
@@ -134,14 +149,7 @@ impl RunShown {
     fn from_record(dir: &Path) -> anyhow::Result<RunShown> {
         let record = read_record(dir)?;
         let (mut floors, unreadable) = carus_labour::floor_frames(dir, &record);
-        if let Some(first) = unreadable.first() {
-            eprintln!(
-                "warning: {} of the floor's frames cannot be read ({} first); the floor is shown at the \
-                 nearest state the run kept: run the scenario again for the whole series",
-                unreadable.len(),
-                first.display()
-            );
-        }
+        warn_unreadable_floor_frames(&unreadable);
         floors.extend(record.key_moments.iter().filter_map(|m| m.floor.clone()));
         Ok(RunShown {
             scenario: record.scenario,
@@ -280,6 +288,9 @@ mod tests {
         let saved = std::fs::read(&frame).unwrap();
         std::fs::write(&frame, &saved[..300]).unwrap();
         let (frames, unreadable) = carus_labour::floor_frames(dir.path(), &record);
+        assert_eq!((frames.len(), unreadable), (3, vec![frame.clone()]));
+        // So it is in a run still going, whose frames a checkpoint lists.
+        let (frames, unreadable) = carus_labour::floor_frames_at(dir.path(), &[0.0, 0.1, 0.2, 0.3]);
         assert_eq!((frames.len(), unreadable), (3, vec![frame.clone()]));
         std::fs::write(&frame, saved).unwrap();
         let png = dir.path().join("frame.png");
