@@ -577,6 +577,8 @@ impl TledSolver {
         Ok(())
     }
 
+    /// The simulated time: steps times the step, unrounded, as the loads
+    /// read it. Outputs give [`reported_time_s`] of it.
     pub fn time_s(&self) -> f64 {
         self.time_s
     }
@@ -762,6 +764,13 @@ impl TledSolver {
         self.can_roll_back = false;
         Ok(())
     }
+}
+
+/// A simulated time as outputs give it: rounded to the nanosecond, so 7000
+/// steps of 50 us read 0.35 s and not 0.35000000000000003. Far below any
+/// step the solvers take, so no two output times merge.
+pub fn reported_time_s(t: f64) -> f64 {
+    (t * 1e9).round() / 1e9
 }
 
 #[cfg(test)]
@@ -1278,5 +1287,28 @@ mod run_tests {
         }
         assert_eq!(s.last_good_state(), before);
         assert!(s.displacements().iter().flatten().all(|v| v.is_finite()));
+    }
+}
+
+#[cfg(test)]
+mod reported_time_tests {
+    use super::reported_time_s;
+    use proptest::prelude::*;
+
+    #[test]
+    fn step_counts_read_as_the_decimal_they_are() {
+        assert_eq!(7.0 * 0.05, 0.35000000000000003);
+        assert_eq!(reported_time_s(7.0 * 0.05), 0.35);
+        assert_eq!(reported_time_s(11040.0 * 0.0005), 5.52);
+    }
+
+    proptest! {
+        /// Within half a nanosecond of the clock, and in the clock's order.
+        #[test]
+        fn rounding_keeps_the_time_and_its_order(step in 0u64..2_000_000, dt in 1e-7f64..2e-3) {
+            let (t, next) = (step as f64 * dt, (step + 1) as f64 * dt);
+            prop_assert!((reported_time_s(t) - t).abs() <= 0.5e-9 + 1e-15 * t);
+            prop_assert!(reported_time_s(next) > reported_time_s(t));
+        }
     }
 }

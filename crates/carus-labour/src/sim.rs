@@ -379,11 +379,11 @@ impl<'a> Simulation<'a> {
         })
     }
 
-    /// The simulated time as reported (samples, events, errors): the clock
-    /// rounded to the nanosecond, so 11040 steps of 0.5 ms read 5.52 s and
-    /// not 5.5200000000000005. The forces read the unrounded clock.
+    /// The simulated time as reported (samples, events, errors), so 11040
+    /// steps of 0.5 ms read 5.52 s and not 5.5200000000000005. The forces
+    /// read the unrounded clock.
     pub fn time_s(&self) -> f64 {
-        (self.clock_s() * 1e9).round() / 1e9
+        carus_fem::solver::reported_time_s(self.clock_s())
     }
 
     fn clock_s(&self) -> f64 {

@@ -11,6 +11,7 @@ use carus_fem::{
     MaterialRegion, Mesh, ModelOptions, MooneyRivlin, NeoHookean, NodalForce, Precision,
     StepControl, SurfacePressure, TetFormulation, TledModel, TledSolver,
 };
+use carus_fem::solver::reported_time_s;
 use serde::Serialize;
 
 use super::load::{load_job, mesh_path};
@@ -362,7 +363,7 @@ impl Recorder {
                 jacobian: &fields.jacobian,
             },
         )?;
-        self.pvd.push(solver.time_s(), name);
+        self.pvd.push(reported_time_s(solver.time_s()), name);
         self.pvd.write(&self.out_dir.join("solution.pvd"))?;
         self.last_frame_time_s = Some(solver.time_s());
         Ok(())
@@ -372,7 +373,7 @@ impl Recorder {
         let energies = solver.energies();
         let forces_ok = solver.update_internal_forces().is_ok();
         let mut row = vec![
-            solver.time_s(),
+            reported_time_s(solver.time_s()),
             solver.steps() as f64,
             max_norm(&solver.displacements()),
             energies.kinetic_j,
@@ -569,7 +570,7 @@ pub fn run_job(
         out_dir: out_dir.display().to_string(),
         frames: recorder.pvd.frames().len(),
         steps: solver.steps(),
-        simulated_s: solver.time_s(),
+        simulated_s: reported_time_s(solver.time_s()),
         wall_s: start.elapsed().as_secs_f64(),
         critical_dt_s,
         dt_s,
