@@ -256,7 +256,7 @@ fn job_errors_name_the_key_the_line_and_the_fix() {
         ("\n[solver]\nend_time_s = 1.0\ntime_step_s = 1e-300\n", "`solver.time_step_s`: 1e-300 s would take 1.0e300 steps"),
         (
             "\n[solver]\nend_time_s = 1.0\ntime_step_s = \"auto\"\n",
-            "`materials`: the stable time step is 1.875e-157 s, so 1 s would take 5.3e156 steps",
+            "`materials`: the stable time step is 1.875e-157 s, so 1e0 s would take 5.3e156 steps",
         ),
     ];
     for (extra, expected) in cases {
@@ -268,6 +268,14 @@ fn job_errors_name_the_key_the_line_and_the_fix() {
         assert!(err.contains(expected), "{err}\n  expected: {expected}");
         assert!(err.contains("fix:") || err.contains("hint:"), "{err}");
     }
+    // The other way: a step longer than the run would simulate nothing and call it done.
+    let dense = write_job(&dir, &format!("{}\n[solver]\nend_time_s = 0.2\n", BASE.replace("density_kg_m3 = 1000.0", "density_kg_m3 = 1e308")));
+    let err = run_job(&dense, &dir.join("out"), &RunOptions::default(), &mut |_| {}).unwrap_err().to_string();
+    assert!(err.contains("`materials`") && err.contains("longer than the whole run (2e-1 s)") && err.contains("fix:"), "{err}");
+    // Young/Poisson with a shear modulus too: one of them would be ignored.
+    let both = write_job(&dir, &format!("{}\n[solver]\nend_time_s = 1e-4\n", BASE.replace("poisson_ratio = 0.45", "poisson_ratio = 0.45\nshear_modulus_pa = 500.0")));
+    let err = run_job(&both, &dir.join("out"), &RunOptions::default(), &mut |_| {}).unwrap_err().to_string();
+    assert!(err.contains("`material[0]`") && err.contains("moduli from both pairs"), "{err}");
     // Two fixings of one node agree, so they are not refused.
     let twice = write_job(&dir, &format!("{BASE}\n[[fixed]]\nnode_set = \"x0\"\ncomponents = [\"x\"]\n[solver]\nend_time_s = 1e-4\n"));
     run_job(&twice, &dir.join("out-twice"), &RunOptions::default(), &mut |_| {}).unwrap();

@@ -74,8 +74,9 @@ fn format_error(path: &Path, format: &'static str, message: impl ToString) -> Im
 
 /// Binary STL: an 80-byte header, a triangle count, 50 bytes per triangle.
 /// Anything that does not start with `solid` or whose size fits the binary
-/// layout exactly is read as binary, so a truncated binary file is caught
-/// with its counts rather than misread.
+/// layout exactly is read as binary, so a truncated binary file, or one
+/// longer than its count (triangles the reader would silently drop), is
+/// caught with its counts rather than misread.
 pub fn parse_stl(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
     let announced =
         (bytes.len() >= 84).then(|| u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as usize);
@@ -94,6 +95,15 @@ pub fn parse_stl(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
                     found: (bytes.len() - 84) / 50,
                 })
             }
+            Some(expected) => {
+                let body = bytes.len() - 84;
+                return Err(ImportError::OverlongStl {
+                    path: path.to_path_buf(),
+                    expected,
+                    found: body / 50,
+                    spare_bytes: body % 50,
+                });
+            }
             None => {
                 return Err(format_error(
                     path,
@@ -101,7 +111,6 @@ pub fn parse_stl(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
                     "the file is shorter than a binary STL header (84 bytes)",
                 ))
             }
-            _ => {}
         }
     }
     let mut cursor = Cursor::new(bytes);

@@ -66,6 +66,13 @@ pub enum ImportError {
         expected: usize,
         found: usize,
     },
+    #[error("{path}: binary STL longer than its header says: the header announces {expected} triangles but the file holds {found} whole ones (and {spare_bytes} bytes over), which would be dropped; the exporter left a wrong count: export the mesh again, or as ASCII STL, OBJ or PLY")]
+    OverlongStl {
+        path: PathBuf,
+        expected: usize,
+        found: usize,
+        spare_bytes: usize,
+    },
     #[error("{path}: not a readable {format} file: {message}; export the mesh again from the tool that made it")]
     Format {
         path: PathBuf,

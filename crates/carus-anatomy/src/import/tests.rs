@@ -218,6 +218,17 @@ fn broken_meshes_say_what_and_where() {
         "{err}"
     );
     assert!(err.to_string().contains("truncated.stl") && err.to_string().contains("4 triangles"));
+    // A count the exporter left short: the triangles past it are not dropped unsaid.
+    let mut overlong = stl.clone();
+    overlong.extend_from_slice(&stl[84..84 + 50]);
+    overlong.extend_from_slice(&[0; 3]);
+    let overlong = write(&dir, "overlong.stl", &overlong);
+    let err = read_surface(&overlong, Units::Millimetres).unwrap_err();
+    assert!(
+        matches!(err, ImportError::OverlongStl { expected: 4, found: 5, spare_bytes: 3, .. }),
+        "{err}"
+    );
+    assert!(err.to_string().contains("overlong.stl") && err.to_string().contains("export the mesh again"));
 
     let nan = write(&dir, "nan.obj", obj().replacen("v 0 1 0", "v nan 1 0", 1).as_bytes());
     let err = read_surface(&nan, Units::Millimetres).unwrap_err();

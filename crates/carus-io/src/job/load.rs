@@ -173,10 +173,12 @@ impl Checker<'_> {
                         "give exactly one of the two pairs",
                     ));
                 }
-                if moduli && (given(m.young_modulus_pa) || given(m.poisson_ratio)) {
+                let one_of_each = (given(m.shear_modulus_pa) || given(m.bulk_modulus_pa))
+                    && (given(m.young_modulus_pa) || given(m.poisson_ratio));
+                if one_of_each {
                     return Err(self.fail(
                         key.to_string(),
-                        "both moduli pairs are given".into(),
+                        "moduli from both pairs are given (shear/bulk and Young/Poisson), and one pair fixes the other".into(),
                         "keep either shear/bulk or Young/Poisson",
                     ));
                 }

@@ -432,13 +432,30 @@ fn build_solver(
             path: job_path.to_path_buf(),
             key: "materials".into(),
             problem: format!(
-                "the stable time step is {critical_s:.3e} s, so {} s would take {steps:.1e} steps: \
-                 a material's stiffness is far too high or its density far too low (the step is \
-                 an element's size over the wave speed, sqrt(E / density))",
+                "the stable time step is {critical_s:.3e} s, so {:e} s would take {steps:.1e} steps: \
+                 solver.end_time_s is far too long, or a material's stiffness is far too high or its \
+                 density far too low (the step is an element's size over the wave speed, \
+                 sqrt(E / density))",
+                solver_spec.end_time_s
+            ),
+            fix: "check solver.end_time_s (seconds), each material's young_modulus_pa (Pa) and \
+                  density_kg_m3 (kg/m^3), and solver.hourglass_coefficient"
+                .into(),
+        });
+    }
+    // The other way round, the run would end before its first step.
+    if solver_spec.time_step_s == TimeStep::Auto && AUTO_TIME_STEP_FRACTION * critical_s > solver_spec.end_time_s {
+        return Err(JobError::Invalid {
+            path: job_path.to_path_buf(),
+            key: "materials".into(),
+            problem: format!(
+                "the stable time step is {critical_s:.3e} s, longer than the whole run ({:e} s), so \
+                 nothing would be simulated: a material's stiffness is far too low or its density \
+                 far too high, or solver.end_time_s far too short",
                 solver_spec.end_time_s
             ),
             fix: "check each material's young_modulus_pa (Pa) and density_kg_m3 (kg/m^3), and \
-                  solver.hourglass_coefficient"
+                  solver.end_time_s (seconds)"
                 .into(),
         });
     }
