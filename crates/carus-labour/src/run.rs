@@ -1559,7 +1559,10 @@ mod tests {
         s.trajectory.waypoints[1] = into_bone;
         let e = Scene::build(&s).err().expect("refused").to_string();
         assert!(
-            e.contains("`trajectory.waypoints[1] (time_s = 1)`") && e.contains("into the bony canal") && e.contains("anterior_mm"),
+            e.contains("`trajectory.waypoints[1] (the way-point at time_s = 1)`")
+                && e.contains("puts the head at least ")
+                && e.contains(" mm (the contact reads depths to 5 mm) into the bony canal")
+                && e.contains("anterior_mm"),
             "{e}"
         );
 

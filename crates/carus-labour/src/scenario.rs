@@ -32,9 +32,12 @@ pub enum ScenarioError {
         message: String,
         hint: String,
     },
-    #[error("{path}: `{key}` = {value}: {problem}\n  hint: {hint}")]
+    #[error("{}: `{key}` = {value}: {problem}\n  hint: {hint}", located(.path, *.line))]
     Value {
         path: PathBuf,
+        /// The key's line in the file; None for a scenario not read from
+        /// text (`--set`, a checkpoint's).
+        line: Option<usize>,
         key: std::borrow::Cow<'static, str>,
         value: String,
         problem: String,
@@ -890,7 +893,12 @@ impl Scenario {
         let mut scenario: Scenario = serde_path_to_error::deserialize(deserializer)
             .map_err(|e| syntax(path, text, e.path().to_string(), e.inner()))?;
         scenario.base_dir = base_dir;
-        scenario.check(path)?;
+        scenario.check(path).map_err(|e| match e {
+            ScenarioError::Value { path, line: None, key, value, problem, hint } => {
+                ScenarioError::Value { line: line_of_key(text, &key), path, key, value, problem, hint }
+            }
+            other => other,
+        })?;
         check_pelvis_import(path, text, &scenario.pelvis, &scenario.base_dir)?;
         Ok(scenario)
     }
@@ -941,6 +949,9 @@ impl Scenario {
                 problem: format!("{key}{message}"),
                 hint,
             },
+            ScenarioError::Value { line: Some(_), path, key, value, problem, hint } => {
+                ScenarioError::Value { line: None, path, key, value, problem, hint }
+            }
             other => other,
         })
     }
@@ -958,6 +969,7 @@ impl Scenario {
     fn check(&self, path: &Path) -> Result<(), ScenarioError> {
         let err = |key: &'static str, value: f64, problem: &str, hint: &str| ScenarioError::Value {
             path: path.to_path_buf(),
+            line: None,
             key: key.into(),
             value: shown(value),
             problem: problem.into(),
@@ -1391,6 +1403,7 @@ impl Scenario {
             if !(length.is_finite() && length > 1e-9) {
                 return Err(ScenarioError::Value {
                     path: path.to_path_buf(),
+                    line: None,
                     key: "expulsion.direction".into(),
                     value: format!("{v:?}"),
                     problem: "has no direction (zero or not finite)".into(),
@@ -1401,6 +1414,7 @@ impl Scenario {
         if self.spine.enabled && !self.trunk.enabled {
             return Err(ScenarioError::Value {
                 path: path.to_path_buf(),
+                line: None,
                 key: "spine.enabled".into(),
                 value: "true".into(),
                 problem: "a spine that bends needs the trunk it bends".into(),
@@ -1410,6 +1424,7 @@ impl Scenario {
         let mentum = self.start.position.is_mentum();
         let wrong_denominator = |problem: &str, hint: &str| ScenarioError::Value {
             path: path.to_path_buf(),
+            line: None,
             key: "start.position".into(),
             value: format!("\"{:?}\"", self.start.position),
             problem: problem.into(),
@@ -1433,6 +1448,7 @@ impl Scenario {
         if self.name.trim().is_empty() {
             return Err(ScenarioError::Value {
                 path: path.to_path_buf(),
+                line: None,
                 key: "name".into(),
                 value: "\"\"".into(),
                 problem: "must not be empty".into(),
@@ -1445,6 +1461,7 @@ impl Scenario {
         if self.name.len() > MAX_NAME_BYTES {
             return Err(ScenarioError::Value {
                 path: path.to_path_buf(),
+                line: None,
                 key: "name".into(),
                 value: format!("{} bytes", self.name.len()),
                 problem: format!("names the output folder runs/<name>-<n>, which file systems cap; at most {MAX_NAME_BYTES} bytes"),
@@ -1454,6 +1471,7 @@ impl Scenario {
         if self.name.starts_with('.') || self.name.chars().any(|c| matches!(c, '/' | '\\' | ':') || c.is_control()) {
             return Err(ScenarioError::Value {
                 path: path.to_path_buf(),
+                line: None,
                 key: "name".into(),
                 value: format!("{:?}", self.name),
                 problem: "names the output folder runs/<name>-<n>, so it may not hold /, \\, : or control \
@@ -1472,6 +1490,7 @@ impl Scenario {
         let t = &self.trajectory;
         let err = |key: String, value: String, problem: &str, hint: &str| ScenarioError::Value {
             path: path.to_path_buf(),
+            line: None,
             key: key.into(),
             value,
             problem: problem.into(),
@@ -1581,6 +1600,13 @@ fn set_key(table: &mut toml::Table, key: &str, value: &str) -> Result<(), Scenar
             if let Some(ScenarioError::Syntax { key, message, hint, .. }) = unit {
                 return Err(refuse(&format!("{key}{message}"), &hint));
             }
+            // Rust reads `1e400` as infinity; TOML refuses it, so it is no bare word either.
+            if value.trim().parse::<f64>().is_ok_and(f64::is_infinite) {
+                return Err(refuse(
+                    "the number is beyond the largest a value can hold (about 1.8e308)",
+                    "check the exponent; units are in the key names (mm, deg, s, n, pa)",
+                ));
+            }
             toml::Value::String(value.to_string())
         }
     };
@@ -1613,6 +1639,41 @@ fn set_key(table: &mut toml::Table, key: &str, value: &str) -> Result<(), Scenar
 /// The line, from 1, that byte `offset` of `text` lies on.
 fn line_at(text: &str, offset: usize) -> usize {
     text[..offset.min(text.len())].matches('\n').count() + 1
+}
+
+/// `file:line`, or the file alone where the line is not known.
+fn located(path: &Path, line: Option<usize>) -> String {
+    match line {
+        Some(line) => format!("{}:{line}", path.display()),
+        None => path.display().to_string(),
+    }
+}
+
+/// The line of the value of a dotted key as `check` names it
+/// (`floor.shear_modulus_pa`, `trajectory.waypoints[2].phi_deg`); None
+/// where the text does not write it (a default taken).
+fn line_of_key(text: &str, key: &str) -> Option<usize> {
+    use toml::de::{DeTable, DeValue};
+    let root = DeTable::parse(text).ok()?;
+    let mut table = root.get_ref();
+    let parts: Vec<&str> = key.split('.').collect();
+    for (n, part) in parts.iter().enumerate() {
+        let (name, index) = match part.split_once('[') {
+            Some((name, rest)) => (name, Some(rest.strip_suffix(']')?.parse::<usize>().ok()?)),
+            None => (*part, None),
+        };
+        let mut value = table.get(name)?;
+        if let Some(i) = index {
+            let DeValue::Array(items) = value.get_ref() else { return None };
+            value = items.get(i)?;
+        }
+        if n + 1 == parts.len() {
+            return Some(line_at(text, value.span().start));
+        }
+        let DeValue::Table(inner) = value.get_ref() else { return None };
+        table = inner;
+    }
+    None
 }
 
 /// The unit a key's name ends with, the longer endings first.
@@ -1711,8 +1772,13 @@ fn unit_in_value(path: &Path, text: &str, error: &toml::de::Error) -> Option<Sce
         let is_number = number.starts_with(|c: char| c.is_ascii_digit() || "+-.".contains(c))
             && number.contains(|c: char| c.is_ascii_digit())
             && number.replace('_', "").parse::<f64>().is_ok();
+        // `e400` in `1e400` is the number's exponent (too large: TOML says so).
+        let exponent = unit.len() > 1
+            && unit.starts_with(['e', 'E'])
+            && unit[1..].trim_start_matches(['+', '-']).chars().all(|c| c.is_ascii_digit());
         let is_unit = unit.starts_with(|c: char| c.is_alphabetic() || c == '°')
-            && unit.chars().all(|c| c.is_alphanumeric() || "/^*.°".contains(c));
+            && unit.chars().all(|c| c.is_alphanumeric() || "/^*.°".contains(c))
+            && !exponent;
         (is_number && is_unit).then_some((number, unit))
     })?;
     let table = text
@@ -1980,9 +2046,17 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(
-            e.contains("floor.shear_modulus_pa") && e.contains("positive"),
-            "{e}"
+            e.starts_with("test.toml:3: `floor.shear_modulus_pa` = -3") && e.contains("positive"),
+            "the value's line is named: {e}"
         );
+        // So is a way-point's, counted among the array's tables.
+        let e = parse("name = \"x\"\n[trajectory]\nmode = \"imposed\"\n[[trajectory.waypoints]]\ntime_s = 1.0\nstation_mm = 0.0\ntheta_deg = 0.0\nphi_deg = 10.0\n[[trajectory.waypoints]]\ntime_s = 2.0\nstation_mm = 10.0\ntheta_deg = 0.0\nphi_deg = 95.0\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("test.toml:13: `trajectory.waypoints[1].phi_deg` = 95"), "{e}");
+        // From the command line there is no file line to name.
+        let e = Scenario::builtin("normal").unwrap().with_setting("floor.shear_modulus_pa", "-3").unwrap_err().to_string();
+        assert!(e.starts_with("normal with floor.shear_modulus_pa = -3: `floor.shear_modulus_pa` = -3"), "{e}");
         let e = parse("name = \"x\"\n[expulsion]\nforce_min_n = 200.0\nforce_max_n = 100.0\n")
             .unwrap_err()
             .to_string();
@@ -2226,6 +2300,9 @@ mod tests {
         let normal = Scenario::builtin("normal").unwrap();
         let e = normal.with_setting("expulsion.force_max_n", "120 N").unwrap_err().to_string();
         assert!(e.contains("`expulsion.force_max_n`: a unit after the number") && e.contains("`force_max_n = 120`"), "{e}");
+        // An exponent is no unit: a number too large is named as one.
+        let e = normal.with_setting("contact.friction", "1e400").unwrap_err().to_string();
+        assert!(e.contains("contact.friction = 1e400") && e.contains("beyond the largest a value can hold"), "{e}");
         assert!(normal.with_setting("start.position", "LOT").is_ok());
     }
 

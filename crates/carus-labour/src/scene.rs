@@ -443,13 +443,19 @@ impl Scene {
                 continue;
             }
             let site = self.site_name(found.main_region(self.sites.len()));
+            // Points past the contact's search band carry no depth, so the
+            // deepest read is only a floor.
+            let depth = format!(
+                "at least {:.1} mm (the contact reads depths to {:.0} mm)",
+                found.deepest_m * 1e3,
+                self.pelvis_collider.search_depth_m() * 1e3
+            );
             return Err(crate::scenario::ScenarioError::Setting {
-                setting: format!("trajectory.waypoints[{i}] (time_s = {})", w.time_s),
+                setting: format!("trajectory.waypoints[{i}] (the way-point at time_s = {})", w.time_s),
                 problem: format!(
-                    "puts the head {:.1} mm into the bony canal at the {site}, more than the {:.0} mm \
+                    "puts the head {depth} into the bony canal at the {site}, more than the {:.0} mm \
                      the contact allows: at station {} mm the canal is narrower than the head at \
                      theta {} deg, phi {} deg and {} mm off the axis",
-                    found.deepest_m * 1e3,
                     DESIGN_PENETRATION_M * 1e3,
                     w.station_mm,
                     w.theta_deg,

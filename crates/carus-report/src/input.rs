@@ -76,6 +76,9 @@ pub struct AxialMomentSample {
     /// chest, shoulders on the skull).
     #[serde(default)]
     pub trunk_nm: f64,
+    /// The imposed and hybrid modes' guide (not the physics); 0 in forward runs.
+    #[serde(default)]
+    pub guide_nm: f64,
 }
 
 /// Figures of the run (not of the labour).

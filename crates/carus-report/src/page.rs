@@ -476,16 +476,20 @@ fn plots_section(
             plots::svg(&spec("force", "force (N)", force, vec![0.0]))?,
         ),
     ];
-    let _ = write!(
-        w,
-        "<section id=\"plots\"><h2>Against time</h2><p class=\"legend\">Shaded: the movements \
-         in the timeline's colours. Dashed: the key moments ({}).</p><div class=\"plots\">",
-        parts
+    let moments = if parts.moments.is_empty() {
+        "No key moment was reached.".to_string()
+    } else {
+        let marks: Vec<String> = parts
             .moments
             .iter()
             .map(|m| format!("{} = {}", m.kind.mark(), m.kind.label().to_lowercase()))
-            .collect::<Vec<_>>()
-            .join(", ")
+            .collect();
+        format!("Dashed: the key moments ({}).", marks.join(", "))
+    };
+    let _ = write!(
+        w,
+        "<section id=\"plots\"><h2>Against time</h2><p class=\"legend\">Shaded: the movements \
+         in the timeline's colours. {moments}</p><div class=\"plots\">"
     );
     for (id, heading, caption, svg) in figures {
         let _ = write!(
@@ -609,6 +613,10 @@ fn all_finite(what: &'static str, columns: &[&[f64]]) -> Result<(), ReportError>
     }
 }
 
+/// The imposed and hybrid modes' guide in the plots that draw it, and its key.
+const GUIDE_COLOUR: RGBColor = RGBColor(217, 26, 217);
+const GUIDE_KEY: &str = " <span style=\"color:#d91ad9\">&#9632; the guide (not the physics)</span>";
+
 /// What spun the head about the pelvic axis: bone, floor, neck and trunk, the
 /// causes a reader checks when internal rotation does or does not happen.
 fn axial_moment_plot(
@@ -621,15 +629,16 @@ fn axial_moment_plot(
         return Ok(());
     }
     let column = |f: fn(&AxialMomentSample) -> f64| m.iter().map(f).collect::<Vec<f64>>();
-    let (time_s, bone, floor, neck, push, trunk) = (
+    let (time_s, bone, floor, neck, push, trunk, guide) = (
         column(|s| s.time_s),
         column(|s| s.bone_nm),
         column(|s| s.floor_nm),
         column(|s| s.neck_nm),
         column(|s| s.neck_push_nm),
         column(|s| s.trunk_nm),
+        column(|s| s.guide_nm),
     );
-    all_finite("head_axial_moments", &[&time_s, &bone, &floor, &neck, &push, &trunk])?;
+    all_finite("head_axial_moments", &[&time_s, &bone, &floor, &neck, &push, &trunk, &guide])?;
     let (bone_colour, floor_colour, neck_colour, push_colour, trunk_colour) = (
         RGBColor(200, 82, 0),
         RGBColor(68, 1, 84),
@@ -637,34 +646,40 @@ fn axial_moment_plot(
         RGBColor(95, 170, 220),
         RGBColor(53, 183, 121),
     );
-    let spec = axis.spec(
-        "axial-moments",
-        "moment (N m)",
-        &time_s,
-        vec![
-            Curve {
-                values: &bone,
-                colour: bone_colour,
-            },
-            Curve {
-                values: &floor,
-                colour: floor_colour,
-            },
-            Curve {
-                values: &neck,
-                colour: neck_colour,
-            },
-            Curve {
-                values: &push,
-                colour: push_colour,
-            },
-            Curve {
-                values: &trunk,
-                colour: trunk_colour,
-            },
-        ],
-        vec![0.0],
-    );
+    let mut curves = vec![
+        Curve {
+            values: &bone,
+            colour: bone_colour,
+        },
+        Curve {
+            values: &floor,
+            colour: floor_colour,
+        },
+        Curve {
+            values: &neck,
+            colour: neck_colour,
+        },
+        Curve {
+            values: &push,
+            colour: push_colour,
+        },
+        Curve {
+            values: &trunk,
+            colour: trunk_colour,
+        },
+    ];
+    let guided = guide.iter().any(|&g| g != 0.0);
+    if guided {
+        curves.push(Curve {
+            values: &guide,
+            colour: GUIDE_COLOUR,
+        });
+    }
+    let guide_key = match guided {
+        true => GUIDE_KEY,
+        false => "",
+    };
+    let spec = axis.spec("axial-moments", "moment (N m)", &time_s, curves, vec![0.0]);
     let svg = plots::svg(&spec)?;
     let _ = write!(
         w,
@@ -675,7 +690,7 @@ fn axial_moment_plot(
          <span style=\"color:#440154\">&#9632; pelvic floor</span> \
          <span style=\"color:#35b779\">&#9632; the trunk on the head (chin on chest)</span> \
          <span style=\"color:#1f5799\">&#9632; neck</span>, of which \
-         <span style=\"color:#5faadc\">&#9632; the push through the pivot</span></small>\
+         <span style=\"color:#5faadc\">&#9632; the push through the pivot</span>{guide_key}</small>\
          </figcaption>{svg}</figure>"
     );
     Ok(())
@@ -707,11 +722,11 @@ fn canal_force_plot(w: &mut String, input: &ReportInput, axis: &TimeAxis) -> Res
     ];
     let guided = guide.iter().any(|&g| g != 0.0);
     if guided {
-        curves.push(curve(&guide, RGBColor(217, 26, 217)));
+        curves.push(curve(&guide, GUIDE_COLOUR));
     }
     let svg = plots::svg(&axis.spec("canal-forces", "force (N)", &time_s, curves, vec![0.0]))?;
     let guide_key = match guided {
-        true => " <span style=\"color:#d91ad9\">&#9632; the guide (not the physics)</span>",
+        true => GUIDE_KEY,
         false => "",
     };
     let _ = write!(

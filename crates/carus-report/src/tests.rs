@@ -235,11 +235,17 @@ fn the_moments_that_turn_the_head_are_plotted_when_known() {
             neck_nm: 0.05,
             neck_push_nm: -0.1,
             trunk_nm: 0.02,
+            guide_nm: 0.0,
         })
         .collect();
     let html = write_report_with(&input, None).unwrap().html;
     assert_eq!(html.matches("<svg").count(), 5, "four plots and the moments' (no floor)");
     assert!(html.contains("id=\"plot-axial-moments\"") && html.contains("the push through the pivot") && html.contains("the trunk on the head"));
+    assert!(!html.contains("the guide (not the physics)"), "a forward run has no guide");
+    // An imposed or hybrid run's guide turns the head too, and is drawn.
+    input.head_axial_moments[1].guide_nm = 0.3;
+    let html = write_report_with(&input, None).unwrap().html;
+    assert!(html.contains("the push through the pivot</span> <span style=\"color:#d91ad9\">&#9632; the guide (not the physics)</span>"), "{html}");
     input.head_axial_moments[2].neck_nm = f64::INFINITY;
     assert!(matches!(
         write_report_with(&input, None),

@@ -5,7 +5,7 @@
 //! The turning of anatomy (f64, metres) into render meshes (f32) lives here
 //! for now; the report crate draws its key moments with its own few lines.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use carus_anatomy::fetus::{CapsuleChain, FetalHead, Fetus};
@@ -64,7 +64,8 @@ pub struct RenderArgs {
     #[arg(value_enum)]
     pub part: RenderPart,
     /// Anatomy file (TOML, `[pelvis]`, `[head]`, `[floor]` tables as for
-    /// `carus measure`); for `scene`, a scenario file. Without it, the defaults.
+    /// `carus measure`); for `scene`, a built-in scenario's name or a
+    /// scenario file. Without it, the defaults (the `normal` scenario).
     pub file: Option<PathBuf>,
     /// PNG file to write (its folder is created if missing).
     #[arg(long)]
@@ -107,9 +108,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<Status> {
             floor_meshes(&pelvis, &floor)
         }
         RenderPart::Scene => {
-            let scenario = match &args.file {
-                Some(path) => Scenario::from_file(path)?,
-                None => Scenario::builtin("normal")?,
+            // A built-in's name as `carus run` takes it, or a scenario file.
+            let scenario = match args.file.as_deref() {
+                Some(path) if path.to_str().is_none() => Scenario::from_file(path)?,
+                file => super::run::load(file.and_then(Path::to_str))?,
             };
             let scene = LabourScene::build(&scenario)
                 .with_context(|| format!("scenario `{}`", scenario.name))?;
@@ -610,6 +612,20 @@ mod tests {
         };
         let message = format!("{error:#}");
         assert!(message.contains("no/such/anatomy.toml"), "{message}");
+        // The scene takes a built-in's name as `carus run` does, and names them all when it is neither.
+        let out = std::env::temp_dir().join(format!("carus-render-textbook-{}.png", std::process::id()));
+        let scene = |file: &str| RenderArgs {
+            part: RenderPart::Scene,
+            file: Some(PathBuf::from(file)),
+            out: out.clone(),
+            views: vec![ViewName::Lateral],
+            size: 32,
+            json: false,
+        };
+        let message = format!("{:#}", run(&scene("no-such-scenario")).err().unwrap());
+        assert!(message.contains("neither a built-in scenario (normal,") && message.contains("textbook) nor a file"), "{message}");
+        assert!(matches!(run(&scene("textbook")).unwrap(), Status::Success));
+        std::fs::remove_file(&out).unwrap();
     }
 
     #[test]

@@ -202,12 +202,18 @@ pub(super) fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result
     let scene = Scene::build(&record.scenario)?;
     let input = carus_report::ReportInput {
         title: run_title(&record.scenario),
-        notice: summary.failure.as_ref().map(|f| {
-            format!(
-                "The run ended early at t = {:.2} s: {f}",
-                summary.simulated_s
-            )
-        }),
+        notice: match (&summary.failure, summary.completed) {
+            (Some(f), _) => Some(format!("The run ended early at t = {:.2} s: {f}", summary.simulated_s)),
+            // Stopped (Ctrl-C, a signal): what follows is the labour so far.
+            (None, false) => Some(format!(
+                "The run was stopped at t = {:.2} s, before its end at {} s: this page shows the labour \
+                 so far, not its outcome. Go on with: carus run --resume {}",
+                summary.simulated_s,
+                record.scenario.numerics.end_time_s,
+                out_dir.display()
+            )),
+            (None, true) => None,
+        },
         scenario_toml: Some(record.scenario.to_toml()?),
         run: carus_report::RunFigures {
             simulated_s: summary.simulated_s,
@@ -245,18 +251,7 @@ pub(super) fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result
             .iter()
             .map(|f| (f.time_s, f.peak_stretch))
             .collect(),
-        head_axial_moments: record
-            .loads
-            .iter()
-            .map(|l| carus_report::AxialMomentSample {
-                time_s: l.time_s,
-                bone_nm: l.head_axial.bone_nm,
-                floor_nm: l.head_axial.floor_nm,
-                neck_nm: l.head_axial.neck_nm,
-                neck_push_nm: l.head_axial.neck_push_nm,
-                trunk_nm: l.head_axial.trunk_nm,
-            })
-            .collect(),
+        head_axial_moments: head_axial_moments(record, &scene),
         head_canal_forces: head_canal_forces(record, &scene),
         scene: Some(report_scene_with_forces(record, &scene, detector)?),
     };
@@ -309,6 +304,28 @@ fn report_scene_with_forces(
 /// source's force on the head along the pelvic axis's tangent at the head
 /// (the report's plot). None for a run with a trunk recorded before the
 /// neck's force was.
+/// What turned the head about the pelvic axis at each recorded instant,
+/// the guide's share included where the head was moved by one.
+fn head_axial_moments(record: &RunRecord, scene: &Scene) -> Vec<carus_report::AxialMomentSample> {
+    record
+        .loads
+        .iter()
+        .zip(&record.history.samples)
+        .map(|(l, sample)| {
+            let down = carus_labour::loads::down_the_canal(scene.canal.axis(), sample.head.position_m);
+            carus_report::AxialMomentSample {
+                time_s: l.time_s,
+                bone_nm: l.head_axial.bone_nm,
+                floor_nm: l.head_axial.floor_nm,
+                neck_nm: l.head_axial.neck_nm,
+                neck_push_nm: l.head_axial.neck_push_nm,
+                trunk_nm: l.head_axial.trunk_nm,
+                guide_nm: l.guide.map_or(0.0, |g| g.moment_nm.dot(down)),
+            }
+        })
+        .collect()
+}
+
 fn head_canal_forces(record: &RunRecord, scene: &Scene) -> Vec<carus_report::CanalForceSample> {
     use carus_analysis::ContactSite;
     use carus_labour::loads::{down_the_canal, Body};
@@ -760,6 +777,24 @@ mod tests {
         record.floor[2].inverted_corner_elements = 5;
         let t = record.floor[1].time_s;
         assert_eq!(inverted_corners(&record), format!("up to 5 of 48, from t = {t:.1} s"));
+    }
+
+    /// A run stopped before its end says so at the top of its report, with
+    /// the command that goes on; a finished one has no notice.
+    #[test]
+    fn a_stopped_run_s_report_says_it_was_stopped() {
+        let dir = tempfile::tempdir().unwrap();
+        let s = crate::commands::coarse_normal(0.4);
+        let stop = RunOptions { stop_at_s: Some(0.2), ..RunOptions::default() };
+        let record = carus_labour::run(&s, dir.path(), &stop, &mut carus_labour::SilentObserver).unwrap();
+        assert!(!record.summary.completed);
+        write_report(&record, dir.path()).unwrap();
+        let page = std::fs::read_to_string(dir.path().join("report.html")).unwrap();
+        let expected = format!("The run was stopped at t = 0.20 s, before its end at 0.4 s: this page shows the labour so far, not its outcome. Go on with: carus run --resume {}", dir.path().display());
+        assert!(page.contains(&carus_report::page::escape(&expected)), "{expected}");
+        let finished = coarse_record(0.2);
+        write_report(&finished, dir.path()).unwrap();
+        assert!(!std::fs::read_to_string(dir.path().join("report.html")).unwrap().contains("id=\"notice\""));
     }
 
     /// The report's pictures carry the forces at each key moment the run

@@ -76,8 +76,9 @@ fn setting_arg(text: &str) -> Result<String, String> {
 /// A key and its one value, for commands that run once with it (`carus
 /// run`, `carus sanity`).
 pub(super) fn one_setting(text: &str) -> anyhow::Result<(String, String)> {
-    if !text.contains('=') {
-        bail!("--set {text}: write KEY=VALUE, e.g. --set contact.friction=0.1");
+    match text.split_once('=') {
+        Some((key, value)) if !key.trim().is_empty() && !value.trim().is_empty() => {}
+        _ => bail!("--set {text}: write KEY=VALUE, e.g. --set contact.friction=0.1"),
     }
     let setting = parse_setting(text)?;
     let [value] = setting.values.as_slice() else {
