@@ -226,7 +226,7 @@ fn timeline(
         let _ = write!(
             w,
             "<p class=\"note\" data-note=\"rotation-outside-window\">Internal rotation not counted: \
-             {} (CARDINAL_MOVEMENTS.md).</p>",
+             {} (Carus's docs/spec/CARDINAL_MOVEMENTS.md).</p>",
             escape(&r.to_string())
         );
     }
@@ -798,7 +798,7 @@ fn reading_guide(w: &mut String) {
          <li><b>Theta</b>: where the occiput points in the canal's cross-section, \
          0 = occiput anterior, \u{b1}90 = transverse, \u{b1}180 = occiput posterior.</li>\
          <li><b>Phi</b>: the head's attitude relative to the fetal spine, positive in flexion.</li>\
-         <li>A movement counts as observed by the rules of CARDINAL_MOVEMENTS.md; its size is \
+         <li>A movement counts as observed by the rules of Carus's docs/spec/CARDINAL_MOVEMENTS.md; its size is \
          the change of its own quantity (station, phi or theta) from start to end.</li>\
          <li>The outcome: delivered when head and trunk are past the outlet; arrested when \
          the fetus stopped progressing over the last part of the run.</li></ul></section>\n",
