@@ -54,6 +54,10 @@ impl MeshFile {
     }
 }
 
+/// The largest coordinate a mesh file may hold, in its own unit: a slip
+/// of exponent (1e300) would otherwise read as a degenerate element.
+const MAX_COORDINATE: f64 = 1e6;
+
 /// Collects nodes, volume elements and sets under the file's ids.
 pub(crate) struct MeshBuilder {
     path: PathBuf,
@@ -95,10 +99,17 @@ impl MeshBuilder {
         }
     }
 
-    /// Adds node `id`; the error says why it cannot (taken id, NaN).
+    /// Adds node `id`; the error says why it cannot (taken id, NaN, a
+    /// coordinate beyond [`MAX_COORDINATE`]).
     pub(crate) fn add_node(&mut self, id: u64, xyz: [f64; 3]) -> Result<(), String> {
         if !xyz.iter().all(|x| x.is_finite()) {
             return Err(format!("node {id} has a non-finite coordinate {xyz:?}"));
+        }
+        if let Some(far) = xyz.iter().find(|x| x.abs() > MAX_COORDINATE) {
+            return Err(format!(
+                "node {id} has the coordinate {far:e}, beyond {MAX_COORDINATE:e} in the file's unit \
+                 (a kilometre in mm, a thousand km in m): no tissue model is that large"
+            ));
         }
         if self.node_position.insert(id, self.coords.len()).is_some() {
             return Err(format!("node {id} is defined twice"));
@@ -481,6 +492,15 @@ mod tests {
         b.add_tetrahedron(4, [10, 11, 12, 14]);
         let err = b.finish().unwrap_err().to_string();
         assert!(err.contains("element 4 names node 14"), "{err}");
+    }
+
+    #[test]
+    fn a_node_out_of_any_tissue_s_reach_is_refused() {
+        let mut b = MeshBuilder::new(Path::new("m.msh"));
+        assert!(b.add_node(1, [0.0, -1e6, 0.0]).is_ok());
+        let err = b.add_node(2, [0.01, 1e300, 0.0]).unwrap_err();
+        assert!(err.contains("node 2 has the coordinate 1e300, beyond 1e6"), "{err}");
+        assert!(b.add_node(3, [f64::NAN, 0.0, 0.0]).unwrap_err().contains("non-finite"));
     }
 
     #[test]

@@ -349,9 +349,18 @@ fn mesh_from_piece(path: &Path, piece: &UnstructuredGridPiece) -> Result<MeshFil
             }
         }
     }
+    // An array of the wrong length is a damaged file, not an array to skip:
+    // skipped, its sets would be reported missing from a file that has them.
+    let wrong_length = |what: &str, name: &str, found: usize, expected: u64| {
+        content_error(
+            path,
+            format!("the {what} data array `{name}` holds {found} values for {expected} {what}s"),
+            RESAVE_FIX,
+        )
+    };
     for (name, values) in integer_arrays(&piece.data.cell) {
         if values.len() != cells.len() {
-            continue;
+            return Err(wrong_length("cell", &name, values.len(), cells.len() as u64));
         }
         for (c, &value) in values.iter().enumerate() {
             if value < 0 {
@@ -373,7 +382,7 @@ fn mesh_from_piece(path: &Path, piece: &UnstructuredGridPiece) -> Result<MeshFil
     }
     for (name, values) in integer_arrays(&piece.data.point) {
         if values.len() as u64 != point_count {
-            continue;
+            return Err(wrong_length("point", &name, values.len(), point_count));
         }
         for (p, &value) in values.iter().enumerate() {
             if value != 0 {
@@ -555,6 +564,22 @@ mod tests {
         assert_eq!(file.mesh.element_sets["region_3"], vec![0]);
         assert_eq!(file.mesh.surfaces["region_5"].len(), 1);
         assert_eq!(file.mesh.node_sets["fixed"], vec![0, 1]);
+    }
+
+    /// A set array with a value too few or too many is the damaged file
+    /// named, not a set silently missing.
+    #[test]
+    fn a_set_array_of_the_wrong_length_is_the_files_error() {
+        let (_dir, path) = temp("short_sets.vtk");
+        for (from, to, expected) in [
+            ("CELL_DATA 3\nSCALARS tag int 1\nLOOKUP_TABLE default\n0 1 -1", "CELL_DATA 2\nSCALARS tag int 1\nLOOKUP_TABLE default\n0 1", "the cell data array `tag` holds 2 values for 3 cells"),
+            ("CELL_DATA 3", "POINT_DATA 2\nSCALARS fixed int 1\nLOOKUP_TABLE default\n1 1\nCELL_DATA 3", "the point data array `fixed` holds 2 values for 4 points"),
+        ] {
+            assert!(LEGACY_VTK.contains(from));
+            std::fs::write(&path, LEGACY_VTK.replace(from, to)).unwrap();
+            let e = read_vtk(&path).err().expect("refused").to_string();
+            assert!(e.contains("short_sets.vtk") && e.contains(expected) && e.contains("save it again"), "{e}");
+        }
     }
 
     /// vtkio panics on a binary array shorter than its header; that is the
