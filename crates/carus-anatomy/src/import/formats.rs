@@ -813,6 +813,19 @@ fn read_uri(path: &Path, uri: &str) -> Result<Vec<u8>, ImportError> {
             .decode(encoded)
             .map_err(|e| format_error(path, "glTF", format!("embedded buffer: {e}")));
     }
+    if uri.contains("://") {
+        return Err(format_error(
+            path,
+            "glTF",
+            format!("buffer `{uri}` is on the network, which Carus does not fetch; download it beside the glTF and name it by its file name, or export a .glb"),
+        ));
+    }
     let file = path.parent().unwrap_or(Path::new(".")).join(uri);
-    carus_io::input::read_bytes(&file).map_err(|source| ImportError::Io { path: file, source })
+    carus_io::input::read_bytes(&file).map_err(|source| {
+        format_error(
+            path,
+            "glTF",
+            format!("its buffer `{uri}` ({}) cannot be read: {source}; keep the .bin beside the .gltf, or export a .glb", file.display()),
+        )
+    })
 }

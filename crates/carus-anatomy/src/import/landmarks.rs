@@ -283,6 +283,18 @@ fn check_orientation(path: &Path, l: &PelvisLandmarks) -> Result<(), ImportError
 pub fn import_pelvis(path: &Path) -> Result<ImportedPelvis, ImportError> {
     let file = LandmarksFile::read(path)?;
     let mesh_path = path.parent().unwrap_or(Path::new(".")).join(&file.mesh);
+    // A mesh that is not there is the landmarks file's `mesh` key to fix.
+    if !mesh_path.exists() {
+        return Err(file_error(
+            path,
+            format!(
+                "`mesh = {:?}` names {}, which does not exist; the path is relative to this landmarks \
+                 file: correct it, or put the mesh beside the landmarks file",
+                file.mesh.display().to_string(),
+                mesh_path.display()
+            ),
+        ));
+    }
     let raw = read_raw(&mesh_path)?;
     assemble_pelvis(path, &file, mesh_path, &raw)
 }

@@ -180,6 +180,12 @@ fn a_tetrahedron_round_trips_in_every_format() {
     let stl = read_surface(&files[0], Units::Metres).unwrap();
     assert_eq!(stl.report.triangles_read, 4);
     assert_eq!(stl.surface.vertices.len(), 4);
+    // A buffer file not beside the glTF, or on the network, is named with the glTF that wants it.
+    for (uri, expected) in [("tetra.bin", "its buffer `tetra.bin`"), ("http://example.com/x.bin", "on the network")] {
+        let gltf = write(&dir, "separate.gltf", gltf_json("", Some(uri.into())).as_bytes());
+        let e = read_surface(&gltf, Units::Metres).unwrap_err().to_string();
+        assert!(e.contains("separate.gltf") && e.contains(expected), "{e}");
+    }
     std::fs::remove_dir_all(dir).ok();
 }
 
@@ -434,6 +440,14 @@ fn landmark_file_mistakes_are_named_with_their_fix() {
 
     let units = edited_landmarks(&dir, |t| t.replace("units = \"mm\"", "units = \"cm\""));
     assert!(import_pelvis(&units).unwrap_err().to_string().contains("units"));
+    // A mesh that is not there is the landmarks file's `mesh` to correct.
+    let gone = write(&dir, "gone.landmarks.toml", std::fs::read(visible_human_female_pelvis_path()).unwrap().as_slice());
+    let e = import_pelvis(&gone).unwrap_err().to_string();
+    assert!(
+        e.contains("gone.landmarks.toml") && e.contains("`mesh = \"visible-human-female-pelvis.stl\"` names")
+            && e.contains("does not exist") && e.contains("relative to this landmarks file"),
+        "{e}"
+    );
 
     // An unknown key is named as a landmark, whatever its value.
     let shipped = std::fs::read_to_string(visible_human_female_pelvis_path()).unwrap();

@@ -242,16 +242,8 @@ impl AnatomyFile {
         let base = self.path.as_deref().and_then(Path::parent).unwrap_or(Path::new("."));
         let where_ = self.path.as_ref().map_or("the default pelvis".to_string(), |p| format!("{}: [pelvis]", p.display()));
         let (pelvis, report) = self.pelvis.build_with_report(base).with_context(|| where_)?;
-        if let Some((r, mesh)) = report.filter(|(r, _)| r.open_edges > 0 || r.degenerate_dropped > 0) {
-            eprintln!(
-                "note: {}: {} open edges (holes), {} non-manifold edges, {} degenerate triangles dropped of {} read; \
-                 the fetus can slip through a hole: fill the holes (e.g. MeshLab's Close Holes) and export it again",
-                mesh.display(),
-                r.open_edges,
-                r.non_manifold_edges,
-                r.degenerate_dropped,
-                r.triangles_read
-            );
+        if let Some(note) = report.and_then(|(r, mesh)| import_note(&r, &mesh)) {
+            eprintln!("note: {note}");
         }
         Ok(pelvis)
     }
@@ -277,9 +269,56 @@ impl AnatomyFile {
     }
 }
 
+/// What an imported pelvis's mesh report means for a run: holes let the
+/// fetus slip through (fix them); dropped degenerate triangles alone leave
+/// the surface whole.
+fn import_note(r: &carus_anatomy::import::MeshReport, mesh: &Path) -> Option<String> {
+    if r.open_edges > 0 {
+        return Some(format!(
+            "{}: {} open edges (holes), {} non-manifold edges, {} degenerate triangles dropped of {} read; \
+             the fetus can slip through a hole: fill the holes (e.g. MeshLab's Close Holes) and export it again",
+            mesh.display(),
+            r.open_edges,
+            r.non_manifold_edges,
+            r.degenerate_dropped,
+            r.triangles_read
+        ));
+    }
+    (r.degenerate_dropped > 0).then(|| {
+        format!(
+            "{}: {} degenerate (zero-area) triangles dropped of {} read; no hole is left, so the surface \
+             the contact uses is whole",
+            mesh.display(),
+            r.degenerate_dropped,
+            r.triangles_read
+        )
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Holes get the fix; dropped degenerate triangles alone are no hole;
+    /// a clean mesh gets no note.
+    #[test]
+    fn an_import_note_tells_holes_from_dropped_triangles() {
+        let mesh = Path::new("pelvis.stl");
+        let report = |open_edges, degenerate_dropped| carus_anatomy::import::MeshReport {
+            triangles_read: 100,
+            vertices: 52,
+            degenerate_dropped,
+            parts: 1,
+            closed_parts: usize::from(open_edges == 0),
+            open_edges,
+            non_manifold_edges: 0,
+        };
+        let holes = import_note(&report(6, 1), mesh).unwrap();
+        assert!(holes.starts_with("pelvis.stl: 6 open edges (holes)") && holes.contains("fill the holes"), "{holes}");
+        let dropped = import_note(&report(0, 2), mesh).unwrap();
+        assert!(dropped.contains("2 degenerate (zero-area) triangles dropped of 100") && !dropped.contains("fill"), "{dropped}");
+        assert_eq!(import_note(&report(0, 0), mesh), None);
+    }
 
     fn load(text: &str) -> anyhow::Result<AnatomyFile> {
         let dir = tempfile::tempdir()?;
