@@ -15,6 +15,7 @@ pub mod input;
 pub mod job;
 pub mod pvd;
 mod text;
+pub mod toml_text;
 pub mod units;
 pub mod vtk;
 mod vtk_compat;
@@ -32,6 +33,12 @@ pub use vtk::{write_vtu, FrameFields};
 /// `.msh` (Gmsh), `.vtk`/`.vtu` (VTK), `.inp` (Abaqus). Coordinates are
 /// returned as written; see [`MeshFile::to_metres`].
 pub fn read_mesh(path: &Path) -> Result<MeshFile, ReadError> {
+    if path.is_dir() {
+        return Err(ReadError::Io {
+            path: path.to_path_buf(),
+            cause: std::io::Error::other("a folder, not a mesh file: name the .msh, .vtk, .vtu or .inp file in it"),
+        });
+    }
     let extension = path
         .extension()
         .and_then(|e| e.to_str())
@@ -55,4 +62,20 @@ fn temp(name: &str) -> (tempfile::TempDir, std::path::PathBuf) {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join(name);
     (dir, path)
+}
+
+#[cfg(test)]
+mod tests {
+    /// A folder named for a mesh is said to be one, with the extensions
+    /// to look for, whatever its name ends with.
+    #[test]
+    fn a_folder_is_no_mesh() {
+        let dir = tempfile::tempdir().unwrap();
+        for name in ["meshes", "cube.msh"] {
+            let folder = dir.path().join(name);
+            std::fs::create_dir(&folder).unwrap();
+            let e = super::read_mesh(&folder).unwrap_err().to_string();
+            assert!(e.contains(name) && e.contains("a folder, not a mesh file") && e.contains(".msh, .vtk"), "{e}");
+        }
+    }
 }

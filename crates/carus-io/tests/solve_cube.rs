@@ -272,6 +272,13 @@ fn job_errors_name_the_key_the_line_and_the_fix() {
     let dense = write_job(&dir, &format!("{}\n[solver]\nend_time_s = 0.2\n", BASE.replace("density_kg_m3 = 1000.0", "density_kg_m3 = 1e308")));
     let err = run_job(&dense, &dir.join("out"), &RunOptions::default(), &mut |_| {}).unwrap_err().to_string();
     assert!(err.contains("`materials`") && err.contains("longer than the whole run (2e-1 s)") && err.contains("fix:"), "{err}");
+    // A key written twice is named, and so is a component listed twice.
+    let twice = write_job(&dir, &format!("{BASE}\n[solver]\nend_time_s = 1e-4\nend_time_s = 2e-4\n"));
+    let err = run_job(&twice, &dir.join("out"), &RunOptions::default(), &mut |_| {}).unwrap_err().to_string();
+    assert!(err.contains("duplicate key `end_time_s`: given a second time in its table") && err.contains("keep one of the two lines"), "{err}");
+    let listed = write_job(&dir, &format!("{BASE}components = [\"x\", \"x\", \"y\"]\n[solver]\nend_time_s = 1e-4\n"));
+    let err = run_job(&listed, &dir.join("out"), &RunOptions::default(), &mut |_| {}).unwrap_err().to_string();
+    assert!(err.contains("`fixed[0].components`") && err.contains("names \"x\" twice"), "{err}");
     // Young/Poisson with a shear modulus too: one of them would be ignored.
     let both = write_job(&dir, &format!("{}\n[solver]\nend_time_s = 1e-4\n", BASE.replace("poisson_ratio = 0.45", "poisson_ratio = 0.45\nshear_modulus_pa = 500.0")));
     let err = run_job(&both, &dir.join("out"), &RunOptions::default(), &mut |_| {}).unwrap_err().to_string();

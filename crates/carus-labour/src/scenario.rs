@@ -1830,25 +1830,10 @@ fn takes_a_number(full_key: &str) -> bool {
 fn syntax(path: &Path, text: &str, key: String, error: &toml::de::Error) -> ScenarioError {
     let line = error.span().map_or(0, |s| line_at(text, s.start));
     let mut message = error.message().trim().to_string();
-    // The parser names no key for a duplicate; its span covers the key written twice.
-    let twice = error
-        .span()
-        .and_then(|s| text.get(s))
-        .map(str::trim)
-        .filter(|k| message.starts_with("duplicate key") && !k.is_empty() && !k.contains('\n'));
-    let on_header = twice.is_some()
-        && text.lines().nth(line.saturating_sub(1)).is_some_and(|l| l.trim_start().starts_with('['));
-    if let Some(k) = twice {
-        message = if on_header {
-            format!("the table `{k}` is given a second time")
-        } else {
-            format!("duplicate key `{k}`: given a second time in its table")
-        };
-    }
-    let hint = if on_header {
-        "put the keys of both into one table".to_string()
-    } else if twice.is_some() {
-        "keep one of the two lines".to_string()
+    let twice = carus_io::toml_text::written_twice(text, error).map(|t| t.message_and_fix());
+    let hint = if let Some((said, fix)) = twice {
+        message = said;
+        fix.to_string()
     } else if message.starts_with("unknown field") {
         "check the spelling against `carus scenarios show normal`, which lists every key"
             .to_string()

@@ -51,6 +51,12 @@ impl MeshFormat {
 
 /// Reads a mesh file of any supported format.
 pub fn read_raw(path: &Path) -> Result<RawMesh, ImportError> {
+    if path.is_dir() {
+        return Err(ImportError::Io {
+            path: path.to_path_buf(),
+            source: std::io::Error::other("a folder, not a mesh file: name the .stl, .obj, .ply, .gltf or .glb file in it"),
+        });
+    }
     let format = MeshFormat::from_path(path)?;
     let bytes = carus_io::input::read_bytes(path).map_err(|source| ImportError::Io {
         path: path.to_path_buf(),

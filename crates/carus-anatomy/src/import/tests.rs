@@ -180,6 +180,11 @@ fn a_tetrahedron_round_trips_in_every_format() {
     let stl = read_surface(&files[0], Units::Metres).unwrap();
     assert_eq!(stl.report.triangles_read, 4);
     assert_eq!(stl.surface.vertices.len(), 4);
+    // A folder is no mesh, whatever its name ends with.
+    let folder = dir.join("pelvis.stl");
+    std::fs::create_dir_all(&folder).unwrap();
+    let e = read_surface(&folder, Units::Metres).unwrap_err().to_string();
+    assert!(e.contains("pelvis.stl") && e.contains("a folder, not a mesh file"), "{e}");
     // A buffer file not beside the glTF, or on the network, is named with the glTF that wants it.
     for (uri, expected) in [("tetra.bin", "its buffer `tetra.bin`"), ("http://example.com/x.bin", "on the network")] {
         let gltf = write(&dir, "separate.gltf", gltf_json("", Some(uri.into())).as_bytes());

@@ -42,8 +42,17 @@ fn toml_error(path: &Path, text: &str, key: String, error: &toml::de::Error) -> 
         }
         None => (0, 0),
     };
-    let message = error.message().trim().to_string();
-    let hint = hint_for(&message);
+    let (message, hint) = match crate::toml_text::written_twice(text, error) {
+        Some(twice) => {
+            let (message, fix) = twice.message_and_fix();
+            (message, fix.to_string())
+        }
+        None => {
+            let message = error.message().trim().to_string();
+            let hint = hint_for(&message);
+            (message, hint)
+        }
+    };
     JobError::Syntax {
         path: path.to_path_buf(),
         line,
@@ -277,6 +286,14 @@ fn check_values(path: &Path, spec: &JobSpec) -> Result<(), JobError> {
                 format!("fixed[{i}].components"),
                 "is empty".into(),
                 "list the fixed components, e.g. [\"x\", \"y\", \"z\"], or leave the key out to fix all three",
+            ));
+        }
+        let listed = f.components.as_deref().unwrap_or_default();
+        if let Some(twice) = listed.iter().enumerate().find_map(|(k, a)| listed[..k].contains(a).then_some(a)) {
+            return Err(c.fail(
+                format!("fixed[{i}].components"),
+                format!("names \"{}\" twice", format!("{twice:?}").to_lowercase()),
+                "list each fixed component once, e.g. [\"x\", \"y\"]",
             ));
         }
     }
