@@ -60,6 +60,25 @@ pub struct Checkpoint {
     pub wall_s: f64,
 }
 
+impl Checkpoint {
+    /// The scenario the run started with, as the checkpoint in `dir` keeps
+    /// it; text that no longer reads is the checkpoint damaged, not a
+    /// scenario to correct.
+    pub fn scenario(&self, dir: &Path) -> Result<crate::Scenario, LabourError> {
+        let path = dir.join(CHECKPOINT_FILE);
+        crate::Scenario::parse(&path, &self.scenario_toml, self.base_dir.clone()).map_err(|e| match e {
+            crate::ScenarioError::Syntax { .. } | crate::ScenarioError::Value { .. } => output_error(
+                &path,
+                format!(
+                    "the scenario it keeps does not read ({e}): the file was damaged after carus wrote it; \
+                     run the scenario again from the start"
+                ),
+            ),
+            other => other.into(),
+        })
+    }
+}
+
 pub fn write_checkpoint(dir: &Path, checkpoint: &Checkpoint) -> Result<(), LabourError> {
     write_json_whole(&dir.join(CHECKPOINT_FILE), checkpoint)
 }

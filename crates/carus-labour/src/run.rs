@@ -199,11 +199,7 @@ pub fn resume(
         _ => {}
     }
     let checkpoint = output::read_checkpoint(out_dir)?;
-    let scenario = Scenario::parse(
-        &out_dir.join(output::CHECKPOINT_FILE),
-        &checkpoint.scenario_toml,
-        checkpoint.base_dir.clone(),
-    )?;
+    let scenario = checkpoint.scenario(out_dir)?;
     let missing = keys_missing(&checkpoint.scenario_toml, &scenario.to_toml()?);
     if !missing.is_empty() {
         return Err(LabourError::Checkpoint(format!(
@@ -1254,6 +1250,20 @@ mod tests {
         assert!(e.starts_with("the run failed at t = 0.10 s (a floor element turned inside out)"), "{e}");
         assert!(e.contains("with a new --out"), "{e}");
         assert_eq!(std::fs::read(&path).unwrap(), written);
+    }
+
+    /// A checkpoint whose kept scenario no longer reads is said to be
+    /// damaged, not a scenario to correct at its line 1.
+    #[test]
+    fn a_checkpoint_with_damaged_scenario_text_is_named_as_damaged() {
+        let stop = RunOptions { stop_at_s: Some(0.1), ..RunOptions::default() };
+        let (dir, _) = run_in(&coarse(0.3), &stop);
+        let path = dir.path().join(output::CHECKPOINT_FILE);
+        let mut checkpoint: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+        checkpoint["scenario_toml"] = "= 1\n".into();
+        std::fs::write(&path, checkpoint.to_string()).unwrap();
+        let e = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).unwrap_err().to_string();
+        assert!(e.contains("checkpoint.json") && e.contains("the scenario it keeps does not read") && e.contains("run the scenario again from the start"), "{e}");
     }
 
     /// A history the detector refuses leaves no report but a note of why,

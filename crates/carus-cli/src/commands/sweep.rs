@@ -191,7 +191,8 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
     let (plan, base, out_dir) = match &args.resume {
         Some(dir) => {
             let plan = read_plan(dir)?;
-            let base = Scenario::parse(&dir.join(PLAN_FILE), &plan.scenario_toml, plan.base_dir.clone())?;
+            let base = Scenario::parse(&dir.join(PLAN_FILE), &plan.scenario_toml, plan.base_dir.clone())
+                .with_context(|| damaged_plan(dir))?;
             (plan, base, Some(dir.clone()))
         }
         None => {
@@ -209,7 +210,11 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
         .set
         .iter()
         .map(|s| parse_setting(s))
-        .collect::<anyhow::Result<Vec<_>>>()?;
+        .collect::<anyhow::Result<Vec<_>>>();
+    let settings = match &args.resume {
+        Some(dir) => settings.with_context(|| damaged_plan(dir))?,
+        None => settings?,
+    };
     for (i, setting) in settings.iter().enumerate() {
         if settings[..i].iter().any(|earlier| earlier.key == setting.key) {
             bail!(
@@ -346,6 +351,15 @@ fn check_variants_start(scenarios: &[Scenario], combinations: &[Vec<(String, Str
         eprintln!("warning: {failure}\n  this run will not start; its row in the table gives the reason");
     }
     Ok(())
+}
+
+/// What to do when the plan a sweep kept no longer reads.
+fn damaged_plan(dir: &Path) -> String {
+    format!(
+        "{} is damaged (what it keeps of the sweep's scenario or --set values does not read); run the \
+         sweep again with a new --out",
+        dir.join(PLAN_FILE).display()
+    )
 }
 
 /// The sweep's plan in `dir`, with what to do when it is not there.
@@ -816,6 +830,12 @@ mod tests {
         std::fs::write(&plan_path, plan.to_string()).unwrap();
         let e = format!("{:#}", run(&resume).err().unwrap());
         assert!(e.contains("02-expulsion.force_max_n=120 is a run the plan no longer makes"), "{e}");
+        // A plan whose kept values no longer read is said to be damaged, not a command line.
+        let mut plan: serde_json::Value = serde_json::from_str(&original).unwrap();
+        plan["set"] = json!(["expulsion.force_max_n"]);
+        std::fs::write(&plan_path, plan.to_string()).unwrap();
+        let e = format!("{:#}", run(&resume).err().unwrap());
+        assert!(e.contains("sweep_plan.json is damaged") && e.contains("run the sweep again"), "{e}");
         std::fs::write(&plan_path, original).unwrap();
         assert!(matches!(run(&resume).unwrap(), Status::Success));
         assert_eq!([history(&first), history(&second)], whole);

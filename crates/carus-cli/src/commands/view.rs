@@ -136,7 +136,7 @@ impl RunShown {
         let (floors, unreadable) = carus_labour::floor_frames_at(dir, &checkpoint.frame_times);
         warn_unreadable_floor_frames(&unreadable);
         Ok(RunShown {
-            scenario: Scenario::parse(&dir.join(CHECKPOINT_FILE), &checkpoint.scenario_toml, checkpoint.base_dir.clone())?,
+            scenario: checkpoint.scenario(dir)?,
             floors,
             samples: checkpoint.state.samples,
             detector: None,
