@@ -64,6 +64,36 @@ fn content_error(path: &Path, problem: impl Into<String>, fix: &str) -> ReadErro
     }
 }
 
+/// vtkio's error, in words where its text is known (it names no line,
+/// and a size mismatch reads as a Rust struct), with its own text kept.
+fn in_words(vtkio: &str) -> String {
+    let field = |name: &str| -> Option<&str> {
+        let start = vtkio.find(&format!("{name}: "))? + name.len() + 2;
+        let rest = &vtkio[start..];
+        Some(rest[..rest.find([',', ' ', '}']).unwrap_or(rest.len())].trim_matches('"'))
+    };
+    let said = if vtkio.contains("DataArraySizeMismatch") {
+        let array = match field("name") {
+            Some("") | None => "the points' coordinate array".to_string(),
+            Some(name) => format!("the data array `{name}`"),
+        };
+        format!(
+            "{array} holds {} values where the file's counts call for {}",
+            field("actual").unwrap_or("?"),
+            field("expected").unwrap_or("?")
+        )
+    } else if vtkio.contains("Base64Decode") {
+        "a base64 data array holds a character that is not base64".to_string()
+    } else if vtkio.contains("Decompress") {
+        "a compressed data array cannot be decompressed".to_string()
+    } else if vtkio.starts_with("Parse error") {
+        "the legacy file stops early or has a line that is not what its header announces".to_string()
+    } else {
+        return format!("({vtkio})");
+    };
+    format!("{said} (the VTK reader: {vtkio})")
+}
+
 const RESAVE_FIX: &str = "open it in ParaView and save it again as an unstructured grid (.vtu), or check the file is complete";
 
 fn load_unstructured(path: &Path) -> Result<UnstructuredGridPiece, ReadError> {
@@ -102,7 +132,7 @@ fn load_unstructured(path: &Path) -> Result<UnstructuredGridPiece, ReadError> {
         Ok(Err(e)) => {
             return Err(content_error(
                 path,
-                format!("not a readable VTK file ({e})"),
+                format!("not a readable VTK file: {}", in_words(&e.to_string())),
                 RESAVE_FIX,
             ))
         }
@@ -580,6 +610,16 @@ mod tests {
             let e = read_vtk(&path).err().expect("refused").to_string();
             assert!(e.contains("short_sets.vtk") && e.contains(expected) && e.contains("save it again"), "{e}");
         }
+    }
+
+    #[test]
+    fn vtkio_errors_are_put_in_words() {
+        let mismatch = "XML error: Validation error: DataArraySizeMismatch { name: \"types\", expected: 5, actual: 3 }";
+        assert_eq!(in_words(mismatch), format!("the data array `types` holds 3 values where the file's counts call for 5 (the VTK reader: {mismatch})"));
+        let points = "XML error: Validation error: DataArraySizeMismatch { name: \"\", expected: 27, actual: 24 }";
+        assert!(in_words(points).starts_with("the points' coordinate array holds 24 values where the file's counts call for 27"));
+        assert!(in_words("Parse error: Complete").starts_with("the legacy file stops early"));
+        assert_eq!(in_words("something new"), "(something new)");
     }
 
     /// vtkio panics on a binary array shorter than its header; that is the
