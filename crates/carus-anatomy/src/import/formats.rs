@@ -458,7 +458,15 @@ pub fn parse_ply(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
                 format!("face {index} refers to vertex {bad}, but there are {count} vertices"),
             ));
         }
-        for k in 1..corners.len().saturating_sub(1) {
+        // Dropped unsaid, an edge or a point would leave a hole where a face was.
+        if corners.len() < 3 {
+            return Err(format_error(
+                path,
+                "PLY",
+                format!("face {index} has {} corners; a face needs 3 or more (edges and points belong in other elements)", corners.len()),
+            ));
+        }
+        for k in 1..corners.len() - 1 {
             mesh.triangles
                 .push([corners[0] as u32, corners[k] as u32, corners[k + 1] as u32]);
         }
@@ -479,8 +487,22 @@ pub struct NamedPart {
 /// file naming a missing accessor would panic there: that one reference is
 /// checked first and named.
 fn parse_gltf(path: &Path, bytes: &[u8]) -> Result<gltf::Gltf, ImportError> {
-    let unchecked = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| format_error(path, "glTF", e))?;
+    let unchecked = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| {
+        // A GLB shorter than its header says reads as "could not completely read the object".
+        let glb_cut_short = bytes.starts_with(b"glTF") && matches!(e, gltf::Error::Binary(_) | gltf::Error::Io(_));
+        match glb_cut_short {
+            true => format_error(path, "glTF", format!("the GLB ends before the length its header declares (a truncated copy, or a wrong length field: {e})")),
+            false => format_error(path, "glTF", e),
+        }
+    })?;
     let root = unchecked.document.as_json();
+    if !root.asset.version.starts_with("2.") {
+        return Err(format_error(
+            path,
+            "glTF",
+            format!("it is glTF {}, and Carus reads glTF 2.0; export it as glTF 2.0 (.glb or .gltf)", root.asset.version),
+        ));
+    }
     for (m, mesh) in root.meshes.iter().enumerate() {
         for (p, primitive) in mesh.primitives.iter().enumerate() {
             let position = gltf::json::validation::Checked::Valid(gltf::json::mesh::Semantic::Positions);
@@ -566,8 +588,20 @@ pub fn parse_gltf_parts(path: &Path, bytes: &[u8]) -> Result<Vec<NamedPart>, Imp
                 .unwrap_or_else(|| format!("mesh {}", mesh.index()));
             let mut raw = RawMesh::default();
             let mirrored = world.determinant() < 0.0;
-            for primitive in mesh.primitives().filter(|p| p.mode() == gltf::mesh::Mode::Triangles) {
+            for primitive in mesh.primitives() {
                 let (m, p) = (mesh.index(), primitive.index());
+                // Strips and fans are surfaces this reader would drop; points and lines are none.
+                match primitive.mode() {
+                    gltf::mesh::Mode::Triangles => {}
+                    mode @ (gltf::mesh::Mode::TriangleStrip | gltf::mesh::Mode::TriangleFan) => {
+                        return Err(format_error(
+                            path,
+                            "glTF",
+                            format!("primitive {p} of mesh {m} is drawn as {mode:?}, and Carus reads triangle lists; export with the mesh triangulated (e.g. Blender's glTF exporter does)"),
+                        ))
+                    }
+                    _ => continue,
+                }
                 // gltf's reader yields nothing for an accessor of the wrong
                 // type or outside its buffer: check them first, and name them.
                 let position = primitive.get(&gltf::Semantic::Positions);

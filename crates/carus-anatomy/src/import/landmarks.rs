@@ -214,6 +214,18 @@ impl LandmarksFile {
                 format!("landmark `{name}` has a non-finite coordinate"),
             ));
         }
+        // As for the mesh's vertices: a slip of exponent, named before it reads as a degenerate plane.
+        let beyond = |p: &[f64; 3]| p.iter().any(|c| c.abs() * file.units.to_metres() > super::MAX_COORDINATE_M);
+        if let Some((name, p)) = file.landmarks.iter().find(|(_, p)| beyond(p)) {
+            return Err(file_error(
+                path,
+                format!(
+                    "landmark `{name}` = {p:?} lies beyond {} m of the mesh's origin in {}; check its exponent and the file's `units`",
+                    super::MAX_COORDINATE_M,
+                    file.units.name()
+                ),
+            ));
+        }
         Ok(file)
     }
 

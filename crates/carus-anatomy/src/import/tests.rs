@@ -313,6 +313,14 @@ fn gltf_cycles_and_accessors_outside_their_buffers_are_named() {
     let e = err(embedded_gltf(r#", "children": [1, 2]}, {"children": [2]}, {"#));
     assert!(e.contains("node 2 is a child of both node 0 and node 1"), "{e}");
 
+    // glTF 1.0, a triangle strip, a GLB cut short: each said, none read as an empty mesh.
+    let e = err(good.replacen(r#""version": "2.0""#, r#""version": "1.0""#, 1));
+    assert!(e.contains("it is glTF 1.0, and Carus reads glTF 2.0"), "{e}");
+    let e = err(good.replacen(r#""indices": 1"#, r#""indices": 1, "mode": 5"#, 1));
+    assert!(e.contains("primitive 0 of mesh 0 is drawn as TriangleStrip") && e.contains("triangulated"), "{e}");
+    let whole = glb("");
+    let e = parse_gltf_parts(Path::new("cut.glb"), &whole[..whole.len() - 10]).unwrap_err().to_string();
+    assert!(e.contains("cut.glb") && e.contains("the GLB ends before the length its header declares"), "{e}");
     // Accessors of the wrong type were read as something else.
     let e = err(good.replacen(r#""type": "VEC3""#, r#""type": "VEC2""#, 1));
     assert!(e.contains("accessor 0 (POSITION of primitive 0 of mesh 0) is a VEC2 of FLOAT") && e.contains("must be a VEC3 of FLOAT"), "{e}");
@@ -356,6 +364,9 @@ element vertex 3
     assert!(e.contains("declares `vertex_indices` a list of float") && e.contains("property list uchar int vertex_indices"), "{e}");
     let e = err(ply_ascii().replacen("vertex_indices", "corners", 1));
     assert!(e.contains("no `vertex_indices` (or `vertex_index`) property"), "{e}");
+    // A two-corner face would be a hole, not a face skipped unsaid.
+    let e = err(ply_ascii().replacen("3 0 1 3", "2 0 1", 1));
+    assert!(e.contains("face 1 has 2 corners; a face needs 3 or more"), "{e}");
 }
 
 #[test]
@@ -445,6 +456,10 @@ fn landmark_file_mistakes_are_named_with_their_fix() {
 
     let units = edited_landmarks(&dir, |t| t.replace("units = \"mm\"", "units = \"cm\""));
     assert!(import_pelvis(&units).unwrap_err().to_string().contains("units"));
+    // A landmark a slip of exponent away is named, not read as a degenerate plane.
+    let far = edited_landmarks(&dir, |t| t.replacen("sacral_promontory = [-6.074813660234213,", "sacral_promontory = [1e300,", 1));
+    let e = import_pelvis(&far).unwrap_err().to_string();
+    assert!(e.contains("landmark `sacral_promontory` = [1e300") && e.contains("beyond 1000 m"), "{e}");
     // A mesh that is not there is the landmarks file's `mesh` to correct.
     let gone = write(&dir, "gone.landmarks.toml", std::fs::read(visible_human_female_pelvis_path()).unwrap().as_slice());
     let e = import_pelvis(&gone).unwrap_err().to_string();
