@@ -1214,6 +1214,12 @@ mod tests {
         std::fs::write(&path, edited.to_string()).unwrap();
         let e = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).expect_err("refused").to_string();
         assert!(e.contains("not one its scenario can reach") && e.contains("edited or damaged"), "{e}");
+        // So is a head a slip of exponent away, which would blow up at once.
+        let mut edited: serde_json::Value = serde_json::from_str(&text).unwrap();
+        edited["state"]["bodies"]["position"][0][0] = 1e300.into();
+        std::fs::write(&path, edited.to_string()).unwrap();
+        let e = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).expect_err("refused").to_string();
+        assert!(e.contains("a metre or more from the pelvis") && e.contains("edited or damaged"), "{e}");
         std::fs::write(&path, &text).unwrap();
         // A scenario.toml deleted since is written again, as the run started.
         std::fs::remove_file(&scenario).unwrap();

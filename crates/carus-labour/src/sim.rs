@@ -342,11 +342,14 @@ impl<'a> Simulation<'a> {
         // As the run counts its steps (run.rs): the last may end a hair past
         // end_time_s when the step does not divide it.
         let end_step = (scene.scenario.numerics.end_time_s / dt).round() as u64;
-        if state.step > end_step || b.first_not_finite().is_some() {
+        // A run stops before a body is thrown a metre (THROWN_M), so a saved one that far is damaged.
+        let thrown = b.position.iter().any(|p| p.length() > THROWN_M);
+        if state.step > end_step || b.first_not_finite().is_some() || thrown {
             return Err(LabourError::Checkpoint(format!(
                 "the saved state is not one its scenario can reach (its step count puts it at t = \
-                 {reached_s:.3e} s, the scenario ends at {} s; or a pose is not finite): the \
-                 checkpoint was edited or damaged: run the scenario again from the start",
+                 {reached_s:.3e} s, the scenario ends at {} s; or a pose is not finite, or a metre or \
+                 more from the pelvis): the checkpoint was edited or damaged: run the scenario again \
+                 from the start",
                 scene.scenario.numerics.end_time_s
             )));
         }
