@@ -268,10 +268,17 @@ fn job_errors_name_the_key_the_line_and_the_fix() {
         assert!(err.contains(expected), "{err}\n  expected: {expected}");
         assert!(err.contains("fix:") || err.contains("hint:"), "{err}");
     }
-    // The other way: a step longer than the run would simulate nothing and call it done.
-    let dense = write_job(&dir, &format!("{}\n[solver]\nend_time_s = 0.2\n", BASE.replace("density_kg_m3 = 1000.0", "density_kg_m3 = 1e308")));
-    let err = run_job(&dense, &dir.join("out"), &RunOptions::default(), &mut |_| {}).unwrap_err().to_string();
-    assert!(err.contains("`materials`") && err.contains("longer than the whole run (2e-1 s)") && err.contains("fix:"), "{err}");
+    // The automatic step ends the run on end_time_s itself: whole steps of at most 0.9
+    // of the critical one, and one step where the run is shorter than that.
+    for (density, end_s) in [("1000.0", 0.2), ("1e308", 0.2)] {
+        let job = write_job(&dir, &format!("{}\n[solver]\nend_time_s = {end_s}\n", BASE.replace("density_kg_m3 = 1000.0", &format!("density_kg_m3 = {density}"))));
+        let out = dir.join(format!("out-auto-{density}"));
+        let report = run_job(&job, &out, &RunOptions::default(), &mut |_| {}).unwrap();
+        assert!(report.failure.is_none(), "{:?}", report.failure);
+        assert_eq!(report.simulated_s, end_s);
+        assert!(report.steps >= 1 && report.dt_s <= 0.9 * report.critical_dt_s * (1.0 + 1e-12), "{report:?}");
+        assert!((report.dt_s * report.steps as f64 - end_s).abs() < 1e-12, "{report:?}");
+    }
     // A key written twice is named, and so is a component listed twice.
     let twice = write_job(&dir, &format!("{BASE}\n[solver]\nend_time_s = 1e-4\nend_time_s = 2e-4\n"));
     let err = run_job(&twice, &dir.join("out"), &RunOptions::default(), &mut |_| {}).unwrap_err().to_string();

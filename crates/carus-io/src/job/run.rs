@@ -443,27 +443,14 @@ fn build_solver(
                 .into(),
         });
     }
-    // The other way round, the run would end before its first step.
-    if solver_spec.time_step_s == TimeStep::Auto && AUTO_TIME_STEP_FRACTION * critical_s > solver_spec.end_time_s {
-        return Err(JobError::Invalid {
-            path: job_path.to_path_buf(),
-            key: "materials".into(),
-            problem: format!(
-                "the stable time step is {critical_s:.3e} s, longer than the whole run ({:e} s), so \
-                 nothing would be simulated: a material's stiffness is far too low or its density \
-                 far too high, or solver.end_time_s far too short",
-                solver_spec.end_time_s
-            ),
-            fix: "check each material's young_modulus_pa (Pa) and density_kg_m3 (kg/m^3), and \
-                  solver.end_time_s (seconds)"
-                .into(),
-        });
-    }
     let (dt_s, control) = match solver_spec.time_step_s {
-        TimeStep::Auto => (
-            AUTO_TIME_STEP_FRACTION * model.critical_time_step(),
-            StepControl::Refuse,
-        ),
+        // A whole number of steps, each at most the fraction of the critical
+        // one, so the run ends on end_time_s itself (and a run shorter than
+        // one such step is one step).
+        TimeStep::Auto => {
+            let end_s = solver_spec.end_time_s;
+            (end_s / (end_s / (AUTO_TIME_STEP_FRACTION * critical_s)).ceil(), StepControl::Refuse)
+        }
         TimeStep::Seconds(dt) if solver_spec.sub_stepping => (dt, StepControl::SubStep),
         TimeStep::Seconds(dt) => (dt, StepControl::Refuse),
     };

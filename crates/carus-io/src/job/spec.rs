@@ -164,7 +164,8 @@ pub enum TimeStep {
 }
 
 /// Safety factor of `time_step_s = "auto"` below the critical step (the
-/// usual explicit-dynamics margin; NiftySim's examples run at 0.9 or less).
+/// usual explicit-dynamics margin; NiftySim's examples run at 0.9 or less);
+/// the step is then shortened so that whole steps end on `end_time_s`.
 pub const AUTO_TIME_STEP_FRACTION: f64 = 0.9;
 
 impl<'de> Deserialize<'de> for TimeStep {
