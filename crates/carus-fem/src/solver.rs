@@ -767,8 +767,9 @@ impl TledSolver {
 }
 
 /// A simulated time as outputs give it: rounded to the nanosecond, so 7000
-/// steps of 50 us read 0.35 s and not 0.35000000000000003. Far below any
-/// step the solvers take, so no two output times merge.
+/// steps of 50 us read 0.35 s and not 0.35000000000000003. Steps of a
+/// nanosecond or more (every labour run; a `carus solve` job's step is its
+/// own) keep their output times apart.
 pub fn reported_time_s(t: f64) -> f64 {
     (t * 1e9).round() / 1e9
 }

@@ -79,7 +79,7 @@ fn preference(kind: wgpu::DeviceType) -> u8 {
 fn backend_names(backends: wgpu::Backends) -> String {
     let names: Vec<&str> = backends.iter_names().map(|(name, _)| name).collect();
     if names.is_empty() {
-        "no backend (WGPU_BACKEND names none built into Carus: vulkan, metal, dx12)".into()
+        "no backend (WGPU_BACKEND names none that Carus searches headless: vulkan, metal, dx12)".into()
     } else {
         names.join(", ")
     }

@@ -70,7 +70,11 @@ fn in_words(vtkio: &str) -> String {
     let field = |name: &str| -> Option<&str> {
         let start = vtkio.find(&format!("{name}: "))? + name.len() + 2;
         let rest = &vtkio[start..];
-        Some(rest[..rest.find([',', ' ', '}']).unwrap_or(rest.len())].trim_matches('"'))
+        match rest.strip_prefix('"') {
+            // A quoted name runs to its closing quote, spaces and all.
+            Some(quoted) => quoted.split('"').next(),
+            None => Some(&rest[..rest.find([',', ' ', '}']).unwrap_or(rest.len())]),
+        }
     };
     let said = if vtkio.contains("DataArraySizeMismatch") {
         let array = match field("name") {
@@ -620,6 +624,8 @@ mod tests {
         assert!(in_words(points).starts_with("the points' coordinate array holds 24 values where the file's counts call for 27"));
         assert!(in_words("Parse error: Complete").starts_with("the legacy file stops early"));
         assert_eq!(in_words("something new"), "(something new)");
+        let spaced = "DataArraySizeMismatch { name: \"tissue id, left\", expected: 2, actual: 1 }";
+        assert!(in_words(spaced).starts_with("the data array `tissue id, left` holds 1 values"), "{}", in_words(spaced));
     }
 
     /// vtkio panics on a binary array shorter than its header; that is the

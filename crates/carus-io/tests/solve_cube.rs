@@ -256,7 +256,7 @@ fn job_errors_name_the_key_the_line_and_the_fix() {
         ("\n[solver]\nend_time_s = 1.0\ntime_step_s = 1e-300\n", "`solver.time_step_s`: 1e-300 s would take 1.0e300 steps"),
         (
             "\n[solver]\nend_time_s = 1.0\ntime_step_s = \"auto\"\n",
-            "`materials`: the stable time step is 1.875e-157 s, so 1e0 s would take 5.3e156 steps",
+            "`materials`: the stable time step is 1.875e-157 s, so 1 s would take 5.3e156 steps",
         ),
     ];
     for (extra, expected) in cases {

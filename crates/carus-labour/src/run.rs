@@ -104,7 +104,7 @@ pub fn floor_frames(out_dir: &Path, record: &RunRecord) -> (Vec<FloorAtMoment>, 
         .files
         .floor_pvd
         .as_ref()
-        .and_then(|pvd| std::fs::read_to_string(out_dir.join(pvd)).ok())
+        .and_then(|pvd| carus_io::input::read_text(&out_dir.join(pvd)).ok())
         .and_then(|xml| carus_io::PvdCollection::parse(&xml))
     else {
         return (Vec::new(), Vec::new());
@@ -1219,7 +1219,7 @@ mod tests {
         edited["state"]["bodies"]["position"][0][0] = 1e300.into();
         std::fs::write(&path, edited.to_string()).unwrap();
         let e = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).expect_err("refused").to_string();
-        assert!(e.contains("a metre or more from the pelvis") && e.contains("edited or damaged"), "{e}");
+        assert!(e.contains("beyond a kilometre of the pelvis") && e.contains("edited or damaged"), "{e}");
         std::fs::write(&path, &text).unwrap();
         // A scenario.toml deleted since is written again, as the run started.
         std::fs::remove_file(&scenario).unwrap();
@@ -1269,7 +1269,7 @@ mod tests {
         checkpoint["scenario_toml"] = "= 1\n".into();
         std::fs::write(&path, checkpoint.to_string()).unwrap();
         let e = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).unwrap_err().to_string();
-        assert!(e.contains("checkpoint.json") && e.contains("the scenario it keeps does not read") && e.contains("run the scenario again from the start"), "{e}");
+        assert!(e.contains("checkpoint.json: damaged after carus wrote it") && e.contains("checkpoint.json (the scenario it keeps):1:") && e.contains("run the scenario again from the start"), "{e}");
     }
 
     /// A history the detector refuses leaves no report but a note of why,

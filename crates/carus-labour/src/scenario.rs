@@ -35,8 +35,8 @@ pub enum ScenarioError {
     #[error("{}: `{key}` = {value}: {problem}\n  hint: {hint}", located(.path, *.line))]
     Value {
         path: PathBuf,
-        /// The key's line in the file; None for a scenario not read from
-        /// text (`--set`, a checkpoint's).
+        /// The key's line in the text read (a file, or the scenario a
+        /// checkpoint or sweep plan keeps); None for a `--set` value.
         line: Option<usize>,
         key: std::borrow::Cow<'static, str>,
         value: String,
@@ -1601,7 +1601,7 @@ fn set_key(table: &mut toml::Table, key: &str, value: &str) -> Result<(), Scenar
                 return Err(refuse(&format!("{key}{message}"), &hint));
             }
             // Rust reads `1e400` as infinity; TOML refuses it, so it is no bare word either.
-            if value.trim().parse::<f64>().is_ok_and(f64::is_infinite) {
+            if value.trim().parse::<f64>().is_ok_and(f64::is_infinite) && value.contains(|c: char| c.is_ascii_digit()) {
                 return Err(refuse(
                     "the number is beyond the largest a value can hold (about 1.8e308)",
                     "check the exponent; units are in the key names (mm, deg, s, n, pa)",
@@ -2288,6 +2288,8 @@ mod tests {
         // An exponent is no unit: a number too large is named as one.
         let e = normal.with_setting("contact.friction", "1e400").unwrap_err().to_string();
         assert!(e.contains("contact.friction = 1e400") && e.contains("beyond the largest a value can hold"), "{e}");
+        // A word Rust would read as infinity is still a word (a name, here).
+        assert_eq!(normal.with_setting("name", "Infinity").unwrap().name, "Infinity");
         assert!(normal.with_setting("start.position", "LOT").is_ok());
     }
 

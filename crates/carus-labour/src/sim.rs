@@ -342,14 +342,16 @@ impl<'a> Simulation<'a> {
         // As the run counts its steps (run.rs): the last may end a hair past
         // end_time_s when the step does not divide it.
         let end_step = (scene.scenario.numerics.end_time_s / dt).round() as u64;
-        // A run stops before a body is thrown a metre (THROWN_M), so a saved one that far is damaged.
-        let thrown = b.position.iter().any(|p| p.length() > THROWN_M);
+        // No run reaches a kilometre (a head off the canal stops it at a
+        // metre, THROWN_M, and no push carries a trunk that far): a saved
+        // body there is a slip of exponent.
+        let thrown = b.position.iter().any(|p| p.length() > 1e3);
         if state.step > end_step || b.first_not_finite().is_some() || thrown {
             return Err(LabourError::Checkpoint(format!(
                 "the saved state is not one its scenario can reach (its step count puts it at t = \
-                 {reached_s:.3e} s, the scenario ends at {} s; or a pose is not finite, or a metre or \
-                 more from the pelvis): the checkpoint was edited or damaged: run the scenario again \
-                 from the start",
+                 {reached_s:.3e} s, the scenario ends at {} s; or a pose is not finite, or beyond a \
+                 kilometre of the pelvis): the checkpoint was edited or damaged: run the scenario \
+                 again from the start",
                 scene.scenario.numerics.end_time_s
             )));
         }
@@ -382,9 +384,10 @@ impl<'a> Simulation<'a> {
         })
     }
 
-    /// The simulated time as reported (samples, events, errors), so 11040
-    /// steps of 0.5 ms read 5.52 s and not 5.5200000000000005. The forces
-    /// read the unrounded clock.
+    /// The simulated time as reported (samples, frames, the record), so
+    /// 11040 steps of 0.5 ms read 5.52 s and not 5.5200000000000005. The
+    /// forces read the unrounded clock, and so do the step's errors, which
+    /// print it to the millisecond.
     pub fn time_s(&self) -> f64 {
         carus_fem::solver::reported_time_s(self.clock_s())
     }

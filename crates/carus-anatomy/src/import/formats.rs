@@ -488,12 +488,20 @@ pub struct NamedPart {
 /// checked first and named.
 fn parse_gltf(path: &Path, bytes: &[u8]) -> Result<gltf::Gltf, ImportError> {
     let unchecked = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| {
-        // A GLB shorter than its header says reads as "could not completely read the object".
-        let glb_cut_short = bytes.starts_with(b"glTF") && matches!(e, gltf::Error::Binary(_) | gltf::Error::Io(_));
-        match glb_cut_short {
-            true => format_error(path, "glTF", format!("the GLB ends before the length its header declares (a truncated copy, or a wrong length field: {e})")),
-            false => format_error(path, "glTF", e),
-        }
+        use gltf::binary::Error as Glb;
+        let said = match &e {
+            // Otherwise "could not completely read the object".
+            gltf::Error::Binary(Glb::Length { .. } | Glb::ChunkLength { .. } | Glb::Io(_)) | gltf::Error::Io(_)
+                if bytes.starts_with(b"glTF") =>
+            {
+                format!("the GLB ends before the length its header declares (a truncated copy, or a wrong length field: {e})")
+            }
+            gltf::Error::Binary(Glb::Version(v)) => {
+                format!("it is binary glTF version {v}, and Carus reads glTF 2.0; export it as glTF 2.0 (.glb or .gltf)")
+            }
+            _ => e.to_string(),
+        };
+        format_error(path, "glTF", said)
     })?;
     let root = unchecked.document.as_json();
     if !root.asset.version.starts_with("2.") {

@@ -321,6 +321,10 @@ fn gltf_cycles_and_accessors_outside_their_buffers_are_named() {
     let whole = glb("");
     let e = parse_gltf_parts(Path::new("cut.glb"), &whole[..whole.len() - 10]).unwrap_err().to_string();
     assert!(e.contains("cut.glb") && e.contains("the GLB ends before the length its header declares"), "{e}");
+    let mut old_binary = whole.clone();
+    old_binary[4..8].copy_from_slice(&1u32.to_le_bytes());
+    let e = parse_gltf_parts(Path::new("old.glb"), &old_binary).unwrap_err().to_string();
+    assert!(e.contains("it is binary glTF version 1, and Carus reads glTF 2.0"), "{e}");
     // Accessors of the wrong type were read as something else.
     let e = err(good.replacen(r#""type": "VEC3""#, r#""type": "VEC2""#, 1));
     assert!(e.contains("accessor 0 (POSITION of primitive 0 of mesh 0) is a VEC2 of FLOAT") && e.contains("must be a VEC3 of FLOAT"), "{e}");

@@ -207,10 +207,10 @@ pub(super) fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result
             // Stopped (Ctrl-C, a signal): what follows is the labour so far.
             (None, false) => Some(format!(
                 "The run was stopped at t = {:.2} s, before its end at {} s: this page shows the labour \
-                 so far, not its outcome. Go on with: carus run --resume {}",
+                 so far, not its outcome. Go on with: {}",
                 summary.simulated_s,
                 record.scenario.numerics.end_time_s,
-                out_dir.display()
+                resume_command(out_dir)
             )),
             (None, true) => None,
         },
@@ -300,10 +300,6 @@ fn report_scene_with_forces(
     Ok(pictured)
 }
 
-/// What pushed the head down the canal at each recorded instant: each
-/// source's force on the head along the pelvic axis's tangent at the head
-/// (the report's plot). None for a run with a trunk recorded before the
-/// neck's force was.
 /// What turned the head about the pelvic axis at each recorded instant,
 /// the guide's share included where the head was moved by one.
 fn head_axial_moments(record: &RunRecord, scene: &Scene) -> Vec<carus_report::AxialMomentSample> {
@@ -326,6 +322,10 @@ fn head_axial_moments(record: &RunRecord, scene: &Scene) -> Vec<carus_report::Ax
         .collect()
 }
 
+/// What pushed the head down the canal at each recorded instant: each
+/// source's force on the head along the pelvic axis's tangent at the head
+/// (the report's plot). None for a run with a trunk recorded before the
+/// neck's force was.
 fn head_canal_forces(record: &RunRecord, scene: &Scene) -> Vec<carus_report::CanalForceSample> {
     use carus_analysis::ContactSite;
     use carus_labour::loads::{down_the_canal, Body};
@@ -605,6 +605,20 @@ pub(super) fn go_on_into(scenario: &Scenario, dir: &Path, stop: &Arc<AtomicBool>
     Ok(record)
 }
 
+/// The command that goes on with the stopped run in `dir`: a run of a
+/// sweep or sanity check goes on with its folder's, which also rewrites
+/// the tables.
+fn resume_command(dir: &Path) -> String {
+    let parent = dir.parent().filter(|p| !p.as_os_str().is_empty());
+    let command = parent.and_then(|p| {
+        [("carus sweep", super::sweep::PLAN_FILE), ("carus sanity", super::sanity::PLAN_FILE)]
+            .into_iter()
+            .find(|(_, plan)| p.join(plan).is_file())
+            .map(|(command, _)| format!("{command} --resume {}", p.display()))
+    });
+    command.unwrap_or_else(|| format!("carus run --resume {}", dir.display()))
+}
+
 pub(super) fn json_summary(record: &RunRecord, out_dir: &Path) -> serde_json::Value {
     json!({
         "outcome": record.summary.outcome,
@@ -795,6 +809,21 @@ mod tests {
         let finished = coarse_record(0.2);
         write_report(&finished, dir.path()).unwrap();
         assert!(!std::fs::read_to_string(dir.path().join("report.html")).unwrap().contains("id=\"notice\""));
+    }
+
+    /// A stopped run of a sweep or sanity check goes on with its folder's
+    /// command, which also rewrites the tables; a plain run with its own.
+    #[test]
+    fn a_stopped_run_goes_on_with_the_command_that_made_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let run = dir.path().join("01-x");
+        std::fs::create_dir(&run).unwrap();
+        assert_eq!(resume_command(&run), format!("carus run --resume {}", run.display()));
+        for (plan, command) in [(super::super::sweep::PLAN_FILE, "carus sweep"), (super::super::sanity::PLAN_FILE, "carus sanity")] {
+            std::fs::write(dir.path().join(plan), "{}").unwrap();
+            assert_eq!(resume_command(&run), format!("{command} --resume {}", dir.path().display()));
+            std::fs::remove_file(dir.path().join(plan)).unwrap();
+        }
     }
 
     /// The report's pictures carry the forces at each key moment the run

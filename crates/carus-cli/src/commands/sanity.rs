@@ -55,7 +55,7 @@ struct Judged {
 }
 
 /// The changes the cases run with, kept in their folder for `--resume`.
-const PLAN_FILE: &str = "sanity_plan.json";
+pub(super) const PLAN_FILE: &str = "sanity_plan.json";
 
 #[derive(serde::Serialize, serde::Deserialize)]
 struct SanityPlan {

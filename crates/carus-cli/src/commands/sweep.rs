@@ -185,14 +185,15 @@ struct SweepPlan {
     one_at_a_time: bool,
 }
 
-const PLAN_FILE: &str = "sweep_plan.json";
+pub(super) const PLAN_FILE: &str = "sweep_plan.json";
 
 pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
     let (plan, base, out_dir) = match &args.resume {
         Some(dir) => {
             let plan = read_plan(dir)?;
-            let base = Scenario::parse(&dir.join(PLAN_FILE), &plan.scenario_toml, plan.base_dir.clone())
-                .with_context(|| damaged_plan(dir))?;
+            // Lines count in the kept text, not in the JSON file.
+            let kept = PathBuf::from(format!("{} (the scenario it keeps)", dir.join(PLAN_FILE).display()));
+            let base = Scenario::parse(&kept, &plan.scenario_toml, plan.base_dir.clone()).with_context(|| damaged_plan(dir))?;
             (plan, base, Some(dir.clone()))
         }
         None => {
@@ -206,22 +207,24 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
             (plan, base, None)
         }
     };
+    // What a resumed sweep reads from its plan, a damaged plan is to blame for.
+    let from_plan = |e: anyhow::Error| match &args.resume {
+        Some(dir) => e.context(damaged_plan(dir)),
+        None => e,
+    };
     let settings = plan
         .set
         .iter()
         .map(|s| parse_setting(s))
-        .collect::<anyhow::Result<Vec<_>>>();
-    let settings = match &args.resume {
-        Some(dir) => settings.with_context(|| damaged_plan(dir))?,
-        None => settings?,
-    };
+        .collect::<anyhow::Result<Vec<_>>>()
+        .map_err(from_plan)?;
     for (i, setting) in settings.iter().enumerate() {
         if settings[..i].iter().any(|earlier| earlier.key == setting.key) {
-            bail!(
+            return Err(from_plan(anyhow::anyhow!(
                 "--set {} is given twice; list all its values in one --set, e.g. --set {}=1,2",
                 setting.key,
                 setting.key
-            );
+            )));
         }
     }
     let combinations = if plan.one_at_a_time {
@@ -237,7 +240,8 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
     let scenarios = combinations
         .iter()
         .map(|c| base.with_settings(c))
-        .collect::<Result<Vec<Scenario>, _>>()?;
+        .collect::<Result<Vec<Scenario>, _>>()
+        .map_err(|e| from_plan(e.into()))?;
     check_variants_start(&scenarios, &combinations)?;
     // The pool is made first: a bad --jobs leaves no out dir behind.
     let (pool, jobs) = labour_pool(args.jobs, scenarios.len())?;
@@ -389,7 +393,7 @@ fn check_runs_match_plan(out_dir: &Path, scenarios: &[Scenario], dirs: &[PathBuf
     };
     for (scenario, dir) in scenarios.iter().zip(dirs) {
         let path = dir.join(carus_labour::output::SCENARIO_FILE);
-        let Ok(text) = std::fs::read_to_string(&path) else {
+        let Ok(text) = carus_io::input::read_text(&path) else {
             continue;
         };
         let ran = Scenario::parse(&path, &text, scenario.base_dir.clone())?;

@@ -133,7 +133,11 @@ impl RunShown {
         if run_ending(dir).is_some_and(|e| e.simulated_s >= checkpoint_s) {
             return RunShown::from_record(dir);
         }
-        let (floors, unreadable) = carus_labour::floor_frames_at(dir, &checkpoint.frame_times);
+        // A run without a floor writes no floor frames at its frame times.
+        let (floors, unreadable) = match checkpoint.state.floor {
+            Some(_) => carus_labour::floor_frames_at(dir, &checkpoint.frame_times),
+            None => Default::default(),
+        };
         warn_unreadable_floor_frames(&unreadable);
         Ok(RunShown {
             scenario: checkpoint.scenario(dir)?,

@@ -156,7 +156,8 @@ pub enum PrecisionSpec {
     F32,
 }
 
-/// The time step: seconds, or `"auto"` = 0.9 x the critical step.
+/// The time step: seconds, or `"auto"`: at most 0.9 x the critical step, in
+/// whole steps to the end time.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum TimeStep {
     Auto,
