@@ -66,9 +66,7 @@ impl Checkpoint {
     /// scenario to correct.
     pub fn scenario(&self, dir: &Path) -> Result<crate::Scenario, LabourError> {
         let path = dir.join(CHECKPOINT_FILE);
-        // Lines count in the kept text, not in the JSON file.
-        let kept = PathBuf::from(format!("{} (the scenario it keeps)", path.display()));
-        crate::Scenario::parse(&kept, &self.scenario_toml, self.base_dir.clone()).map_err(|e| match e {
+        crate::Scenario::parse_kept(&path, &self.scenario_toml, self.base_dir.clone()).map_err(|e| match e {
             crate::ScenarioError::Syntax { .. } | crate::ScenarioError::Value { .. } => output_error(
                 &path,
                 format!("damaged after carus wrote it ({e}); run the scenario again from the start"),

@@ -887,17 +887,24 @@ impl Scenario {
         Scenario::parse(path, &text, base)
     }
 
+    /// Parses and checks the scenario text that the file `holder` keeps (a
+    /// checkpoint, a sweep plan): errors name it as that text, whose lines
+    /// they count, not the holder's.
+    pub fn parse_kept(holder: &Path, text: &str, base_dir: PathBuf) -> Result<Scenario, ScenarioError> {
+        Scenario::parse(&PathBuf::from(format!("{} (the scenario it keeps)", holder.display())), text, base_dir)
+    }
+
     /// Parses and checks scenario text; `path` names it in errors.
     pub fn parse(path: &Path, text: &str, base_dir: PathBuf) -> Result<Scenario, ScenarioError> {
         let deserializer = toml::Deserializer::parse(text).map_err(|e| toml_syntax(path, text, &e))?;
         let mut scenario: Scenario = serde_path_to_error::deserialize(deserializer)
             .map_err(|e| syntax(path, text, e.path().to_string(), e.inner()))?;
         scenario.base_dir = base_dir;
-        scenario.check(path).map_err(|e| match e {
-            ScenarioError::Value { path, line: None, key, value, problem, hint } => {
-                ScenarioError::Value { line: line_of_key(text, &key), path, key, value, problem, hint }
+        scenario.check(path).map_err(|mut e| {
+            if let ScenarioError::Value { line, key, .. } = &mut e {
+                *line = line_of_key(text, key);
             }
-            other => other,
+            e
         })?;
         check_pelvis_import(path, text, &scenario.pelvis, &scenario.base_dir)?;
         Ok(scenario)
@@ -949,10 +956,12 @@ impl Scenario {
                 problem: format!("{key}{message}"),
                 hint,
             },
-            ScenarioError::Value { line: Some(_), path, key, value, problem, hint } => {
-                ScenarioError::Value { line: None, path, key, value, problem, hint }
+            mut other => {
+                if let ScenarioError::Value { line, .. } = &mut other {
+                    *line = None;
+                }
+                other
             }
-            other => other,
         })
     }
 

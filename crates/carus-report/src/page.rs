@@ -613,9 +613,18 @@ fn all_finite(what: &'static str, columns: &[&[f64]]) -> Result<(), ReportError>
     }
 }
 
-/// The imposed and hybrid modes' guide in the plots that draw it, and its key.
-const GUIDE_COLOUR: RGBColor = RGBColor(217, 26, 217);
-const GUIDE_KEY: &str = " <span style=\"color:#d91ad9\">&#9632; the guide (not the physics)</span>";
+/// Adds the imposed and hybrid modes' guide to a plot's `curves` where it
+/// acted (a forward run has none), and returns its key for the caption.
+fn guide_curve<'a>(guide: &'a [f64], curves: &mut Vec<Curve<'a>>) -> &'static str {
+    if guide.iter().all(|&g| g == 0.0) {
+        return "";
+    }
+    curves.push(Curve {
+        values: guide,
+        colour: RGBColor(217, 26, 217),
+    });
+    " <span style=\"color:#d91ad9\">&#9632; the guide (not the physics)</span>"
+}
 
 /// What spun the head about the pelvic axis: bone, floor, neck and trunk, the
 /// causes a reader checks when internal rotation does or does not happen.
@@ -668,17 +677,7 @@ fn axial_moment_plot(
             colour: trunk_colour,
         },
     ];
-    let guided = guide.iter().any(|&g| g != 0.0);
-    if guided {
-        curves.push(Curve {
-            values: &guide,
-            colour: GUIDE_COLOUR,
-        });
-    }
-    let guide_key = match guided {
-        true => GUIDE_KEY,
-        false => "",
-    };
+    let guide_key = guide_curve(&guide, &mut curves);
     let spec = axis.spec("axial-moments", "moment (N m)", &time_s, curves, vec![0.0]);
     let svg = plots::svg(&spec)?;
     let _ = write!(
@@ -720,15 +719,8 @@ fn canal_force_plot(w: &mut String, input: &ReportInput, axis: &TimeAxis) -> Res
         curve(&bone, RGBColor(200, 82, 0)),
         curve(&floor, RGBColor(68, 1, 84)),
     ];
-    let guided = guide.iter().any(|&g| g != 0.0);
-    if guided {
-        curves.push(curve(&guide, GUIDE_COLOUR));
-    }
+    let guide_key = guide_curve(&guide, &mut curves);
     let svg = plots::svg(&axis.spec("canal-forces", "force (N)", &time_s, curves, vec![0.0]))?;
-    let guide_key = match guided {
-        true => GUIDE_KEY,
-        false => "",
-    };
     let _ = write!(
         w,
         "<figure class=\"plot\" id=\"plot-canal-forces\"><figcaption><b>What pushes the head \

@@ -191,9 +191,8 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
     let (plan, base, out_dir) = match &args.resume {
         Some(dir) => {
             let plan = read_plan(dir)?;
-            // Lines count in the kept text, not in the JSON file.
-            let kept = PathBuf::from(format!("{} (the scenario it keeps)", dir.join(PLAN_FILE).display()));
-            let base = Scenario::parse(&kept, &plan.scenario_toml, plan.base_dir.clone()).with_context(|| damaged_plan(dir))?;
+            let base = Scenario::parse_kept(&dir.join(PLAN_FILE), &plan.scenario_toml, plan.base_dir.clone())
+                .with_context(|| damaged_plan(dir))?;
             (plan, base, Some(dir.clone()))
         }
         None => {
