@@ -145,6 +145,7 @@ impl<'a> Parser<'a> {
             grouped,
             ..
         } = self;
+        note_shared_names(&mut builder, &physical_names);
         for (dim, tag, id, nodes) in grouped {
             let name = physical_names
                 .get(&(dim, tag))
@@ -454,6 +455,26 @@ impl<'a> Parser<'a> {
     }
 }
 
+/// Gmsh itself gives one name one tag, so two tags of one dimension with
+/// one name come from an edited file; their groups are joined under the
+/// name, and the note says so in case two different regions were meant.
+fn note_shared_names(builder: &mut MeshBuilder, physical_names: &HashMap<(u8, i64), String>) {
+    let mut tags_by_name: HashMap<(u8, &str), Vec<i64>> = HashMap::new();
+    for ((dim, tag), name) in physical_names {
+        tags_by_name.entry((*dim, name)).or_default().push(*tag);
+    }
+    let mut shared: Vec<_> = tags_by_name.into_iter().filter(|(_, tags)| tags.len() > 1).collect();
+    shared.sort();
+    for ((dim, name), mut tags) in shared {
+        tags.sort_unstable();
+        let tags: Vec<String> = tags.iter().map(i64::to_string).collect();
+        builder.note(format!(
+            "the {dim}-D physical groups {} are all named \"{name}\": they are read as one group; rename them in Gmsh if they are different regions",
+            tags.join(", ")
+        ));
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -489,6 +510,21 @@ mod tests {
         }
         // The unnamed physical point group 7 keeps its number as its name.
         assert_eq!(mesh.node_sets["7"].len(), 1);
+    }
+
+    #[test]
+    fn groups_sharing_a_name_are_joined_with_a_note() {
+        // Tag 1 (the two hexahedra) and a new tag 4 both named "tissue".
+        let text = CUBE_V22
+            .replacen("$PhysicalNames\n2\n", "$PhysicalNames\n3\n3 4 \"tissue\"\n", 1)
+            .replacen("2 5 2 1 1 2 3", "2 5 2 4 1 2 3", 1);
+        let file = read("shared.msh", &text).unwrap();
+        assert_eq!(file.mesh.element_sets["tissue"], vec![0, 1]);
+        let note = file.notes.iter().find(|n| n.contains("physical groups")).expect("a note");
+        assert!(note.contains("3-D physical groups 1, 4"), "{note}");
+        assert!(note.contains("\"tissue\""), "{note}");
+        // One name per tag, as Gmsh writes it: no note.
+        assert!(read("a.msh", CUBE_V22).unwrap().notes.iter().all(|n| !n.contains("physical groups")));
     }
 
     #[test]

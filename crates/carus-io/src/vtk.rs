@@ -22,7 +22,9 @@ use vtkio::xml::Compressor;
 
 use crate::builder::{MeshBuilder, MeshFile};
 use crate::error::{ReadError, WriteError};
-use crate::vtk_compat::{legacy_type_names, raw_appended_to_base64};
+use crate::vtk_compat::{
+    declared_arrays, legacy_type_names, raw_appended_to_base64, without_component_ranges,
+};
 
 /// Reads a legacy `.vtk` or XML `.vtu` unstructured grid.
 pub fn read_vtk(path: &Path) -> Result<MeshFile, ReadError> {
@@ -160,7 +162,12 @@ fn load_unstructured(path: &Path) -> Result<UnstructuredGridPiece, ReadError> {
     };
     let piece_count = pieces.len();
     match pieces.into_iter().next() {
-        Some(Piece::Inline(piece)) if piece_count == 1 => Ok(*piece),
+        Some(Piece::Inline(piece)) if piece_count == 1 => {
+            if extension == "vtu" {
+                check_nothing_dropped(path, &bytes, &piece)?;
+            }
+            Ok(*piece)
+        }
         Some(Piece::Inline(_)) => Err(content_error(
             path,
             format!("the grid has {piece_count} pieces"),
@@ -172,6 +179,45 @@ fn load_unstructured(path: &Path) -> Result<UnstructuredGridPiece, ReadError> {
             "save it as one serial .vtu file (ParaView: Merge Blocks, then Save Data)",
         )),
     }
+}
+
+/// Every point and cell data array the `.vtu` declares must have been
+/// read: vtkio drops one it cannot read, and a set array lost that way
+/// would read as a set the mesh does not have.
+fn check_nothing_dropped(
+    path: &Path,
+    bytes: &[u8],
+    piece: &UnstructuredGridPiece,
+) -> Result<(), ReadError> {
+    let [point, cell] = declared_arrays(bytes);
+    let kept = |attributes: &[Attribute], name: &str| {
+        attributes.iter().any(|a| match a {
+            Attribute::DataArray(array) => array.name == name,
+            Attribute::Field { data_array, .. } => data_array.iter().any(|f| f.name == name),
+        })
+    };
+    let sections = [
+        ("point", "points", piece.num_points(), point, &piece.data.point),
+        ("cell", "cells", piece.cells.types.len(), cell, &piece.data.cell),
+    ];
+    for (kind, counted, count, declared, attributes) in sections {
+        let Some(lost) = declared.iter().find(|a| !kept(attributes, &a.name)) else {
+            continue;
+        };
+        let expected = count * lost.components;
+        let problem = match lost.ascii_values {
+            Some(found) if found != expected => format!(
+                "the {kind} data array `{}` holds {found} values for {count} {counted} ({expected} expected with {} per {kind})",
+                lost.name, lost.components
+            ),
+            _ => format!(
+                "the {kind} data array `{}` cannot be read: its data is damaged or does not hold {} values per {kind} for the {count} {counted}",
+                lost.name, lost.components
+            ),
+        };
+        return Err(content_error(path, problem, RESAVE_FIX));
+    }
+    Ok(())
 }
 
 fn data_set_name(data: &DataSet) -> &'static str {
@@ -547,6 +593,11 @@ pub fn write_vtu(path: &Path, mesh: &Mesh, frame: &FrameFields) -> Result<(), Wr
         .map_err(|e| vtk_error(e.into()))?;
     let mut bytes = Vec::new();
     xml.write(&mut bytes).map_err(|e| vtk_error(e.into()))?;
+    // vtkio writes text (base64 inline), so this is always UTF-8.
+    let bytes = match String::from_utf8(bytes) {
+        Ok(text) => without_component_ranges(text).into_bytes(),
+        Err(not_text) => not_text.into_bytes(),
+    };
     let io_error = |cause| WriteError::Io {
         path: path.to_path_buf(),
         cause,
@@ -613,6 +664,27 @@ mod tests {
             std::fs::write(&path, LEGACY_VTK.replace(from, to)).unwrap();
             let e = read_vtk(&path).err().expect("refused").to_string();
             assert!(e.contains("short_sets.vtk") && e.contains(expected) && e.contains("save it again"), "{e}");
+        }
+    }
+
+    /// vtkio drops a data array of the wrong length without a word; the
+    /// reader names it instead of reporting a set the mesh lacks.
+    #[test]
+    fn a_dropped_vtu_array_is_the_files_error() {
+        let (_dir, path) = temp("dropped.vtu");
+        for (from, to, expected) in [
+            (">1 1 0 0<", ">1 1 0<", "the point data array `fixed` holds 3 values for 4 points (4 expected with 1 per point)"),
+            (">3 5<", ">3 5 7<", "the cell data array `region` holds 3 values for 2 cells"),
+            (
+                r#"<DataArray type="Int32" Name="region" format="ascii">3 5</DataArray>"#,
+                r#"<DataArray type="Int32" Name="region" format="binary">!!!!</DataArray>"#,
+                "the cell data array `region` cannot be read: its data is damaged",
+            ),
+        ] {
+            assert!(ASCII_VTU.contains(from));
+            std::fs::write(&path, ASCII_VTU.replace(from, to)).unwrap();
+            let e = read_vtk(&path).err().expect("refused").to_string();
+            assert!(e.contains("dropped.vtu") && e.contains(expected) && e.contains("save it again"), "{e}");
         }
     }
 
@@ -756,6 +828,37 @@ mod tests {
         for cut in (0..bytes.len() - 30).step_by(stride) {
             std::fs::write(&path, &bytes[..cut]).unwrap();
             assert!(read_vtk(&path).is_err(), "cut at {cut} accepted");
+        }
+    }
+
+    /// An offset or a byte count out by one byte is the damaged file named,
+    /// not shifted numbers read as a mesh.
+    #[test]
+    fn appended_data_out_by_a_byte_is_an_error() {
+        let (_dir, path) = temp("appended_shifted.vtu");
+        for compress in [false, true] {
+            let bytes = appended_raw_vtu(compress);
+            let text_end = bytes.windows(4).position(|w| w == b"   _").unwrap();
+            let head = String::from_utf8(bytes[..text_end].to_vec()).unwrap();
+            // The second array's offset one byte either way.
+            let at = head.match_indices("offset=\"").nth(1).unwrap().0 + "offset=\"".len();
+            let len = head[at..].find('"').unwrap();
+            let offset: usize = head[at..at + len].parse().unwrap();
+            for moved in [offset - 1, offset + 1] {
+                let mut shifted = format!("{}{moved}{}", &head[..at], &head[at + len..]).into_bytes();
+                shifted.extend_from_slice(&bytes[text_end..]);
+                std::fs::write(&path, &shifted).unwrap();
+                let e = read_vtk(&path).err().expect("refused").to_string();
+                assert!(e.contains("appended_shifted.vtu") && e.contains("is wrong"), "{e}");
+            }
+            // The first array's byte count (its last header field) one short.
+            let data = text_end + 4;
+            let field = if compress { data + 24 } else { data };
+            let mut short = bytes.clone();
+            short[field] -= 1;
+            std::fs::write(&path, &short).unwrap();
+            let e = read_vtk(&path).err().expect("refused").to_string();
+            assert!(e.contains("byte count is wrong"), "{e}");
         }
     }
 

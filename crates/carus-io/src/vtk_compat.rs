@@ -78,7 +78,7 @@ pub(crate) fn raw_appended_to_base64(bytes: &[u8]) -> Result<Cow<'_, [u8]>, Stri
     unique.dedup();
     let mut encoded = String::new();
     let mut new_offsets = Vec::with_capacity(unique.len());
-    for &offset in &unique {
+    for (k, &offset) in unique.iter().enumerate() {
         new_offsets.push(encoded.len());
         let overflow = || format!("the array at appended offset {offset} is larger than the file");
         if compressed {
@@ -99,6 +99,7 @@ pub(crate) fn raw_appended_to_base64(bytes: &[u8]) -> Result<Cow<'_, [u8]>, Stri
                 .ok_or_else(overflow)?;
             encoded.push_str(&STANDARD.encode(header));
             encoded.push_str(&STANDARD.encode(body));
+            check_tiling(data, &unique, k, body_start + payload)?;
         } else {
             let size = read_header(offset)?;
             let end = (offset + header_bytes)
@@ -106,6 +107,7 @@ pub(crate) fn raw_appended_to_base64(bytes: &[u8]) -> Result<Cow<'_, [u8]>, Stri
                 .ok_or_else(overflow)?;
             let block = data.get(offset..end).ok_or_else(overflow)?;
             encoded.push_str(&STANDARD.encode(block));
+            check_tiling(data, &unique, k, end)?;
         }
     }
     // Rewrite the offsets in order of appearance.
@@ -126,6 +128,120 @@ pub(crate) fn raw_appended_to_base64(bytes: &[u8]) -> Result<Cow<'_, [u8]>, Stri
     text.push_str(&encoded);
     text.push_str("</AppendedData></VTKFile>\n");
     Ok(Cow::Owned(text.into_bytes()))
+}
+
+/// Writers lay the arrays end to end, so array `k` of the appended data
+/// must end where the next begins (or, the last, where the data ends): an
+/// offset or byte count out by even one byte would otherwise be read as
+/// shifted numbers, a mesh that looks inverted rather than damaged.
+fn check_tiling(data: &[u8], offsets: &[usize], k: usize, end: usize) -> Result<(), String> {
+    let offset = offsets[k];
+    match offsets.get(k + 1) {
+        Some(&next) if next != end => Err(format!(
+            "the array at appended offset {offset} ends at byte {end}, but the next array begins at byte {next}: an offset or an array's byte count is wrong"
+        )),
+        None if !data[end..].iter().all(u8::is_ascii_whitespace) => Err(format!(
+            "the last array (appended offset {offset}) ends at byte {end}, {} bytes before the end of the appended data: its byte count is wrong",
+            data.len() - end
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// The `.vtu` text vtkio wrote, without `RangeMin`/`RangeMax` on arrays
+/// of more than one component: vtkio writes the range of all their
+/// components, where VTK reads these as the range of the magnitude (never
+/// negative); left out, VTK computes the range itself.
+pub(crate) fn without_component_ranges(xml: String) -> String {
+    let mut out = String::with_capacity(xml.len());
+    let mut rest = xml.as_str();
+    while let Some(at) = rest.find("<DataArray") {
+        let tag_len = rest[at..].find('>').map_or(rest.len() - at, |e| e + 1);
+        let tag = &rest[at..at + tag_len];
+        out.push_str(&rest[..at]);
+        let components: usize = attribute(tag.as_bytes(), "NumberOfComponents")
+            .and_then(|c| c.trim().parse().ok())
+            .unwrap_or(1);
+        if components > 1 {
+            out.push_str(&without_attribute(&without_attribute(tag, "RangeMin"), "RangeMax"));
+        } else {
+            out.push_str(tag);
+        }
+        rest = &rest[at + tag_len..];
+    }
+    out.push_str(rest);
+    out
+}
+
+/// `tag` without its ` name="..."` attribute.
+fn without_attribute(tag: &str, name: &str) -> String {
+    let pattern = format!(" {name}=\"");
+    match tag.find(&pattern) {
+        Some(start) => {
+            let value_start = start + pattern.len();
+            let end = tag[value_start..].find('"').map_or(tag.len(), |e| value_start + e + 1);
+            format!("{}{}", &tag[..start], &tag[end..])
+        }
+        None => tag.to_string(),
+    }
+}
+
+/// A data array a `.vtu` declares in its `PointData` or `CellData`.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct DeclaredArray {
+    pub name: String,
+    pub components: usize,
+    /// How many numbers its text holds, for an ascii array.
+    pub ascii_values: Option<usize>,
+}
+
+/// The arrays of the first piece's `PointData` and `CellData`, read from
+/// the XML text: vtkio skips an attribute array it cannot read (a wrong
+/// length, undecodable data) without a word, so the caller compares these
+/// with what vtkio kept. Reads only the text before `<AppendedData>`.
+pub(crate) fn declared_arrays(bytes: &[u8]) -> [Vec<DeclaredArray>; 2] {
+    let text_end = find(bytes, b"<AppendedData", 0).unwrap_or(bytes.len());
+    let text = String::from_utf8_lossy(&bytes[..text_end]);
+    ["PointData", "CellData"].map(|section| {
+        let open = format!("<{section}");
+        let Some(start) = text
+            .match_indices(&open)
+            .map(|(at, _)| at)
+            .find(|&at| matches!(text.as_bytes().get(at + open.len()), Some(b'>' | b'/' | b' ' | b'\t' | b'\n' | b'\r')))
+        else {
+            return Vec::new();
+        };
+        let Some(tag_len) = text[start..].find('>') else { return Vec::new() };
+        if text[..start + tag_len].ends_with('/') {
+            return Vec::new();
+        }
+        let close = format!("</{section}>");
+        let end = text[start..].find(&close).map_or(text.len(), |e| start + e);
+        let mut arrays = Vec::new();
+        let mut search = start;
+        while let Some(at) = text[search..end].find("<DataArray") {
+            let tag_start = search + at;
+            let Some(tag_len) = text[tag_start..end].find('>') else { break };
+            let tag = &text[tag_start..tag_start + tag_len];
+            let self_closing = tag.ends_with('/');
+            let body_start = tag_start + tag_len + 1;
+            let body_end = if self_closing {
+                body_start
+            } else {
+                text[body_start..end].find("</DataArray>").map_or(end, |e| body_start + e)
+            };
+            let ascii = attribute(tag.as_bytes(), "format").as_deref() == Some("ascii");
+            arrays.push(DeclaredArray {
+                name: attribute(tag.as_bytes(), "Name").unwrap_or_default(),
+                components: attribute(tag.as_bytes(), "NumberOfComponents")
+                    .and_then(|c| c.trim().parse().ok())
+                    .unwrap_or(1),
+                ascii_values: ascii.then(|| text[body_start..body_end].split_ascii_whitespace().count()),
+            });
+            search = body_end;
+        }
+        arrays
+    })
 }
 
 /// VTK 9 type names and their classic legacy names (as vtkio reads them).
@@ -240,6 +356,32 @@ mod tests {
             legacy_type_names(b"POINTS 3 float\n"),
             Cow::Borrowed(_)
         ));
+    }
+
+    #[test]
+    fn declared_arrays_are_read_from_point_and_cell_data_only() {
+        let text = br#"<VTKFile><Piece><PointData Scalars="t"><DataArray type="Int32" Name="t" format="ascii"> 1 2
+ 3 </DataArray><DataArray type="Float32" Name="v" NumberOfComponents="3" format="appended" offset="0"/></PointData>
+<CellData/><Points><DataArray type="Float32" NumberOfComponents="3" format="ascii">0 0 0</DataArray></Points></Piece>
+<AppendedData encoding="raw">_<PointData><DataArray Name="inside"/></AppendedData></VTKFile>"#;
+        let [point, cell] = declared_arrays(text);
+        assert_eq!(
+            point,
+            vec![
+                DeclaredArray { name: "t".into(), components: 1, ascii_values: Some(3) },
+                DeclaredArray { name: "v".into(), components: 3, ascii_values: None },
+            ]
+        );
+        assert!(cell.is_empty());
+    }
+
+    #[test]
+    fn component_ranges_are_left_out_of_vector_arrays_only() {
+        let xml = r#"<Points><DataArray type="Float64" Name="Points" NumberOfComponents="3" format="binary" RangeMin="-0.13" RangeMax="0.07">AAAA</DataArray></Points><DataArray type="Float64" Name="j" format="binary" RangeMin="1" RangeMax="2">"#;
+        assert_eq!(
+            without_component_ranges(xml.to_string()),
+            r#"<Points><DataArray type="Float64" Name="Points" NumberOfComponents="3" format="binary">AAAA</DataArray></Points><DataArray type="Float64" Name="j" format="binary" RangeMin="1" RangeMax="2">"#
+        );
     }
 
     #[test]
