@@ -1,5 +1,7 @@
 //! CSV histories (a header line, then one row of numbers per record), for
-//! time histories of a solve and, later, pose histories of a labour run.
+//! time histories of a solve and pose histories of a labour run, and a
+//! reader for such tables (through the `csv` crate: quoted cells, CRLF
+//! line ends and a byte-order mark, as spreadsheets write them).
 //! Numbers are written in Rust's shortest exact form, so reading a file
 //! back gives the same `f64` bit for bit.
 
@@ -7,7 +9,7 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-use crate::error::WriteError;
+use crate::error::{ReadError, WriteError};
 
 /// Writes a CSV file row by row; rows must match the header's width.
 pub struct CsvWriter {
@@ -56,20 +58,32 @@ impl CsvWriter {
     /// that does not bend) and is written as an empty cell, which
     /// spreadsheets and data frames read as missing.
     pub fn row(&mut self, values: &[f64]) -> Result<(), WriteError> {
-        if values.len() != self.columns {
-            return Err(WriteError::Shape {
-                path: self.path.clone(),
-                problem: format!(
-                    "a row of {} values under a header of {} columns",
-                    values.len(),
-                    self.columns
-                ),
-            });
+        self.row_with_labels(values, &[])
+    }
+
+    /// Appends one row of numbers followed by text labels (names such as
+    /// `pelvic_floor`, without commas, quotes or line breaks; an empty label
+    /// is a missing value).
+    pub fn row_with_labels(&mut self, values: &[f64], labels: &[&str]) -> Result<(), WriteError> {
+        let shape_error = |problem: String| WriteError::Shape {
+            path: self.path.clone(),
+            problem,
+        };
+        if values.len() + labels.len() != self.columns {
+            return Err(shape_error(format!(
+                "a row of {} values under a header of {} columns",
+                values.len() + labels.len(),
+                self.columns
+            )));
+        }
+        if let Some(bad) = labels.iter().find(|l| l.contains([',', '"', '\n', '\r'])) {
+            return Err(shape_error(format!("label {bad:?} holds a comma, quote or line break")));
         }
         // Debug is the shortest exact form, with an exponent for tiny or huge values.
         let line = values
             .iter()
             .map(|v| if v.is_nan() { String::new() } else { format!("{v:?}") })
+            .chain(labels.iter().map(|l| l.to_string()))
             .collect::<Vec<_>>()
             .join(",");
         self.write_line(&line)
@@ -81,6 +95,115 @@ impl CsvWriter {
         self.out.flush().map_err(|cause| WriteError::Io {
             path: self.path.clone(),
             cause,
+        })
+    }
+}
+
+/// A CSV file read whole: its column names and its data rows, every cell
+/// trimmed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CsvTable {
+    /// The file, for errors.
+    pub path: PathBuf,
+    pub header: Vec<String>,
+    pub rows: Vec<CsvRow>,
+}
+
+/// One data row and the line it starts on (1-based, the header is line 1).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CsvRow {
+    pub line: usize,
+    pub cells: Vec<String>,
+}
+
+impl CsvTable {
+    /// Reads `path` (bounded as every user file is: [`crate::input`]).
+    pub fn read(path: &Path) -> Result<Self, ReadError> {
+        let bytes = crate::input::read_bytes(path).map_err(|cause| ReadError::Io {
+            path: path.to_path_buf(),
+            cause,
+        })?;
+        Self::parse(path, &bytes)
+    }
+
+    /// Parses CSV bytes; `path` only names the file in errors. A row of
+    /// another width than the header is refused at its line; blank lines
+    /// are skipped.
+    pub fn parse(path: &Path, bytes: &[u8]) -> Result<Self, ReadError> {
+        let syntax = |line: usize, problem: String, fix: &str| ReadError::Syntax {
+            path: path.to_path_buf(),
+            line,
+            problem,
+            fix: fix.to_string(),
+        };
+        let mut reader = ::csv::ReaderBuilder::new()
+            .has_headers(false)
+            .flexible(true)
+            .trim(::csv::Trim::All)
+            .from_reader(bytes);
+        let mut header: Option<Vec<String>> = None;
+        let mut rows = Vec::new();
+        for record in reader.records() {
+            let record = record.map_err(|e| {
+                let line = e.position().map_or(0, |p| p.line() as usize);
+                syntax(line, format!("not readable as CSV ({e})"), "save the table as CSV in UTF-8")
+            })?;
+            let line = record.position().map_or(0, |p| p.line() as usize);
+            let cells: Vec<String> = record.iter().map(str::to_string).collect();
+            match &header {
+                None => {
+                    if let Some(empty) = cells.iter().position(String::is_empty) {
+                        return Err(syntax(
+                            line,
+                            format!("column {} of the header has no name", empty + 1),
+                            "give every column a name in the first line",
+                        ));
+                    }
+                    header = Some(cells);
+                }
+                Some(names) => {
+                    if cells.len() != names.len() {
+                        return Err(syntax(
+                            line,
+                            format!("the row has {} cells under a header of {} columns", cells.len(), names.len()),
+                            "give every row one cell per column (an empty cell for a missing value)",
+                        ));
+                    }
+                    rows.push(CsvRow { line, cells });
+                }
+            }
+        }
+        let Some(header) = header else {
+            return Err(ReadError::Content {
+                path: path.to_path_buf(),
+                problem: "the file is empty".into(),
+                fix: "give a header line of column names, then one row per sample".into(),
+            });
+        };
+        Ok(CsvTable {
+            path: path.to_path_buf(),
+            header,
+            rows,
+        })
+    }
+
+    /// The index of the column named `name`.
+    pub fn column(&self, name: &str) -> Option<usize> {
+        self.header.iter().position(|h| h == name)
+    }
+
+    /// The number in `column` of `row`: `None` for an empty cell, an error
+    /// naming the line and the column for anything that is not a number.
+    pub fn number(&self, row: &CsvRow, column: usize) -> Result<Option<f64>, ReadError> {
+        let cell = &row.cells[column];
+        if cell.is_empty() {
+            return Ok(None);
+        }
+        cell.parse::<f64>().map(Some).map_err(|_| ReadError::Syntax {
+            path: self.path.clone(),
+            line: row.line,
+            problem: format!("`{}` = {cell:?} is not a number", self.header[column]),
+            fix: "write a number (a decimal point, not a comma), or leave the cell empty".into(),
         })
     }
 }
@@ -125,6 +248,44 @@ mod tests {
         csv.row(&[1.5, f64::NAN, -0.25]).unwrap();
         csv.flush().unwrap();
         assert_eq!(std::fs::read_to_string(&path).unwrap(), "a,b,c\n1.5,,-0.25\n");
+    }
+
+    #[test]
+    fn a_written_table_reads_back_with_its_labels() {
+        let (_dir, path) = temp("labelled.csv");
+        let mut csv = CsvWriter::create(&path, &["time_s", "force_n", "site"]).unwrap();
+        csv.row_with_labels(&[0.1, f64::NAN], &["pelvic_floor"]).unwrap();
+        csv.row_with_labels(&[0.2, -3.5e-9], &[""]).unwrap();
+        assert!(csv.row_with_labels(&[0.3, 1.0], &["a,b"]).is_err());
+        csv.flush().unwrap();
+        let table = CsvTable::read(&path).unwrap();
+        assert_eq!(table.header, ["time_s", "force_n", "site"]);
+        assert_eq!(table.rows.len(), 2);
+        let force = table.column("force_n").unwrap();
+        assert_eq!(table.number(&table.rows[0], force).unwrap(), None);
+        assert_eq!(table.number(&table.rows[1], force).unwrap(), Some(-3.5e-9));
+        assert_eq!(table.rows[0].cells[2], "pelvic_floor");
+        assert_eq!(table.rows[1].line, 3);
+    }
+
+    /// What spreadsheets write: a byte-order mark, quoted names, CRLF,
+    /// spaces, a blank last line.
+    #[test]
+    fn spreadsheet_csv_is_read_and_bad_cells_are_named() {
+        let text = "\u{feff}\"time_s\", x_mm\r\n0, 1.5\r\n0.5,\r\n\r\n";
+        let table = CsvTable::parse(Path::new("sheet.csv"), text.as_bytes()).unwrap();
+        assert_eq!(table.header, ["time_s", "x_mm"]);
+        assert_eq!(table.number(&table.rows[0], 1).unwrap(), Some(1.5));
+        assert_eq!(table.number(&table.rows[1], 1).unwrap(), None);
+
+        let comma = CsvTable::parse(Path::new("sheet.csv"), b"t,x\n0,1\n1,\"2,5\"\n").unwrap();
+        let e = comma.number(&comma.rows[1], 1).unwrap_err().to_string();
+        assert!(e.starts_with("sheet.csv:3: `x` = \"2,5\" is not a number"), "{e}");
+        let ragged = CsvTable::parse(Path::new("r.csv"), b"t,x\n0,1\n1\n").unwrap_err().to_string();
+        assert!(ragged.starts_with("r.csv:3: the row has 1 cells under a header of 2 columns"), "{ragged}");
+        let unnamed = CsvTable::parse(Path::new("u.csv"), b"t,,x\n").unwrap_err().to_string();
+        assert!(unnamed.contains("column 2 of the header has no name"), "{unnamed}");
+        assert!(CsvTable::parse(Path::new("e.csv"), b"").is_err());
     }
 
     #[test]

@@ -3,7 +3,8 @@
 
 use std::path::PathBuf;
 
-/// A mesh file could not be turned into a [`carus_fem::Mesh`].
+/// A file could not be read: a mesh that cannot become a
+/// [`carus_fem::Mesh`], or a table.
 #[derive(Debug, thiserror::Error)]
 pub enum ReadError {
     /// The file could not be opened or read.

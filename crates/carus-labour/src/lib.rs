@@ -52,6 +52,9 @@ pub enum LabourError {
     },
     #[error("pose history: {0}")]
     History(#[from] carus_analysis::HistoryError),
+    /// A table given as a pose history could not be read.
+    #[error(transparent)]
+    Table(#[from] carus_io::ReadError),
     #[error("{path}: {message}")]
     Output {
         path: std::path::PathBuf,

@@ -293,6 +293,8 @@ pub fn write_history_csv(
         "neck_fx_n",
         "neck_fy_n",
         "neck_fz_n",
+        DOMINANT_CONTACT_COLUMN,
+        DOMINANT_PART_COLUMN,
     ];
     header.extend_from_slice(&poses);
     let mut csv = CsvWriter::create(path, &header).map_err(|e| output_error(path, e))?;
@@ -338,9 +340,222 @@ pub fn write_history_csv(
             Some(f) => values.extend(f.to_array()),
             None => values.extend([f64::NAN; 3]),
         }
-        csv.row(&values).map_err(|e| output_error(path, e))?;
+        let labels = [
+            sample.dominant_contact.map_or("", |c| c.name()),
+            sample.dominant_part.map_or("", |p| p.name()),
+        ];
+        csv.row_with_labels(&values, &labels).map_err(|e| output_error(path, e))?;
     }
     csv.flush().map_err(|e| output_error(path, e))
+}
+
+/// The part of the canal that bore the most force at a sample, and the
+/// fetal body it bore on: the last two columns of pose_history.csv.
+const DOMINANT_CONTACT_COLUMN: &str = "dominant_contact";
+const DOMINANT_PART_COLUMN: &str = "dominant_part";
+
+/// How far a quaternion read from a table may be from unit length and
+/// still be taken (normalised) as a rotation: a table of 4-6 digits.
+const TABLE_QUATERNION_TOLERANCE: f64 = 1e-3;
+
+/// A pose history read from a table in pose_history.csv's columns, for
+/// the anatomy of `scene` (the head, trunk and canal the poses are of).
+///
+/// Read: `time_s`; the head's pose, `head_x_m`, `head_y_m`, `head_z_m`
+/// (or `_mm`) and `head_qx`..`head_qw`; the trunk's in `trunk_` columns
+/// when the table has them (then every row needs it and so does the
+/// anatomy); the forces `expulsion_`, `bone_` and `floor_` `fx_n`..`fz_n`
+/// when present (zero where absent or empty); `dominant_contact` and
+/// `dominant_part` when present. Every other column is ignored: the
+/// detector derives station, theta and phi itself.
+pub fn read_history_csv(path: &Path, scene: &crate::Scene) -> Result<PoseHistory, LabourError> {
+    let table = carus_io::CsvTable::read(path)?;
+    let content = |problem: String, fix: &str| -> LabourError {
+        carus_io::ReadError::Content {
+            path: path.to_path_buf(),
+            problem,
+            fix: fix.to_string(),
+        }
+        .into()
+    };
+    let at = |line: usize, problem: String, fix: &str| -> LabourError {
+        carus_io::ReadError::Syntax {
+            path: path.to_path_buf(),
+            line,
+            problem,
+            fix: fix.to_string(),
+        }
+        .into()
+    };
+    // A position column in metres, or in millimetres scaled to metres.
+    let position = |name: &str| -> Option<(usize, f64)> {
+        table
+            .column(&format!("{name}_m"))
+            .map(|c| (c, 1.0))
+            .or_else(|| table.column(&format!("{name}_mm")).map(|c| (c, 1e-3)))
+    };
+    let pose_columns = |body: &str| -> Result<Option<[(usize, f64); 7]>, LabourError> {
+        let names = ["x", "y", "z", "qx", "qy", "qz", "qw"].map(|a| format!("{body}_{a}"));
+        let found: Vec<Option<(usize, f64)>> = names
+            .iter()
+            .enumerate()
+            .map(|(i, n)| if i < 3 { position(n) } else { table.column(n).map(|c| (c, 1.0)) })
+            .collect();
+        match found.iter().filter(|c| c.is_some()).count() {
+            0 => Ok(None),
+            7 => Ok(Some(std::array::from_fn(|i| found[i].unwrap_or_default()))),
+            _ => {
+                let missing: Vec<String> = names
+                    .iter()
+                    .zip(&found)
+                    .filter(|(_, c)| c.is_none())
+                    .map(|(n, _)| if n.ends_with(['x', 'y', 'z']) && !n.contains("_q") { format!("{n}_m") } else { n.clone() })
+                    .collect();
+                Err(content(
+                    format!("the {body}'s pose lacks the column(s) {}", missing.join(", ")),
+                    "give the position (x, y, z in m, or _mm) and the orientation quaternion (qx, qy, qz, qw) of the pelvis frame",
+                ))
+            }
+        }
+    };
+    let time = table.column("time_s").ok_or_else(|| {
+        content("there is no `time_s` column".into(), "name the time column `time_s`, in seconds")
+    })?;
+    let head = pose_columns("head")?.ok_or_else(|| {
+        content(
+            "there are no head pose columns".into(),
+            "give head_x_m, head_y_m, head_z_m (or _mm) and head_qx, head_qy, head_qz, head_qw: the head's centre-of-mass frame in the pelvis frame (docs/DETECTOR.md)",
+        )
+    })?;
+    let trunk = pose_columns("trunk")?;
+    if trunk.is_some() && scene.trunk_geometry.is_none() {
+        return Err(content(
+            "the table has trunk poses but the anatomy has no trunk".into(),
+            "give an anatomy with `trunk.enabled = true`, or drop the trunk columns",
+        ));
+    }
+    let force_columns = |body: &str| ["fx", "fy", "fz"].map(|a| table.column(&format!("{body}_{a}_n")));
+    let forces = ["expulsion", "bone", "floor"].map(force_columns);
+    let label = |name: &str| table.column(name);
+    let (contact_column, part_column) = (label(DOMINANT_CONTACT_COLUMN), label(DOMINANT_PART_COLUMN));
+
+    let mut samples = Vec::with_capacity(table.rows.len());
+    for row in &table.rows {
+        let number = |column: usize| table.number(row, column);
+        let Some(time_s) = number(time)? else {
+            return Err(at(row.line, "`time_s` is empty".into(), "give every row its time"));
+        };
+        let pose = |columns: &[(usize, f64); 7], body: &str| -> Result<Option<RigidPose>, LabourError> {
+            let mut v = [0.0; 7];
+            let mut empty = 0;
+            for (slot, &(column, scale)) in v.iter_mut().zip(columns) {
+                match number(column)? {
+                    Some(x) => *slot = x * scale,
+                    None => empty += 1,
+                }
+            }
+            match empty {
+                0 => {}
+                7 => return Ok(None),
+                _ => {
+                    return Err(at(
+                        row.line,
+                        format!("the {body}'s pose has {empty} empty cells of 7"),
+                        "give all seven numbers of the pose, or none",
+                    ))
+                }
+            }
+            let q = glam::DQuat::from_xyzw(v[3], v[4], v[5], v[6]);
+            let length = q.length();
+            if !((length - 1.0).abs() <= TABLE_QUATERNION_TOLERANCE) {
+                return Err(at(
+                    row.line,
+                    format!("the {body}'s quaternion (qx, qy, qz, qw) has length {length}, not 1"),
+                    "give the orientation as a unit quaternion, scalar part last",
+                ));
+            }
+            Ok(Some(RigidPose {
+                position_m: DVec3::new(v[0], v[1], v[2]),
+                // A run's own quaternions are kept bit for bit.
+                orientation: if (length - 1.0).abs() > 1e-12 { q.normalize() } else { q },
+            }))
+        };
+        let head_pose = pose(&head, "head")?.ok_or_else(|| {
+            at(row.line, "the head's pose is empty".into(), "give the head's pose at every sample")
+        })?;
+        let trunk_pose = match &trunk {
+            Some(columns) => Some(pose(columns, "trunk")?.ok_or_else(|| {
+                at(
+                    row.line,
+                    "the trunk's pose is empty".into(),
+                    "give the trunk's pose at every sample, or drop the trunk columns",
+                )
+            })?),
+            None => None,
+        };
+        let mut force = [DVec3::ZERO; 3];
+        for (f, columns) in force.iter_mut().zip(&forces) {
+            for (axis, column) in columns.iter().enumerate() {
+                if let Some(column) = column {
+                    f[axis] = number(*column)?.unwrap_or(0.0);
+                }
+            }
+        }
+        let named = |column: Option<usize>| column.map(|c| row.cells[c].as_str()).filter(|c| !c.is_empty());
+        let dominant_contact = named(contact_column)
+            .map(|name| {
+                serde_json::from_value(serde_json::Value::String(name.to_string())).map_err(|_| {
+                    at(
+                        row.line,
+                        format!("`{DOMINANT_CONTACT_COLUMN}` = {name:?} names no part of the canal"),
+                        "use symphysis, pubic_arch, sacral_promontory, sacrum, coccyx, ischial_spines, pelvic_sidewall, sacrospinous_ligament or pelvic_floor, or leave it empty",
+                    )
+                })
+            })
+            .transpose()?;
+        let dominant_part = named(part_column)
+            .map(|name| {
+                serde_json::from_value(serde_json::Value::String(name.to_string())).map_err(|_| {
+                    at(
+                        row.line,
+                        format!("`{DOMINANT_PART_COLUMN}` = {name:?} names no fetal body"),
+                        "use head or trunk, or leave it empty",
+                    )
+                })
+            })
+            .transpose()?;
+        samples.push(carus_analysis::PoseSample {
+            time_s,
+            head: head_pose,
+            trunk: trunk_pose,
+            lower_trunk: None,
+            expulsion_force_n: force[0],
+            bone_contact_force_n: force[1],
+            floor_contact_force_n: force[2],
+            dominant_contact,
+            dominant_part,
+        });
+    }
+    let mut history = crate::run::history_of(scene, samples);
+    if trunk.is_none() {
+        history.trunk = None;
+    }
+    history.validate().map_err(|e| {
+        // The history's samples are the table's rows, in order.
+        let line = |index: usize| table.rows.get(index).map_or(0, |r| r.line);
+        let index = match &e {
+            carus_analysis::HistoryError::NotFinite { index, .. }
+            | carus_analysis::HistoryError::TimeNotIncreasing { index, .. }
+            | carus_analysis::HistoryError::NotUnitQuaternion { index, .. }
+            | carus_analysis::HistoryError::TooFar { index, .. } => Some(*index),
+            _ => None,
+        };
+        match index {
+            Some(i) => at(line(i), e.to_string(), "correct the row"),
+            None => content(e.to_string(), "give at least two samples"),
+        }
+    })?;
+    Ok(history)
 }
 
 /// Position and orientation quaternion of a pose, NaN when there is none.

@@ -1033,9 +1033,9 @@ mod tests {
         assert!(lines
             .next()
             .unwrap()
-            .ends_with(",head_trunk_fx_n,head_trunk_fy_n,head_trunk_fz_n,head_axial_moment_trunk_nm,neck_fx_n,neck_fy_n,neck_fz_n"));
+            .ends_with(",head_trunk_fx_n,head_trunk_fy_n,head_trunk_fz_n,head_axial_moment_trunk_nm,neck_fx_n,neck_fy_n,neck_fz_n,dominant_contact,dominant_part"));
         for (line, l) in lines.zip(&record.loads) {
-            let values: Vec<f64> = line.rsplit(',').take(7).map(|v| v.parse().unwrap()).collect();
+            let values: Vec<f64> = line.rsplit(',').skip(2).take(7).map(|v| v.parse().unwrap()).collect();
             let (f, n) = (l.head_trunk_force_n, l.neck_force_n.unwrap());
             assert_eq!(values, vec![n.z, n.y, n.x, l.head_axial.trunk_nm, f.z, f.y, f.x], "t = {}", l.time_s);
         }

@@ -721,15 +721,20 @@ pub(super) fn outcome_line(outcome: &Outcome) -> String {
     }
     match &outcome.arrest {
         Some(a) => format!(
-            "arrested at the {} stage, {} {:+.0} mm, the {}{} against {}",
+            "arrested at the {} stage, {} {:+.0} mm, {}",
             serde_name(&a.stage),
             // A shoulder arrest's station is the bisacromial midpoint's.
             if a.stage == ArrestStage::Shoulders { "shoulders at station" } else { "station" },
             a.station_mm,
-            a.part,
-            a.shoulders_holding_head()
-                .map_or(String::new(), |s| format!(" (shoulders at station {s:+.0} mm)")),
-            a.against
+            // A history read from a table may name no contact.
+            match (a.part.as_str(), a.against.as_str()) {
+                ("unknown", "unknown") => "against a contact the history does not name".to_string(),
+                (part, against) => format!(
+                    "the {part}{} against {against}",
+                    a.shoulders_holding_head()
+                        .map_or(String::new(), |s| format!(" (shoulders at station {s:+.0} mm)"))
+                ),
+            }
         ),
         None => "neither delivered nor arrested (the run ended too soon to tell)".to_string(),
     }
