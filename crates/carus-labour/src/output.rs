@@ -354,6 +354,22 @@ pub fn write_history_csv(
 const DOMINANT_CONTACT_COLUMN: &str = "dominant_contact";
 const DOMINANT_PART_COLUMN: &str = "dominant_part";
 
+/// The name in a label column's cell (`None` when the table has no such
+/// column or the cell is empty), or what is wrong with it and the fix.
+fn label_cell<T: serde::de::DeserializeOwned>(
+    row: &carus_io::CsvRow,
+    column: Option<usize>,
+    wrong: &str,
+    fix: &'static str,
+) -> Result<Option<T>, (String, &'static str)> {
+    let Some(name) = column.map(|c| row.cells[c].as_str()).filter(|c| !c.is_empty()) else {
+        return Ok(None);
+    };
+    serde_json::from_value(serde_json::Value::String(name.to_string()))
+        .map(Some)
+        .map_err(|_| (format!("{name:?} {wrong}"), fix))
+}
+
 /// How far a quaternion read from a table may be from unit length and
 /// still be taken (normalised) as a rotation: a table of 4-6 digits.
 const TABLE_QUATERNION_TOLERANCE: f64 = 1e-3;
@@ -501,29 +517,10 @@ pub fn read_history_csv(path: &Path, scene: &crate::Scene) -> Result<PoseHistory
                 }
             }
         }
-        let named = |column: Option<usize>| column.map(|c| row.cells[c].as_str()).filter(|c| !c.is_empty());
-        let dominant_contact = named(contact_column)
-            .map(|name| {
-                serde_json::from_value(serde_json::Value::String(name.to_string())).map_err(|_| {
-                    at(
-                        row.line,
-                        format!("`{DOMINANT_CONTACT_COLUMN}` = {name:?} names no part of the canal"),
-                        "use symphysis, pubic_arch, sacral_promontory, sacrum, coccyx, ischial_spines, pelvic_sidewall, sacrospinous_ligament or pelvic_floor, or leave it empty",
-                    )
-                })
-            })
-            .transpose()?;
-        let dominant_part = named(part_column)
-            .map(|name| {
-                serde_json::from_value(serde_json::Value::String(name.to_string())).map_err(|_| {
-                    at(
-                        row.line,
-                        format!("`{DOMINANT_PART_COLUMN}` = {name:?} names no fetal body"),
-                        "use head or trunk, or leave it empty",
-                    )
-                })
-            })
-            .transpose()?;
+        let dominant_contact = label_cell(row, contact_column, "names no part of the canal", "use symphysis, pubic_arch, sacral_promontory, sacrum, coccyx, ischial_spines, pelvic_sidewall, sacrospinous_ligament or pelvic_floor, or leave it empty")
+            .map_err(|(problem, fix)| at(row.line, format!("`{DOMINANT_CONTACT_COLUMN}` = {problem}"), fix))?;
+        let dominant_part = label_cell(row, part_column, "names no fetal body", "use head or trunk, or leave it empty")
+            .map_err(|(problem, fix)| at(row.line, format!("`{DOMINANT_PART_COLUMN}` = {problem}"), fix))?;
         samples.push(carus_analysis::PoseSample {
             time_s,
             head: head_pose,
