@@ -140,6 +140,7 @@ impl CsvTable {
             .has_headers(false)
             .flexible(true)
             .trim(::csv::Trim::All)
+            .comment(Some(b'#'))
             .from_reader(bytes);
         let mut header: Option<Vec<String>> = None;
         let mut rows = Vec::new();
@@ -152,13 +153,7 @@ impl CsvTable {
             let cells: Vec<String> = record.iter().map(str::to_string).collect();
             match &header {
                 None => {
-                    if let Some(empty) = cells.iter().position(String::is_empty) {
-                        return Err(syntax(
-                            line,
-                            format!("column {} of the header has no name", empty + 1),
-                            "give every column a name in the first line",
-                        ));
-                    }
+                    check_header(&cells).map_err(|(problem, fix)| syntax(line, problem, fix))?;
                     header = Some(cells);
                 }
                 Some(names) => {
@@ -187,25 +182,72 @@ impl CsvTable {
         })
     }
 
-    /// The index of the column named `name`.
+    /// The index of the column named `name`, or of the one column whose
+    /// name differs from it only in case (`TIME_S` for `time_s`).
     pub fn column(&self, name: &str) -> Option<usize> {
-        self.header.iter().position(|h| h == name)
+        self.header.iter().position(|h| h == name).or_else(|| {
+            let mut alike = self.header.iter().enumerate().filter(|(_, h)| h.eq_ignore_ascii_case(name));
+            match (alike.next(), alike.next()) {
+                (Some((i, _)), None) => Some(i),
+                _ => None,
+            }
+        })
     }
 
     /// The number in `column` of `row`: `None` for an empty cell, an error
-    /// naming the line and the column for anything that is not a number.
+    /// naming the line and the column for anything that is not a finite
+    /// number.
     pub fn number(&self, row: &CsvRow, column: usize) -> Result<Option<f64>, ReadError> {
         let cell = &row.cells[column];
         if cell.is_empty() {
             return Ok(None);
         }
-        cell.parse::<f64>().map(Some).map_err(|_| ReadError::Syntax {
-            path: self.path.clone(),
-            line: row.line,
-            problem: format!("`{}` = {cell:?} is not a number", self.header[column]),
-            fix: "write a number (a decimal point, not a comma), or leave the cell empty".into(),
-        })
+        match cell.parse::<f64>() {
+            Ok(x) if x.is_finite() => Ok(Some(x)),
+            parsed => Err(ReadError::Syntax {
+                path: self.path.clone(),
+                line: row.line,
+                problem: format!(
+                    "`{}` = {cell:?} is not {}",
+                    self.header[column],
+                    if parsed.is_ok() { "a finite number" } else { "a number" }
+                ),
+                fix: "write a finite number (a decimal point, not a comma), or leave the cell empty".into(),
+            }),
+        }
     }
+}
+
+/// A header a table can be read by: every column named once, and the
+/// commas that separate them. A file of another separator, or JSON, reads
+/// as a header of one column.
+fn check_header(cells: &[String]) -> Result<(), (String, &'static str)> {
+    if let [only] = cells {
+        if only.starts_with(['{', '[']) {
+            return Err(("the file is JSON, not CSV".into(), "give a JSON pose history a .json name"));
+        }
+        if let Some(separator) = [';', '\t', '|'].into_iter().find(|c| only.contains(*c)) {
+            return Err((
+                format!("the columns are separated by {separator:?}, not commas"),
+                "save the table as CSV with commas between the columns and decimal points (a spreadsheet's \"CSV (comma delimited)\")",
+            ));
+        }
+    }
+    if let Some(empty) = cells.iter().position(String::is_empty) {
+        return Err((
+            format!("column {} of the header has no name", empty + 1),
+            "give every column a name in the first line",
+        ));
+    }
+    for (i, name) in cells.iter().enumerate() {
+        if let Some(j) = cells[..i].iter().position(|h| h.eq_ignore_ascii_case(name)) {
+            return Err((
+                format!("columns {} and {} are both named `{name}`", j + 1, i + 1),
+                "name every column once",
+            ));
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -286,6 +328,19 @@ mod tests {
         let unnamed = CsvTable::parse(Path::new("u.csv"), b"t,,x\n").unwrap_err().to_string();
         assert!(unnamed.contains("column 2 of the header has no name"), "{unnamed}");
         assert!(CsvTable::parse(Path::new("e.csv"), b"").is_err());
+    }
+
+    #[test]
+    fn headers_of_other_files_and_repeated_names_are_named() {
+        let refused = |text: &str| CsvTable::parse(Path::new("t.csv"), text.as_bytes()).unwrap_err().to_string();
+        assert!(refused("time_s;x_mm\n0;1,5\n").contains("separated by ';'"));
+        assert!(refused("time_s\tx_mm\n0\t1\n").contains("separated by '\\t'"));
+        assert!(refused("{\"head\": 1}\n").contains("the file is JSON"));
+        assert!(refused("t,x,T\n").contains("columns 1 and 3 are both named `T`"));
+        let table = CsvTable::parse(Path::new("t.csv"), b"# from the tracker\nTIME_S,x\n1,inf\n").unwrap();
+        assert_eq!(table.column("time_s"), Some(0));
+        let e = table.number(&table.rows[0], 1).unwrap_err().to_string();
+        assert!(e.contains("`x` = \"inf\" is not a finite number"), "{e}");
     }
 
     #[test]

@@ -354,6 +354,54 @@ pub fn write_history_csv(
 const DOMINANT_CONTACT_COLUMN: &str = "dominant_contact";
 const DOMINANT_PART_COLUMN: &str = "dominant_part";
 
+/// What to check when a table's positions cannot be where its columns put them.
+const UNIT_AND_FRAME_FIX: &str = "check the positions' unit (`_m` columns hold metres, `_mm` millimetres) and frame: the pelvis frame's origin is the inlet's centre, z normal to the inlet towards the mother's head, y towards the symphysis (CONVENTIONS.md)";
+
+/// Farthest the head's centre can lie from the pelvic axis before it is
+/// born: half the widest inlet diameter (about 130 mm transverse,
+/// REFERENCE_DATA.md) with room to spare. Farther, the table's positions
+/// are in another unit or frame than its columns say.
+const HEAD_REACH_FROM_AXIS_M: f64 = 0.1;
+
+/// A head whose given position never leaves a millimetre around the
+/// pelvis origin has positions in metres written under `_mm` columns.
+const STILL_AT_ORIGIN_M: f64 = 1e-3;
+
+/// The table's head positions are in the canal: each within
+/// [`HEAD_REACH_FROM_AXIS_M`] of the pelvic axis until past the outlet,
+/// and not all within [`STILL_AT_ORIGIN_M`] of the origin. Else the line
+/// of the first sample at fault and what is wrong.
+fn check_within_canal(
+    table: &carus_io::CsvTable,
+    samples: &[carus_analysis::PoseSample],
+    scene: &crate::Scene,
+) -> Result<(), (usize, String)> {
+    let axis = scene.canal.axis();
+    let outlet_sigma = scene.canal.outlet_sigma();
+    let centre = |s: &carus_analysis::PoseSample| s.head.point(scene.head_geometry.centre_m);
+    for (sample, row) in samples.iter().zip(&table.rows) {
+        let c = centre(sample);
+        let sigma = axis.project(c);
+        let off_axis = (c - axis.point(sigma)).length();
+        if sigma < outlet_sigma && off_axis > HEAD_REACH_FROM_AXIS_M {
+            return Err((
+                row.line,
+                format!(
+                    "the head's centre lies {:.0} mm from the pelvic axis before it is born, outside any birth canal",
+                    off_axis * 1e3
+                ),
+            ));
+        }
+    }
+    if samples.len() > 1 && samples.iter().all(|s| s.head.position_m.length() < STILL_AT_ORIGIN_M) {
+        return Err((
+            table.rows.first().map_or(0, |r| r.line),
+            "the head's position stays within 1 mm of the pelvis origin over the whole table: positions in metres under `_mm` columns?".into(),
+        ));
+    }
+    Ok(())
+}
+
 /// The name in a label column's cell (`None` when the table has no such
 /// column or the cell is empty), or what is wrong with it and the fix.
 fn label_cell<T: serde::de::DeserializeOwned>(
@@ -410,6 +458,19 @@ pub fn read_history_csv(path: &Path, scene: &crate::Scene) -> Result<PoseHistory
             .map(|c| (c, 1.0))
             .or_else(|| table.column(&format!("{name}_mm")).map(|c| (c, 1e-3)))
     };
+    // One unit for a body's three position columns, and only one of them.
+    for body in ["head", "trunk"] {
+        let units: Vec<&str> = ["m", "mm"]
+            .into_iter()
+            .filter(|unit| ["x", "y", "z"].iter().any(|a| table.column(&format!("{body}_{a}_{unit}")).is_some()))
+            .collect();
+        if units.len() > 1 {
+            return Err(content(
+                format!("the {body}'s position has columns in both metres (`{body}_x_m`...) and millimetres (`{body}_x_mm`...)"),
+                "give its x, y and z in one unit, once",
+            ));
+        }
+    }
     let pose_columns = |body: &str| -> Result<Option<[(usize, f64); 7]>, LabourError> {
         let names = ["x", "y", "z", "qx", "qy", "qz", "qw"].map(|a| format!("{body}_{a}"));
         let found: Vec<Option<(usize, f64)>> = names
@@ -547,10 +608,22 @@ pub fn read_history_csv(path: &Path, scene: &crate::Scene) -> Result<PoseHistory
             | carus_analysis::HistoryError::TooFar { index, .. } => Some(*index),
             _ => None,
         };
-        match index {
-            Some(i) => at(line(i), e.to_string(), "correct the row"),
-            None => content(e.to_string(), "give at least two samples"),
+        match (index, &e) {
+            (Some(i), carus_analysis::HistoryError::TooFar { distance_m, .. }) => at(
+                line(i),
+                format!("a position lies {distance_m:.3e} m from the pelvis origin, farther than a fetus goes"),
+                UNIT_AND_FRAME_FIX,
+            ),
+            (Some(i), _) => at(line(i), e.to_string(), "correct the row"),
+            (None, _) => content(e.to_string(), "give at least two samples"),
         }
+    })?;
+    check_within_canal(&table, &history.samples, scene).map_err(|(line, problem)| {
+        at(
+            line,
+            problem,
+            UNIT_AND_FRAME_FIX,
+        )
     })?;
     Ok(history)
 }

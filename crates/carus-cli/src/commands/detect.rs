@@ -8,8 +8,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use carus_analysis::{detect, DetectorReport, PoseHistory};
-use carus_labour::output::{HISTORY_JSON, SCENARIO_FILE};
-use carus_labour::{Scenario, Scene};
+use carus_labour::output::{HISTORY_CSV, HISTORY_JSON, SCENARIO_FILE};
+use carus_labour::{Scenario, Scene, BUILTINS};
 use serde_json::json;
 
 use super::run::{movement_list, movements_json, outcome_line, print_movements};
@@ -22,55 +22,111 @@ pub struct DetectArgs {
     /// For a CSV table: the scenario whose pelvis, head and trunk the poses are of (a built-in name or a file). Without it, the scenario.toml beside the table (a run folder's), else the built-in `normal`.
     #[arg(long, value_name = "SCENARIO")]
     pub anatomy: Option<String>,
+    /// Also write the detector's per-sample series (station, theta, phi, ...) to this CSV file, to check how a table was read.
+    #[arg(long, value_name = "FILE.csv")]
+    pub series: Option<PathBuf>,
     /// Print one JSON object on standard output and nothing else there.
     #[arg(long)]
     pub json: bool,
 }
 
+/// The scenario whose anatomy a table's poses were read with.
+#[derive(Debug)]
+struct TableAnatomy {
+    /// A built-in scenario's name, or the scenario file's path.
+    scenario: String,
+    builtin: bool,
+    /// How it was chosen, for the reader.
+    chosen: &'static str,
+    /// The head's centre of mass (the point the table places) from the
+    /// midpoint of its diameters, in the head's axes, mm.
+    head_mass_centre_mm: [f64; 3],
+    /// Whether the table gave the trunk's poses.
+    trunk: bool,
+}
+
 pub fn run(args: &DetectArgs) -> anyhow::Result<Status> {
     let path = history_file(&args.history);
     let (report, anatomy) = detect_file(&path, args.anatomy.as_deref())?;
+    if let Some(series) = &args.series {
+        write_series(series, &report)?;
+    }
     let movements = movement_list(&report.movements);
     if args.json {
         print_json(&json!({
             "history": path.display().to_string(),
-            "anatomy": anatomy,
+            "anatomy": anatomy.as_ref().map(|a| &a.scenario),
+            "anatomy_builtin": anatomy.as_ref().map(|a| a.builtin),
             "outcome": report.outcome,
             "movements": movements_json(&movements),
             "posterior_rotation": report.posterior_rotation,
             "internal_rotation_outside_window": report.internal_rotation_outside_window,
             "head_born": report.head_born,
             "contraction_period_s": report.contraction_period_s,
+            "series": args.series.as_ref().map(|p| p.display().to_string()),
         }))?;
     } else {
-        if let Some(anatomy) = &anatomy {
-            println!("{}: the poses of the anatomy of {anatomy}", path.display());
+        if let Some(a) = &anatomy {
+            // Rounded first, so that a component of a few nanometres reads 0.0, not -0.0.
+            let [o, b, v] = a.head_mass_centre_mm.map(|x| (x * 10.0).round() / 10.0 + 0.0);
+            println!(
+                "{}: the poses of the anatomy of {} ({}); the head's position is its centre of mass, \
+                 {o:+.1} mm along the occipitofrontal axis, {b:+.1} mm along the biparietal, {v:+.1} mm along the vertex axis \
+                 from the midpoint of its diameters{}",
+                path.display(),
+                if a.builtin { format!("the built-in `{}`", a.scenario) } else { a.scenario.clone() },
+                a.chosen,
+                if a.trunk { "" } else { "; no trunk poses, so neither the shoulders nor expulsion can be judged" }
+            );
         }
         println!("{}: {}", path.display(), outcome_line(&report.outcome));
         print_movements(&movements, report.internal_rotation_outside_window, report.head_born);
+        if let Some(series) = &args.series {
+            println!("per-sample series written to {}", series.display());
+        }
     }
     Ok(Status::Success)
 }
 
-/// A folder stands for the pose history a run wrote into it.
+/// A folder stands for the pose history a run wrote into it: its JSON, or
+/// its table when only that is there.
 fn history_file(path: &Path) -> PathBuf {
-    if path.is_dir() {
-        path.join(HISTORY_JSON)
-    } else {
-        path.to_path_buf()
+    if !path.is_dir() {
+        return path.to_path_buf();
     }
+    let json = path.join(HISTORY_JSON);
+    let table = path.join(HISTORY_CSV);
+    if !json.exists() && table.is_file() {
+        table
+    } else {
+        json
+    }
+}
+
+/// The detector's per-sample series as CSV.
+fn write_series(path: &Path, report: &DetectorReport) -> anyhow::Result<()> {
+    let (columns, rows) = report.series.table();
+    let mut csv = carus_io::CsvWriter::create(path, &columns)?;
+    for row in rows {
+        let values: Vec<f64> = row.iter().map(|v| v.unwrap_or(f64::NAN)).collect();
+        csv.row(&values)?;
+    }
+    csv.flush()?;
+    Ok(())
 }
 
 /// The detector's report on the history in `path`, and for a table the
 /// scenario whose anatomy it was read with.
-fn detect_file(path: &Path, anatomy: Option<&str>) -> anyhow::Result<(DetectorReport, Option<String>)> {
+fn detect_file(path: &Path, anatomy: Option<&str>) -> anyhow::Result<(DetectorReport, Option<TableAnatomy>)> {
     let is_table = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv"));
     let (history, anatomy) = if is_table {
-        let (scenario, label) = table_anatomy(path, anatomy)?;
-        let scene = Scene::build(&scenario).with_context(|| format!("cannot build the anatomy of {label}"))?;
+        let (scenario, mut chosen) = table_anatomy(path, anatomy)?;
+        let scene = Scene::build(&scenario).with_context(|| format!("cannot build the anatomy of {}", chosen.scenario))?;
         let history = carus_labour::output::read_history_csv(path, &scene)
             .with_context(|| format!("{} is not a table of poses in pose_history.csv's columns (docs/DETECTOR.md)", path.display()))?;
-        (history, Some(label))
+        chosen.head_mass_centre_mm = (-history.head.centre_m * 1e3).to_array();
+        chosen.trunk = history.trunk.is_some();
+        (history, Some(chosen))
     } else {
         if anatomy.is_some() {
             anyhow::bail!(
@@ -84,18 +140,27 @@ fn detect_file(path: &Path, anatomy: Option<&str>) -> anyhow::Result<(DetectorRe
     Ok((report, anatomy))
 }
 
-/// The scenario a table's poses are read with, and how to name it.
-fn table_anatomy(path: &Path, anatomy: Option<&str>) -> anyhow::Result<(Scenario, String)> {
+/// The scenario a table's poses are read with, and how it was chosen.
+fn table_anatomy(path: &Path, anatomy: Option<&str>) -> anyhow::Result<(Scenario, TableAnatomy)> {
+    let named = |scenario: String, chosen| TableAnatomy {
+        builtin: BUILTINS.iter().any(|(n, _)| *n == scenario),
+        scenario,
+        chosen,
+        head_mass_centre_mm: [0.0; 3],
+        trunk: false,
+    };
     if let Some(name) = anatomy {
-        return Ok((super::run::load(Some(name))?, format!("`{name}`")));
+        return Ok((super::run::load(Some(name))?, named(name.to_string(), "--anatomy")));
     }
     let beside = path.parent().unwrap_or(Path::new(".")).join(SCENARIO_FILE);
     if beside.is_file() {
         let scenario = Scenario::from_file(&beside)
-            .with_context(|| format!("the run's scenario beside the table (give --anatomy to choose another)"))?;
-        return Ok((scenario, beside.display().to_string()));
+            .context("the run's scenario beside the table (give --anatomy to choose another)")?;
+        let mut chosen = named(beside.display().to_string(), "the scenario beside the table");
+        chosen.builtin = false;
+        return Ok((scenario, chosen));
     }
-    Ok((super::run::load(None)?, "the built-in `normal` scenario (--anatomy chooses another)".into()))
+    Ok((super::run::load(None)?, named("normal".into(), "the default; --anatomy chooses another")))
 }
 
 fn read_json_history(path: &Path) -> anyhow::Result<PoseHistory> {
@@ -105,10 +170,12 @@ fn read_json_history(path: &Path) -> anyhow::Result<PoseHistory> {
             path.display()
         )
     })?;
+    let looks_like_table = text.trim_start_matches('\u{feff}').lines().next().is_some_and(|l| l.contains("time_s") && !l.contains('{'));
     PoseHistory::from_json_str(&text).with_context(|| {
         format!(
-            "{} is not a pose history in the format `carus run` writes (docs/DETECTOR.md)",
-            path.display()
+            "{} is not a pose history in the format `carus run` writes (docs/DETECTOR.md){}",
+            path.display(),
+            if looks_like_table { "; it reads like a CSV table: give it a .csv name" } else { "" }
         )
     })
 }
@@ -150,6 +217,11 @@ mod tests {
 
         let text = format!("{:#}", detect_file(&wrong, Some("normal")).unwrap_err());
         assert!(text.contains("--anatomy is for a CSV table"), "{text}");
+
+        let misnamed = dir.path().join("table.json");
+        std::fs::write(&misnamed, "time_s,head_x_m\n0,0\n").unwrap();
+        let text = format!("{:#}", detect_file(&misnamed, None).unwrap_err());
+        assert!(text.contains("reads like a CSV table: give it a .csv name"), "{text}");
     }
 
     /// A run's pose_history.csv, read with the scenario beside it, gives
@@ -163,7 +235,8 @@ mod tests {
         let own = record.detector.expect("a detector report");
         let table = dir.path().join(carus_labour::output::HISTORY_CSV);
         let (again, anatomy) = detect_file(&table, None).unwrap();
-        assert!(anatomy.unwrap().ends_with(SCENARIO_FILE));
+        let anatomy = anatomy.unwrap();
+        assert!(anatomy.scenario.ends_with(SCENARIO_FILE) && !anatomy.builtin && anatomy.trunk);
         assert_eq!(again.outcome, own.outcome);
         assert_eq!(again.movements, own.movements);
         assert_eq!(again.head_born, own.head_born);
@@ -187,7 +260,11 @@ mod tests {
         }
         std::fs::write(&table, text).unwrap();
         let (report, anatomy) = detect_file(&table, None).unwrap();
-        assert!(anatomy.unwrap().contains("normal"));
+        let anatomy = anatomy.unwrap();
+        assert!(anatomy.scenario == "normal" && anatomy.builtin && !anatomy.trunk);
+        // The default head's centre of mass, from its diameters' midpoint.
+        let [o, b, v] = anatomy.head_mass_centre_mm;
+        assert!((o - 2.0).abs() < 0.1 && b.abs() < 1e-3 && (v + 4.9).abs() < 0.1, "{o} {b} {v}");
         let m = &report.movements;
         assert!(m.engagement.observed && m.descent.observed, "{m:?}");
         assert!(!m.flexion.observed && !m.internal_rotation.observed && !m.extension.observed, "{m:?}");
@@ -207,7 +284,47 @@ mod tests {
             "arrested at the outlet stage, station +80 mm, against a contact the history does not name"
         );
         let (_, named) = detect_file(&table, Some("contracted-inlet")).unwrap();
-        assert_eq!(named.unwrap(), "`contracted-inlet`");
+        assert_eq!(named.unwrap().scenario, "contracted-inlet");
+    }
+
+    /// A table whose positions are in another unit or frame than its
+    /// columns say is refused, not judged; a folder holding only a table
+    /// is read through it; the series can be written.
+    #[test]
+    fn a_table_outside_the_canal_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let table = dir.path().join(HISTORY_CSV);
+        let rows = |x_mm: f64, scale: f64| {
+            let mut text = String::from("time_s,head_x_mm,head_y_mm,head_z_mm,head_qx,head_qy,head_qz,head_qw\n");
+            for k in 0..=20 {
+                let t = k as f64 * 0.5;
+                text.push_str(&format!("{t},{},0,{},1,0,0,0\n", x_mm * scale, (60.0 - 12.0 * t) * scale));
+            }
+            text
+        };
+        for (text, expected) in [
+            (rows(300.0, 1.0), "mm from the pelvic axis before it is born, outside any birth canal"),
+            (rows(0.0, 1e-3), "poses.csv:2: the head's position stays within 1 mm of the pelvis origin"),
+        ] {
+            let poses = dir.path().join("poses.csv");
+            std::fs::write(&poses, text).unwrap();
+            let e = format!("{:#}", detect_file(&poses, None).unwrap_err());
+            assert!(e.contains(expected) && e.contains("`_mm` millimetres"), "{e}");
+        }
+        let mixed = rows(0.0, 1.0).replacen("head_x_mm", "head_x_m", 1);
+        std::fs::write(dir.path().join("poses.csv"), mixed).unwrap();
+        let e = format!("{:#}", detect_file(&dir.path().join("poses.csv"), None).unwrap_err());
+        assert!(e.contains("both metres") && e.contains("one unit"), "{e}");
+
+        std::fs::write(&table, rows(0.0, 1.0)).unwrap();
+        assert_eq!(history_file(dir.path()), table);
+        let (report, _) = detect_file(&history_file(dir.path()), Some("normal")).unwrap();
+        let series = dir.path().join("series.csv");
+        write_series(&series, &report).unwrap();
+        let written = carus_io::CsvTable::read(&series).unwrap();
+        assert_eq!(written.rows.len(), 21);
+        let station = written.column("station_mm").unwrap();
+        assert!(written.number(&written.rows[0], station).unwrap().unwrap() < written.number(&written.rows[20], station).unwrap().unwrap());
     }
 
     /// Tables that cannot be poses are refused at their line and column.

@@ -728,7 +728,12 @@ pub(super) fn outcome_line(outcome: &Outcome) -> String {
             a.station_mm,
             // A history read from a table may name no contact.
             match (a.part.as_str(), a.against.as_str()) {
-                ("unknown", "unknown") => "against a contact the history does not name".to_string(),
+                ("unknown", "unknown") => format!(
+                    "against a contact the history does not name{}",
+                    a.shoulders_station_mm
+                        .filter(|_| a.stage != ArrestStage::Shoulders)
+                        .map_or(String::new(), |s| format!(" (shoulders at station {s:+.0} mm)"))
+                ),
                 (part, against) => format!(
                     "the {part}{} against {against}",
                     a.shoulders_holding_head()
