@@ -81,6 +81,19 @@ pub enum ContactSite {
 }
 
 impl ContactSite {
+    /// Every site, for listing their names.
+    pub const ALL: [ContactSite; 9] = [
+        ContactSite::Symphysis,
+        ContactSite::PubicArch,
+        ContactSite::SacralPromontory,
+        ContactSite::Sacrum,
+        ContactSite::Coccyx,
+        ContactSite::IschialSpines,
+        ContactSite::PelvicSidewall,
+        ContactSite::SacrospinousLigament,
+        ContactSite::PelvicFloor,
+    ];
+
     /// The name used in JSON and reports ("sacral_promontory", ...).
     pub fn name(self) -> &'static str {
         match self {

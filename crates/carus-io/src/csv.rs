@@ -144,12 +144,13 @@ impl CsvTable {
             .from_reader(bytes);
         let mut header: Option<Vec<String>> = None;
         let mut rows = Vec::new();
+        let mut lines = LineCounter::new(bytes);
         for record in reader.records() {
             let record = record.map_err(|e| {
-                let line = e.position().map_or(0, |p| p.line() as usize);
+                let line = e.position().map_or(0, |p| lines.line_of_record(p.byte() as usize));
                 syntax(line, format!("not readable as CSV ({e})"), "save the table as CSV in UTF-8")
             })?;
-            let line = record.position().map_or(0, |p| p.line() as usize);
+            let line = record.position().map_or(0, |p| lines.line_of_record(p.byte() as usize));
             let cells: Vec<String> = record.iter().map(str::to_string).collect();
             match &header {
                 None => {
@@ -182,16 +183,10 @@ impl CsvTable {
         })
     }
 
-    /// The index of the column named `name`, or of the one column whose
-    /// name differs from it only in case (`TIME_S` for `time_s`).
+    /// The index of the column named `name`, in any case (`TIME_S` for
+    /// `time_s`; the header names each column once in any case).
     pub fn column(&self, name: &str) -> Option<usize> {
-        self.header.iter().position(|h| h == name).or_else(|| {
-            let mut alike = self.header.iter().enumerate().filter(|(_, h)| h.eq_ignore_ascii_case(name));
-            match (alike.next(), alike.next()) {
-                (Some((i, _)), None) => Some(i),
-                _ => None,
-            }
-        })
+        self.header.iter().position(|h| h.eq_ignore_ascii_case(name))
     }
 
     /// The number in `column` of `row`: `None` for an empty cell, an error
@@ -215,6 +210,58 @@ impl CsvTable {
                 fix: "write a finite number (a decimal point, not a comma), or leave the cell empty".into(),
             }),
         }
+    }
+}
+
+/// A row of numbers with `None` (a value not recorded) as NaN, which
+/// [`CsvWriter::row`] writes as an empty cell.
+pub fn missing_as_nan(values: &[Option<f64>]) -> Vec<f64> {
+    values.iter().map(|v| v.unwrap_or(f64::NAN)).collect()
+}
+
+/// The 1-based line a record starts on, from the byte where the csv crate
+/// says it starts: that byte can be the `\n` left of the row before's
+/// `\r\n`, or a blank or `#` line the reader skipped (the crate's line
+/// count is off in both cases). Counted forwards, as records come in order.
+struct LineCounter<'a> {
+    bytes: &'a [u8],
+    at: usize,
+    line: usize,
+}
+
+impl<'a> LineCounter<'a> {
+    fn new(bytes: &'a [u8]) -> Self {
+        LineCounter { bytes, at: 0, line: 1 }
+    }
+
+    fn line_of_record(&mut self, start: usize) -> usize {
+        let start = start.min(self.bytes.len());
+        if start >= self.at {
+            self.line += self.bytes[self.at..start].iter().filter(|&&b| b == b'\n').count();
+            self.at = start;
+        }
+        // Past line ends and skipped lines to the record's first byte.
+        let (mut line, mut at) = (self.line, self.at);
+        loop {
+            match self.bytes.get(at) {
+                Some(b'\r') => at += 1,
+                Some(b'\n') => {
+                    line += 1;
+                    at += 1;
+                }
+                Some(b'#') if at == 0 || self.bytes[at - 1] == b'\n' => {
+                    match self.bytes[at..].iter().position(|&b| b == b'\n') {
+                        Some(end) => {
+                            at += end + 1;
+                            line += 1;
+                        }
+                        None => break,
+                    }
+                }
+                _ => break,
+            }
+        }
+        line
     }
 }
 
@@ -328,6 +375,29 @@ mod tests {
         let unnamed = CsvTable::parse(Path::new("u.csv"), b"t,,x\n").unwrap_err().to_string();
         assert!(unnamed.contains("column 2 of the header has no name"), "{unnamed}");
         assert!(CsvTable::parse(Path::new("e.csv"), b"").is_err());
+    }
+
+    /// Lines are counted as an editor shows them, whatever the line ends,
+    /// blank lines and comments before a row.
+    #[test]
+    fn errors_name_the_line_an_editor_shows() {
+        for text in [
+            "t,x\n0,1\n1,a\n",
+            "t,x\r\n0,1\r\n1,a\r\n",
+            "# note\nt,x\n\n1,a\n",
+            "\u{feff}t,x\r\n# two\r\n# comments\r\n1,a\r\n",
+        ] {
+            let table = CsvTable::parse(Path::new("t.csv"), text.as_bytes()).unwrap();
+            let row = table.rows.last().unwrap();
+            let expected = text.trim_start_matches('\u{feff}').lines().position(|l| l.starts_with("1,a")).unwrap() + 1;
+            assert_eq!(row.line, expected, "{text:?}");
+            let e = table.number(row, 1).unwrap_err().to_string();
+            assert!(e.starts_with(&format!("t.csv:{expected}:")), "{e}");
+        }
+        let ragged = CsvTable::parse(Path::new("r.csv"), b"t,x\r\n0,1\r\n1\r\n").unwrap_err().to_string();
+        assert!(ragged.starts_with("r.csv:3:"), "{ragged}");
+        let unnamed = CsvTable::parse(Path::new("u.csv"), b"# a\n# b\nt,,x\n").unwrap_err().to_string();
+        assert!(unnamed.starts_with("u.csv:3:"), "{unnamed}");
     }
 
     #[test]

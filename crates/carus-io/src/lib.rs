@@ -23,7 +23,7 @@ mod vtk_compat;
 use std::path::Path;
 
 pub use builder::MeshFile;
-pub use csv::{CsvRow, CsvTable, CsvWriter};
+pub use csv::{missing_as_nan, CsvRow, CsvTable, CsvWriter};
 pub use error::{ReadError, WriteError};
 pub use pvd::PvdCollection;
 pub use units::LengthUnit;

@@ -136,6 +136,11 @@ pub(crate) fn raw_appended_to_base64(bytes: &[u8]) -> Result<Cow<'_, [u8]>, Stri
 /// shifted numbers, a mesh that looks inverted rather than damaged.
 fn check_tiling(data: &[u8], offsets: &[usize], k: usize, end: usize) -> Result<(), String> {
     let offset = offsets[k];
+    if k == 0 && offset != 0 {
+        return Err(format!(
+            "the first array begins at byte {offset} of the appended data, not at its start: an offset is wrong"
+        ));
+    }
     match offsets.get(k + 1) {
         Some(&next) if next != end => Err(format!(
             "the array at appended offset {offset} ends at byte {end}, but the next array begins at byte {next}: an offset or an array's byte count is wrong"
@@ -311,19 +316,20 @@ fn rfind(haystack: &[u8], needle: &[u8]) -> Option<usize> {
     haystack.windows(needle.len()).rposition(|w| w == needle)
 }
 
-/// The value of `name="..."` inside one XML tag.
+/// The value of `name="..."` (or `name='...'`, as XML allows) inside one
+/// XML tag.
 fn attribute(tag: &[u8], name: &str) -> Option<String> {
     let tag = String::from_utf8_lossy(tag);
-    let pattern = format!("{name}=\"");
+    let pattern = format!("{name}=");
     let mut search = 0;
     while let Some(at) = tag[search..].find(&pattern) {
         let start = search + at;
-        // Whole attribute names only (`offset` inside `xoffset` does not count).
-        let whole = start == 0 || tag.as_bytes()[start - 1].is_ascii_whitespace();
         let value_start = start + pattern.len();
-        let value_end = value_start + tag[value_start..].find('"')?;
-        if whole {
-            return Some(tag[value_start..value_end].to_string());
+        let quote = tag[value_start..].chars().next().filter(|c| matches!(c, '"' | '\''))?;
+        let value_end = value_start + 1 + tag[value_start + 1..].find(quote)?;
+        // Whole attribute names only (`offset` inside `xoffset` does not count).
+        if start == 0 || tag.as_bytes()[start - 1].is_ascii_whitespace() {
+            return Some(tag[value_start + 1..value_end].to_string());
         }
         search = value_end;
     }
@@ -373,6 +379,14 @@ mod tests {
             ]
         );
         assert!(cell.is_empty());
+    }
+
+    #[test]
+    fn attributes_are_read_in_either_quotes_and_whole() {
+        let tag = br#"<DataArray xName="no" Name='fixed' format="ascii""#;
+        assert_eq!(attribute(tag, "Name").as_deref(), Some("fixed"));
+        assert_eq!(attribute(tag, "format").as_deref(), Some("ascii"));
+        assert_eq!(attribute(tag, "offset"), None);
     }
 
     #[test]

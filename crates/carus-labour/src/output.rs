@@ -299,7 +299,7 @@ pub fn write_history_csv(
     header.extend_from_slice(&poses);
     let mut csv = CsvWriter::create(path, &header).map_err(|e| output_error(path, e))?;
     for (k, (row, sample)) in rows.iter().zip(&history.samples).enumerate() {
-        let mut values: Vec<f64> = row.iter().map(|v| v.unwrap_or(f64::NAN)).collect();
+        let mut values = carus_io::missing_as_nan(row);
         values.extend(pose_columns(Some(sample.head)));
         values.extend(pose_columns(sample.trunk));
         for f in [
@@ -396,26 +396,29 @@ fn check_within_canal(
     if samples.len() > 1 && samples.iter().all(|s| s.head.position_m.length() < STILL_AT_ORIGIN_M) {
         return Err((
             table.rows.first().map_or(0, |r| r.line),
-            "the head's position stays within 1 mm of the pelvis origin over the whole table: positions in metres under `_mm` columns?".into(),
+            format!(
+                "the head's position stays within {} mm of the pelvis origin over the whole table: positions in metres under `_mm` columns?",
+                STILL_AT_ORIGIN_M * 1e3
+            ),
         ));
     }
     Ok(())
 }
 
 /// The name in a label column's cell (`None` when the table has no such
-/// column or the cell is empty), or what is wrong with it and the fix.
+/// column or the cell is empty), or what is wrong with it.
 fn label_cell<T: serde::de::DeserializeOwned>(
     row: &carus_io::CsvRow,
     column: Option<usize>,
     wrong: &str,
-    fix: &'static str,
-) -> Result<Option<T>, (String, &'static str)> {
+    names: &str,
+) -> Result<Option<T>, String> {
     let Some(name) = column.map(|c| row.cells[c].as_str()).filter(|c| !c.is_empty()) else {
         return Ok(None);
     };
     serde_json::from_value(serde_json::Value::String(name.to_string()))
         .map(Some)
-        .map_err(|_| (format!("{name:?} {wrong}"), fix))
+        .map_err(|_| format!("{name:?} {wrong} (the names: {names})"))
 }
 
 /// How far a quaternion read from a table may be from unit length and
@@ -459,19 +462,22 @@ pub fn read_history_csv(path: &Path, scene: &crate::Scene) -> Result<PoseHistory
             .or_else(|| table.column(&format!("{name}_mm")).map(|c| (c, 1e-3)))
     };
     // One unit for a body's three position columns, and only one of them.
-    for body in ["head", "trunk"] {
-        let units: Vec<&str> = ["m", "mm"]
+    let position_unit = |body: &str| -> Result<&'static str, LabourError> {
+        let units: Vec<&'static str> = ["m", "mm"]
             .into_iter()
             .filter(|unit| ["x", "y", "z"].iter().any(|a| table.column(&format!("{body}_{a}_{unit}")).is_some()))
             .collect();
-        if units.len() > 1 {
-            return Err(content(
+        match units[..] {
+            [unit] => Ok(unit),
+            [] => Ok("m"),
+            _ => Err(content(
                 format!("the {body}'s position has columns in both metres (`{body}_x_m`...) and millimetres (`{body}_x_mm`...)"),
                 "give its x, y and z in one unit, once",
-            ));
+            )),
         }
-    }
-    let pose_columns = |body: &str| -> Result<Option<[(usize, f64); 7]>, LabourError> {
+    };
+    let pose_column_indices = |body: &str| -> Result<Option<[(usize, f64); 7]>, LabourError> {
+        let unit = position_unit(body)?;
         let names = ["x", "y", "z", "qx", "qy", "qz", "qw"].map(|a| format!("{body}_{a}"));
         let found: Vec<Option<(usize, f64)>> = names
             .iter()
@@ -486,7 +492,7 @@ pub fn read_history_csv(path: &Path, scene: &crate::Scene) -> Result<PoseHistory
                     .iter()
                     .zip(&found)
                     .filter(|(_, c)| c.is_none())
-                    .map(|(n, _)| if n.ends_with(['x', 'y', 'z']) && !n.contains("_q") { format!("{n}_m") } else { n.clone() })
+                    .map(|(n, _)| if n.ends_with(['x', 'y', 'z']) && !n.contains("_q") { format!("{n}_{unit}") } else { n.clone() })
                     .collect();
                 Err(content(
                     format!("the {body}'s pose lacks the column(s) {}", missing.join(", ")),
@@ -498,13 +504,15 @@ pub fn read_history_csv(path: &Path, scene: &crate::Scene) -> Result<PoseHistory
     let time = table.column("time_s").ok_or_else(|| {
         content("there is no `time_s` column".into(), "name the time column `time_s`, in seconds")
     })?;
-    let head = pose_columns("head")?.ok_or_else(|| {
+    let head = pose_column_indices("head")?.ok_or_else(|| {
         content(
             "there are no head pose columns".into(),
             "give head_x_m, head_y_m, head_z_m (or _mm) and head_qx, head_qy, head_qz, head_qw: the head's centre-of-mass frame in the pelvis frame (docs/DETECTOR.md)",
         )
     })?;
-    let trunk = pose_columns("trunk")?;
+    // A run without a trunk writes its trunk columns empty in every row.
+    let trunk = pose_column_indices("trunk")?
+        .filter(|columns| table.rows.iter().any(|row| columns.iter().any(|&(c, _)| !row.cells[c].is_empty())));
     if trunk.is_some() && scene.trunk_geometry.is_none() {
         return Err(content(
             "the table has trunk poses but the anatomy has no trunk".into(),
@@ -516,6 +524,7 @@ pub fn read_history_csv(path: &Path, scene: &crate::Scene) -> Result<PoseHistory
     let label = |name: &str| table.column(name);
     let (contact_column, part_column) = (label(DOMINANT_CONTACT_COLUMN), label(DOMINANT_PART_COLUMN));
 
+    let site_names = carus_analysis::ContactSite::ALL.map(|site| site.name()).join(", ");
     let mut samples = Vec::with_capacity(table.rows.len());
     for row in &table.rows {
         let number = |column: usize| table.number(row, column);
@@ -578,10 +587,10 @@ pub fn read_history_csv(path: &Path, scene: &crate::Scene) -> Result<PoseHistory
                 }
             }
         }
-        let dominant_contact = label_cell(row, contact_column, "names no part of the canal", "use symphysis, pubic_arch, sacral_promontory, sacrum, coccyx, ischial_spines, pelvic_sidewall, sacrospinous_ligament or pelvic_floor, or leave it empty")
-            .map_err(|(problem, fix)| at(row.line, format!("`{DOMINANT_CONTACT_COLUMN}` = {problem}"), fix))?;
-        let dominant_part = label_cell(row, part_column, "names no fetal body", "use head or trunk, or leave it empty")
-            .map_err(|(problem, fix)| at(row.line, format!("`{DOMINANT_PART_COLUMN}` = {problem}"), fix))?;
+        let dominant_contact = label_cell(row, contact_column, "names no part of the canal", &site_names)
+            .map_err(|problem| at(row.line, format!("`{DOMINANT_CONTACT_COLUMN}` = {problem}"), &format!("use {site_names}, or leave it empty")))?;
+        let dominant_part = label_cell(row, part_column, "names no fetal body", "head or trunk")
+            .map_err(|problem| at(row.line, format!("`{DOMINANT_PART_COLUMN}` = {problem}"), "use head or trunk, or leave it empty"))?;
         samples.push(carus_analysis::PoseSample {
             time_s,
             head: head_pose,
@@ -615,7 +624,8 @@ pub fn read_history_csv(path: &Path, scene: &crate::Scene) -> Result<PoseHistory
                 UNIT_AND_FRAME_FIX,
             ),
             (Some(i), _) => at(line(i), e.to_string(), "correct the row"),
-            (None, _) => content(e.to_string(), "give at least two samples"),
+            (None, carus_analysis::HistoryError::TooFewSamples { .. }) => content(e.to_string(), "give at least two samples"),
+            (None, _) => content(e.to_string(), "check the anatomy the table is read with (--anatomy)"),
         }
     })?;
     check_within_canal(&table, &history.samples, scene).map_err(|(line, problem)| {

@@ -12,7 +12,7 @@ use carus_labour::output::{HISTORY_CSV, HISTORY_JSON, SCENARIO_FILE};
 use carus_labour::{Scenario, Scene, BUILTINS};
 use serde_json::json;
 
-use super::run::{movement_list, movements_json, outcome_line, print_movements};
+use super::run::{movement_list, movements_json, outcome_line, print_movements, DEFAULT_SCENARIO};
 use super::{print_json, Status};
 
 #[derive(clap::Args)]
@@ -108,8 +108,7 @@ fn write_series(path: &Path, report: &DetectorReport) -> anyhow::Result<()> {
     let (columns, rows) = report.series.table();
     let mut csv = carus_io::CsvWriter::create(path, &columns)?;
     for row in rows {
-        let values: Vec<f64> = row.iter().map(|v| v.unwrap_or(f64::NAN)).collect();
-        csv.row(&values)?;
+        csv.row(&carus_io::missing_as_nan(&row))?;
     }
     csv.flush()?;
     Ok(())
@@ -160,7 +159,7 @@ fn table_anatomy(path: &Path, anatomy: Option<&str>) -> anyhow::Result<(Scenario
         chosen.builtin = false;
         return Ok((scenario, chosen));
     }
-    Ok((super::run::load(None)?, named("normal".into(), "the default; --anatomy chooses another")))
+    Ok((super::run::load(None)?, named(DEFAULT_SCENARIO.into(), "the default; --anatomy chooses another")))
 }
 
 fn read_json_history(path: &Path) -> anyhow::Result<PoseHistory> {
@@ -243,6 +242,22 @@ mod tests {
         assert!(again.series.table() == own.series.table(), "the series differ");
     }
 
+    /// A run without a trunk writes its trunk columns empty; its table
+    /// reads back as a history without a trunk, with the run's result.
+    #[test]
+    fn a_trunkless_runs_table_gives_the_runs_result() {
+        let mut s = crate::commands::coarse_normal(1.0);
+        s.trunk.enabled = false;
+        let dir = tempfile::tempdir().unwrap();
+        let record = carus_labour::run(&s, dir.path(), &RunOptions::default(), &mut SilentObserver).unwrap();
+        let own = record.detector.expect("a detector report");
+        let (again, anatomy) = detect_file(&dir.path().join(HISTORY_CSV), None).unwrap();
+        assert!(!anatomy.unwrap().trunk);
+        assert_eq!(again.outcome, own.outcome);
+        assert_eq!(again.movements, own.movements);
+        assert!(again.series.table() == own.series.table(), "the series differ");
+    }
+
     /// Another tool's table: the head alone, in millimetres, quaternions
     /// rounded to five digits, with the built-in anatomy; a straight push
     /// down the inlet's axis is engagement and descent only.
@@ -283,6 +298,9 @@ mod tests {
             crate::commands::run::outcome_line(&unnamed),
             "arrested at the outlet stage, station +80 mm, against a contact the history does not name"
         );
+        let mut site_only = unnamed.clone();
+        site_only.arrest.as_mut().unwrap().against = "sacrum".into();
+        assert_eq!(crate::commands::run::outcome_line(&site_only), "arrested at the outlet stage, station +80 mm, against sacrum");
         let (_, named) = detect_file(&table, Some("contracted-inlet")).unwrap();
         assert_eq!(named.unwrap().scenario, "contracted-inlet");
     }

@@ -399,7 +399,7 @@ fn floor_surface(floor: &carus_labour::scene::FloorScene, mut states: Vec<&Floor
 }
 
 /// The built-in scenario `carus run` runs when given none.
-const DEFAULT_SCENARIO: &str = "normal";
+pub(super) const DEFAULT_SCENARIO: &str = "normal";
 
 pub(super) fn load(name: Option<&str>) -> anyhow::Result<Scenario> {
     let name = name.unwrap_or(DEFAULT_SCENARIO);
@@ -720,27 +720,28 @@ pub(super) fn outcome_line(outcome: &Outcome) -> String {
         return "delivered".to_string();
     }
     match &outcome.arrest {
-        Some(a) => format!(
-            "arrested at the {} stage, {} {:+.0} mm, {}",
-            serde_name(&a.stage),
-            // A shoulder arrest's station is the bisacromial midpoint's.
-            if a.stage == ArrestStage::Shoulders { "shoulders at station" } else { "station" },
-            a.station_mm,
-            // A history read from a table may name no contact.
-            match (a.part.as_str(), a.against.as_str()) {
-                ("unknown", "unknown") => format!(
-                    "against a contact the history does not name{}",
-                    a.shoulders_station_mm
-                        .filter(|_| a.stage != ArrestStage::Shoulders)
-                        .map_or(String::new(), |s| format!(" (shoulders at station {s:+.0} mm)"))
-                ),
-                (part, against) => format!(
-                    "the {part}{} against {against}",
+        Some(a) => {
+            // A history read from a table may name neither.
+            let held = match a.part.as_str() {
+                "unknown" => String::new(),
+                part => format!(
+                    "the {part}{} ",
                     a.shoulders_holding_head()
                         .map_or(String::new(), |s| format!(" (shoulders at station {s:+.0} mm)"))
                 ),
-            }
-        ),
+            };
+            let against = match a.against.as_str() {
+                "unknown" => "a contact the history does not name",
+                site => site,
+            };
+            format!(
+                "arrested at the {} stage, {} {:+.0} mm, {held}against {against}",
+                serde_name(&a.stage),
+                // A shoulder arrest's station is the bisacromial midpoint's.
+                if a.stage == ArrestStage::Shoulders { "shoulders at station" } else { "station" },
+                a.station_mm,
+            )
+        }
         None => "neither delivered nor arrested (the run ended too soon to tell)".to_string(),
     }
 }
