@@ -44,6 +44,21 @@ pub struct PlaneMeasurement {
     pub sigma_mm: f64,
 }
 
+/// Equal steps the pelvic axis is sampled in, inlet centre to outlet
+/// centre (under 2 mm each in a gynecoid pelvis).
+pub const AXIS_STEPS: usize = 60;
+
+/// One point of the pelvic axis.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct AxisSample {
+    /// Arc length from the inlet's centre, mm.
+    pub sigma_mm: f64,
+    /// The point, mm, pelvis frame.
+    pub point_mm: [f64; 3],
+    /// Unit direction of descent there.
+    pub tangent: [f64; 3],
+}
+
 /// Everything `carus measure pelvis` reports.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PelvisMeasurement {
@@ -61,6 +76,9 @@ pub struct PelvisMeasurement {
     pub planes: BTreeMap<&'static str, PlaneMeasurement>,
     /// Length of the pelvic axis from the inlet centre to the outlet centre, mm.
     pub axis_length_mm: f64,
+    /// The pelvic axis itself (the curve station, theta and phi are read
+    /// along): [`axis_samples`].
+    pub axis_mm: Vec<AxisSample>,
     /// Landmarks, mm, pelvis frame.
     pub landmarks_mm: BTreeMap<&'static str, [f64; 3]>,
     /// The largest distance of a landmark from the surface, mm (0 for a
@@ -182,6 +200,7 @@ pub fn measure(pelvis: &Pelvis) -> PelvisMeasurement {
         outlet_posterior_sagittal_mm: d(tuberosity_midpoint, l.coccyx_tip),
         planes,
         axis_length_mm: pelvis.axis.length() * MM,
+        axis_mm: axis_samples(pelvis),
         landmarks_mm: l
             .named()
             .into_iter()
@@ -246,9 +265,45 @@ pub(crate) fn ray_triangle(origin: DVec3, dir: DVec3, a: DVec3, b: DVec3, c: DVe
     (t > 0.0).then_some(t)
 }
 
+/// The pelvic axis in [`AXIS_STEPS`] equal steps from the inlet's centre
+/// to the outlet's.
+pub fn axis_samples(pelvis: &Pelvis) -> Vec<AxisSample> {
+    let length = pelvis.axis.length();
+    (0..=AXIS_STEPS)
+        .map(|k| {
+            let sigma = length * k as f64 / AXIS_STEPS as f64;
+            let p = pelvis.axis.point(sigma);
+            AxisSample {
+                sigma_mm: sigma * MM,
+                point_mm: [p.x * MM, p.y * MM, p.z * MM],
+                tangent: pelvis.axis.tangent(sigma).to_array(),
+            }
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The axis runs from the inlet's centre, down its normal, to the
+    /// outlet's centre, in equal steps.
+    #[test]
+    fn the_axis_samples_run_from_the_inlet_centre_to_the_outlet_centre() {
+        let pelvis = Pelvis::generate(&PelvisDiameters::default()).unwrap();
+        let m = measure(&pelvis);
+        let (first, last) = (m.axis_mm.first().unwrap(), m.axis_mm.last().unwrap());
+        let close = |a: [f64; 3], b: [f64; 3], tol: f64| (DVec3::from(a) - DVec3::from(b)).length() < tol;
+        assert!(close(first.point_mm, m.planes["inlet"].centre_mm, 1e-6));
+        assert!(close(first.tangent, m.planes["inlet"].normal, 1e-6));
+        assert!(close(last.point_mm, m.planes["outlet"].centre_mm, 1e-3));
+        assert_eq!(m.axis_mm.len(), AXIS_STEPS + 1);
+        assert!((last.sigma_mm - m.axis_length_mm).abs() < 1e-9);
+        for pair in m.axis_mm.windows(2) {
+            let chord = (DVec3::from(pair[1].point_mm) - DVec3::from(pair[0].point_mm)).length();
+            assert!(chord <= pair[1].sigma_mm - pair[0].sigma_mm + 1e-6, "a chord longer than its arc");
+        }
+    }
 
     #[test]
     fn closest_points_on_a_triangle() {

@@ -18,7 +18,7 @@ mod spec;
 
 pub use diameters::{DiameterError, PelvisDiameters, PELVIC_CANAL_DIAMETER_MM};
 pub use landmarks::{PelvisLandmarks, LANDMARK_NAMES};
-pub use measure::{measure, PelvisMeasurement, PlaneMeasurement};
+pub use measure::{axis_samples, measure, AxisSample, PelvisMeasurement, PlaneMeasurement};
 pub use spec::{PelvisBuildError, PelvisSpec, VISIBLE_HUMAN_FEMALE};
 pub(crate) use generate::mid_ring;
 pub(crate) use interpolate::SuperRing as MidRing;

@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use carus_anatomy::floor::ATTACHED;
+use carus_anatomy::pelvis::AxisSample;
 use carus_anatomy::TriSurface;
 use carus_io::{write_vtu, FrameFields};
 
@@ -43,9 +44,6 @@ pub struct MeshArgs {
     pub json: bool,
 }
 
-/// Points along the pelvic axis in the written axis file.
-const AXIS_SAMPLES: usize = 60;
-
 pub fn run(args: &MeshArgs) -> anyhow::Result<Status> {
     let file = AnatomyFile::load(args.file.as_deref())?;
     super::create_out_folder(&args.out)?;
@@ -59,12 +57,7 @@ pub fn run(args: &MeshArgs) -> anyhow::Result<Status> {
             let landmarks: Vec<(String, [f64; 3])> =
                 pelvis.landmarks.named().iter().map(|(n, p)| (n.to_string(), p.to_array())).collect();
             written.extend(write_landmarks(&args.out, "pelvis_landmarks", &landmarks)?);
-            let axis: Vec<(f64, [f64; 3])> = (0..=AXIS_SAMPLES)
-                .map(|k| {
-                    let sigma = pelvis.axis.length() * k as f64 / AXIS_SAMPLES as f64;
-                    (sigma, pelvis.axis.point(sigma).to_array())
-                })
-                .collect();
+            let axis = carus_anatomy::pelvis::axis_samples(&pelvis);
             written.push(write_axis(&args.out.join("pelvic_axis.csv"), &axis)?);
             if args.part == MeshPart::Floor {
                 let floor = file.floor(&pelvis)?;
@@ -178,10 +171,11 @@ fn write_landmarks(dir: &Path, name: &str, points: &[(String, [f64; 3])]) -> any
 }
 
 /// `sigma_mm,x_mm,y_mm,z_mm` along the pelvic axis.
-fn write_axis(path: &Path, samples: &[(f64, [f64; 3])]) -> anyhow::Result<PathBuf> {
-    let mut csv = String::from("sigma_mm,x_mm,y_mm,z_mm\n");
-    for (sigma, p) in samples {
-        csv += &format!("{:.4},{:.4},{:.4},{:.4}\n", sigma * 1e3, p[0] * 1e3, p[1] * 1e3, p[2] * 1e3);
+fn write_axis(path: &Path, samples: &[AxisSample]) -> anyhow::Result<PathBuf> {
+    let mut csv = String::from("sigma_mm,x_mm,y_mm,z_mm,tangent_x,tangent_y,tangent_z\n");
+    for s in samples {
+        let ([x, y, z], [tx, ty, tz]) = (s.point_mm, s.tangent);
+        csv += &format!("{:.4},{x:.4},{y:.4},{z:.4},{tx:.6},{ty:.6},{tz:.6}\n", s.sigma_mm);
     }
     std::fs::write(path, csv).with_context(|| format!("cannot write {}", path.display()))?;
     Ok(path.to_path_buf())

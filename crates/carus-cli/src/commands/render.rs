@@ -182,8 +182,7 @@ const PELVIS_MARKER_M: f32 = 3.5e-3;
 pub(super) const HEAD_MARKER_M: f32 = 2.5e-3;
 const ATTACHED_MARKER_M: f32 = 1.2e-3;
 const AXIS_RADIUS_M: f32 = 1.5e-3;
-/// Points along the pelvic axis tube and round each plane's outline.
-const AXIS_SAMPLES: usize = 60;
+/// Points round each plane's outline.
 const OUTLINE_SAMPLES: usize = 64;
 
 /// The landmarks CONVENTIONS.md names for every pelvis.
@@ -259,9 +258,9 @@ pub(super) fn pelvis_markers(pelvis: &Pelvis) -> Vec<RenderMesh> {
 
 /// The curve of Carus from the inlet centre to the outlet centre.
 fn axis_tube(pelvis: &Pelvis) -> RenderMesh {
-    let axis = &pelvis.axis;
-    let points: Vec<[f32; 3]> = (0..=AXIS_SAMPLES)
-        .map(|k| f32_point(axis.point(axis.length() * k as f64 / AXIS_SAMPLES as f64)))
+    let points: Vec<[f32; 3]> = carus_anatomy::pelvis::axis_samples(pelvis)
+        .iter()
+        .map(|s| s.point_mm.map(|x| (x * 1e-3) as f32))
         .collect();
     RenderMesh::tube("pelvic axis", &points, AXIS_RADIUS_M, AXIS_RGB)
 }
