@@ -123,6 +123,10 @@ pub struct TrunkSection {
     /// vertebra: 37 mm, the cervical spine's length at birth (Roche,
     /// carus-anatomy TrunkDiameters).
     pub cervical_spine_mm: f64,
+    /// The trunk from the neck base (T1) to the breech: engineering
+    /// estimate 186 mm, not scaled with the shoulders (carus-anatomy
+    /// TrunkDiameters).
+    pub trunk_length_mm: f64,
 }
 
 impl Default for TrunkSection {
@@ -133,6 +137,7 @@ impl Default for TrunkSection {
             bisacromial_mm: d.bisacromial_mm,
             bitrochanteric_mm: d.bitrochanteric_mm,
             cervical_spine_mm: d.cervical_spine_mm,
+            trunk_length_mm: d.trunk_length_mm,
         }
     }
 }
@@ -424,6 +429,11 @@ pub const MIN_VTU_EVERY_S: f64 = 0.01;
 /// newborn's 37 mm cervical spine (carus-anatomy TrunkDiameters), so that a
 /// length given in cm is refused.
 pub const FETAL_NECK_LENGTH_MM: (f64, f64) = (15.0, 110.0);
+
+/// The trunk lengths (neck base to breech) a scenario may give, mm: from
+/// under half to over twice the default 186 mm (carus-anatomy
+/// TrunkDiameters), so that a length given in cm is refused.
+pub const FETAL_TRUNK_LENGTH_MM: (f64, f64) = (80.0, 400.0);
 
 /// The longest scenario name, bytes: a folder name of runs/ may take 255.
 const MAX_NAME_BYTES: usize = 200;
@@ -984,7 +994,7 @@ impl Scenario {
             problem: problem.into(),
             hint: hint.into(),
         };
-        let positive: [(&'static str, f64, &str); 22] = [
+        let positive: [(&'static str, f64, &str); 23] = [
             (
                 "trunk.bisacromial_mm",
                 self.trunk.bisacromial_mm,
@@ -999,6 +1009,11 @@ impl Scenario {
                 "trunk.cervical_spine_mm",
                 self.trunk.cervical_spine_mm,
                 "a length in mm, e.g. 37.0",
+            ),
+            (
+                "trunk.trunk_length_mm",
+                self.trunk.trunk_length_mm,
+                "a length in mm, e.g. 186.0",
             ),
             (
                 "expulsion.period_s",
@@ -1282,6 +1297,12 @@ impl Scenario {
             FETAL_NECK_LENGTH_MM,
             "is not the length of a fetal neck",
             "mm (not cm): the newborn's cervical spine is 37 mm long",
+        )?;
+        in_band(
+            &[("trunk.trunk_length_mm", self.trunk.trunk_length_mm)],
+            FETAL_TRUNK_LENGTH_MM,
+            "is not the length of a fetal trunk",
+            "mm (not cm): the trunk from the neck base to the breech is about 186 mm",
         )?;
         in_band(
             &[("contact.sample_spacing_mm", self.contact.sample_spacing_mm)],
@@ -2151,6 +2172,10 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("trunk.cervical_spine_mm") && e.contains("37 mm"), "{e}");
+        let e = parse("name = \"x\"\n[trunk]\ntrunk_length_mm = 18.6\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("trunk.trunk_length_mm") && e.contains("186 mm"), "{e}");
         // A [floor.mesh] of one key keeps the runs' resolution, not the library's.
         let floor = parse("name = \"x\"\n[floor.mesh]\nsag_mm = 25.0\n").unwrap().floor.mesh;
         assert_eq!(floor, FloorParameters { sag_mm: 25.0, ..FloorSection::default().mesh });

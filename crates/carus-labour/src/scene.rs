@@ -165,6 +165,7 @@ impl Scene {
                 bisacromial_mm: s.trunk.bisacromial_mm,
                 bitrochanteric_mm: s.trunk.bitrochanteric_mm,
                 cervical_spine_mm: s.trunk.cervical_spine_mm,
+                trunk_length_mm: s.trunk.trunk_length_mm,
             };
             let anatomy =
                 Trunk::new(&d).map_err(|e| LabourError::Anatomy(format!("fetal trunk: {e}")))?;

@@ -1,6 +1,7 @@
 //! The fetal trunk: neck, shoulders, chest, abdomen and hips as a closed
 //! surface of superellipse rings, built from the bisacromial and
-//! bitrochanteric diameters and the length of the cervical spine.
+//! bitrochanteric diameters and the lengths of the cervical spine and of
+//! the trunk below it.
 //!
 //! Trunk frame (metres): origin at the atlanto-occipital pivot, where the
 //! trunk carries the head; x ventral, y towards the fetal left, z cranial, so
@@ -32,6 +33,14 @@ pub struct TrunkDiameters {
     /// Radiology, Springer; doi 10.1007/978-3-540-68897-6_6). Not scaled
     /// with the shoulders: a wider girdle is not a longer neck.
     pub cervical_spine_mm: f64,
+    /// From the neck base (T1) down to the buttocks' lowest ring, along
+    /// the spine (the breech's cap rounds off below it).
+    /// Engineering estimate: 186 mm, the proportion (1.55 bisacromial) the
+    /// trunk was shaped with on a term neonate with 120 mm shoulders. Not
+    /// scaled with the shoulders: a wider girdle is not a longer spine, so
+    /// the levels along it (the shoulder ring, the thoracolumbar junction,
+    /// the hips) stay where they are when only the shoulders widen.
+    pub trunk_length_mm: f64,
 }
 
 impl Default for TrunkDiameters {
@@ -40,6 +49,7 @@ impl Default for TrunkDiameters {
             bisacromial_mm: 120.0,
             bitrochanteric_mm: 95.0,
             cervical_spine_mm: 37.0,
+            trunk_length_mm: 186.0,
         }
     }
 }
@@ -57,6 +67,7 @@ impl TrunkDiameters {
             ("bisacromial_mm", self.bisacromial_mm),
             ("bitrochanteric_mm", self.bitrochanteric_mm),
             ("cervical_spine_mm", self.cervical_spine_mm),
+            ("trunk_length_mm", self.trunk_length_mm),
         ] {
             if !(value.is_finite() && value > 0.0) {
                 return Err(TrunkError::NotPositive { name, value });
@@ -82,20 +93,26 @@ struct Section {
     centre_x: f64,
 }
 
+/// The trunk below the neck, in the bisacromial diameters of the term
+/// neonate it was shaped on: depths along it are fractions of a
+/// 1/1.55 part of `trunk_length_mm`.
+const LENGTH_IN_SHOULDER_WIDTHS: f64 = 1.55;
+
 /// Cross-sections from the neck down: the pivot, then the neck base at the
 /// cervical spine's length below it, then the trunk at depths below the
-/// neck base. Depths and sizes are fractions of the bisacromial diameter S
-/// (engineering estimates shaped on a term neonate: neck about 48 mm
-/// thick, chest about 108 x 88 mm and abdomen about 100 x 92 mm, i.e.
-/// circumferences near 31-33 cm, the trunk below the neck about 1.55 S
-/// long), except the shoulder and hip widths, which are the diameters
-/// themselves.
+/// neck base. Girths are fractions of the bisacromial diameter S and depths
+/// fractions of the trunk's length in its 1.55 parts, L (engineering
+/// estimates shaped on a term neonate, where L = S = 120 mm: neck about
+/// 48 mm thick, chest about 108 x 88 mm and abdomen about 100 x 92 mm,
+/// i.e. circumferences near 31-33 cm), except the shoulder and hip
+/// widths, which are the diameters themselves.
 fn sections(d: &TrunkDiameters) -> [Section; 8] {
     let s = d.bisacromial_mm * 1e-3;
     let t = d.bitrochanteric_mm * 1e-3;
     let neck_base = d.cervical_spine_mm * 1e-3;
+    let l = d.trunk_length_mm * 1e-3 / LENGTH_IN_SHOULDER_WIDTHS;
     let section = |depth: f64, half_width: f64, half_depth: f64, centre: f64| Section {
-        z: -(neck_base + depth * s),
+        z: -(neck_base + depth * l),
         half_width,
         half_depth: half_depth * s,
         centre_x: centre * s,
@@ -112,7 +129,7 @@ fn sections(d: &TrunkDiameters) -> [Section; 8] {
         section(0.75, 0.42 * s, 0.38, 0.22),
         section(1.15, 0.5 * t, 0.33, 0.18),
         section(1.42, 0.36 * t, 0.22, 0.12),
-        section(1.55, 0.12 * t, 0.08, 0.08),
+        section(LENGTH_IN_SHOULDER_WIDTHS, 0.12 * t, 0.08, 0.08),
     ]
 }
 
@@ -121,8 +138,10 @@ const NECK_BASE: usize = 1;
 /// Index of the shoulder (acromion) and hip (trochanter) sections.
 const SHOULDER: usize = 2;
 const HIP: usize = 5;
+/// Index of the buttocks' lowest ring, the end of the trunk's length.
+const BUTTOCKS: usize = 7;
 /// Index of the section at the thoracolumbar junction, below the chest
-/// (0.75 S below the neck base, 127 mm below the pivot for the default
+/// (0.75 L below the neck base, 127 mm below the pivot for the default
 /// trunk). Engineering
 /// estimate: in a term neonate the thoracic spine ends about halfway from
 /// the atlas to the sacral tip; the cut is where the trunk bends.
@@ -262,7 +281,7 @@ impl Trunk {
     /// vertebra behind and the manubrium's jugular notch in front, and
     /// slopes down and forwards. Here it runs through the back of the neck
     /// base (at T1, the cervical spine's length below the pivot) and the
-    /// front of the shoulder section (0.12 S lower), the clavicles lying
+    /// front of the shoulder section (0.12 L lower), the clavicles lying
     /// almost level from the notch to the acromions (engineering reading
     /// for the fetus), across the
     /// shoulders from side to side. Below it bone lies under the skin;
@@ -301,6 +320,9 @@ impl Trunk {
             width_mm: (hi.y - lo.y) * 1e3,
             length_mm: (hi.z - lo.z) * 1e3,
             cervical_spine_mm: (l.neck.z - self.surface.vertices[NECK_BASE * RING_POINTS].z) * 1e3,
+            trunk_length_mm: (self.surface.vertices[NECK_BASE * RING_POINTS].z
+                - self.surface.vertices[BUTTOCKS * RING_POINTS].z)
+                * 1e3,
         }
     }
 }
@@ -316,6 +338,8 @@ pub struct TrunkMeasurement {
     pub length_mm: f64,
     /// From the pivot down to the neck base (T1).
     pub cervical_spine_mm: f64,
+    /// From the neck base down to the buttocks' lowest ring.
+    pub trunk_length_mm: f64,
 }
 
 #[cfg(test)]
@@ -326,8 +350,8 @@ mod tests {
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(32))]
         #[test]
-        fn trunks_are_closed_and_measure_back(s in 90.0..160.0f64, t in 70.0..120.0f64, c in 20.0..50.0f64) {
-            let d = TrunkDiameters { bisacromial_mm: s, bitrochanteric_mm: t, cervical_spine_mm: c };
+        fn trunks_are_closed_and_measure_back(s in 90.0..180.0f64, t in 70.0..120.0f64, c in 20.0..50.0f64, l in 120.0..260.0f64) {
+            let d = TrunkDiameters { bisacromial_mm: s, bitrochanteric_mm: t, cervical_spine_mm: c, trunk_length_mm: l };
             let trunk = Trunk::new(&d).unwrap();
             trunk.surface.check_closed().unwrap();
             let m = trunk.measure();
@@ -335,11 +359,16 @@ mod tests {
             prop_assert!((m.bitrochanteric_mm - t).abs() < 0.1);
             prop_assert!((m.width_mm - s.max(t)).abs() < 0.1);
             prop_assert!((m.cervical_spine_mm - c).abs() < 0.1);
+            prop_assert!((m.trunk_length_mm - l).abs() < 0.1);
+            // The shoulders widen the trunk, not lengthen it.
+            let wider = Trunk::new(&TrunkDiameters { bisacromial_mm: 1.3 * s, ..d }).unwrap();
+            prop_assert!((wider.measure().trunk_length_mm - m.trunk_length_mm).abs() < 1e-9);
+            prop_assert!((wider.landmarks.acromion_left.z - trunk.landmarks.acromion_left.z).abs() < 1e-12);
         }
 
         #[test]
-        fn the_segments_close_and_fill_the_trunk(s in 90.0..160.0f64, t in 70.0..120.0f64, c in 20.0..50.0f64) {
-            let d = TrunkDiameters { bisacromial_mm: s, bitrochanteric_mm: t, cervical_spine_mm: c };
+        fn the_segments_close_and_fill_the_trunk(s in 90.0..180.0f64, t in 70.0..120.0f64, c in 20.0..50.0f64, l in 120.0..260.0f64) {
+            let d = TrunkDiameters { bisacromial_mm: s, bitrochanteric_mm: t, cervical_spine_mm: c, trunk_length_mm: l };
             let trunk = Trunk::new(&d).unwrap();
             let parts = trunk.segments();
             parts.thorax.check_closed().unwrap();
