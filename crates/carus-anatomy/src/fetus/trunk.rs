@@ -36,10 +36,14 @@ pub struct TrunkDiameters {
     /// From the neck base (T1) down to the buttocks' lowest ring, along
     /// the spine (the breech's cap rounds off below it).
     /// Engineering estimate: 186 mm, the proportion (1.55 bisacromial) the
-    /// trunk was shaped with on a term neonate with 120 mm shoulders. Not
-    /// scaled with the shoulders: a wider girdle is not a longer spine, so
-    /// the levels along it (the shoulder ring, the thoracolumbar junction,
-    /// the hips) stay where they are when only the shoulders widen.
+    /// trunk was shaped with on a term neonate with 120 mm shoulders; with
+    /// the head and neck it makes a 314 mm sitting height, near the
+    /// newborn's 0.65 of a 50 cm length (docs/ANATOMY.md). Not scaled with
+    /// the shoulders: a wider girdle is not a longer spine (macrosomic
+    /// infants of diabetic mothers have larger shoulders at the same
+    /// length, J Matern Fetal Med 1998;7(6):292), so the levels along it
+    /// (the shoulder ring, the thoracolumbar junction, the hips) stay where
+    /// they are when only the shoulders widen.
     pub trunk_length_mm: f64,
 }
 
@@ -93,9 +97,10 @@ struct Section {
     centre_x: f64,
 }
 
-/// The trunk below the neck, in the bisacromial diameters of the term
-/// neonate it was shaped on: depths along it are fractions of a
-/// 1/1.55 part of `trunk_length_mm`.
+/// The trunk below the neck was shaped 1.55 bisacromial diameters long on
+/// a term neonate; its levels are kept in those units, L =
+/// `trunk_length_mm` / 1.55 (120 mm by default), now apart from the
+/// shoulders' width.
 const LENGTH_IN_SHOULDER_WIDTHS: f64 = 1.55;
 
 /// Cross-sections from the neck down: the pivot, then the neck base at the
