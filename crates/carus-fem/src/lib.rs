@@ -32,4 +32,4 @@ pub use material::{Material, MaterialLaw, MooneyRivlin, NeoHookean};
 pub use mesh::{ElementKind, Mesh};
 pub use model::{HourglassModulus, MaterialRegion, ModelOptions, Precision, TetFormulation, TledModel};
 pub use quality::{check_quality, QualityReport};
-pub use solver::{SolverSnapshot, StepControl, TledSolver};
+pub use solver::{ClockOrigin, SolverSnapshot, StepControl, TledSolver};

@@ -129,9 +129,19 @@ pub struct TledModel {
     critical_time_step_s: f64,
     element_time_step_s: f64,
     critical_element: usize,
+    /// Each element's reference volume (m^3) and dilatational wave speed
+    /// (m/s), for the critical step of a deformed shape.
+    element_scales: Vec<ElementScale>,
     /// Diagonal of the mesh's bounding box, m (scale of the runaway check).
     size_m: f64,
     kernel: KernelModel,
+}
+
+/// What the critical step of one element is made of, besides its shape.
+#[derive(Debug, Clone, Copy)]
+struct ElementScale {
+    volume_m3: f64,
+    wave_speed_m_s: f64,
 }
 
 /// Fraction of the linearised stability limit 2 / omega_max taken as the
@@ -176,7 +186,10 @@ fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     ]
 }
 fn norm(a: [f64; 3]) -> f64 {
-    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
+    norm_squared(a).sqrt()
+}
+fn norm_squared(a: [f64; 3]) -> f64 {
+    a[0] * a[0] + a[1] * a[1] + a[2] * a[2]
 }
 pub(crate) fn det3(m: &[[f64; 3]; 3]) -> f64 {
     crate::kernel::element::det3(m)
@@ -274,17 +287,36 @@ pub(crate) fn h8_geometry(e: usize, x: &[[f64; 3]; 8]) -> Result<ElementGeometry
             }
         }
     }
-    // Hallquist, LS-DYNA Theory Manual (2006), sec. 22.1: L_e = V_e / A_e,max for solids.
-    let max_face = H8_FACES
-        .iter()
-        .map(|f| 0.5 * norm(cross(sub(x[f[2]], x[f[0]]), sub(x[f[3]], x[f[1]]))))
-        .fold(0.0, f64::max);
     Ok(ElementGeometry {
         shape_derivatives: dh,
         weight: volume,
         volume,
-        characteristic_length: volume / max_face,
+        characteristic_length: characteristic_length(ElementKind::H8, x, volume),
     })
+}
+
+/// The length L_e of the critical step L_e / c_e for an element of this
+/// volume on these corners (Hallquist, LS-DYNA Theory Manual (2006), sec.
+/// 22.1): V / A_max for H8, the minimum altitude 3 V / A_max for T4.
+fn characteristic_length(kind: ElementKind, x: &[[f64; 3]], volume: f64) -> f64 {
+    // One square root for the largest face: the labour run calls this on
+    // every element at every rigid step.
+    match kind {
+        ElementKind::H8 => {
+            let max_face = H8_FACES
+                .iter()
+                .map(|f| norm_squared(cross(sub(x[f[2]], x[f[0]]), sub(x[f[3]], x[f[1]]))))
+                .fold(0.0, f64::max);
+            volume / (0.5 * max_face.sqrt())
+        }
+        ElementKind::T4 => {
+            let max_face = T4_FACES
+                .iter()
+                .map(|f| norm_squared(cross(sub(x[f[1]], x[f[0]]), sub(x[f[2]], x[f[0]]))))
+                .fold(0.0, f64::max);
+            3.0 * volume / (0.5 * max_face.sqrt())
+        }
+    }
 }
 
 /// T4 geometry; errors on inverted or degenerate elements.
@@ -320,16 +352,11 @@ pub(crate) fn t4_geometry(e: usize, x: &[[f64; 3]; 4]) -> Result<ElementGeometry
             dh[a][j] = (0..3).map(|i| DN[a][i] * inv[j][i]).sum();
         }
     }
-    // Minimum altitude 3 V / A_max (LS-DYNA Theory Manual, sec. 22.1, tetrahedra).
-    let max_face = T4_FACES
-        .iter()
-        .map(|f| 0.5 * norm(cross(sub(x[f[1]], x[f[0]]), sub(x[f[2]], x[f[0]]))))
-        .fold(0.0, f64::max);
     Ok(ElementGeometry {
         shape_derivatives: dh,
         weight: volume,
         volume,
-        characteristic_length: 3.0 * volume / max_face,
+        characteristic_length: characteristic_length(ElementKind::T4, x, volume),
     })
 }
 
@@ -415,15 +442,15 @@ impl TledModel {
             });
         }
         let region_of = assign_regions(mesh, materials)?;
-        let (kernel, (element_time_step_s, critical_element, min_length)) = match options.precision
+        let (kernel, (element_time_step_s, critical_element, min_length), element_scales) = match options.precision
         {
             Precision::F64 => {
-                let (k, limits) = build_kernel::<f64>(mesh, materials, &region_of, options)?;
-                (KernelModel::F64(k), limits)
+                let (k, limits, scales) = build_kernel::<f64>(mesh, materials, &region_of, options)?;
+                (KernelModel::F64(k), limits, scales)
             }
             Precision::F32 => {
-                let (k, limits) = build_kernel::<f32>(mesh, materials, &region_of, options)?;
-                (KernelModel::F32(k), limits)
+                let (k, limits, scales) = build_kernel::<f32>(mesh, materials, &region_of, options)?;
+                (KernelModel::F32(k), limits, scales)
             }
         };
         let mut lo = [f64::INFINITY; 3];
@@ -451,6 +478,7 @@ impl TledModel {
             critical_time_step_s: spectral.min(element_time_step_s),
             element_time_step_s,
             critical_element,
+            element_scales,
             size_m: norm(sub(hi, lo)),
             kernel,
         })
@@ -471,6 +499,31 @@ impl TledModel {
     /// 10-15 % above the true limit, hence the spectral check.
     pub fn element_time_step(&self) -> f64 {
         self.element_time_step_s
+    }
+
+    /// The critical step of a deformed shape, s: the element estimate
+    /// min_e L_e / c_e on the elements as they are now (volume J V_e,
+    /// largest face as deformed), times the margin the spectral check
+    /// found at the reference ([`Self::critical_time_step`] over
+    /// [`Self::element_time_step`]); at the reference it is the critical
+    /// step. An element pressed flat by contact, its faces stretched at
+    /// constant volume, lowers it several times, and a step the reference
+    /// allowed then diverges (docs/SOLVE.md). `positions` are the nodes'
+    /// current coordinates, `volume_ratios` the elements' J
+    /// ([`crate::TledSolver::volume_ratios`]).
+    pub fn critical_time_step_at(&self, positions: &[[f64; 3]], volume_ratios: &[f64]) -> f64 {
+        let margin = self.critical_time_step_s / self.element_time_step_s;
+        let kind = self.mesh.kind;
+        let mut corners = [[0.0; 3]; 8];
+        let mut step = f64::INFINITY;
+        for ((el, scale), &j) in self.mesh.elements().zip(&self.element_scales).zip(volume_ratios) {
+            for (c, &n) in corners.iter_mut().zip(el) {
+                *c = positions[n as usize];
+            }
+            let length = characteristic_length(kind, &corners[..el.len()], j * scale.volume_m3);
+            step = step.min(length / scale.wave_speed_m_s);
+        }
+        margin * step
     }
 
     /// The element with the smallest L_e / c_e.
@@ -580,7 +633,7 @@ fn build_kernel<T: Real>(
     materials: &[MaterialRegion],
     region_of: &[u16],
     options: &ModelOptions,
-) -> Result<(KernelData<T>, StepLimits), FemError> {
+) -> Result<(KernelData<T>, StepLimits, Vec<ElementScale>), FemError> {
     let npe = mesh.kind.nodes_per_element();
     let ne = mesh.element_count();
     let nn = mesh.node_count();
@@ -592,6 +645,7 @@ fn build_kernel<T: Real>(
     let mut dt_crit = f64::INFINITY;
     let mut dt_element = 0;
     let mut min_length = f64::INFINITY;
+    let mut scales = Vec::with_capacity(ne);
     for (e, el) in mesh.elements().enumerate() {
         let region = &materials[region_of[e] as usize];
         let (lambda, mu) = region.material.lame_parameters();
@@ -619,6 +673,10 @@ fn build_kernel<T: Real>(
             .material
             .dilatational_wave_speed(region.density_kg_m3);
         let dt = geom.characteristic_length / c;
+        scales.push(ElementScale {
+            volume_m3: geom.volume,
+            wave_speed_m_s: c,
+        });
         min_length = min_length.min(geom.characteristic_length);
         if dt < dt_crit {
             dt_crit = dt;
@@ -679,6 +737,7 @@ fn build_kernel<T: Real>(
             nodes,
         },
         (dt_crit, dt_element, min_length),
+        scales,
     ))
 }
 

@@ -35,6 +35,13 @@ pub struct RunSummary {
     pub rigid_steps: u64,
     pub rigid_dt_s: f64,
     pub floor_substeps_per_step: u32,
+    /// Rigid steps whose floor took finer sub-steps, because contact had
+    /// pressed an element flat and its stable step had shrunk, and the most
+    /// sub-steps one took (docs/SOLVE.md).
+    #[serde(default)]
+    pub floor_refined_steps: u64,
+    #[serde(default)]
+    pub floor_most_substeps: u32,
     pub floor_elements: usize,
     pub head_samples: usize,
     pub trunk_samples: usize,

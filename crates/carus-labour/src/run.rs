@@ -620,6 +620,8 @@ fn finish(
         rigid_steps: sim.state.step,
         rigid_dt_s: sim.dt_s(),
         floor_substeps_per_step: sim.floor_substeps(),
+        floor_refined_steps: sim.state.floor.as_ref().map_or(0, |f| f.refined_steps),
+        floor_most_substeps: sim.state.floor.as_ref().map_or(0, |f| f.most_substeps),
         floor_elements: scene.floor.as_ref().map_or(0, |f| f.mesh.element_count()),
         head_samples: scene.head.samples.len(),
         trunk_samples: scene.trunk.as_ref().map_or(0, |t| t.samples.len()),

@@ -39,7 +39,21 @@ pub struct FloorState {
     /// Contact of the bony canal wall (with the sacrospinous ligaments)
     /// with the floor's nodes: the tissue slides on the bone, never into it.
     pub bone: TissueContact,
+    /// Rigid steps whose floor took finer sub-steps than the reference
+    /// shape's (an element pressed flat: [`MAX_SUBSTEP_REFINEMENT`]).
+    #[serde(default)]
+    pub refined_steps: u64,
+    /// The most sub-steps one rigid step took.
+    #[serde(default)]
+    pub most_substeps: u32,
 }
+
+/// The most times finer than the reference shape's that the floor is
+/// sub-stepped when contact has pressed an element flat (numerical
+/// bound, not physics): a rigid step then costs up to this many times
+/// more, and an element that needs more is being crushed and fails as a
+/// floor failure, named, as it did before sub-steps followed the shape.
+pub const MAX_SUBSTEP_REFINEMENT: u32 = 16;
 
 /// One recorded floor figure: the largest principal stretch over the floor.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -251,6 +265,8 @@ impl<'a> Simulation<'a> {
                     // Tissue never passes into bone: a node the floor
                     // throws through the wall within a step is caught too.
                     bone: contact()?.catching_crossings(),
+                    refined_steps: 0,
+                    most_substeps: 0,
                 })
             }
             None => None,
@@ -717,9 +733,22 @@ impl<'a> Simulation<'a> {
         };
         let scene = self.scene;
         let nodes = deformed(&floor.reference, solver);
+        let volume_ratios = solver.volume_ratios();
         let ratio = scene.scenario.floor.crushed_volume_ratio;
-        let crushed =
-            (ratio > 0.0).then(|| crushed_nodes(&floor.mesh, &nodes, &solver.volume_ratios(), ratio));
+        let crushed = (ratio > 0.0).then(|| crushed_nodes(&floor.mesh, &nodes, &volume_ratios, ratio));
+        // Contact can press an element flat, its faces stretched at constant
+        // volume, and the stable step with it far below the reference
+        // shape's that the sub-step was chosen for: sub-step finer while it
+        // lasts (docs/SOLVE.md).
+        let positions: Vec<[f64; 3]> = nodes.iter().map(|p| p.to_array()).collect();
+        let stable = scene.scenario.numerics.floor_step_fraction
+            * floor.model.critical_time_step_at(&positions, &volume_ratios);
+        let substeps = substeps_within(self.dt, stable, self.substeps);
+        if substeps != self.substeps {
+            solver.set_step(self.dt / substeps as f64, StepControl::Refuse)?;
+            floor_state.refined_steps += 1;
+        }
+        floor_state.most_substeps = floor_state.most_substeps.max(substeps);
         solver.release_imposed();
         // Who holds a node, first come first served (carus-fem's imposed
         // displacements override its fixed dofs, and a later imposition
@@ -783,7 +812,7 @@ impl<'a> Simulation<'a> {
                 .collect();
             floor_failure(e, solver, floor, &scene.scenario.floor.mesh, &holders)
         };
-        for _ in 0..self.substeps {
+        for _ in 0..substeps {
             if let Err(e) = solver.step() {
                 return Err(explain(e, solver));
             }
@@ -791,6 +820,7 @@ impl<'a> Simulation<'a> {
         if let Err(e) = solver.update_internal_forces() {
             return Err(explain(e, solver));
         }
+        solver.set_step(self.dt / self.substeps as f64, StepControl::Refuse)?;
         let pivot = self
             .state
             .bodies
@@ -1079,6 +1109,22 @@ pub(crate) fn floor_failure(
     }
 }
 
+/// The sub-steps of a rigid step `dt` at or below the `stable` sub-step:
+/// at least `reference` (those of the reference shape), at most
+/// [`MAX_SUBSTEP_REFINEMENT`] times as many.
+fn substeps_within(dt: f64, stable: f64, reference: u32) -> u32 {
+    let most = reference * MAX_SUBSTEP_REFINEMENT;
+    if !(stable > 0.0) || dt / stable >= most as f64 {
+        return most;
+    }
+    let mut n = ((dt / stable).ceil() as u32).max(reference);
+    // Rounding can leave dt / n a hair above the stable step.
+    while n < most && dt / n as f64 > stable {
+        n += 1;
+    }
+    n
+}
+
 /// The floor's solver with a sub-step of `dt / n`, n the fewest sub-steps
 /// at or below the chosen fraction of the critical step; returns it with n.
 fn new_solver(
@@ -1110,6 +1156,28 @@ fn bearer(forces: impl Iterator<Item = DVec3>) -> FetalPart {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The reference sub-steps while the floor keeps its shape; more, at or
+    /// below the stable sub-step, once an element is pressed flat; never
+    /// more than the cap, which also takes a shape with no stable step.
+    #[test]
+    fn sub_steps_follow_the_stable_step_within_their_bounds() {
+        let dt = 5e-4;
+        assert_eq!(substeps_within(dt, dt / 9.0 * 1.3, 9), 9);
+        assert_eq!(substeps_within(dt, dt / 9.0, 9), 9);
+        let cap = 9 * MAX_SUBSTEP_REFINEMENT;
+        for k in 1..2000 {
+            let stable = dt / (9.0 + 0.37 * k as f64);
+            let n = substeps_within(dt, stable, 9);
+            assert!(n >= 9 && n <= cap);
+            if n < cap {
+                assert!(dt / n as f64 <= stable && dt / (n - 1) as f64 > stable, "{k}: {n}");
+            }
+        }
+        for stable in [0.0, -1.0, f64::NAN, dt / 1e9] {
+            assert_eq!(substeps_within(dt, stable, 9), cap);
+        }
+    }
 
     /// Two H8 cells side by side share a face: crushing the second marks its
     /// eight nodes and the first cell's other four stay free.

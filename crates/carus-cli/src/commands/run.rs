@@ -237,6 +237,17 @@ pub(super) fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result
                     summary.floor_substeps_per_step.to_string(),
                 ),
                 (
+                    "rigid steps whose floor took finer sub-steps (an element pressed flat; docs/SOLVE.md)".into(),
+                    if summary.floor_refined_steps == 0 {
+                        "none".into()
+                    } else {
+                        format!(
+                            "{} of {}, up to {} sub-steps",
+                            summary.floor_refined_steps, summary.rigid_steps, summary.floor_most_substeps
+                        )
+                    },
+                ),
+                (
                     "floor elements with a corner turned inside out (stresses not to be trusted; docs/LABOUR.md)"
                         .into(),
                     inverted_corners(record),

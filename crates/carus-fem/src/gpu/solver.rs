@@ -27,7 +27,7 @@ use crate::kernel::lanes::Real;
 use crate::loads::BoundaryConditions;
 use crate::model::{KernelModel, TledModel};
 use crate::coupling::CoupledNodes;
-use crate::solver::{substeps_for, SolverSnapshot, StepControl};
+use crate::solver::{substeps_for, ClockOrigin, SolverSnapshot, StepControl};
 
 use super::buffers::{check_limits, storage, ModelArrays, ModelBuffers, Planned};
 use super::device::GpuDevice;
@@ -1043,6 +1043,7 @@ impl GpuSolver {
             previous_displacements_m: vec3s(&self.read_slot(prev, "reading the state back")?),
             coupled: self.coupled.held.clone(),
             sliding: self.coupled.sliding.clone(),
+            clock: ClockOrigin::default(),
         })
     }
 
@@ -1060,6 +1061,13 @@ impl GpuSolver {
                 }
                 .into());
             }
+        }
+        if snap.clock != ClockOrigin::default() {
+            return Err(FemError::InvalidOption {
+                option: "snapshot",
+                reason: "it was taken after a change of step (TledSolver::set_step), which this backend does not make; restore it on the CPU solver".into(),
+            }
+            .into());
         }
         let coupled = snap.coupling();
         coupled.check_restored(nn)?;
