@@ -510,8 +510,11 @@ impl TledModel {
     /// constant volume, lowers it several times, and a step the reference
     /// allowed then diverges (docs/SOLVE.md). `positions` are the nodes'
     /// current coordinates, `volume_ratios` the elements' J
-    /// ([`crate::TledSolver::volume_ratios`]).
+    /// ([`crate::TledSolver::volume_ratios`]). An element with no length
+    /// left (flat, inverted or not finite) gives 0: no step is stable.
     pub fn critical_time_step_at(&self, positions: &[[f64; 3]], volume_ratios: &[f64]) -> f64 {
+        assert_eq!(positions.len(), self.mesh.node_count(), "one position per node");
+        assert_eq!(volume_ratios.len(), self.mesh.element_count(), "one volume ratio per element");
         let margin = self.critical_time_step_s / self.element_time_step_s;
         let kind = self.mesh.kind;
         let mut corners = [[0.0; 3]; 8];
@@ -521,6 +524,9 @@ impl TledModel {
                 *c = positions[n as usize];
             }
             let length = characteristic_length(kind, &corners[..el.len()], j * scale.volume_m3);
+            if !(length > 0.0) {
+                return 0.0;
+            }
             step = step.min(length / scale.wave_speed_m_s);
         }
         margin * step

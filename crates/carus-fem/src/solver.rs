@@ -56,6 +56,11 @@ pub struct SolverSnapshot {
     /// was taken at.
     #[serde(default)]
     pub clock: ClockOrigin,
+    /// The sub-step the state was taken at, s (0 in snapshots written
+    /// before it was recorded): a state with its previous displacement one
+    /// sub-step behind resumes only at that sub-step.
+    #[serde(default)]
+    pub substep_s: f64,
 }
 
 /// Where the clock last changed step: time runs from here in whole
@@ -69,6 +74,29 @@ pub struct ClockOrigin {
 }
 
 impl SolverSnapshot {
+    /// Refuses a snapshot whose clock a solver stepping `substep_s` cannot
+    /// continue: a time that is not finite, a clock origin after the state,
+    /// or another sub-step.
+    pub(crate) fn check_clock(&self, substep_s: f64) -> Result<(), FemError> {
+        let refuse = |reason: String| Err(FemError::InvalidOption { option: "snapshot", reason });
+        if !self.time_s.is_finite() || !self.clock.time_s.is_finite() {
+            return refuse(format!("its time ({} s, clock origin {} s) is not finite", self.time_s, self.clock.time_s));
+        }
+        if self.clock.substeps > self.substeps || self.clock.steps > self.steps {
+            return refuse(format!(
+                "its clock origin (step {}, sub-step {}) lies after its state (step {}, sub-step {}); the file is damaged",
+                self.clock.steps, self.clock.substeps, self.steps, self.substeps
+            ));
+        }
+        if self.substep_s != 0.0 && self.substep_s != substep_s {
+            return refuse(format!(
+                "it was taken at a sub-step of {:e} s and this solver steps {:e} s; set the step to it first (TledSolver::set_step)",
+                self.substep_s, substep_s
+            ));
+        }
+        Ok(())
+    }
+
     pub(crate) fn coupling(&self) -> CoupledNodes {
         CoupledNodes {
             held: self.coupled.clone(),
@@ -563,7 +591,9 @@ impl TledSolver {
     /// switch: the half-step velocity is kept, not re-centred). For a mesh deformed so
     /// far that the stable step has shrunk below the one it was built with
     /// ([`TledModel::critical_time_step_at`]). Call it between steps; the
-    /// same step again changes nothing.
+    /// same step again changes nothing. A failure in the first sub-step
+    /// after a change cannot roll back (the buffers hold no earlier
+    /// sub-step of the new length): it reports the state it failed in.
     pub fn set_step(&mut self, dt_s: f64, control: StepControl) -> Result<(), FemError> {
         let substeps_per_step = substeps_for(dt_s, self.model.critical_time_step(), control)?;
         if dt_s == self.dt_s && substeps_per_step == self.substeps_per_step {
@@ -807,6 +837,7 @@ impl TledSolver {
             coupled: self.coupled.held.clone(),
             sliding: self.coupled.sliding.clone(),
             clock: self.clock,
+            substep_s: self.h_s,
         }
     }
 
@@ -832,6 +863,7 @@ impl TledSolver {
                 });
             }
         }
+        snap.check_clock(self.h_s)?;
         let coupled = snap.coupling();
         coupled.check_restored(nn)?;
         with_state!(self, |_k, s| {
@@ -1192,6 +1224,45 @@ mod run_tests {
             b.step().unwrap();
         }
         assert_eq!(a.snapshot(), b.snapshot());
+    }
+
+    /// A snapshot resumes only on a clock it can continue: at the sub-step
+    /// it was taken at, with its clock origin before its state and its
+    /// times finite; each refusal says why, and the solver is untouched.
+    #[test]
+    fn restore_refuses_a_clock_it_cannot_continue() {
+        let (mesh, m) = model(2, ModelOptions::default());
+        let h = 0.9 * m.critical_time_step();
+        let mut s = TledSolver::new(m.clone(), &pull(&mesh, 0.02), h, StepControl::Refuse).unwrap();
+        for _ in 0..4 {
+            s.step().unwrap();
+        }
+        s.set_step(h / 2.0, StepControl::Refuse).unwrap();
+        s.step().unwrap();
+        let refined = s.snapshot();
+        assert_eq!(refined.substep_s, h / 2.0);
+        let mut other = TledSolver::new(m, &pull(&mesh, 0.02), h, StepControl::Refuse).unwrap();
+        let untouched = other.snapshot();
+        let refused = |other: &mut TledSolver, snap: &SolverSnapshot, why: &str| {
+            let e = other.restore(snap).unwrap_err().to_string();
+            assert!(e.contains(why), "{e}");
+        };
+        refused(&mut other, &refined, "set the step to it first");
+        let mut ahead = refined.clone();
+        ahead.substep_s = h;
+        ahead.clock.substeps = ahead.substeps + 1;
+        refused(&mut other, &ahead, "lies after its state");
+        let mut endless = refined.clone();
+        endless.substep_s = h;
+        endless.time_s = f64::NAN;
+        refused(&mut other, &endless, "not finite");
+        assert_eq!(other.snapshot(), untouched);
+        other.set_step(h / 2.0, StepControl::Refuse).unwrap();
+        other.restore(&refined).unwrap();
+        // A snapshot from before the sub-step was recorded is taken as it comes.
+        let mut old = untouched.clone();
+        old.substep_s = 0.0;
+        other.restore(&old).unwrap();
     }
 
     /// A free block drifting at a uniform velocity: a change of step keeps

@@ -1425,19 +1425,41 @@ mod tests {
         assert_resumes_bit_for_bit(&coarse(2.0));
     }
 
+    /// At friction 0.05 the coarse normal run presses a floor element flat
+    /// from about 10.8 s, and its floor is sub-stepped finer from there
+    /// (sim::MAX_SUBSTEP_REFINEMENT): stopped among those steps, it
+    /// resumes at the reference sub-step and ends bit for bit as the
+    /// uninterrupted run, its count of refined steps carried on.
+    #[test]
+    fn a_run_stopped_among_refined_floor_steps_resumes_bit_for_bit() {
+        let mut s = coarse(11.0);
+        s.contact.friction = 0.05;
+        let (whole, half) = assert_resumes_bit_for_bit_from(&s, 10.85);
+        let (before, after) = (half.summary.floor_refined_steps, whole.summary.floor_refined_steps);
+        assert!(before > 0 && after > before, "{before} refined steps by 10.85 s, {after} by 11 s");
+        assert!(whole.summary.floor_most_substeps > whole.summary.floor_substeps_per_step);
+    }
+
     /// Stopped at 1 s and resumed from its checkpoint, a run of `s` ends
     /// exactly as the uninterrupted one; returns that one.
     fn assert_resumes_bit_for_bit(s: &Scenario) -> RunRecord {
+        assert_resumes_bit_for_bit_from(s, 1.0).0
+    }
+
+    /// Stopped at `stop_s` and resumed from its checkpoint, a run of `s`
+    /// ends exactly as the uninterrupted one; returns that one and the
+    /// stopped one.
+    fn assert_resumes_bit_for_bit_from(s: &Scenario, stop_s: f64) -> (RunRecord, RunRecord) {
         let (_, whole) = run_in(s, &RunOptions::default());
         let (dir, half) = run_in(
             s,
             &RunOptions {
-                stop_at_s: Some(1.0),
+                stop_at_s: Some(stop_s),
                 ..RunOptions::default()
             },
         );
         assert!(!half.summary.completed);
-        assert_eq!(half.summary.simulated_s, 1.0);
+        assert_eq!(half.summary.simulated_s, stop_s);
         let first_leg_s = output::read_checkpoint(dir.path()).unwrap().wall_s;
         assert!(first_leg_s > 0.0 && first_leg_s <= half.summary.wall_s);
         let second_leg = Instant::now();
@@ -1455,8 +1477,9 @@ mod tests {
         assert_eq!(resumed.loads, whole.loads);
         assert_eq!(resumed.floor, whole.floor);
         assert_eq!(resumed.detector, whole.detector);
+        assert_eq!(resumed.summary.floor_refined_steps, whole.summary.floor_refined_steps);
         assert!(resumed.detector.is_some());
-        whole
+        (whole, half)
     }
 
     /// The coarse textbook scenario's fetus taken through two way-points

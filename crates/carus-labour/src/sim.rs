@@ -43,7 +43,8 @@ pub struct FloorState {
     /// shape's (an element pressed flat: [`MAX_SUBSTEP_REFINEMENT`]).
     #[serde(default)]
     pub refined_steps: u64,
-    /// The most sub-steps one rigid step took.
+    /// The most sub-steps one rigid step took (the reference sub-steps
+    /// when none was refined).
     #[serde(default)]
     pub most_substeps: u32,
 }
@@ -739,11 +740,13 @@ impl<'a> Simulation<'a> {
         // Contact can press an element flat, its faces stretched at constant
         // volume, and the stable step with it far below the reference
         // shape's that the sub-step was chosen for: sub-step finer while it
-        // lasts (docs/SOLVE.md).
+        // lasts (docs/SOLVE.md). Read on the shape the last step left,
+        // before this step's holds move it: a step behind the contact, which
+        // the floor step fraction's margin covers.
         let positions: Vec<[f64; 3]> = nodes.iter().map(|p| p.to_array()).collect();
-        let stable = scene.scenario.numerics.floor_step_fraction
-            * floor.model.critical_time_step_at(&positions, &volume_ratios);
-        let substeps = substeps_within(self.dt, stable, self.substeps);
+        let fraction = scene.scenario.numerics.floor_step_fraction;
+        let stable = fraction * floor.model.critical_time_step_at(&positions, &volume_ratios);
+        let substeps = substeps_within(self.dt, stable, fraction * floor.critical_step_s, self.substeps);
         if substeps != self.substeps {
             solver.set_step(self.dt / substeps as f64, StepControl::Refuse)?;
             floor_state.refined_steps += 1;
@@ -812,15 +815,15 @@ impl<'a> Simulation<'a> {
                 .collect();
             floor_failure(e, solver, floor, &scene.scenario.floor.mesh, &holders)
         };
-        for _ in 0..substeps {
-            if let Err(e) = solver.step() {
-                return Err(explain(e, solver));
-            }
-        }
-        if let Err(e) = solver.update_internal_forces() {
+        let stepped = (0..substeps)
+            .try_for_each(|_| solver.step())
+            .and_then(|()| solver.update_internal_forces());
+        // Back to the reference sub-step whatever happened: a state
+        // written from here records the step it resumes at.
+        solver.set_step(self.dt / self.substeps as f64, StepControl::Refuse)?;
+        if let Err(e) = stepped {
             return Err(explain(e, solver));
         }
-        solver.set_step(self.dt / self.substeps as f64, StepControl::Refuse)?;
         let pivot = self
             .state
             .bodies
@@ -1109,20 +1112,34 @@ pub(crate) fn floor_failure(
     }
 }
 
-/// The sub-steps of a rigid step `dt` at or below the `stable` sub-step:
-/// at least `reference` (those of the reference shape), at most
-/// [`MAX_SUBSTEP_REFINEMENT`] times as many.
-fn substeps_within(dt: f64, stable: f64, reference: u32) -> u32 {
-    let most = reference * MAX_SUBSTEP_REFINEMENT;
+/// The fewest sub-steps of a rigid step `dt` at or below the `stable`
+/// sub-step, at most `most` (also for a shape with no stable step).
+fn fewest_substeps(dt: f64, stable: f64, most: u32) -> u32 {
     if !(stable > 0.0) || dt / stable >= most as f64 {
         return most;
     }
-    let mut n = ((dt / stable).ceil() as u32).max(reference);
+    let mut n = ((dt / stable).ceil() as u32).max(1);
     // Rounding can leave dt / n a hair above the stable step.
     while n < most && dt / n as f64 > stable {
         n += 1;
     }
     n
+}
+
+/// How far below the built stable sub-step the one re-read on the shape
+/// at rest may fall by rounding alone (relative): so little never refines.
+const AT_REST_ROUNDING: f64 = 1e-9;
+
+/// The sub-steps of a rigid step `dt` on the floor as it is now, whose
+/// stable sub-step is `stable`: the `reference` ones, chosen for the
+/// built shape's stable sub-step `reference_stable`, until the shape needs
+/// more; then the fewest at or below `stable`, at most
+/// [`MAX_SUBSTEP_REFINEMENT`] times the reference.
+fn substeps_within(dt: f64, stable: f64, reference_stable: f64, reference: u32) -> u32 {
+    if stable >= reference_stable * (1.0 - AT_REST_ROUNDING) {
+        return reference;
+    }
+    fewest_substeps(dt, stable, reference * MAX_SUBSTEP_REFINEMENT).max(reference)
 }
 
 /// The floor's solver with a sub-step of `dt / n`, n the fewest sub-steps
@@ -1133,7 +1150,7 @@ fn new_solver(
     dt: f64,
 ) -> Result<(TledSolver, u32), LabourError> {
     let h = scene.scenario.numerics.floor_step_fraction * floor.critical_step_s;
-    let substeps = (dt / h).ceil().max(1.0) as u32;
+    let substeps = fewest_substeps(dt, h, u32::MAX);
     let solver = TledSolver::new(
         floor.model.clone(),
         &floor.bcs,
@@ -1157,25 +1174,29 @@ fn bearer(forces: impl Iterator<Item = DVec3>) -> FetalPart {
 mod tests {
     use super::*;
 
-    /// The reference sub-steps while the floor keeps its shape; more, at or
-    /// below the stable sub-step, once an element is pressed flat; never
-    /// more than the cap, which also takes a shape with no stable step.
+    /// The reference sub-steps while the floor keeps its shape (rounding
+    /// at rest included); more, at or below the stable sub-step, once an
+    /// element is pressed flat; never more than the cap, which also takes
+    /// a shape with no stable step.
     #[test]
     fn sub_steps_follow_the_stable_step_within_their_bounds() {
         let dt = 5e-4;
-        assert_eq!(substeps_within(dt, dt / 9.0 * 1.3, 9), 9);
-        assert_eq!(substeps_within(dt, dt / 9.0, 9), 9);
+        let built = dt / 9.0;
+        assert_eq!(fewest_substeps(dt, built, u32::MAX), 9);
+        assert_eq!(substeps_within(dt, built * 1.3, built, 9), 9);
+        assert_eq!(substeps_within(dt, built, built, 9), 9);
+        assert_eq!(substeps_within(dt, built * (1.0 - 1e-15), built, 9), 9);
         let cap = 9 * MAX_SUBSTEP_REFINEMENT;
         for k in 1..2000 {
             let stable = dt / (9.0 + 0.37 * k as f64);
-            let n = substeps_within(dt, stable, 9);
+            let n = substeps_within(dt, stable, built, 9);
             assert!(n >= 9 && n <= cap);
             if n < cap {
                 assert!(dt / n as f64 <= stable && dt / (n - 1) as f64 > stable, "{k}: {n}");
             }
         }
         for stable in [0.0, -1.0, f64::NAN, dt / 1e9] {
-            assert_eq!(substeps_within(dt, stable, 9), cap);
+            assert_eq!(substeps_within(dt, stable, built, 9), cap);
         }
     }
 

@@ -97,11 +97,10 @@ struct Section {
     centre_x: f64,
 }
 
-/// The trunk below the neck was shaped 1.55 bisacromial diameters long on
-/// a term neonate; its levels are kept in those units, L =
-/// `trunk_length_mm` / 1.55 (120 mm by default), now apart from the
-/// shoulders' width.
-const LENGTH_IN_SHOULDER_WIDTHS: f64 = 1.55;
+/// The trunk's levels below the neck are given in units L of its length,
+/// `trunk_length_mm` = 1.55 L (L = 120 mm by default, the term neonate the
+/// sections were shaped on).
+const LEVEL_UNITS_PER_TRUNK_LENGTH: f64 = 1.55;
 
 /// Cross-sections from the neck down: the pivot, then the neck base at the
 /// cervical spine's length below it, then the trunk at depths below the
@@ -115,7 +114,7 @@ fn sections(d: &TrunkDiameters) -> [Section; 8] {
     let s = d.bisacromial_mm * 1e-3;
     let t = d.bitrochanteric_mm * 1e-3;
     let neck_base = d.cervical_spine_mm * 1e-3;
-    let l = d.trunk_length_mm * 1e-3 / LENGTH_IN_SHOULDER_WIDTHS;
+    let l = d.trunk_length_mm * 1e-3 / LEVEL_UNITS_PER_TRUNK_LENGTH;
     let section = |depth: f64, half_width: f64, half_depth: f64, centre: f64| Section {
         z: -(neck_base + depth * l),
         half_width,
@@ -134,7 +133,7 @@ fn sections(d: &TrunkDiameters) -> [Section; 8] {
         section(0.75, 0.42 * s, 0.38, 0.22),
         section(1.15, 0.5 * t, 0.33, 0.18),
         section(1.42, 0.36 * t, 0.22, 0.12),
-        section(LENGTH_IN_SHOULDER_WIDTHS, 0.12 * t, 0.08, 0.08),
+        section(LEVEL_UNITS_PER_TRUNK_LENGTH, 0.12 * t, 0.08, 0.08),
     ]
 }
 

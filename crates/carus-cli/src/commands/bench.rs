@@ -144,6 +144,10 @@ struct LabourBenchReport {
     us_per_rigid_step: f64,
     floor_elements: usize,
     floor_substeps_per_step: u32,
+    /// Rigid steps whose floor was sub-stepped finer (an element pressed
+    /// flat), and the most sub-steps one took: they cost more.
+    floor_refined_steps: u64,
+    floor_most_substeps: u32,
     /// Wall time of each stage of the rigid steps, in step order.
     stages_wall_s: StageTimes,
     /// Before the first step: building the scene, writing the parts that
@@ -195,6 +199,12 @@ fn labour(args: &LabourBenchArgs) -> anyhow::Result<Status> {
         report.floor_elements,
         report.floor_substeps_per_step
     );
+    if report.floor_refined_steps > 0 {
+        println!(
+            "  {} rigid steps sub-stepped finer on a flattened floor element, up to {} sub-steps",
+            report.floor_refined_steps, report.floor_most_substeps
+        );
+    }
     let share = |s: f64| 100.0 * s / report.wall_s;
     for (name, s) in report.stages_wall_s.named() {
         println!("  {name:<14} {s:>7.2} s  {:>4.1} %", share(s));
@@ -250,6 +260,8 @@ fn labour_bench(scenario: Option<&str>, settings: &[String]) -> anyhow::Result<L
         us_per_rigid_step: stepping_s * 1e6 / summary.rigid_steps.max(1) as f64,
         floor_elements: summary.floor_elements,
         floor_substeps_per_step: summary.floor_substeps_per_step,
+        floor_refined_steps: summary.floor_refined_steps,
+        floor_most_substeps: summary.floor_most_substeps,
         stages_wall_s: stages,
         // The run's own wall time is its setup, its steps and its writing.
         setup_wall_s: (summary.wall_s - stepping_s - summary.output_wall_s).max(0.0),
@@ -456,5 +468,7 @@ mod tests {
         assert_eq!(report.target_wall_s, None, "the coarse scenario is not the built-in `normal`");
         assert_eq!(report.target_met, None);
         assert!(report.floor_elements > 0 && report.floor_substeps_per_step > 0);
+        // 0.2 s in, the floor has not been touched: nothing refined.
+        assert_eq!((report.floor_refined_steps, report.floor_most_substeps), (0, report.floor_substeps_per_step));
     }
 }

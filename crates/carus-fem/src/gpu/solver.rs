@@ -1044,6 +1044,7 @@ impl GpuSolver {
             coupled: self.coupled.held.clone(),
             sliding: self.coupled.sliding.clone(),
             clock: ClockOrigin::default(),
+            substep_s: self.h_s,
         })
     }
 
@@ -1062,6 +1063,7 @@ impl GpuSolver {
                 .into());
             }
         }
+        snap.check_clock(self.h_s)?;
         if snap.clock != ClockOrigin::default() {
             return Err(FemError::InvalidOption {
                 option: "snapshot",
