@@ -33,8 +33,10 @@ pub use trajectory::{Mode, Trajectory, TrajectorySection, Waypoint};
 /// Why a run cannot start or go on.
 #[derive(Debug, thiserror::Error)]
 pub enum LabourError {
+    /// Boxed: a scenario error carries its file, key and hint, and would
+    /// make every `Result` of the run as large.
     #[error(transparent)]
-    Scenario(#[from] ScenarioError),
+    Scenario(Box<ScenarioError>),
     #[error("anatomy: {0}")]
     Anatomy(String),
     #[error("contact: {0}")]
@@ -118,6 +120,12 @@ pub enum LabourError {
         dt_s: f64,
         limit_s: f64,
     },
+}
+
+impl From<ScenarioError> for LabourError {
+    fn from(e: ScenarioError) -> Self {
+        LabourError::Scenario(Box::new(e))
+    }
 }
 
 /// How to steady an unstable joint: a shorter rigid step where one that
