@@ -318,7 +318,7 @@ fn lengths_in_millimetres_are_refused_with_the_fix() {
     let err = detect(&h).unwrap_err().to_string();
     assert!(err.contains("biparietal_mm = 0.095"), "{err}");
     // Every run's own history lies well inside the bound.
-    assert!(detect(&history).is_ok());
+    assert!(detect(history).is_ok());
 }
 
 /// The textbook labour held with the head centre at `hold_mm` sigma for

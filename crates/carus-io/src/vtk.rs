@@ -662,7 +662,7 @@ mod tests {
         ] {
             assert!(LEGACY_VTK.contains(from));
             std::fs::write(&path, LEGACY_VTK.replace(from, to)).unwrap();
-            let e = read_vtk(&path).err().expect("refused").to_string();
+            let e = read_vtk(&path).expect_err("refused").to_string();
             assert!(e.contains("short_sets.vtk") && e.contains(expected) && e.contains("save it again"), "{e}");
         }
     }
@@ -683,7 +683,7 @@ mod tests {
         ] {
             assert!(ASCII_VTU.contains(from));
             std::fs::write(&path, ASCII_VTU.replace(from, to)).unwrap();
-            let e = read_vtk(&path).err().expect("refused").to_string();
+            let e = read_vtk(&path).expect_err("refused").to_string();
             assert!(e.contains("dropped.vtu") && e.contains(expected) && e.contains("save it again"), "{e}");
         }
     }
@@ -707,7 +707,7 @@ mod tests {
         let (_dir, path) = temp("short.vtu");
         let vtu = r#"<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian" header_type="UInt64"><UnstructuredGrid><Piece NumberOfPoints="1" NumberOfCells="0"><Points><DataArray type="Float32" NumberOfComponents="3" format="binary">AAAA</DataArray></Points><Cells><DataArray type="Int64" Name="connectivity" format="ascii"></DataArray><DataArray type="Int64" Name="offsets" format="ascii"></DataArray><DataArray type="UInt8" Name="types" format="ascii"></DataArray></Cells></Piece></UnstructuredGrid></VTKFile>"#;
         std::fs::write(&path, vtu).unwrap();
-        let e = read_vtk(&path).err().expect("refused").to_string();
+        let e = read_vtk(&path).expect_err("refused").to_string();
         assert!(e.contains("short.vtu") && e.contains("malformed data arrays"), "{e}");
     }
 
@@ -848,7 +848,7 @@ mod tests {
                 let mut shifted = format!("{}{moved}{}", &head[..at], &head[at + len..]).into_bytes();
                 shifted.extend_from_slice(&bytes[text_end..]);
                 std::fs::write(&path, &shifted).unwrap();
-                let e = read_vtk(&path).err().expect("refused").to_string();
+                let e = read_vtk(&path).expect_err("refused").to_string();
                 assert!(e.contains("appended_shifted.vtu") && e.contains("is wrong"), "{e}");
             }
             // The first array's byte count (its last header field) one short.
@@ -857,7 +857,7 @@ mod tests {
             let mut short = bytes.clone();
             short[field] -= 1;
             std::fs::write(&path, &short).unwrap();
-            let e = read_vtk(&path).err().expect("refused").to_string();
+            let e = read_vtk(&path).expect_err("refused").to_string();
             assert!(e.contains("byte count is wrong"), "{e}");
         }
     }

@@ -330,7 +330,7 @@ fn drive(
             break;
         }
         let k = sim.state.step;
-        if k % snapshot_every == 0 {
+        if k.is_multiple_of(snapshot_every) {
             timed(&mut || {
                 floor_snapshots.extend(FloorSnapshot::take(&sim));
                 Ok(())
@@ -339,10 +339,10 @@ fn drive(
         // A frame or checkpoint that cannot be written (a full disk) ends
         // the run as a failure, with what was simulated still written.
         let mut written = Ok(());
-        if s.output.vtu && k % frame_every == 0 {
+        if s.output.vtu && k.is_multiple_of(frame_every) {
             written = timed(&mut || write_frame(&sim, out_dir, &mut frame_times));
         }
-        if written.is_ok() && k % checkpoint_every == 0 {
+        if written.is_ok() && k.is_multiple_of(checkpoint_every) {
             written = timed(&mut || save_checkpoint(&mut sim, out_dir, &frame_times, clock.wall_s()));
         }
         if let Err(e) = written {
@@ -353,10 +353,10 @@ fn drive(
             (completed, output_failed) = (false, true);
             break;
         }
-        if k % POLL_STEPS == 0 {
+        if k.is_multiple_of(POLL_STEPS) {
             observer.progress(sim.time_s(), s.numerics.end_time_s);
         }
-        if s.numerics.stop_when_delivered && k % 20 == 0 && delivered(&sim) {
+        if s.numerics.stop_when_delivered && k.is_multiple_of(20) && delivered(&sim) {
             break;
         }
     }
@@ -1177,7 +1177,7 @@ mod tests {
         assert!(refused(|s| { s.bone_contacts.pop(); }).contains("state.bone_contacts"));
         assert!(refused(|s| { s.floor_wrench.pop(); }).contains("state.floor_wrench"));
         assert!(refused(|s| { s.bodies.position.pop(); }).contains("poses"));
-        let e = refused(|s| s.spine = s.neck.clone());
+        let e = refused(|s| s.spine = s.neck);
         assert!(e.contains("state.spine") && e.contains("from the start"), "{e}");
         assert!(Simulation::from_state(&scene, state.clone()).is_ok());
     }
@@ -1598,7 +1598,7 @@ mod tests {
         let mut s = coarse_path(Mode::Imposed);
         let into_bone = Waypoint { time_s: 1.0, station_mm: 30.0, theta_deg: 0.0, phi_deg: -80.0, anterior_mm: 40.0 };
         s.trajectory.waypoints[1] = into_bone;
-        let e = Scene::build(&s).err().expect("refused").to_string();
+        let e = Scene::build(&s).expect_err("refused").to_string();
         assert!(
             e.contains("`trajectory.waypoints[1] (the way-point at time_s = 1)`")
                 && e.contains("puts the head at least ")

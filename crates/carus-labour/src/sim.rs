@@ -420,7 +420,7 @@ impl<'a> Simulation<'a> {
 
     /// Whether the state after `step` steps is a pose sample.
     fn samples_at(&self, step: u64) -> bool {
-        step % self.sample_every == 0 || step == self.end_step
+        step.is_multiple_of(self.sample_every) || step == self.end_step
     }
 
     pub fn dt_s(&self) -> f64 {

@@ -198,7 +198,7 @@ mod forces {
             let spine = s.trunk.unwrap().orientation * demo.history.trunk.as_ref().unwrap().spine;
             s.expulsion_force_n = -80.0 * spine;
         }
-        let sample = history.samples[k].clone();
+        let sample = history.samples[k];
         let pivot = sample.head.point(PIVOT_IN_HEAD);
         let farthest = |surface: &carus_anatomy::TriSurface, pose: &carus_analysis::RigidPose, along: DVec3| {
             surface.vertices.iter().map(|&v| pose.point(v)).max_by(|a, b| a.dot(along).total_cmp(&b.dot(along))).unwrap()
@@ -286,7 +286,7 @@ mod forces {
         assert_eq!(arrows[0].rgb, EXPULSION_RGB);
         // Drawn as a mesh from tail to tip, as long as its scale says.
         let mesh = arrows[4].mesh();
-        let ends = mesh.positions.iter().map(|p| DVec3::from(Vec3::from(*p).as_dvec3()));
+        let ends = mesh.positions.iter().map(|p| Vec3::from(*p).as_dvec3());
         let back = -arrows[4].force_n.normalize();
         let reach = ends.map(|p| (p - arrows[4].tip_m).dot(back)).fold(0.0, f64::max);
         assert!((reach - 40.0 * ARROW_M_PER_N).abs() < 1e-5, "{reach}");

@@ -639,7 +639,7 @@ pub fn parse_gltf_parts(path: &Path, bytes: &[u8]) -> Result<Vec<NamedPart>, Imp
                     (None, None) => (0..count).collect(),
                     (None, Some(_)) => return Err(unreadable("indices")),
                 };
-                if indices.len() % 3 != 0 {
+                if !indices.len().is_multiple_of(3) {
                     return Err(format_error(
                         path,
                         "glTF",
