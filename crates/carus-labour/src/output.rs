@@ -553,7 +553,7 @@ pub fn read_history_csv(path: &Path, scene: &crate::Scene) -> Result<PoseHistory
             }
             let q = glam::DQuat::from_xyzw(v[3], v[4], v[5], v[6]);
             let length = q.length();
-            if !((length - 1.0).abs() <= TABLE_QUATERNION_TOLERANCE) {
+            if length.is_nan() || (length - 1.0).abs() > TABLE_QUATERNION_TOLERANCE {
                 return Err(at(
                     row.line,
                     format!("the {body}'s quaternion (qx, qy, qz, qw) has length {length}, not 1"),

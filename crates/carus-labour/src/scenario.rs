@@ -5,6 +5,7 @@
 //! path, toml the line).
 
 use std::fmt;
+use std::num::NonZeroUsize;
 use std::path::{Path, PathBuf};
 
 use carus_anatomy::fetus::{HeadDiameters, TrunkDiameters};
@@ -34,10 +35,12 @@ pub enum ScenarioError {
     },
     #[error("{}: `{key}` = {value}: {problem}\n  hint: {hint}", located(.path, *.line))]
     Value {
-        path: PathBuf,
+        /// A boxed path and a non-zero line keep this, the largest
+        /// variant, and every `Result` carrying it small.
+        path: Box<Path>,
         /// The key's line in the text read (a file, or the scenario a
         /// checkpoint or sweep plan keeps); None for a `--set` value.
-        line: Option<usize>,
+        line: Option<NonZeroUsize>,
         key: std::borrow::Cow<'static, str>,
         value: String,
         problem: String,
@@ -987,7 +990,7 @@ impl Scenario {
     /// Impossible values, named by their key with a hint.
     fn check(&self, path: &Path) -> Result<(), ScenarioError> {
         let err = |key: &'static str, value: f64, problem: &str, hint: &str| ScenarioError::Value {
-            path: path.to_path_buf(),
+            path: path.into(),
             line: None,
             key: key.into(),
             value: shown(value),
@@ -1432,7 +1435,7 @@ impl Scenario {
             let length = glam::DVec3::from_array(v).length();
             if !(length.is_finite() && length > 1e-9) {
                 return Err(ScenarioError::Value {
-                    path: path.to_path_buf(),
+                    path: path.into(),
                     line: None,
                     key: "expulsion.direction".into(),
                     value: format!("{v:?}"),
@@ -1443,7 +1446,7 @@ impl Scenario {
         }
         if self.spine.enabled && !self.trunk.enabled {
             return Err(ScenarioError::Value {
-                path: path.to_path_buf(),
+                path: path.into(),
                 line: None,
                 key: "spine.enabled".into(),
                 value: "true".into(),
@@ -1453,7 +1456,7 @@ impl Scenario {
         }
         let mentum = self.start.position.is_mentum();
         let wrong_denominator = |problem: &str, hint: &str| ScenarioError::Value {
-            path: path.to_path_buf(),
+            path: path.into(),
             line: None,
             key: "start.position".into(),
             value: format!("\"{:?}\"", self.start.position),
@@ -1477,7 +1480,7 @@ impl Scenario {
         }
         if self.name.trim().is_empty() {
             return Err(ScenarioError::Value {
-                path: path.to_path_buf(),
+                path: path.into(),
                 line: None,
                 key: "name".into(),
                 value: "\"\"".into(),
@@ -1490,7 +1493,7 @@ impl Scenario {
         // sweep's `sweep-` prefix and a run's number.
         if self.name.len() > MAX_NAME_BYTES {
             return Err(ScenarioError::Value {
-                path: path.to_path_buf(),
+                path: path.into(),
                 line: None,
                 key: "name".into(),
                 value: format!("{} bytes", self.name.len()),
@@ -1500,7 +1503,7 @@ impl Scenario {
         }
         if self.name.starts_with('.') || self.name.chars().any(|c| matches!(c, '/' | '\\' | ':') || c.is_control()) {
             return Err(ScenarioError::Value {
-                path: path.to_path_buf(),
+                path: path.into(),
                 line: None,
                 key: "name".into(),
                 value: format!("{:?}", self.name),
@@ -1519,7 +1522,7 @@ impl Scenario {
     fn check_trajectory(&self, path: &Path) -> Result<(), ScenarioError> {
         let t = &self.trajectory;
         let err = |key: String, value: String, problem: &str, hint: &str| ScenarioError::Value {
-            path: path.to_path_buf(),
+            path: path.into(),
             line: None,
             key: key.into(),
             value,
@@ -1672,7 +1675,7 @@ fn line_at(text: &str, offset: usize) -> usize {
 }
 
 /// `file:line`, or the file alone where the line is not known.
-fn located(path: &Path, line: Option<usize>) -> String {
+fn located(path: &Path, line: Option<NonZeroUsize>) -> String {
     match line {
         Some(line) => format!("{}:{line}", path.display()),
         None => path.display().to_string(),
@@ -1682,7 +1685,7 @@ fn located(path: &Path, line: Option<usize>) -> String {
 /// The line of the value of a dotted key as `check` names it
 /// (`floor.shear_modulus_pa`, `trajectory.waypoints[2].phi_deg`); None
 /// where the text does not write it (a default taken).
-fn line_of_key(text: &str, key: &str) -> Option<usize> {
+fn line_of_key(text: &str, key: &str) -> Option<NonZeroUsize> {
     use toml::de::{DeTable, DeValue};
     let root = DeTable::parse(text).ok()?;
     let mut table = root.get_ref();
@@ -1698,7 +1701,7 @@ fn line_of_key(text: &str, key: &str) -> Option<usize> {
             value = items.get(i)?;
         }
         if n + 1 == parts.len() {
-            return Some(line_at(text, value.span().start));
+            return NonZeroUsize::new(line_at(text, value.span().start));
         }
         let DeValue::Table(inner) = value.get_ref() else { return None };
         table = inner;

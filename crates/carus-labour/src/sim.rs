@@ -1115,7 +1115,7 @@ pub(crate) fn floor_failure(
 /// The fewest sub-steps of a rigid step `dt` at or below the `stable`
 /// sub-step, at most `most` (also for a shape with no stable step).
 fn fewest_substeps(dt: f64, stable: f64, most: u32) -> u32 {
-    if !(stable > 0.0) || dt / stable >= most as f64 {
+    if stable.is_nan() || stable <= 0.0 || dt / stable >= most as f64 {
         return most;
     }
     let mut n = ((dt / stable).ceil() as u32).max(1);

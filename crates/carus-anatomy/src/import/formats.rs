@@ -220,8 +220,13 @@ struct PlyLayout {
     ascii: bool,
     /// The 1-based line number of the first data line.
     data_line: usize,
-    elements: Vec<(String, usize, Vec<(String, bool, bool)>)>,
+    /// Each element's name, count and properties.
+    elements: Vec<(String, usize, Vec<PlyProperty>)>,
 }
+
+/// A PLY property: its name, whether it is a list, whether its values
+/// are integers.
+type PlyProperty = (String, bool, bool);
 
 /// Reads a PLY header, or says which line of it is wrong.
 fn ply_layout(text: &str) -> Result<PlyLayout, String> {

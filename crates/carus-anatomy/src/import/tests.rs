@@ -375,9 +375,10 @@ element vertex 3
 
 #[test]
 fn absurdly_far_vertices_are_refused_with_their_place() {
-    let mut raw = RawMesh::default();
-    raw.positions = vec![DVec3::ZERO, DVec3::new(3e38, 0.0, 0.0), DVec3::Y];
-    raw.triangles = vec![[0, 1, 2]];
+    let mut raw = RawMesh {
+        positions: vec![DVec3::ZERO, DVec3::new(3e38, 0.0, 0.0), DVec3::Y],
+        triangles: vec![[0, 1, 2]],
+    };
     let e = weld(Path::new("huge.stl"), &raw, 1e-3).unwrap_err();
     assert!(matches!(e, ImportError::TooFar { triangle: 0, corner: 1, vertex: 1, .. }), "{e}");
     let e = e.to_string();

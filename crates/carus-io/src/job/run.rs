@@ -427,7 +427,7 @@ fn build_solver(
     // digits) makes the stable step so small that the run could not end.
     let critical_s = model.critical_time_step();
     let steps = solver_spec.end_time_s / critical_s;
-    if !(steps <= super::load::MAX_STEPS) {
+    if steps.is_nan() || steps > super::load::MAX_STEPS {
         return Err(JobError::Invalid {
             path: job_path.to_path_buf(),
             key: "materials".into(),
