@@ -524,7 +524,7 @@ impl TledModel {
                 *c = positions[n as usize];
             }
             let length = characteristic_length(kind, &corners[..el.len()], j * scale.volume_m3);
-            if !(length > 0.0) {
+            if !length.is_finite() || length <= 0.0 {
                 return 0.0;
             }
             step = step.min(length / scale.wave_speed_m_s);

@@ -73,6 +73,10 @@ pub struct ClockOrigin {
     pub substeps: u64,
 }
 
+/// How far, relative, a sub-step read back off an older snapshot's clock
+/// may lie from the solver's (the rounding of a time summed in steps).
+const SUBSTEP_READ_BACK: f64 = 1e-9;
+
 impl SolverSnapshot {
     /// Refuses a snapshot whose clock a solver stepping `substep_s` cannot
     /// continue: a time that is not finite, a clock origin after the state,
@@ -88,10 +92,20 @@ impl SolverSnapshot {
                 self.clock.steps, self.clock.substeps, self.steps, self.substeps
             ));
         }
-        if self.substep_s != 0.0 && self.substep_s != substep_s {
+        // Snapshots from before the sub-step was recorded: read it off the
+        // clock, which runs in whole sub-steps from its origin.
+        let taken_at = if self.substep_s != 0.0 {
+            self.substep_s
+        } else {
+            match self.substeps - self.clock.substeps {
+                0 => return Ok(()),
+                n => (self.time_s - self.clock.time_s) / n as f64,
+            }
+        };
+        if (taken_at - substep_s).abs() > SUBSTEP_READ_BACK * substep_s {
             return refuse(format!(
-                "it was taken at a sub-step of {:e} s and this solver steps {:e} s; set the step to it first (TledSolver::set_step)",
-                self.substep_s, substep_s
+                "it was taken at a sub-step of {taken_at:e} s and this solver steps {substep_s:e} s; restore it into a \
+                 solver built with the step it was taken at"
             ));
         }
         Ok(())
@@ -1247,22 +1261,39 @@ mod run_tests {
             let e = other.restore(snap).unwrap_err().to_string();
             assert!(e.contains(why), "{e}");
         };
-        refused(&mut other, &refined, "set the step to it first");
-        let mut ahead = refined.clone();
-        ahead.substep_s = h;
-        ahead.clock.substeps = ahead.substeps + 1;
-        refused(&mut other, &ahead, "lies after its state");
-        let mut endless = refined.clone();
-        endless.substep_s = h;
-        endless.time_s = f64::NAN;
-        refused(&mut other, &endless, "not finite");
+        refused(&mut other, &refined, "restore it into a solver built with the step it was taken at");
+        // A snapshot from before the sub-step was recorded: the step is
+        // read off its clock (one sub-step of h / 2 since the origin).
+        let mut unrecorded = refined.clone();
+        unrecorded.substep_s = 0.0;
+        refused(&mut other, &unrecorded, "taken at a sub-step of");
+        for damage in [
+            |s: &mut SolverSnapshot| s.clock.substeps = s.substeps + 1,
+            |s: &mut SolverSnapshot| s.clock.steps = s.steps + 1,
+        ] {
+            let mut ahead = refined.clone();
+            damage(&mut ahead);
+            refused(&mut other, &ahead, "lies after its state");
+        }
+        for damage in [|s: &mut SolverSnapshot| s.time_s = f64::NAN, |s: &mut SolverSnapshot| s.clock.time_s = f64::INFINITY] {
+            let mut endless = refined.clone();
+            damage(&mut endless);
+            refused(&mut other, &endless, "not finite");
+        }
         assert_eq!(other.snapshot(), untouched);
         other.set_step(h / 2.0, StepControl::Refuse).unwrap();
         other.restore(&refined).unwrap();
-        // A snapshot from before the sub-step was recorded is taken as it comes.
-        let mut old = untouched.clone();
+        other.restore(&unrecorded).unwrap();
+        assert_eq!(other.snapshot(), refined);
+        // An unrecorded snapshot at the built step is taken as it comes.
+        let mut fresh = TledSolver::new(other.model().clone(), &pull(&mesh, 0.02), h, StepControl::Refuse).unwrap();
+        let mut old = s.snapshot();
         old.substep_s = 0.0;
-        other.restore(&old).unwrap();
+        old.clock = ClockOrigin::default();
+        old.time_s = 4.0 * h;
+        old.steps = 4;
+        old.substeps = 4;
+        fresh.restore(&old).unwrap();
     }
 
     /// A free block drifting at a uniform velocity: a change of step keeps

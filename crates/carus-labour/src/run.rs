@@ -1260,6 +1260,23 @@ mod tests {
         assert_eq!(std::fs::read(&path).unwrap(), written);
     }
 
+    /// A checkpoint whose floor was saved at another sub-step than its
+    /// scenario's floor takes is refused as damaged, with what to do.
+    #[test]
+    fn a_checkpoint_with_the_floor_at_another_sub_step_is_refused() {
+        let stop = RunOptions { stop_at_s: Some(0.1), ..RunOptions::default() };
+        let (dir, _) = run_in(&coarse(0.3), &stop);
+        let path = dir.path().join(output::CHECKPOINT_FILE);
+        let mut checkpoint: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+        let substep = &mut checkpoint["state"]["floor"]["solver"]["substep_s"];
+        let saved = substep.as_f64().expect("the floor's sub-step is recorded");
+        *substep = (saved / 2.0).into();
+        std::fs::write(&path, checkpoint.to_string()).unwrap();
+        let e = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).unwrap_err().to_string();
+        assert!(e.contains("the saved pelvic floor cannot go on") && e.contains("taken at a sub-step of"), "{e}");
+        assert!(e.contains("run the scenario again from the start"), "{e}");
+    }
+
     /// A checkpoint whose kept scenario no longer reads is said to be
     /// damaged, not a scenario to correct at its line 1.
     #[test]

@@ -250,7 +250,7 @@ impl<'a> Simulation<'a> {
             .map(|f| new_solver(scene, f, dt))
             .transpose()?;
         let floor = match solver.as_ref() {
-            Some((s, _)) => {
+            Some((s, reference)) => {
                 let reach = scene.scenario.floor.coupling_reach_mm * 1e-3;
                 let contact = || -> Result<TissueContact, LabourError> {
                     let c = TissueContact::new(reach)?;
@@ -267,7 +267,7 @@ impl<'a> Simulation<'a> {
                     // throws through the wall within a step is caught too.
                     bone: contact()?.catching_crossings(),
                     refined_steps: 0,
-                    most_substeps: 0,
+                    most_substeps: *reference,
                 })
             }
             None => None,
@@ -385,7 +385,12 @@ impl<'a> Simulation<'a> {
             }
         };
         if let (Some(solver), Some(floor)) = (solver.as_mut(), &state.floor) {
-            solver.restore(&floor.solver)?;
+            solver.restore(&floor.solver).map_err(|e| {
+                LabourError::Checkpoint(format!(
+                    "the saved pelvic floor cannot go on in this scenario's floor ({e}): the checkpoint was \
+                     edited or damaged: run the scenario again from the start"
+                ))
+            })?;
         }
         let sample_every = ((scene.scenario.output.every_s / dt).round() as u64).max(1);
         Ok(Simulation {
@@ -1139,7 +1144,7 @@ fn substeps_within(dt: f64, stable: f64, reference_stable: f64, reference: u32) 
     if stable >= reference_stable * (1.0 - AT_REST_ROUNDING) {
         return reference;
     }
-    fewest_substeps(dt, stable, reference * MAX_SUBSTEP_REFINEMENT).max(reference)
+    fewest_substeps(dt, stable, reference.saturating_mul(MAX_SUBSTEP_REFINEMENT)).max(reference)
 }
 
 /// The floor's solver with a sub-step of `dt / n`, n the fewest sub-steps
@@ -1150,6 +1155,9 @@ fn new_solver(
     dt: f64,
 ) -> Result<(TledSolver, u32), LabourError> {
     let h = scene.scenario.numerics.floor_step_fraction * floor.critical_step_s;
+    if !h.is_finite() || h <= 0.0 {
+        return Err(carus_fem::FemError::InvalidTimeStep { dt_s: h }.into());
+    }
     let substeps = fewest_substeps(dt, h, u32::MAX);
     let solver = TledSolver::new(
         floor.model.clone(),

@@ -1063,7 +1063,6 @@ impl GpuSolver {
                 .into());
             }
         }
-        snap.check_clock(self.h_s)?;
         if snap.clock != ClockOrigin::default() {
             return Err(FemError::InvalidOption {
                 option: "snapshot",
@@ -1071,6 +1070,7 @@ impl GpuSolver {
             }
             .into());
         }
+        snap.check_clock(self.h_s)?;
         let coupled = snap.coupling();
         coupled.check_restored(nn)?;
         let (curr, prev) = Self::current_slots(snap.substeps);
