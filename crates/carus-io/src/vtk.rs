@@ -820,6 +820,36 @@ mod tests {
         }
     }
 
+    /// XML allows single quotes: ParaView's own files use double ones, a
+    /// script's may not, and the offsets are rewritten either way.
+    #[test]
+    fn reads_appended_raw_vtu_with_single_quoted_offsets() {
+        for compress in [false, true] {
+            let bytes = appended_raw_vtu(compress);
+            let text_end = bytes.windows(4).position(|w| w == b"   _").unwrap();
+            let head = String::from_utf8(bytes[..text_end].to_vec()).unwrap();
+            let mut single = String::new();
+            let mut rest = head.as_str();
+            while let Some(at) = rest.find("offset=\"") {
+                let value = at + "offset=\"".len();
+                let end = value + rest[value..].find('"').unwrap();
+                single.push_str(&format!("{}offset='{}'", &rest[..at], &rest[value..end]));
+                rest = &rest[end + 1..];
+            }
+            single.push_str(rest);
+            assert!(single.matches("offset='").count() >= 2, "{single}");
+            let mut quoted = single.into_bytes();
+            quoted.extend_from_slice(&bytes[text_end..]);
+            let (_dir, path) = temp(&format!("appended_single_{compress}.vtu"));
+            std::fs::write(&path, &quoted).unwrap();
+            let (_dir2, plain) = temp(&format!("appended_double_{compress}.vtu"));
+            std::fs::write(&plain, &bytes).unwrap();
+            let (a, b) = (read_vtk(&path).unwrap(), read_vtk(&plain).unwrap());
+            assert_eq!(a.mesh.nodes, b.mesh.nodes);
+            assert_eq!(a.mesh.connectivity, b.mesh.connectivity);
+        }
+    }
+
     #[test]
     fn truncated_raw_appended_data_is_an_error() {
         let bytes = appended_raw_vtu(true);

@@ -57,22 +57,15 @@ pub(crate) fn raw_appended_to_base64(bytes: &[u8]) -> Result<Cow<'_, [u8]>, Stri
     };
 
     // Every array's offset, re-encoded block by block.
-    let mut text = String::from_utf8_lossy(head).into_owned();
-    let mut offsets: Vec<usize> = Vec::new();
-    let mut search = 0;
-    while let Some(at) = text[search..].find("offset=\"") {
-        let start = search + at + "offset=\"".len();
-        let end = text[start..]
-            .find('"')
-            .map(|e| start + e)
-            .ok_or("an offset attribute is not closed")?;
-        let offset: usize = text[start..end]
-            .trim()
-            .parse()
-            .map_err(|_| format!("offset {:?} is not a number", &text[start..end]))?;
-        offsets.push(offset);
-        search = end;
-    }
+    let head = String::from_utf8_lossy(head);
+    let spans = offset_spans(&head)?;
+    let offsets = spans
+        .iter()
+        .map(|&(start, end)| {
+            let value = &head[start..end];
+            value.trim().parse().map_err(|_| format!("offset {value:?} is not a number"))
+        })
+        .collect::<Result<Vec<usize>, String>>()?;
     let mut unique = offsets.clone();
     unique.sort_unstable();
     unique.dedup();
@@ -111,23 +104,46 @@ pub(crate) fn raw_appended_to_base64(bytes: &[u8]) -> Result<Cow<'_, [u8]>, Stri
         }
     }
     // Rewrite the offsets in order of appearance.
-    let mut rewritten = String::with_capacity(text.len());
-    let mut rest = text.as_str();
-    for offset in &offsets {
-        let at = rest.find("offset=\"").unwrap_or(rest.len());
-        let start = at + "offset=\"".len();
-        let end = start + rest[start..].find('"').unwrap_or(0);
+    let mut text = String::with_capacity(head.len() + encoded.len() + 64);
+    let mut written = 0;
+    for (&(start, end), offset) in spans.iter().zip(&offsets) {
         let index = unique.binary_search(offset).unwrap_or(0);
-        rewritten.push_str(&rest[..start]);
-        rewritten.push_str(&new_offsets[index].to_string());
-        rest = &rest[end..];
+        text.push_str(&head[written..start]);
+        text.push_str(&new_offsets[index].to_string());
+        written = end;
     }
-    rewritten.push_str(rest);
-    text = rewritten;
+    text.push_str(&head[written..]);
     text.push_str("<AppendedData encoding=\"base64\">_");
     text.push_str(&encoded);
     text.push_str("</AppendedData></VTKFile>\n");
     Ok(Cow::Owned(text.into_bytes()))
+}
+
+/// The value spans (start, end) of every `offset` attribute in `text`, in
+/// either quotes (XML allows both) and as a whole name (`xoffset` does not
+/// count).
+fn offset_spans(text: &str) -> Result<Vec<(usize, usize)>, String> {
+    const NAME: &str = "offset=";
+    let mut spans = Vec::new();
+    let mut search = 0;
+    while let Some(at) = text[search..].find(NAME) {
+        let start = search + at;
+        let value_start = start + NAME.len();
+        search = value_start;
+        if start > 0 && !text.as_bytes()[start - 1].is_ascii_whitespace() {
+            continue;
+        }
+        let Some(quote) = text[value_start..].chars().next().filter(|c| matches!(c, '"' | '\'')) else {
+            continue;
+        };
+        let end = text[value_start + 1..]
+            .find(quote)
+            .map(|e| value_start + 1 + e)
+            .ok_or("an offset attribute is not closed")?;
+        spans.push((value_start + 1, end));
+        search = end;
+    }
+    Ok(spans)
 }
 
 /// Writers lay the arrays end to end, so array `k` of the appended data
@@ -396,6 +412,15 @@ mod tests {
             without_component_ranges(xml.to_string()),
             r#"<Points><DataArray type="Float64" Name="Points" NumberOfComponents="3" format="binary">AAAA</DataArray></Points><DataArray type="Float64" Name="j" format="binary" RangeMin="1" RangeMax="2">"#
         );
+    }
+
+    #[test]
+    fn offsets_are_found_in_either_quotes_and_whole() {
+        let text = r#"<DataArray xoffset="9" offset='12'/><DataArray offset="0"/>"#;
+        let spans = offset_spans(text).unwrap();
+        let values: Vec<&str> = spans.iter().map(|&(s, e)| &text[s..e]).collect();
+        assert_eq!(values, ["12", "0"]);
+        assert!(offset_spans(r#"<DataArray offset="3/>"#).unwrap_err().contains("not closed"));
     }
 
     #[test]
