@@ -472,6 +472,16 @@ pub(super) fn choose_out_dir(out: Option<&Path>, name: &str, force: bool) -> any
     })
 }
 
+/// The new out dir of a batch of runs (`carus sweep`, `carus sanity`),
+/// made with its plan written in it first, the plan `--resume` goes on
+/// from.
+pub(super) fn make_batch_dir(output: &OutputArgs, name: &str, plan_file: &str, plan: &impl serde::Serialize) -> anyhow::Result<PathBuf> {
+    let dir = choose_out_dir(output.out.as_deref(), name, output.force)?.make()?;
+    let path = dir.join(plan_file);
+    std::fs::write(&path, serde_json::to_string_pretty(plan)?).with_context(|| format!("cannot write {}", path.display()))?;
+    Ok(dir)
+}
+
 impl OutDir {
     /// Makes the folder and says where it is. A numbered folder is always a
     /// new one (a number taken meanwhile, by another run started at the same

@@ -19,7 +19,7 @@ use carus_labour::Scenario;
 use rayon::prelude::*;
 use serde_json::json;
 
-use super::run::{choose_out_dir, go_on_into, outcome_line, OutputArgs};
+use super::run::{go_on_into, make_batch_dir, outcome_line, OutputArgs};
 use super::sweep::{one_setting, one_setting_arg};
 use super::{ctrl_c_flag, labour_pool, print_json, Status};
 
@@ -84,13 +84,7 @@ pub fn run(args: &SanityArgs) -> anyhow::Result<Status> {
     let (pool, jobs) = labour_pool(args.jobs, scenarios.len())?;
     let out_dir = match &args.resume {
         Some(dir) => dir.clone(),
-        None => {
-            let dir = choose_out_dir(args.output.out.as_deref(), "sanity", args.output.force)?.make()?;
-            let path = dir.join(PLAN_FILE);
-            std::fs::write(&path, serde_json::to_string_pretty(&plan)?)
-                .with_context(|| format!("cannot write {}", path.display()))?;
-            dir
-        }
+        None => make_batch_dir(&args.output, "sanity", PLAN_FILE, &plan)?,
     };
     let stop = ctrl_c_flag();
     if !args.output.quiet {

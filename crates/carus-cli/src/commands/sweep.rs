@@ -22,8 +22,8 @@ use rayon::prelude::*;
 use serde_json::json;
 
 use super::run::{
-    choose_out_dir, go_on_into, json_summary, load, movements, outcome_line, read_record, run_ended,
-    serde_name, OutputArgs,
+    go_on_into, json_summary, load, make_batch_dir, movements, outcome_line, read_record, run_ended, serde_name,
+    OutputArgs,
 };
 use super::{ctrl_c_flag, labour_pool, print_json, Status};
 
@@ -246,14 +246,7 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
     let (pool, jobs) = labour_pool(args.jobs, scenarios.len())?;
     let out_dir = match out_dir {
         Some(dir) => dir,
-        None => {
-            let dir = choose_out_dir(args.output.out.as_deref(), &format!("sweep-{}", base.name), args.output.force)?
-                .make()?;
-            let path = dir.join(PLAN_FILE);
-            std::fs::write(&path, serde_json::to_string_pretty(&plan)?)
-                .with_context(|| format!("cannot write {}", path.display()))?;
-            dir
-        }
+        None => make_batch_dir(&args.output, &format!("sweep-{}", base.name), PLAN_FILE, &plan)?,
     };
     let stop = ctrl_c_flag();
     if !args.output.quiet {
