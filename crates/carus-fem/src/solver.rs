@@ -56,11 +56,11 @@ pub struct SolverSnapshot {
     /// was taken at.
     #[serde(default)]
     pub clock: ClockOrigin,
-    /// The sub-step the state was taken at, s (0 in snapshots written
+    /// The sub-step the state was taken at, s (absent in snapshots written
     /// before it was recorded): a state with its previous displacement one
     /// sub-step behind resumes only at that sub-step.
     #[serde(default)]
-    pub substep_s: f64,
+    pub substep_s: Option<f64>,
 }
 
 /// Where the clock last changed step: time runs from here in whole
@@ -94,13 +94,10 @@ impl SolverSnapshot {
         }
         // Snapshots from before the sub-step was recorded: read it off the
         // clock, which runs in whole sub-steps from its origin.
-        let taken_at = if self.substep_s != 0.0 {
-            self.substep_s
-        } else {
-            match self.substeps - self.clock.substeps {
-                0 => return Ok(()),
-                n => (self.time_s - self.clock.time_s) / n as f64,
-            }
+        let taken_at = match (self.substep_s, self.substeps - self.clock.substeps) {
+            (Some(h), _) => h,
+            (None, 0) => return Ok(()),
+            (None, n) => (self.time_s - self.clock.time_s) / n as f64,
         };
         if (taken_at - substep_s).abs() > SUBSTEP_READ_BACK * substep_s {
             return refuse(format!(
@@ -851,7 +848,7 @@ impl TledSolver {
             coupled: self.coupled.held.clone(),
             sliding: self.coupled.sliding.clone(),
             clock: self.clock,
-            substep_s: self.h_s,
+            substep_s: Some(self.h_s),
         }
     }
 
@@ -1254,7 +1251,7 @@ mod run_tests {
         s.set_step(h / 2.0, StepControl::Refuse).unwrap();
         s.step().unwrap();
         let refined = s.snapshot();
-        assert_eq!(refined.substep_s, h / 2.0);
+        assert_eq!(refined.substep_s, Some(h / 2.0));
         let mut other = TledSolver::new(m, &pull(&mesh, 0.02), h, StepControl::Refuse).unwrap();
         let untouched = other.snapshot();
         let refused = |other: &mut TledSolver, snap: &SolverSnapshot, why: &str| {
@@ -1265,7 +1262,7 @@ mod run_tests {
         // A snapshot from before the sub-step was recorded: the step is
         // read off its clock (one sub-step of h / 2 since the origin).
         let mut unrecorded = refined.clone();
-        unrecorded.substep_s = 0.0;
+        unrecorded.substep_s = None;
         refused(&mut other, &unrecorded, "taken at a sub-step of");
         for damage in [
             |s: &mut SolverSnapshot| s.clock.substeps = s.substeps + 1,
@@ -1288,7 +1285,7 @@ mod run_tests {
         // An unrecorded snapshot at the built step is taken as it comes.
         let mut fresh = TledSolver::new(other.model().clone(), &pull(&mesh, 0.02), h, StepControl::Refuse).unwrap();
         let mut old = s.snapshot();
-        old.substep_s = 0.0;
+        old.substep_s = None;
         old.clock = ClockOrigin::default();
         old.time_s = 4.0 * h;
         old.steps = 4;

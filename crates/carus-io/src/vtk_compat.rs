@@ -58,7 +58,7 @@ pub(crate) fn raw_appended_to_base64(bytes: &[u8]) -> Result<Cow<'_, [u8]>, Stri
 
     // Every array's offset, re-encoded block by block.
     let head = String::from_utf8_lossy(head);
-    let spans = offset_spans(&head)?;
+    let spans = attribute_spans(&head, "offset")?;
     let offsets = spans
         .iter()
         .map(|&(start, end)| {
@@ -117,33 +117,6 @@ pub(crate) fn raw_appended_to_base64(bytes: &[u8]) -> Result<Cow<'_, [u8]>, Stri
     text.push_str(&encoded);
     text.push_str("</AppendedData></VTKFile>\n");
     Ok(Cow::Owned(text.into_bytes()))
-}
-
-/// The value spans (start, end) of every `offset` attribute in `text`, in
-/// either quotes (XML allows both) and as a whole name (`xoffset` does not
-/// count).
-fn offset_spans(text: &str) -> Result<Vec<(usize, usize)>, String> {
-    const NAME: &str = "offset=";
-    let mut spans = Vec::new();
-    let mut search = 0;
-    while let Some(at) = text[search..].find(NAME) {
-        let start = search + at;
-        let value_start = start + NAME.len();
-        search = value_start;
-        if start > 0 && !text.as_bytes()[start - 1].is_ascii_whitespace() {
-            continue;
-        }
-        let Some(quote) = text[value_start..].chars().next().filter(|c| matches!(c, '"' | '\'')) else {
-            continue;
-        };
-        let end = text[value_start + 1..]
-            .find(quote)
-            .map(|e| value_start + 1 + e)
-            .ok_or("an offset attribute is not closed")?;
-        spans.push((value_start + 1, end));
-        search = end;
-    }
-    Ok(spans)
 }
 
 /// Writers lay the arrays end to end, so array `k` of the appended data
@@ -336,20 +309,35 @@ fn rfind(haystack: &[u8], needle: &[u8]) -> Option<usize> {
 /// XML tag.
 fn attribute(tag: &[u8], name: &str) -> Option<String> {
     let tag = String::from_utf8_lossy(tag);
+    let &(start, end) = attribute_spans(&tag, name).ok()?.first()?;
+    Some(tag[start..end].to_string())
+}
+
+/// The value spans (start, end) of every `name` attribute in `text`, in
+/// either quotes, as whole names only (`offset` inside `xoffset` does not
+/// count).
+fn attribute_spans(text: &str, name: &str) -> Result<Vec<(usize, usize)>, String> {
     let pattern = format!("{name}=");
+    let mut spans = Vec::new();
     let mut search = 0;
-    while let Some(at) = tag[search..].find(&pattern) {
+    while let Some(at) = text[search..].find(&pattern) {
         let start = search + at;
         let value_start = start + pattern.len();
-        let quote = tag[value_start..].chars().next().filter(|c| matches!(c, '"' | '\''))?;
-        let value_end = value_start + 1 + tag[value_start + 1..].find(quote)?;
-        // Whole attribute names only (`offset` inside `xoffset` does not count).
-        if start == 0 || tag.as_bytes()[start - 1].is_ascii_whitespace() {
-            return Some(tag[value_start + 1..value_end].to_string());
+        search = value_start;
+        if start > 0 && !text.as_bytes()[start - 1].is_ascii_whitespace() {
+            continue;
         }
-        search = value_end;
+        let Some(quote) = text[value_start..].chars().next().filter(|c| matches!(c, '"' | '\'')) else {
+            continue;
+        };
+        let end = text[value_start + 1..]
+            .find(quote)
+            .map(|e| value_start + 1 + e)
+            .ok_or_else(|| format!("a `{name}` attribute is not closed"))?;
+        spans.push((value_start + 1, end));
+        search = end;
     }
-    None
+    Ok(spans)
 }
 
 #[cfg(test)]
@@ -417,10 +405,10 @@ mod tests {
     #[test]
     fn offsets_are_found_in_either_quotes_and_whole() {
         let text = r#"<DataArray xoffset="9" offset='12'/><DataArray offset="0"/>"#;
-        let spans = offset_spans(text).unwrap();
+        let spans = attribute_spans(text, "offset").unwrap();
         let values: Vec<&str> = spans.iter().map(|&(s, e)| &text[s..e]).collect();
         assert_eq!(values, ["12", "0"]);
-        assert!(offset_spans(r#"<DataArray offset="3/>"#).unwrap_err().contains("not closed"));
+        assert!(attribute_spans(r#"<DataArray offset="3/>"#, "offset").unwrap_err().contains("not closed"));
     }
 
     #[test]

@@ -1264,15 +1264,12 @@ mod tests {
     /// scenario's floor takes is refused as damaged, with what to do.
     #[test]
     fn a_checkpoint_with_the_floor_at_another_sub_step_is_refused() {
-        let stop = RunOptions { stop_at_s: Some(0.1), ..RunOptions::default() };
-        let (dir, _) = run_in(&coarse(0.3), &stop);
-        let path = dir.path().join(output::CHECKPOINT_FILE);
-        let mut checkpoint: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
-        let substep = &mut checkpoint["state"]["floor"]["solver"]["substep_s"];
-        let saved = substep.as_f64().expect("the floor's sub-step is recorded");
-        *substep = (saved / 2.0).into();
-        std::fs::write(&path, checkpoint.to_string()).unwrap();
-        let e = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).unwrap_err().to_string();
+        let scene = Scene::build(&coarse(0.01)).unwrap();
+        let mut state = Simulation::new(&scene).unwrap().state;
+        let solver = &mut state.floor.as_mut().expect("a floor").solver;
+        let saved = solver.substep_s.expect("the floor's sub-step is recorded");
+        solver.substep_s = Some(saved / 2.0);
+        let e = Simulation::from_state(&scene, state).err().expect("refused").to_string();
         assert!(e.contains("the saved pelvic floor cannot go on") && e.contains("taken at a sub-step of"), "{e}");
         assert!(e.contains("run the scenario again from the start"), "{e}");
     }

@@ -1044,7 +1044,7 @@ impl GpuSolver {
             coupled: self.coupled.held.clone(),
             sliding: self.coupled.sliding.clone(),
             clock: ClockOrigin::default(),
-            substep_s: self.h_s,
+            substep_s: Some(self.h_s),
         })
     }
 
