@@ -19,6 +19,7 @@ pub mod toml_text;
 pub mod units;
 pub mod vtk;
 mod vtk_compat;
+mod xml_attr;
 
 use std::path::Path;
 

@@ -5,6 +5,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use crate::error::WriteError;
+use crate::xml_attr::attribute;
 
 /// Frames of a time series: (simulated time in s, file path relative to
 /// the `.pvd`).
@@ -69,12 +70,6 @@ impl PvdCollection {
     }
 }
 
-fn attribute(tag: &str, name: &str) -> Option<String> {
-    let start = tag.find(&format!(" {name}=\""))? + name.len() + 3;
-    let end = start + tag[start..].find('"')?;
-    Some(tag[start..end].to_string())
-}
-
 fn escape(text: &str) -> String {
     text.replace('&', "&amp;")
         .replace('<', "&lt;")
@@ -103,5 +98,14 @@ mod tests {
         assert!(xml.contains("type=\"Collection\""));
         assert!(xml.contains("a&amp;b &quot;q&quot;.vtu"));
         assert_eq!(PvdCollection::parse(&xml).unwrap(), pvd);
+    }
+
+    /// A collection saved by another writer: single quotes, attributes on
+    /// their own lines, a name ending in `file`.
+    #[test]
+    fn collections_from_other_writers_are_read() {
+        let xml = "<VTKFile type='Collection'><Collection>\n<DataSet timestep='0.5'\n\tprofile='x' file='a.vtu'/>\n</Collection></VTKFile>";
+        let pvd = PvdCollection::parse(xml).unwrap();
+        assert_eq!(pvd.frames(), [(0.5, "a.vtu".to_string())]);
     }
 }

@@ -15,6 +15,8 @@ use std::borrow::Cow;
 use base64::engine::general_purpose::STANDARD;
 use base64::Engine;
 
+use crate::xml_attr::{attribute, attribute_spans};
+
 /// The file with raw appended data re-encoded, or unchanged when it has none.
 pub(crate) fn raw_appended_to_base64(bytes: &[u8]) -> Result<Cow<'_, [u8]>, String> {
     let Some(appended_tag) = find(bytes, b"<AppendedData", 0) else {
@@ -22,7 +24,7 @@ pub(crate) fn raw_appended_to_base64(bytes: &[u8]) -> Result<Cow<'_, [u8]>, Stri
     };
     let tag_end = find(bytes, b">", appended_tag).ok_or("the <AppendedData> tag is not closed")?;
     let tag = &bytes[appended_tag..tag_end];
-    if attribute(tag, "encoding").as_deref() != Some("raw") {
+    if attribute(&String::from_utf8_lossy(tag), "encoding").as_deref() != Some("raw") {
         return Ok(Cow::Borrowed(bytes));
     }
     let underscore = find(bytes, b"_", tag_end).ok_or("the appended data has no leading `_`")?;
@@ -33,13 +35,13 @@ pub(crate) fn raw_appended_to_base64(bytes: &[u8]) -> Result<Cow<'_, [u8]>, Stri
 
     let head = &bytes[..appended_tag];
     let file_tag_start = find(head, b"<VTKFile", 0).ok_or("there is no <VTKFile> tag")?;
-    let file_tag = &head[file_tag_start..find(head, b">", file_tag_start).unwrap_or(head.len())];
-    let header_bytes = match attribute(file_tag, "header_type").as_deref() {
+    let file_tag = String::from_utf8_lossy(&head[file_tag_start..find(head, b">", file_tag_start).unwrap_or(head.len())]);
+    let header_bytes = match attribute(&file_tag, "header_type").as_deref() {
         Some("UInt64") => 8,
         _ => 4,
     };
-    let big_endian = attribute(file_tag, "byte_order").as_deref() == Some("BigEndian");
-    let compressed = attribute(file_tag, "compressor").is_some();
+    let big_endian = attribute(&file_tag, "byte_order").as_deref() == Some("BigEndian");
+    let compressed = attribute(&file_tag, "compressor").is_some();
     let read_header = |at: usize| -> Result<usize, String> {
         let field = data
             .get(at..at + header_bytes)
@@ -153,7 +155,7 @@ pub(crate) fn without_component_ranges(xml: String) -> String {
         let tag_len = rest[at..].find('>').map_or(rest.len() - at, |e| e + 1);
         let tag = &rest[at..at + tag_len];
         out.push_str(&rest[..at]);
-        let components: usize = attribute(tag.as_bytes(), "NumberOfComponents")
+        let components: usize = attribute(tag, "NumberOfComponents")
             .and_then(|c| c.trim().parse().ok())
             .unwrap_or(1);
         if components > 1 {
@@ -224,10 +226,10 @@ pub(crate) fn declared_arrays(bytes: &[u8]) -> [Vec<DeclaredArray>; 2] {
             } else {
                 text[body_start..end].find("</DataArray>").map_or(end, |e| body_start + e)
             };
-            let ascii = attribute(tag.as_bytes(), "format").as_deref() == Some("ascii");
+            let ascii = attribute(tag, "format").as_deref() == Some("ascii");
             arrays.push(DeclaredArray {
-                name: attribute(tag.as_bytes(), "Name").unwrap_or_default(),
-                components: attribute(tag.as_bytes(), "NumberOfComponents")
+                name: attribute(tag, "Name").unwrap_or_default(),
+                components: attribute(tag, "NumberOfComponents")
                     .and_then(|c| c.trim().parse().ok())
                     .unwrap_or(1),
                 ascii_values: ascii.then(|| text[body_start..body_end].split_ascii_whitespace().count()),
@@ -305,41 +307,6 @@ fn rfind(haystack: &[u8], needle: &[u8]) -> Option<usize> {
     haystack.windows(needle.len()).rposition(|w| w == needle)
 }
 
-/// The value of `name="..."` (or `name='...'`, as XML allows) inside one
-/// XML tag.
-fn attribute(tag: &[u8], name: &str) -> Option<String> {
-    let tag = String::from_utf8_lossy(tag);
-    let &(start, end) = attribute_spans(&tag, name).ok()?.first()?;
-    Some(tag[start..end].to_string())
-}
-
-/// The value spans (start, end) of every `name` attribute in `text`, in
-/// either quotes, as whole names only (`offset` inside `xoffset` does not
-/// count).
-fn attribute_spans(text: &str, name: &str) -> Result<Vec<(usize, usize)>, String> {
-    let pattern = format!("{name}=");
-    let mut spans = Vec::new();
-    let mut search = 0;
-    while let Some(at) = text[search..].find(&pattern) {
-        let start = search + at;
-        let value_start = start + pattern.len();
-        search = value_start;
-        if start > 0 && !text.as_bytes()[start - 1].is_ascii_whitespace() {
-            continue;
-        }
-        let Some(quote) = text[value_start..].chars().next().filter(|c| matches!(c, '"' | '\'')) else {
-            continue;
-        };
-        let end = text[value_start + 1..]
-            .find(quote)
-            .map(|e| value_start + 1 + e)
-            .ok_or_else(|| format!("a `{name}` attribute is not closed"))?;
-        spans.push((value_start + 1, end));
-        search = end;
-    }
-    Ok(spans)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -386,29 +353,12 @@ mod tests {
     }
 
     #[test]
-    fn attributes_are_read_in_either_quotes_and_whole() {
-        let tag = br#"<DataArray xName="no" Name='fixed' format="ascii""#;
-        assert_eq!(attribute(tag, "Name").as_deref(), Some("fixed"));
-        assert_eq!(attribute(tag, "format").as_deref(), Some("ascii"));
-        assert_eq!(attribute(tag, "offset"), None);
-    }
-
-    #[test]
     fn component_ranges_are_left_out_of_vector_arrays_only() {
         let xml = r#"<Points><DataArray type="Float64" Name="Points" NumberOfComponents="3" format="binary" RangeMin="-0.13" RangeMax="0.07">AAAA</DataArray></Points><DataArray type="Float64" Name="j" format="binary" RangeMin="1" RangeMax="2">"#;
         assert_eq!(
             without_component_ranges(xml.to_string()),
             r#"<Points><DataArray type="Float64" Name="Points" NumberOfComponents="3" format="binary">AAAA</DataArray></Points><DataArray type="Float64" Name="j" format="binary" RangeMin="1" RangeMax="2">"#
         );
-    }
-
-    #[test]
-    fn offsets_are_found_in_either_quotes_and_whole() {
-        let text = r#"<DataArray xoffset="9" offset='12'/><DataArray offset="0"/>"#;
-        let spans = attribute_spans(text, "offset").unwrap();
-        let values: Vec<&str> = spans.iter().map(|&(s, e)| &text[s..e]).collect();
-        assert_eq!(values, ["12", "0"]);
-        assert!(attribute_spans(r#"<DataArray offset="3/>"#, "offset").unwrap_err().contains("not closed"));
     }
 
     #[test]
