@@ -8,7 +8,7 @@ use std::fmt;
 use std::num::NonZeroUsize;
 use std::path::{Path, PathBuf};
 
-use carus_anatomy::fetus::{HeadDiameters, TrunkDiameters};
+use carus_anatomy::fetus::{AtlantoOccipitalPlacement, HeadDiameters, TrunkDiameters};
 use carus_anatomy::floor::FloorParameters;
 use carus_anatomy::pelvis::{PelvisDiameters, PelvisSpec, PELVIC_CANAL_DIAMETER_MM, VISIBLE_HUMAN_FEMALE};
 use serde::de::value::MapAccessDeserializer;
@@ -482,6 +482,24 @@ pub struct FetusSection {
     pub head_linear_drag_n_s_per_m: f64,
     /// Viscous resistance to the head's rotation, N m s/rad (numerical).
     pub head_angular_drag_nm_s_per_rad: f64,
+    /// Where the atlanto-occipital pivot lies in the head: degrees behind
+    /// straight down from the head centre, towards the occiput. It sets the
+    /// head lever (CARDINAL_MOVEMENTS.md, flexion). 15 deg: an engineering
+    /// choice, no measurement found (carus_anatomy::fetus::AtlantoOccipitalPlacement).
+    pub atlanto_occipital_behind_deg: f64,
+    /// How far inside the skull base the pivot lies, as a fraction of the
+    /// centre-to-surface distance on that ray: 0.15, an engineering choice.
+    pub atlanto_occipital_depth: f64,
+}
+
+impl FetusSection {
+    /// The head's pivot as the anatomy builds it.
+    pub fn atlanto_occipital(&self) -> AtlantoOccipitalPlacement {
+        AtlantoOccipitalPlacement {
+            behind_vertical_deg: self.atlanto_occipital_behind_deg,
+            depth: self.atlanto_occipital_depth,
+        }
+    }
 }
 
 impl Default for FetusSection {
@@ -492,6 +510,8 @@ impl Default for FetusSection {
             trunk_angular_drag_nm_s_per_rad: 3.0,
             head_linear_drag_n_s_per_m: 1000.0,
             head_angular_drag_nm_s_per_rad: 0.5,
+            atlanto_occipital_behind_deg: AtlantoOccipitalPlacement::default().behind_vertical_deg,
+            atlanto_occipital_depth: AtlantoOccipitalPlacement::default().depth,
         }
     }
 }
@@ -1393,6 +1413,24 @@ impl Scenario {
                 return Err(err(key, every_s, "is finer than can be recorded", hint));
             }
         }
+        for (key, value, (least, most), hint) in [
+            (
+                "fetus.atlanto_occipital_behind_deg",
+                self.fetus.atlanto_occipital_behind_deg,
+                AtlantoOccipitalPlacement::BEHIND_VERTICAL_DEG,
+                "degrees behind straight down from the head centre, 0 to 45; 15 is the default",
+            ),
+            (
+                "fetus.atlanto_occipital_depth",
+                self.fetus.atlanto_occipital_depth,
+                AtlantoOccipitalPlacement::DEPTH,
+                "a fraction of the centre-to-skull distance, 0.05 to 0.5; 0.15 is the default",
+            ),
+        ] {
+            if !(least..=most).contains(&value) {
+                return Err(err(key, value, "would not put the pivot under the skull base", hint));
+            }
+        }
         if !(3..=6).contains(&self.numerics.head_subdivisions) {
             return Err(err(
                 "numerics.head_subdivisions",
@@ -2179,6 +2217,10 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("trunk.trunk_length_mm") && e.contains("186 mm"), "{e}");
+        let e = parse("name = \"x\"\n[fetus]\natlanto_occipital_behind_deg = 60.0\n").unwrap_err().to_string();
+        assert!(e.contains("fetus.atlanto_occipital_behind_deg") && e.contains("0 to 45"), "{e}");
+        let e = parse("name = \"x\"\n[fetus]\natlanto_occipital_depth = 15.0\n").unwrap_err().to_string();
+        assert!(e.contains("fetus.atlanto_occipital_depth") && e.contains("0.05 to 0.5"), "{e}");
         // A [floor.mesh] of one key keeps the runs' resolution, not the library's.
         let floor = parse("name = \"x\"\n[floor.mesh]\nsag_mm = 25.0\n").unwrap().floor.mesh;
         assert_eq!(floor, FloorParameters { sag_mm: 25.0, ..FloorSection::default().mesh });

@@ -134,7 +134,7 @@ impl Scene {
             RigidObstacle::new("pelvis", &wall.vertices, &wall.triangles, Some(RegionTable { names, labels }))?;
 
         let s = scenario;
-        let head_anatomy = FetalHead::with_subdivisions(&s.head, s.numerics.head_subdivisions)
+        let head_anatomy = FetalHead::with_subdivisions(&s.head, &s.fetus.atlanto_occipital(), s.numerics.head_subdivisions)
             .map_err(|e| unbuildable("head", e))?;
         let spacing = s.contact.sample_spacing_mm * 1e-3;
         let head = FetalBody::new(
@@ -905,6 +905,26 @@ mod tests {
         let options = scene.floor.as_ref().unwrap().model.options();
         assert_eq!(options.hourglass_coefficient, 0.2);
         assert_eq!(options.hourglass_modulus, carus_fem::HourglassModulus::Shear);
+    }
+
+    /// The head lever is the scenario's: `[fetus]`'s pivot keys move the
+    /// pivot the neck and trunk hang from, towards the occiput, and the
+    /// trunk starts hanging from it.
+    #[test]
+    fn the_neck_pivot_is_placed_by_the_scenario() {
+        let mut s = Scenario::builtin("normal").unwrap();
+        s.numerics.head_subdivisions = 3;
+        s.floor.enabled = false;
+        let default = Scene::build(&s).unwrap();
+        s.fetus.atlanto_occipital_behind_deg = 30.0;
+        let back = Scene::build(&s).unwrap();
+        let (p, q) = (default.pivot_in_head, back.pivot_in_head);
+        let centre = default.head_geometry.centre_m;
+        assert!(q.x < p.x, "{q} is not nearer the occiput than {p}");
+        let behind = |v: DVec3| (-(v - centre).x).atan2(-(v - centre).z).to_degrees();
+        assert!((behind(p) - 15.0).abs() < 1e-9 && (behind(q) - 30.0).abs() < 1e-9);
+        assert_eq!(back.neck_joint.unwrap().pivot, back.start_pivot());
+        assert_ne!(back.start[TRUNK], default.start[TRUNK]);
     }
 
     /// A spine that bends cuts the trunk in two at the thoracolumbar joint:

@@ -62,7 +62,17 @@ pub enum HeadError {
          (95, 95, 137.5, 117.5)"
     )]
     Unshapeable { region: &'static str, shortfall_mm: f64 },
-    #[error("surface resolution {0} is out of range: use 2 to 6 sphere subdivisions")]
+    #[error(
+        "atlanto-occipital pivot {name} = {value} is out of range: use {least} to {most} \
+         (the defaults, 15 deg behind straight down and 0.15 in from the skull, keep it under the skull base)"
+    )]
+    Pivot {
+        name: &'static str,
+        value: f64,
+        least: f64,
+        most: f64,
+    },
+    #[error("surface resolution {0} is out of range: use 3 to 6 sphere subdivisions")]
     Resolution(u32),
 }
 

@@ -34,13 +34,65 @@ pub const DEFAULT_HEAD_SUBDIVISIONS: u32 = 4;
 /// from the head centre in the midline: the temples lie in front of and a
 /// little below the parietal eminences (engineering choice).
 const TEMPORAL_ANGLE_DEG: f64 = -12.0;
-/// The atlanto-occipital pivot lies under the skull base at the foramen
-/// magnum: on the midline ray from the head centre pointing this far behind
-/// straight down, drawn 15 % of the way in from the surface (engineering
-/// choice). Being behind the centre it is nearer the occiput than the
-/// forehead, the head lever of CARDINAL_MOVEMENTS.md.
-const PIVOT_ANGLE_DEG: f64 = -105.0;
-const PIVOT_DEPTH: f64 = 0.15;
+/// Where the atlanto-occipital pivot lies in the head: under the skull
+/// base at the foramen magnum, on the midline ray from the head centre that
+/// points `behind_vertical_deg` behind straight down (towards the occiput),
+/// drawn `depth` of the way in from the surface. Being behind the centre,
+/// the pivot is nearer the occiput than the forehead: the head lever of
+/// CARDINAL_MOVEMENTS.md. The defaults, 15 deg and 0.15, are an engineering
+/// choice: no measurement of where a term fetus's foramen magnum lies
+/// relative to its head centre was found (docs/LABOUR.md, thirty-fifth
+/// session, gives how the outcome turns on them).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct AtlantoOccipitalPlacement {
+    /// Angle behind straight down, degrees, seen from the head centre in the midline.
+    pub behind_vertical_deg: f64,
+    /// Fraction of the centre-to-surface distance the pivot lies inside the skull.
+    pub depth: f64,
+}
+
+impl Default for AtlantoOccipitalPlacement {
+    fn default() -> Self {
+        AtlantoOccipitalPlacement {
+            behind_vertical_deg: 15.0,
+            depth: 0.15,
+        }
+    }
+}
+
+impl AtlantoOccipitalPlacement {
+    /// Angles behind straight down that keep the pivot in the skull base:
+    /// from under the centre to halfway to the occiput.
+    pub const BEHIND_VERTICAL_DEG: (f64, f64) = (0.0, 45.0);
+    /// Depths that keep the pivot inside the head and below its centre.
+    pub const DEPTH: (f64, f64) = (0.05, 0.5);
+
+    /// Checks both against their ranges.
+    pub fn validate(&self) -> Result<(), HeadError> {
+        let checks = [
+            ("behind_vertical_deg", self.behind_vertical_deg, Self::BEHIND_VERTICAL_DEG),
+            ("depth", self.depth, Self::DEPTH),
+        ];
+        for (name, value, (least, most)) in checks {
+            if !(least..=most).contains(&value) {
+                return Err(HeadError::Pivot {
+                    name,
+                    value,
+                    least,
+                    most,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// The pivot in the head frame, given the midline profile.
+    fn locate(&self, profile: &SagittalProfile) -> DVec3 {
+        let angle = -(90.0 + self.behind_vertical_deg).to_radians();
+        let base = profile.radius(angle) * DVec2::new(angle.cos(), angle.sin());
+        midline((1.0 - self.depth) * base)
+    }
+}
 
 /// The landmarks of CONVENTIONS.md, metres, in the head frame. All lie on
 /// the surface (as mesh vertices) except the atlanto-occipital pivot, which
@@ -146,14 +198,21 @@ impl HeadBody {
 }
 
 impl FetalHead {
-    /// Builds the head at the default resolution.
+    /// Builds the head at the default resolution, its pivot where
+    /// [`AtlantoOccipitalPlacement::default`] puts it.
     pub fn new(diameters: &HeadDiameters) -> Result<Self, HeadError> {
-        Self::with_subdivisions(diameters, DEFAULT_HEAD_SUBDIVISIONS)
+        Self::with_subdivisions(diameters, &AtlantoOccipitalPlacement::default(), DEFAULT_HEAD_SUBDIVISIONS)
     }
 
-    /// Builds the head on a geodesic sphere subdivided `subdivisions` times (3 to 6).
-    pub fn with_subdivisions(diameters: &HeadDiameters, subdivisions: u32) -> Result<Self, HeadError> {
+    /// Builds the head on a geodesic sphere subdivided `subdivisions` times
+    /// (3 to 6), its atlanto-occipital pivot placed by `pivot`.
+    pub fn with_subdivisions(
+        diameters: &HeadDiameters,
+        pivot: &AtlantoOccipitalPlacement,
+        subdivisions: u32,
+    ) -> Result<Self, HeadError> {
         diameters.validate()?;
+        pivot.validate()?;
         if !(3..=6).contains(&subdivisions) {
             return Err(HeadError::Resolution(subdivisions));
         }
@@ -166,8 +225,6 @@ impl FetalHead {
         let angle = TEMPORAL_ANGLE_DEG.to_radians();
         let temporal = temporal_gauge * profile.radius(angle) * DVec2::new(angle.cos(), angle.sin());
 
-        let pivot_angle = PIVOT_ANGLE_DEG.to_radians();
-        let base = profile.radius(pivot_angle) * DVec2::new(pivot_angle.cos(), pivot_angle.sin());
         let landmarks = HeadLandmarks {
             vertex: midline(profile.vertex),
             occiput: midline(profile.occiput),
@@ -182,7 +239,7 @@ impl FetalHead {
             temporal_left: DVec3::new(temporal.x, half_bitemporal, temporal.y),
             temporal_right: DVec3::new(temporal.x, -half_bitemporal, temporal.y),
             suboccipital: midline(profile.suboccipital),
-            atlanto_occipital: midline((1.0 - PIVOT_DEPTH) * base),
+            atlanto_occipital: pivot.locate(&profile),
         };
         let body = HeadBody {
             profile,
@@ -361,6 +418,42 @@ mod tests {
     }
 
     #[test]
+    fn a_pivot_out_of_its_range_is_refused_by_name() {
+        for (placement, name) in [
+            (AtlantoOccipitalPlacement { behind_vertical_deg: -5.0, depth: 0.15 }, "behind_vertical_deg"),
+            (AtlantoOccipitalPlacement { behind_vertical_deg: f64::NAN, depth: 0.15 }, "behind_vertical_deg"),
+            (AtlantoOccipitalPlacement { behind_vertical_deg: 15.0, depth: 0.9 }, "depth"),
+        ] {
+            let err = FetalHead::with_subdivisions(&HeadDiameters::default(), &placement, 3).unwrap_err();
+            assert!(matches!(err, HeadError::Pivot { name: n, .. } if n == name), "{err}");
+            assert!(err.to_string().contains(name), "{err}");
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(16))]
+        #[test]
+        fn the_pivot_lies_on_its_ray_at_its_depth_and_leaves_the_surface_alone(
+            behind in 0.0..=45.0f64,
+            depth in 0.05..=0.5f64,
+        ) {
+            let d = HeadDiameters::default();
+            let placement = AtlantoOccipitalPlacement { behind_vertical_deg: behind, depth };
+            let head = FetalHead::with_subdivisions(&d, &placement, 3).unwrap();
+            let shallow = AtlantoOccipitalPlacement { depth: 0.05, ..placement };
+            let reference = FetalHead::with_subdivisions(&d, &shallow, 3).unwrap();
+            let (p, q) = (head.landmarks.atlanto_occipital, reference.landmarks.atlanto_occipital);
+            // In the midline, `behind` degrees behind straight down (-v towards -o).
+            prop_assert!(p.y == 0.0 && p.z < 0.0 && p.x <= 1e-15);
+            prop_assert!(((-p.x).atan2(-p.z).to_degrees() - behind).abs() < 1e-9);
+            // Drawn in from the surface in proportion to `depth`.
+            prop_assert!((p.length() / q.length() - (1.0 - depth) / 0.95).abs() < 1e-12);
+            // The pivot is not part of the skull's shape.
+            prop_assert_eq!(&head.surface, &reference.surface);
+        }
+    }
+
+    #[test]
     fn the_measurement_serialises_with_canonical_names() {
         let m = FetalHead::new(&HeadDiameters::default()).unwrap().measure();
         let json = serde_json::to_value(&m).unwrap();
@@ -380,7 +473,7 @@ mod tests {
     #[test]
     fn bad_resolutions_are_refused() {
         assert_eq!(
-            FetalHead::with_subdivisions(&HeadDiameters::default(), 9),
+            FetalHead::with_subdivisions(&HeadDiameters::default(), &AtlantoOccipitalPlacement::default(), 9),
             Err(HeadError::Resolution(9))
         );
     }
@@ -417,7 +510,7 @@ mod tests {
                 mentovertical_mm: mentovertical,
                 submentobregmatic_mm: submentobregmatic,
             };
-            let head = FetalHead::with_subdivisions(&d, 3).unwrap();
+            let head = FetalHead::with_subdivisions(&d, &AtlantoOccipitalPlacement::default(), 3).unwrap();
             check(&d, &head);
         }
     }

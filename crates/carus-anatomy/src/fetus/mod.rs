@@ -17,7 +17,7 @@ pub mod trunk;
 
 pub use diameters::{HeadDiameters, HeadError};
 pub use head::{
-    FetalHead, HeadExtents, HeadLandmarks, HeadMeasurement, DEFAULT_HEAD_SUBDIVISIONS, HEAD_LANDMARK_NAMES,
+    AtlantoOccipitalPlacement, FetalHead, HeadExtents, HeadLandmarks, HeadMeasurement, DEFAULT_HEAD_SUBDIVISIONS, HEAD_LANDMARK_NAMES,
 };
 pub use limbs::{CapsuleChain, Limbs};
 pub use trunk::{Trunk, TrunkDiameters, TrunkError, TrunkLandmarks, TrunkMeasurement, TrunkSegments};

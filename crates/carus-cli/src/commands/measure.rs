@@ -4,7 +4,9 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
-use carus_anatomy::fetus::{FetalHead, HeadDiameters, HeadMeasurement};
+use carus_anatomy::fetus::{
+    AtlantoOccipitalPlacement, FetalHead, HeadDiameters, HeadMeasurement, DEFAULT_HEAD_SUBDIVISIONS,
+};
 use carus_anatomy::floor::{pelvic_floor, FloorParameters};
 use carus_anatomy::pelvis::{measure, Pelvis, PelvisMeasurement, PelvisSpec};
 use serde::Deserialize;
@@ -181,6 +183,8 @@ pub struct AnatomyFile {
     pub path: Option<PathBuf>,
     pub pelvis: PelvisSpec,
     pub head: HeadDiameters,
+    /// The head's atlanto-occipital pivot: a scenario's `[fetus]` keys, else the default.
+    pub pivot: AtlantoOccipitalPlacement,
     pub floor: FloorParameters,
 }
 
@@ -192,6 +196,7 @@ impl AnatomyFile {
                 path: None,
                 pelvis: PelvisSpec::default(),
                 head: HeadDiameters::default(),
+                pivot: AtlantoOccipitalPlacement::default(),
                 floor: run_floor(),
             });
         };
@@ -213,6 +218,7 @@ impl AnatomyFile {
             return Ok(AnatomyFile {
                 pelvis: scenario.pelvis,
                 head: scenario.head,
+                pivot: scenario.fetus.atlanto_occipital(),
                 floor: scenario.floor.mesh,
                 path: Some(path.to_path_buf()),
             });
@@ -230,6 +236,7 @@ impl AnatomyFile {
         Ok(AnatomyFile {
             pelvis,
             head: part(path, &table, "head")?,
+            pivot: AtlantoOccipitalPlacement::default(),
             floor: floor_part(path, &table)?,
             path: Some(path.to_path_buf()),
         })
@@ -250,7 +257,7 @@ impl AnatomyFile {
 
     /// Builds the head the file describes; a failure names the file.
     pub fn head(&self) -> anyhow::Result<FetalHead> {
-        FetalHead::new(&self.head).with_context(|| format!("{}: the [head] diameters cannot be built", self.describe()))
+        FetalHead::with_subdivisions(&self.head, &self.pivot, DEFAULT_HEAD_SUBDIVISIONS).with_context(|| format!("{}: the [head] diameters cannot be built", self.describe()))
     }
 
     /// Builds the pelvic floor the file describes on `pelvis`; a failure names the file.
@@ -350,6 +357,13 @@ mod tests {
         assert!(error.contains("`pelvsi` is not a table"), "{error}");
         let error = format!("{:#}", load(&text.replace("[head]", "[haed]")).err().unwrap());
         assert!(error.contains("haed"), "{error}");
+        // The head is measured with the scenario's pivot; an anatomy file's has the default.
+        let moved = text.replace("atlanto_occipital_behind_deg = 15.0", "atlanto_occipital_behind_deg = 30.0");
+        let file = load(&moved).unwrap();
+        assert_eq!(file.pivot, AtlantoOccipitalPlacement { behind_vertical_deg: 30.0, depth: 0.15 });
+        let pivot = file.head().unwrap().landmarks.atlanto_occipital;
+        assert!(((-pivot.x).atan2(-pivot.z).to_degrees() - 30.0).abs() < 1e-9, "{pivot}");
+        assert_eq!(anatomy.pivot, AtlantoOccipitalPlacement::default());
         // A unit after a number gets the scenario's advice, with its line.
         let error = format!("{:#}", load("[head]\nbiparietal_mm = 95mm\n").err().unwrap());
         assert!(error.contains("file.toml:2") && error.contains("write the number alone"), "{error}");
