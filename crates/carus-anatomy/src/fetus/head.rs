@@ -43,7 +43,7 @@ const TEMPORAL_ANGLE_DEG: f64 = -12.0;
 /// choice: no measurement of where a term fetus's foramen magnum lies
 /// relative to its head centre was found (docs/LABOUR.md, thirty-fifth
 /// session, gives how the outcome turns on them).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AtlantoOccipitalPlacement {
     /// Angle behind straight down, degrees, seen from the head centre in the midline.
     pub behind_vertical_deg: f64,
