@@ -221,6 +221,30 @@ pub fn frame_name(stem: &str, k: usize) -> String {
     format!("{FRAMES_DIR}/{stem}_{k:04}.vtu")
 }
 
+/// The pose history as JSON: what `carus detect` reads back (the canal,
+/// the fetal geometry, each sample's poses and forces), with the
+/// detector's series beside each sample under pose_history.csv's column
+/// names (`station_mm`, `theta_deg`, `phi_deg`...; null where a column
+/// does not apply), which the detector's reader ignores. Without a report
+/// (the detector refused the history) the samples are as recorded.
+pub fn write_history_json(path: &Path, history: &PoseHistory, report: Option<&DetectorReport>) -> Result<(), LabourError> {
+    let mut value = serde_json::to_value(history).map_err(|e| output_error(path, e))?;
+    let samples = value.get_mut("samples").and_then(serde_json::Value::as_array_mut);
+    if let (Some(report), Some(samples)) = (report, samples) {
+        let (columns, rows) = report.series.table();
+        for (sample, row) in samples.iter_mut().zip(&rows) {
+            let Some(sample) = sample.as_object_mut() else { continue };
+            for (column, cell) in columns.iter().zip(row) {
+                // `time_s` is the sample's own; a recorded field is never replaced.
+                sample
+                    .entry(*column)
+                    .or_insert_with(|| cell.map_or(serde_json::Value::Null, serde_json::Value::from));
+            }
+        }
+    }
+    write_json(path, &value)
+}
+
 /// The pose history as CSV: the detector's series (station, theta, phi,
 /// forces...) beside the head and trunk poses in the pelvis frame, and the
 /// moments that spin the head about the pelvic axis.

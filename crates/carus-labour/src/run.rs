@@ -568,7 +568,7 @@ fn finish(
     let scene = sim.scene;
     let history = history(sim);
     let (report, failure) = detect_or_say_why(&history, failure);
-    output::write_json(&out_dir.join(output::HISTORY_JSON), &history)?;
+    output::write_history_json(&out_dir.join(output::HISTORY_JSON), &history, report.as_ref())?;
     output::write_json(&out_dir.join(output::MOVEMENTS_FILE), &report)?;
     output::write_history_csv(
         &out_dir.join(output::HISTORY_CSV),
@@ -859,6 +859,22 @@ mod tests {
             output::CHECKPOINT_FILE,
         ] {
             assert!(dir.path().join(file).exists(), "{file} missing");
+        }
+        // pose_history.json holds station, theta and phi per sample (issue
+        // 4), and the detector reads it back as the history it was.
+        let text = std::fs::read_to_string(dir.path().join(output::HISTORY_JSON)).unwrap();
+        assert_eq!(carus_analysis::PoseHistory::from_json_str(&text).unwrap(), a.history);
+        let json: serde_json::Value = serde_json::from_str(&text).unwrap();
+        let samples = json["samples"].as_array().unwrap();
+        assert_eq!(samples.len(), series.time_s.len());
+        for (k, sample) in samples.iter().enumerate() {
+            for (key, value) in [
+                ("station_mm", series.station_mm[k]),
+                ("theta_deg", series.theta_deg[k]),
+                ("phi_deg", series.phi_deg[k]),
+            ] {
+                assert_eq!(sample[key].as_f64(), Some(value), "sample {k}: {key}");
+            }
         }
     }
 

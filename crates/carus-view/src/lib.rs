@@ -72,6 +72,18 @@ struct HeadMarkers {
     rgb: [f32; 3],
 }
 
+/// What one sample of a replay shows ([`Replay::state`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SampleState {
+    pub time_s: f64,
+    pub station_mm: f64,
+    pub theta_deg: f64,
+    pub phi_deg: f64,
+    pub head_delivered: bool,
+    /// The observed movements whose span holds the sample, by canonical key.
+    pub under_way: Vec<&'static str>,
+}
+
 /// What is laid over a frame besides the anatomy.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
 pub struct Layers {
@@ -208,27 +220,41 @@ impl Replay {
         self.forces.as_ref().map_or_else(Vec::new, |f| f.arrows(&self.history, k))
     }
 
-    /// What sample `k` shows, in words: its time, the head's station,
-    /// theta and phi (CARDINAL_MOVEMENTS.md), and the movements under way.
-    pub fn readout(&self, k: usize) -> Vec<String> {
+    /// What sample `k` shows, as numbers: its time, the head's station,
+    /// theta and phi (CARDINAL_MOVEMENTS.md), whether the head is born,
+    /// and the movements under way.
+    pub fn state(&self, k: usize) -> SampleState {
         let s = &self.series;
-        let t = s.time_s[k];
-        let under_way: Vec<&str> = self
-            .movements
-            .iter()
-            .filter(|(_, start, end)| (*start..=*end).contains(&t))
-            .map(|(key, _, _)| *key)
-            .collect();
+        let time_s = s.time_s[k];
+        SampleState {
+            time_s,
+            station_mm: s.station_mm[k],
+            theta_deg: s.theta_deg[k],
+            phi_deg: s.phi_deg[k],
+            head_delivered: s.head_delivered[k],
+            under_way: self
+                .movements
+                .iter()
+                .filter(|(_, start, end)| (*start..=*end).contains(&time_s))
+                .map(|(key, _, _)| *key)
+                .collect(),
+        }
+    }
+
+    /// What sample `k` shows, in words: [`Replay::state`] and the floor's
+    /// state drawn.
+    pub fn readout(&self, k: usize) -> Vec<String> {
+        let s = self.state(k);
         vec![
-            format!("t = {t:.2} s"),
-            format!("station {:+.1} mm", s.station_mm[k]),
-            format!("theta {:.1} deg", s.theta_deg[k]),
-            format!("phi {:.1} deg (flexion positive)", s.phi_deg[k]),
-            if s.head_delivered[k] { "head delivered".into() } else { "head in the canal".into() },
-            self.floor_shown(t),
-            match under_way.is_empty() {
+            format!("t = {:.2} s", s.time_s),
+            format!("station {:+.1} mm", s.station_mm),
+            format!("theta {:.1} deg", s.theta_deg),
+            format!("phi {:.1} deg (flexion positive)", s.phi_deg),
+            if s.head_delivered { "head delivered".into() } else { "head in the canal".into() },
+            self.floor_shown(s.time_s),
+            match s.under_way.is_empty() {
                 true => "no movement under way".into(),
-                false => format!("under way: {}", under_way.join(", ").replace('_', " ")),
+                false => format!("under way: {}", s.under_way.join(", ").replace('_', " ")),
             },
         ]
     }

@@ -70,8 +70,8 @@ pub struct RenderArgs {
     /// PNG file to write (its folder is created if missing).
     #[arg(long)]
     pub out: PathBuf,
-    /// Views, left to right.
-    #[arg(long, value_enum, value_delimiter = ',', default_values = ["anterior", "lateral", "inferior"])]
+    /// Views, left to right, separated by commas (`--views superior,oblique`).
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "anterior,lateral,inferior")]
     pub views: Vec<ViewName>,
     /// Side of each view's square tile, pixels.
     #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(16..=4096))]

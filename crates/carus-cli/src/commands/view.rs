@@ -17,7 +17,7 @@ use carus_view::{Follow, Layers, Replay};
 
 use super::render::{pelvis_markers, ViewName, HEAD_MARKER_M, LANDMARK_RGB};
 use super::run::{read_record, run_ended, run_title, scene_with_floors};
-use super::Status;
+use super::{print_json, Status};
 
 #[derive(clap::Args)]
 pub struct ViewArgs {
@@ -45,6 +45,9 @@ pub struct ViewArgs {
     /// expulsion and any guide (a check box in the window).
     #[arg(long)]
     pub forces: bool,
+    /// With --picture: print one JSON object (the picture, and the frame's time, station, theta, phi, movements under way and, with --forces, the forces) on standard output.
+    #[arg(long, requires = "picture")]
+    pub json: bool,
 }
 
 pub fn run(args: &ViewArgs) -> anyhow::Result<Status> {
@@ -85,11 +88,41 @@ pub fn run(args: &ViewArgs) -> anyhow::Result<Status> {
     let picture = replay.picture(at, &replay.standard_camera(args.view.into()), layers, width, height)?;
     picture.save_png(path)?;
     let k = replay.sample_at(at);
+    if args.json {
+        print_json(&picture_json(&replay, k, path, args))?;
+        return Ok(Status::Success);
+    }
     println!("{} ({width} x {height}): {}", path.display(), replay.readout(k).join(", "));
     if args.forces {
         println!("forces: {}", replay.force_readout(k).join(", "));
     }
     Ok(Status::Success)
+}
+
+/// `carus view --picture --json`: the picture drawn and what its frame
+/// shows, the forces largest first (with --forces).
+fn picture_json(replay: &Replay, k: usize, path: &Path, args: &ViewArgs) -> serde_json::Value {
+    let state = replay.state(k);
+    let mut json = serde_json::json!({
+        "picture": path.display().to_string(),
+        "width": args.size[0],
+        "height": args.size[1],
+        "view": carus_render::View::from(args.view).name(),
+        "time_s": state.time_s,
+        "station_mm": state.station_mm,
+        "theta_deg": state.theta_deg,
+        "phi_deg": state.phi_deg,
+        "head_delivered": state.head_delivered,
+        "movements_under_way": state.under_way,
+    });
+    if args.forces {
+        let forces: Vec<serde_json::Value> = carus_view::forces::largest_first(replay.arrows(k))
+            .iter()
+            .map(|a| serde_json::json!({ "on": a.label, "force_n": a.force_n.to_array(), "magnitude_n": a.force_n.length() }))
+            .collect();
+        json["forces"] = forces.into();
+    }
+    json
 }
 
 /// What the viewer shows of a run folder: its record once the run has
@@ -272,7 +305,7 @@ mod tests {
     use super::*;
 
     fn args(run: PathBuf, at: f64, picture: PathBuf) -> ViewArgs {
-        ViewArgs { run, at: Some(at), picture: Some(picture), screenshot: None, view: ViewName::Inferior, size: vec![120, 90], landmarks: true, forces: true }
+        ViewArgs { run, at: Some(at), picture: Some(picture), screenshot: None, view: ViewName::Inferior, size: vec![120, 90], landmarks: true, forces: true, json: false }
     }
 
     /// A run's frame is drawn to a PNG of the size asked, with the floor
@@ -303,6 +336,24 @@ mod tests {
         assert!(bytes.starts_with(b"\x89PNG"));
         // Width and height in the PNG header.
         assert_eq!((&bytes[16..20], &bytes[20..24]), (&120u32.to_be_bytes()[..], &90u32.to_be_bytes()[..]));
+        // With --json, the same frame as numbers: the detector's series at
+        // the sample drawn, and the forces largest first.
+        let shown = RunShown::read(dir.path()).unwrap();
+        let scene = RunScene::build(&shown.scenario).unwrap();
+        let replay = shown.replay(&scene).unwrap();
+        let k = replay.sample_at(0.2);
+        let json = picture_json(&replay, k, &png, &args(dir.path().to_path_buf(), 0.2, png.clone()));
+        let series = &record.detector.as_ref().unwrap().series;
+        assert_eq!(json["time_s"].as_f64(), Some(series.time_s[k]));
+        assert!(series.time_s[k] <= 0.2 && 0.2 - series.time_s[k] < s.output.every_s);
+        for (key, value) in [("station_mm", series.station_mm[k]), ("theta_deg", series.theta_deg[k]), ("phi_deg", series.phi_deg[k])] {
+            assert_eq!(json[key].as_f64(), Some(value), "{key}");
+        }
+        assert_eq!((json["view"].as_str(), json["width"].as_u64(), json["head_delivered"].as_bool()), (Some("inferior"), Some(120), Some(false)));
+        let forces = json["forces"].as_array().unwrap();
+        assert_eq!(forces.len(), replay.arrows(k).len());
+        let magnitudes: Vec<f64> = forces.iter().map(|f| f["magnitude_n"].as_f64().unwrap()).collect();
+        assert!(magnitudes.windows(2).all(|w| w[0] >= w[1]), "{magnitudes:?}");
 
         let refused = |a: ViewArgs| format!("{:#}", run(&a).err().expect("refused"));
         let e = refused(args(dir.path().to_path_buf(), 5.0, png.clone()));
@@ -385,6 +436,8 @@ mod tests {
         assert!(Cli::try_parse_from(["view", "runs/x", "--picture", "a.png"]).is_err());
         assert!(Cli::try_parse_from(["view", "runs/x", "--at", "1", "--picture", "a.png", "--screenshot", "b.png"]).is_err());
         assert!(Cli::try_parse_from(["view", "runs/x", "--size", "10", "10"]).is_err());
+        assert!(Cli::try_parse_from(["view", "runs/x", "--json"]).is_err());
+        assert!(Cli::try_parse_from(["view", "runs/x", "--at", "1", "--picture", "a.png", "--json"]).unwrap().view.json);
         assert_eq!(Cli::try_parse_from(["view", "runs/x", "--at", "-1"]).unwrap().view.at, Some(-1.0));
         let both = Cli::try_parse_from(["view", "runs/x", "--at", "1", "--picture", "a.png"]).unwrap();
         assert_eq!((both.view.at, both.view.size.as_slice(), both.view.view), (Some(1.0), &[800, 600][..], ViewName::Lateral));
