@@ -161,9 +161,22 @@ impl Reader<'_> {
                         "give every element all its nodes",
                     ));
                 }
-                // A keyword line ending in a comma continues on the next line.
+                // A keyword line ending in a comma continues on the next line,
+                // which then holds parameters (names), never data (numbers).
+                let keyword_line = self.line;
                 while current.ends_with(',') && index < lines.len() {
-                    current.push_str(lines[index].trim());
+                    let next = lines[index].trim();
+                    if next.starts_with(|c: char| c.is_ascii_digit() || matches!(c, '-' | '+' | '.')) {
+                        self.line = index + 1;
+                        return Err(self.error(
+                            format!(
+                                "the keyword line {keyword_line} ends in a comma, so this line would continue it, \
+                                 but it holds data, not parameters: {next:?}"
+                            ),
+                            format!("remove the comma at the end of line {keyword_line}"),
+                        ));
+                    }
+                    current.push_str(next);
                     index += 1;
                 }
                 let keyword = self.keyword(&current);
@@ -627,7 +640,7 @@ mod tests {
 
     #[test]
     fn tetrahedra_with_continuation_lines() {
-        let text = "*Node\n1,0,0,0\n2,1,0,0\n3,0,1,0\n4,0,0,1\n*element, type=c3d4\n7, 1, 2,\n 3, 4\n*Surface, name=base\n7, S1\n";
+        let text = "*Node\n1,0,0,0\n2,1,0,0\n3,0,1,0\n4,0,0,1\n*element,\n type=c3d4\n7, 1, 2,\n 3, 4\n*Surface, name=base\n7, S1\n";
         let mesh = read(text).unwrap().mesh;
         assert_eq!(mesh.kind, ElementKind::T4);
         assert_eq!(mesh.connectivity, vec![0, 1, 2, 3]);
@@ -661,6 +674,14 @@ mod tests {
             (
                 "*NODE\n1,0,0,0\n*ELEMENT, TYPE=C3D4\n1, 1, 1\n",
                 "m.inp:4: the file ends inside an element",
+            ),
+            (
+                "*NODE\n1,0,0,0\n*ELEMENT, TYPE=S4\n1, 1, 1, 1, 1\n",
+                "m.inp: the file holds no volume elements (8-node hexahedra or 4-node tetrahedra) (skipped *ELEMENT, TYPE=S4",
+            ),
+            (
+                "*NODE\n1,0,0,0\n*ELEMENT, TYPE=C3D4,\n1, 1, 1, 1, 1\n",
+                "m.inp:4: the keyword line 3 ends in a comma, so this line would continue it, but it holds data",
             ),
         ];
         for (text, expected) in cases {

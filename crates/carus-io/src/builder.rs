@@ -185,10 +185,18 @@ impl MeshBuilder {
         let (kind, volume_ids, file_connectivity): (ElementKind, Vec<u64>, Vec<u64>) =
             match (self.hexahedra.len(), self.tetrahedra.len()) {
                 (0, 0) => {
+                    let skipped = match self.notes.is_empty() {
+                        true => String::new(),
+                        false => format!(" ({})", self.notes.join("; ")),
+                    };
+                    let abaqus = self.path.extension().is_some_and(|e| e.eq_ignore_ascii_case("inp"));
                     return Err(self.content_error(
-                        "the file holds no volume elements (8-node hexahedra or 4-node tetrahedra)".into(),
-                        "export the 3-D mesh, not only its surface (Gmsh: add a physical volume, or Mesh.SaveAll = 1)",
-                    ))
+                        format!("the file holds no volume elements (8-node hexahedra or 4-node tetrahedra){skipped}"),
+                        match abaqus {
+                            true => "export the 3-D mesh as solid elements (C3D8, C3D8R, C3D8H, C3D8I, C3D4, C3D4H), not only shells or faces",
+                            false => "export the 3-D mesh, not only its surface (Gmsh: add a physical volume, or Mesh.SaveAll = 1)",
+                        },
+                    ));
                 }
                 (h, t) if h > 0 && t > 0 => {
                     return Err(ReadError::MixedElementKinds {

@@ -23,7 +23,7 @@ use vtkio::xml::Compressor;
 use crate::builder::{MeshBuilder, MeshFile};
 use crate::error::{ReadError, WriteError};
 use crate::vtk_compat::{
-    declared_arrays, legacy_type_names, raw_appended_to_base64, without_component_ranges,
+    declared_arrays, legacy_ascii_fault, legacy_type_names, raw_appended_to_base64, without_component_ranges,
 };
 
 /// Reads a legacy `.vtk` or XML `.vtu` unstructured grid.
@@ -136,11 +136,16 @@ fn load_unstructured(path: &Path) -> Result<UnstructuredGridPiece, ReadError> {
     let vtk = match parsed {
         Ok(Ok(vtk)) => vtk,
         Ok(Err(e)) => {
-            return Err(content_error(
-                path,
-                format!("not a readable VTK file: {}", in_words(&e.to_string())),
-                RESAVE_FIX,
-            ))
+            let problem = format!("not a readable VTK file: {}", in_words(&e.to_string()));
+            return Err(match legacy_ascii_fault(&bytes).filter(|_| extension == "vtk") {
+                Some((line, fault)) => ReadError::Syntax {
+                    path: path.to_path_buf(),
+                    line,
+                    problem: format!("{fault} ({problem})"),
+                    fix: "correct that line, or export the mesh again".into(),
+                },
+                None => content_error(path, problem, RESAVE_FIX),
+            });
         }
         Err(_) => {
             return Err(content_error(
@@ -664,6 +669,24 @@ mod tests {
             std::fs::write(&path, LEGACY_VTK.replace(from, to)).unwrap();
             let e = read_vtk(&path).expect_err("refused").to_string();
             assert!(e.contains("short_sets.vtk") && e.contains(expected) && e.contains("save it again"), "{e}");
+        }
+    }
+
+    /// vtkio's parse errors name no line; in an ASCII legacy file the
+    /// geometry's first bad value or short section is found and named.
+    #[test]
+    fn a_bad_value_in_a_legacy_file_is_named_by_its_line() {
+        let (_dir, path) = temp("bad.vtk");
+        for (from, to, expected) in [
+            ("1 0 0\n", "nan 0 0\n", "bad.vtk:7: \"nan\" in POINTS (line 5) is not a finite number"),
+            ("3 0 1 2\n", "3 0 -1 2\n", "bad.vtk:12: \"-1\" in CELLS (line 10) is not a whole number of 0 or more"),
+            ("POINTS 4 double", "POINTS 1000000000 double", "bad.vtk:10: POINTS (line 5) declares 3000000000 values, but 12 come before this line"),
+            ("CELL_TYPES 3\n10\n5\n3\n", "CELL_TYPES 3\n10\n5\nx\n", "bad.vtk:17: \"x\" in CELL_TYPES (line 14) is not a whole number"),
+        ] {
+            assert!(LEGACY_VTK.contains(from), "{from}");
+            std::fs::write(&path, LEGACY_VTK.replace(from, to)).unwrap();
+            let e = read_vtk(&path).expect_err("refused").to_string();
+            assert!(e.contains(expected) && e.contains("fix: correct that line"), "{e}\n  expected: {expected}");
         }
     }
 

@@ -295,6 +295,76 @@ pub(crate) fn legacy_type_names(bytes: &[u8]) -> Cow<'_, [u8]> {
     }
 }
 
+/// Where an ASCII legacy file's geometry first goes wrong, for vtkio's
+/// parse errors, which name no line: a value in `POINTS` that is not a
+/// finite number, one in `CELLS`, `CELL_TYPES` (or version 5's `OFFSETS`,
+/// `CONNECTIVITY`) that is not a whole number of 0 or more, or a section
+/// that ends before the values its header declares. (line, problem), or
+/// `None` for a binary file or one whose geometry reads well (the fault is
+/// elsewhere, in the data arrays).
+pub(crate) fn legacy_ascii_fault(bytes: &[u8]) -> Option<(usize, String)> {
+    struct Section<'a> {
+        name: &'a str,
+        line: usize,
+        declared: usize,
+        found: usize,
+        real: bool,
+    }
+    let short = |s: &Section, at: usize| {
+        (s.found < s.declared).then(|| {
+            (at, format!("{} (line {}) declares {} values, but {} come before this line", s.name, s.line, s.declared, s.found))
+        })
+    };
+    let text = std::str::from_utf8(bytes).ok()?;
+    if !text.lines().nth(2)?.trim().eq_ignore_ascii_case("ascii") {
+        return None;
+    }
+    let is_keyword = |w: &str| w.chars().all(|c| c.is_ascii_uppercase() || c == '_') && !matches!(w, "NAN" | "INF" | "INFINITY");
+    let mut section: Option<Section> = None;
+    let mut last = 0;
+    for (i, line) in text.lines().enumerate().skip(3) {
+        last = i + 1;
+        let words: Vec<&str> = line.split_whitespace().collect();
+        let Some(&first) = words.first() else { continue };
+        if is_keyword(first) {
+            if let Some(fault) = section.as_ref().and_then(|s| short(s, i + 1)) {
+                return Some(fault);
+            }
+            let count = |k: usize| words.get(k).and_then(|w| w.parse::<usize>().ok());
+            let (declared, real) = match first {
+                "DATASET" => continue,
+                "POINTS" => (count(1).and_then(|n| n.checked_mul(3)), true),
+                // Version 2's `CELLS n size`: size values follow; version 5's
+                // `CELLS offsets connectivity` heads two sections of their own.
+                "CELLS" if words.len() == 3 && text.lines().nth(i + 1).is_some_and(|l| l.trim_start().starts_with("OFFSETS")) => (Some(0), false),
+                "CELLS" => (count(2), false),
+                "CELL_TYPES" => (count(1), false),
+                "OFFSETS" | "CONNECTIVITY" => (Some(0), false),
+                // The data arrays: vtkio's own message has to do there.
+                _ => return None,
+            };
+            let Some(declared) = declared else {
+                return Some((i + 1, format!("{first} needs its count{}: {line:?}", if real { " and type" } else { "s" })));
+            };
+            section = Some(Section { name: first, line: i + 1, declared, found: 0, real });
+            continue;
+        }
+        let Some(s) = section.as_mut() else { continue };
+        for word in words {
+            let fits = match s.real {
+                true => word.parse::<f64>().is_ok_and(f64::is_finite),
+                false => word.parse::<u64>().is_ok(),
+            };
+            if !fits {
+                let wanted = if s.real { "a finite number" } else { "a whole number of 0 or more" };
+                return Some((i + 1, format!("{word:?} in {} (line {}) is not {wanted}", s.name, s.line)));
+            }
+            s.found += 1;
+        }
+    }
+    section.as_ref().and_then(|s| short(s, last + 1))
+}
+
 fn find(haystack: &[u8], needle: &[u8], from: usize) -> Option<usize> {
     haystack
         .get(from..)?

@@ -1251,6 +1251,14 @@ impl Scenario {
                 "the force between contractions, e.g. 0.0 or -10.0",
             ));
         }
+        if self.expulsion.force_min_n < -2000.0 {
+            return Err(err(
+                "expulsion.force_min_n",
+                self.expulsion.force_min_n,
+                "is far beyond any pull back between contractions",
+                "newtons (not mN): 0.0, or a few newtons below it to let the fetus slide back",
+            ));
+        }
         if self.expulsion.force_max_n > 2000.0 {
             return Err(err(
                 "expulsion.force_max_n",
@@ -1266,6 +1274,12 @@ impl Scenario {
                 None => Ok(()),
             }
         };
+        in_band(
+            &[("contact.trunk_cover_depth_mm", self.contact.trunk_cover_depth_mm)],
+            (0.1, 30.0),
+            "is not a plausible depth of soft tissue over a neonate's shoulders and chest",
+            "millimetres, 0.1 to 30: the default is 6.0 (docs/CONTACT.md, \"The trunk's cover\")",
+        )?;
         let h = &self.head;
         in_band(
             &[
@@ -2117,6 +2131,10 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("force_min_n"), "{e}");
+        let e = parse("name = \"x\"\n[expulsion]\nforce_min_n = -1e6\n").unwrap_err().to_string();
+        assert!(e.contains("expulsion.force_min_n") && e.contains("far beyond any pull back"), "{e}");
+        let e = parse("name = \"x\"\n[contact]\ntrunk_cover_depth_mm = 1000.0\n").unwrap_err().to_string();
+        assert!(e.contains("contact.trunk_cover_depth_mm") && e.contains("0.1 to 30"), "{e}");
         let e = parse("name = \"x\"\n[head]\nbiparietal_mm = 9.5\n").unwrap_err().to_string();
         assert!(e.contains("`head.biparietal_mm` = 9.5") && e.contains("not cm"), "{e}");
         let e = parse("name = \"x\"\n[head]\nmentovertical_mm = 1e300\n").unwrap_err().to_string();

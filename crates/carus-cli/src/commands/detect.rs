@@ -47,6 +47,9 @@ struct TableAnatomy {
 
 pub fn run(args: &DetectArgs) -> anyhow::Result<Status> {
     let path = history_file(&args.history);
+    if let Some(series) = &args.series {
+        check_series_target(series, &path)?;
+    }
     let (report, anatomy) = detect_file(&path, args.anatomy.as_deref())?;
     if let Some(series) = &args.series {
         write_series(series, &report)?;
@@ -101,6 +104,28 @@ fn history_file(path: &Path) -> PathBuf {
     } else {
         json
     }
+}
+
+/// `--series` writes a new file or replaces one of the user's, never the
+/// history it reads nor a file in a folder that carus wrote (a run's
+/// records: run.json, pose_history.csv... would be lost).
+fn check_series_target(series: &Path, history: &Path) -> anyhow::Result<()> {
+    if !series.exists() {
+        return Ok(());
+    }
+    let same = |a: &Path, b: &Path| a.canonicalize().ok().is_some_and(|a| b.canonicalize().ok() == Some(a));
+    if same(series, history) {
+        anyhow::bail!("--series {}: that is the pose history being read; write the series to a new file", series.display());
+    }
+    let folder = series.parent().filter(|f| !f.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    if super::run::carus_made(folder) {
+        anyhow::bail!(
+            "--series {}: that file is in a folder carus wrote (a run's or a sweep's), and is not replaced; \
+             write the series outside it",
+            series.display()
+        );
+    }
+    Ok(())
 }
 
 /// The detector's per-sample series as CSV.
@@ -343,6 +368,28 @@ mod tests {
         assert_eq!(written.rows.len(), 21);
         let station = written.column("station_mm").unwrap();
         assert!(written.number(&written.rows[0], station).unwrap().unwrap() < written.number(&written.rows[20], station).unwrap().unwrap());
+    }
+
+    /// `--series` never replaces the history it reads nor a run's records.
+    #[test]
+    fn the_series_is_not_written_over_a_runs_files() {
+        let dir = tempfile::tempdir().unwrap();
+        let run = dir.path().join("run");
+        std::fs::create_dir(&run).unwrap();
+        for f in ["scenario.toml", "run.json", "pose_history.csv"] {
+            std::fs::write(run.join(f), "kept").unwrap();
+        }
+        let history = run.join("pose_history.csv");
+        let e = format!("{:#}", check_series_target(&history, &history).unwrap_err());
+        assert!(e.contains("the pose history being read") && e.contains("new file"), "{e}");
+        let e = format!("{:#}", check_series_target(&run.join("run.json"), &history).unwrap_err());
+        assert!(e.contains("run.json") && e.contains("folder carus wrote") && e.contains("outside it"), "{e}");
+        // A new file, even in the run's folder, and a user's own file elsewhere are written.
+        check_series_target(&run.join("series.csv"), &history).unwrap();
+        let own = dir.path().join("series.csv");
+        std::fs::write(&own, "old").unwrap();
+        check_series_target(&own, &history).unwrap();
+        assert_eq!(std::fs::read_to_string(run.join("run.json")).unwrap(), "kept");
     }
 
     /// Tables that cannot be poses are refused at their line and column.

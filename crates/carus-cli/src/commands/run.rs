@@ -543,6 +543,11 @@ fn mark(dir: &Path) -> anyhow::Result<()> {
         .with_context(|| format!("cannot write {}", mark.display()))
 }
 
+/// Whether `dir` is an out dir of carus (a run's, a sweep's, sanity's).
+pub(super) fn carus_made(dir: &Path) -> bool {
+    dir.join(OUT_DIR_MARK).is_file() || EARLIER_OUTPUT_MARKS.iter().any(|files| files.iter().all(|f| dir.join(f).is_file()))
+}
+
 /// `--force` replaces a folder that carus wrote, never any other: a
 /// mistyped `--out .` or `--out runs` must not delete a user's files or
 /// the earlier runs beside them.
@@ -555,9 +560,7 @@ fn check_replaceable(dir: &Path) -> anyhow::Result<()> {
             dir.display()
         );
     }
-    let marked = dir.join(OUT_DIR_MARK).is_file()
-        || EARLIER_OUTPUT_MARKS.iter().any(|files| files.iter().all(|f| dir.join(f).is_file()));
-    if !marked {
+    if !carus_made(dir) {
         bail!(
             "{} is not a folder that carus made (it has no {OUT_DIR_MARK}, nor a run's scenario.toml with \
              its run.json or checkpoint.json, nor a sweep's tables), and --force replaces only such a \
