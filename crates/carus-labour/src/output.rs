@@ -129,8 +129,15 @@ pub fn run_ending(dir: &Path) -> Option<RunEnding> {
 
 pub fn read_checkpoint(dir: &Path) -> Result<Checkpoint, LabourError> {
     let path = dir.join(CHECKPOINT_FILE);
-    let text = carus_io::input::read_text(&path)
-        .map_err(|e| output_error(&path, format!("{e}; is this the out dir of a `carus run`?")))?;
+    let text = carus_io::input::read_text(&path).map_err(|e| {
+        let problem = match e.kind() {
+            std::io::ErrorKind::InvalidData => format!(
+                "not text ({e}): it was damaged after carus wrote it; run the scenario again from the start"
+            ),
+            _ => format!("{e}; is this the out dir of a `carus run`?"),
+        };
+        output_error(&path, problem)
+    })?;
     serde_json::from_str(&text).map_err(|e| {
         let problem = if e.is_eof() || e.is_syntax() {
             format!(

@@ -1238,6 +1238,18 @@ mod tests {
         std::fs::write(&path, edited.to_string()).unwrap();
         let e = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).expect_err("refused").to_string();
         assert!(e.contains("beyond a kilometre of the pelvis") && e.contains("edited or damaged"), "{e}");
+        // A pose history that contradicts the step, or that the detector
+        // would refuse at the end, is refused before the rest is simulated.
+        let mut edited: serde_json::Value = serde_json::from_str(&text).unwrap();
+        edited["state"]["step"] = 1u64.into();
+        std::fs::write(&path, edited.to_string()).unwrap();
+        let e = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).expect_err("refused").to_string();
+        assert!(e.contains("saved pose history") && e.contains("lies after its step's") && e.contains("edited"), "{e}");
+        let mut edited: serde_json::Value = serde_json::from_str(&text).unwrap();
+        edited["state"]["samples"][1]["head"]["orientation"] = serde_json::json!([0.0, 0.0, 0.0, 0.0]);
+        std::fs::write(&path, edited.to_string()).unwrap();
+        let e = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).expect_err("refused").to_string();
+        assert!(e.contains("saved pose history") && e.contains("quaternion"), "{e}");
         std::fs::write(&path, &text).unwrap();
         // A scenario.toml deleted since is written again, as the run started.
         std::fs::remove_file(&scenario).unwrap();

@@ -973,6 +973,15 @@ impl Scenario {
         if settings.is_empty() {
             return Ok(self.clone());
         }
+        for (k, (key, value)) in settings.iter().enumerate() {
+            if let Some((_, first)) = settings[..k].iter().find(|(earlier, _)| earlier == key) {
+                return Err(ScenarioError::Setting {
+                    setting: format!("{key} = {first}, {key} = {value}"),
+                    problem: format!("{key} is given twice"),
+                    hint: "give each key once".into(),
+                });
+            }
+        }
         let mut table = toml::Table::try_from(self)?;
         for (key, value) in settings {
             set_key(&mut table, key, value)?;
@@ -1834,6 +1843,12 @@ pub fn toml_table(path: &Path, text: &str) -> Result<toml::Table, ScenarioError>
     text.parse::<toml::Table>().map_err(|e| toml_syntax(path, text, &e))
 }
 
+/// `text` read as a `T`, a wrong value named by its line as in a scenario
+/// file (anatomy files: `carus measure`, `carus mesh`).
+pub fn from_toml_text<T: serde::de::DeserializeOwned>(path: &Path, text: &str) -> Result<T, ScenarioError> {
+    toml::from_str(text).map_err(|e| toml_syntax(path, text, &e))
+}
+
 /// A TOML syntax error by line, with the unit-after-a-number advice where
 /// that is the fault.
 fn toml_syntax(path: &Path, text: &str, error: &toml::de::Error) -> ScenarioError {
@@ -2079,6 +2094,12 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("trajectory.mode = forward, contact.fiction = 0.3") && e.contains("fiction"), "{e}");
+        // One key set twice is a slip, not the last one winning.
+        let e = textbook
+            .with_settings(&[setting("contact.friction", "0.1"), setting("contact.friction", "0.2")])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("contact.friction = 0.1, contact.friction = 0.2") && e.contains("given twice"), "{e}");
     }
 
     #[test]

@@ -372,6 +372,23 @@ impl<'a> Simulation<'a> {
                 scene.scenario.numerics.end_time_s
             )));
         }
+        // The samples so far must be a history the detector reads, none
+        // after the saved step: found only at the run's end, the rest
+        // would be simulated for nothing.
+        let recorded = crate::run::history_of(scene, state.samples.clone());
+        let last_s = state.samples.last().map_or(0.0, |s| s.time_s);
+        let fault = match recorded.validate() {
+            Ok(()) | Err(carus_analysis::HistoryError::TooFewSamples { .. }) => {
+                (last_s > reached_s + 0.5 * dt).then(|| format!("its last sample, at t = {last_s} s, lies after its step's t = {reached_s} s"))
+            }
+            Err(e) => Some(e.to_string()),
+        };
+        if let Some(fault) = fault {
+            return Err(LabourError::Checkpoint(format!(
+                "the saved pose history is not one a run writes ({fault}): the checkpoint was edited \
+                 or damaged: run the scenario again from the start"
+            )));
+        }
         let (mut solver, substeps) = match (&scene.floor, &state.floor) {
             (Some(f), Some(_)) => {
                 let (s, n) = new_solver(scene, f, dt)?;
@@ -380,7 +397,9 @@ impl<'a> Simulation<'a> {
             (None, None) => (None, 0),
             _ => {
                 return Err(LabourError::Checkpoint(
-                    "the checkpoint's floor does not match the scenario's".into(),
+                    "the checkpoint's pelvic floor does not match the scenario's (one has a floor, the other none): \
+                     the checkpoint was edited or written for another scenario; run the scenario again from the start"
+                        .into(),
                 ))
             }
         };

@@ -133,10 +133,11 @@ pub fn parse_stl(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
     Ok(mesh)
 }
 
-/// The first line of an OBJ file whose vertex or face tobj would refuse,
-/// for its error, which names none: a coordinate that is not a number, or
+/// The first line of an OBJ file whose vertex or face tobj would refuse
+/// (its errors name no line): a coordinate that is not a number, or
 /// a face corner that names no vertex read so far (1-based, or negative
-/// counting back).
+/// counting back); and a face of fewer than 3 corners, which tobj drops
+/// unsaid, leaving a hole where a face was.
 fn obj_line_at_fault(bytes: &[u8]) -> Option<String> {
     let mut vertices: i64 = 0;
     for (number, line) in String::from_utf8_lossy(bytes).lines().enumerate() {
@@ -149,7 +150,15 @@ fn obj_line_at_fault(bytes: &[u8]) -> Option<String> {
                 vertices += 1;
             }
             Some("f") => {
-                for corner in words {
+                let corners: Vec<&str> = words.collect();
+                if corners.len() < 3 {
+                    return Some(format!(
+                        "line {}: the face has {} corners; a face needs 3 or more (an edge belongs in an `l` line)",
+                        number + 1,
+                        corners.len()
+                    ));
+                }
+                for corner in corners {
                     let index = corner.split('/').next().and_then(|i| i.parse::<i64>().ok());
                     let valid = index.is_some_and(|i| (1..=vertices).contains(&i) || (-vertices..0).contains(&i));
                     if !valid {
@@ -185,13 +194,13 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
         })
         .collect::<Vec<_>>()
         .join("\n");
+    if let Some(at) = obj_line_at_fault(bytes) {
+        return Err(format_error(path, "OBJ", at));
+    }
     let (models, _materials) = tobj::load_obj_buf(&mut BufReader::new(surface_only.as_bytes()), &options, |_| {
         Ok((Vec::new(), Default::default()))
     })
-    .map_err(|e| match obj_line_at_fault(bytes) {
-        Some(at) => format_error(path, "OBJ", format!("{e} ({at})")),
-        None => format_error(path, "OBJ", e),
-    })?;
+    .map_err(|e| format_error(path, "OBJ", e))?;
     let mut mesh = RawMesh::default();
     for model in models {
         let base = mesh.positions.len() as u32;

@@ -288,6 +288,10 @@ fn broken_meshes_say_what_and_where() {
     let word = write(&dir, "word.obj", obj().replacen("v 0 1 0", "v 0 one 0", 1).as_bytes());
     let err = read_surface(&word, Units::Metres).unwrap_err().to_string();
     assert!(err.contains("a vertex needs three numbers: `v 0 one 0`"), "{err}");
+    // A face of two corners is refused, not dropped with a hole left, as in PLY.
+    let edge = write(&dir, "edge.obj", obj().replacen("f 1 3 2", "f 1 3", 1).as_bytes());
+    let err = read_surface(&edge, Units::Metres).unwrap_err().to_string();
+    assert!(err.contains("edge.obj") && err.contains("the face has 2 corners; a face needs 3 or more"), "{err}");
 
     let unknown = write(&dir, "mesh.xyz", b"1 2 3");
     assert!(matches!(

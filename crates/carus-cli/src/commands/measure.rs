@@ -202,13 +202,6 @@ impl AnatomyFile {
         };
         let text = read_text(path)?;
         let table = carus_labour::scenario::toml_table(path, &text)?;
-        fn part<T: for<'de> Deserialize<'de> + Default>(path: &Path, table: &toml::Table, key: &str) -> anyhow::Result<T> {
-            match table.get(key) {
-                None => Ok(T::default()),
-                Some(value) => T::deserialize(value.clone())
-                    .with_context(|| format!("{}: in the [{key}] table (keys and units: docs/ANATOMY.md)", path.display())),
-            }
-        }
         // A scenario (it has a `name`) is read whole, as `carus run` reads
         // it, and keeps the floor's shape in [floor.mesh]; an anatomy file
         // has the three tables only, so that a misspelt one is not quietly
@@ -230,12 +223,21 @@ impl AnatomyFile {
                 path.display()
             );
         }
-        let pelvis = part(path, &table, "pelvis")?;
+        /// The tables read whole from the text, so that a wrong value is
+        /// named by its line; `[floor]` has its own reader.
+        #[derive(Deserialize)]
+        struct Tables {
+            #[serde(default)]
+            pelvis: PelvisSpec,
+            #[serde(default)]
+            head: HeadDiameters,
+        }
+        let Tables { pelvis, head } = carus_labour::scenario::from_toml_text(path, &text)?;
         let base = path.parent().unwrap_or(Path::new("."));
         carus_labour::scenario::check_pelvis_import(path, &text, &pelvis, base)?;
         Ok(AnatomyFile {
             pelvis,
-            head: part(path, &table, "head")?,
+            head,
             pivot: AtlantoOccipitalPlacement::default(),
             floor: floor_part(path, &table)?,
             path: Some(path.to_path_buf()),
@@ -367,6 +369,16 @@ mod tests {
         // A unit after a number gets the scenario's advice, with its line.
         let error = format!("{:#}", load("[head]\nbiparietal_mm = 95mm\n").err().unwrap());
         assert!(error.contains("file.toml:2") && error.contains("write the number alone"), "{error}");
+        // A value of the wrong type is named by its line too, and a misspelt key.
+        let error = format!("{:#}", load("[pelvis]
+inlet_ap_mm = 110.0
+[head]
+biparietal_mm = \"abc\"\n").err().unwrap());
+        assert!(error.contains("file.toml:4") && error.contains("invalid type") && error.contains("numbers without quotes"), "{error}");
+        let error = format!("{:#}", load("[head]
+biparietal_mn = 95.0
+").err().unwrap());
+        assert!(error.contains("file.toml:2") && error.contains("biparietal_mn"), "{error}");
     }
 
     #[test]

@@ -156,6 +156,14 @@ fn warn_unreadable_floor_frames(unreadable: &[PathBuf]) {
 
 impl RunShown {
     fn read(dir: &Path) -> anyhow::Result<RunShown> {
+        if !dir.join(RUN_FILE).exists() && !dir.join(CHECKPOINT_FILE).exists() {
+            anyhow::bail!(
+                "{} holds no run to show: neither {RUN_FILE} (written when a run ends) nor {CHECKPOINT_FILE} \
+                 (written at each checkpoint while it goes); give a folder that `carus run` wrote, or wait \
+                 for a run just started to reach its first checkpoint",
+                dir.display()
+            );
+        }
         if !checkpoint_is_newer(dir) {
             return RunShown::from_record(dir);
         }
@@ -367,7 +375,7 @@ mod tests {
         let e = refused(args(dir.path().to_path_buf(), 0.1, dir.path().join("frame.jpg")));
         assert!(e.contains("*.png"), "{e}");
         let e = refused(args(dir.path().join("nothing"), 0.1, png.clone()));
-        assert!(e.contains("run.json"), "{e}");
+        assert!(e.contains("holds no run to show") && e.contains("run.json") && e.contains("checkpoint.json"), "{e}");
         // A record damaged after the run (a sample out of time order) is
         // named, not drawn.
         let mut damaged = record;
