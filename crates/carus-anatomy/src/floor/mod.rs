@@ -120,7 +120,7 @@ pub enum FloorError {
         min: usize,
     },
     #[error(
-        "elements_around = {0} must be even, so the posterior midline (coccyx) is a row of nodes"
+        "elements_around = {0} must be even, so the posterior midline (coccyx) is a row of nodes; give an even number, such as {next}", next = .0 + 1
     )]
     OddAround(usize),
     #[error("{key} = {value:?} is outside {least} to {most}, the sizes a pelvic floor takes (mm, not m or cm; the default is {default})")]
