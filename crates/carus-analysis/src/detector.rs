@@ -2,7 +2,7 @@
 
 use crate::history::{HistoryError, PoseHistory};
 use crate::measures::Series;
-use crate::movements::{detect_movements, HeadBorn, Movement, Movements, RotationOutsideWindow};
+use crate::movements::{detect_movements, HeadBorn, Movement, Movements, NotHeldAtBirth, RotationOutsideWindow};
 use crate::outcome::{contraction_period_s, outcome, Outcome};
 use serde::{Deserialize, Serialize};
 
@@ -21,6 +21,10 @@ pub struct DetectorReport {
     /// The head's position and attitude at its first delivered sample.
     #[serde(default)]
     pub head_born: Option<HeadBorn>,
+    /// The counted internal rotation or extension the head had lost by its
+    /// birth (empty when both lasted, or the head was not born).
+    #[serde(default)]
+    pub not_held_at_birth: Vec<NotHeldAtBirth>,
     pub outcome: Outcome,
     pub contraction_period_s: Option<f64>,
     pub series: Series,
@@ -39,6 +43,7 @@ pub fn detect(history: &PoseHistory) -> Result<DetectorReport, HistoryError> {
         posterior_rotation: detected.posterior_rotation,
         internal_rotation_outside_window: detected.rotation_outside_window,
         head_born: detected.head_born,
+        not_held_at_birth: detected.not_held_at_birth,
         outcome: outcome(history, &series, spines_sigma_mm, period_s),
         contraction_period_s: period_s,
         series,

@@ -148,6 +148,68 @@ pub struct Detected {
     pub posterior_rotation: Movement,
     pub rotation_outside_window: Option<RotationOutsideWindow>,
     pub head_born: Option<HeadBorn>,
+    pub not_held_at_birth: Vec<NotHeldAtBirth>,
+}
+
+/// A movement the rules counted whose result the head had lost by the
+/// time it was born. CARDINAL_MOVEMENTS.md counts a movement where it
+/// happens; the textbooks describe a head born occiput anterior and by
+/// extension, so a reader is told when the counted rotation or extension
+/// did not last, judged at the birth by the rule's own threshold.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct NotHeldAtBirth {
+    /// Canonical key: `internal_rotation` or `extension`.
+    pub movement: String,
+    /// The head at its birth against the rule, in words.
+    pub reason: String,
+}
+
+/// Which of the counted internal rotation and extension the head `born`
+/// no longer showed: an occiput further than [`ROTATION_TO_DEG`] from OA,
+/// or phi less than [`EXTENSION_MIN_DEG`] below where the extension began.
+fn not_held_at_birth(series: &Series, movements: &Movements, born: Option<HeadBorn>) -> Vec<NotHeldAtBirth> {
+    let Some(born) = born else {
+        return Vec::new();
+    };
+    let mut lost = Vec::new();
+    if movements.internal_rotation.observed && born.theta_deg.abs() > ROTATION_TO_DEG {
+        lost.push(NotHeldAtBirth {
+            movement: "internal_rotation".into(),
+            reason: format!(
+                "the occiput had turned back to {} (theta {:+.0} deg) when the head was born, further than \
+                 the {ROTATION_TO_DEG:.0} deg from occiput anterior that ends the rotation",
+                born.occiput_position(),
+                born.theta_deg
+            ),
+        });
+    }
+    let extension = &movements.extension;
+    let extended_from = extension
+        .start_s
+        .filter(|_| extension.observed)
+        .and_then(|start| series.time_s.iter().position(|&t| t == start))
+        .map(|i| series.phi_deg[i]);
+    if let Some(from) = extended_from.filter(|from| from - born.phi_deg < EXTENSION_MIN_DEG) {
+        lost.push(NotHeldAtBirth {
+            movement: "extension".into(),
+            reason: format!(
+                "the head was born at phi {:+.1} deg, {:.0} deg below the {from:+.1} deg it had extended from, \
+                 where the rule counts a fall of {EXTENSION_MIN_DEG:.0} deg{}",
+                born.phi_deg,
+                (from - born.phi_deg).max(0.0),
+                if born.phi_deg > 0.0 { ": it was born flexed" } else { "" }
+            ),
+        });
+    }
+    lost
+}
+
+/// "internal_rotation not held at birth: the occiput had turned back...":
+/// the words `carus run`, `carus detect` and the report share.
+impl std::fmt::Display for NotHeldAtBirth {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} not held at birth: {}", self.movement, self.reason)
+    }
 }
 
 /// A turn to within 20 degrees of occiput anterior (from at least 45, as
@@ -279,21 +341,24 @@ pub fn detect_movements(series: &Series, spines_sigma_mm: f64) -> Detected {
             Movement::between(series, s, &series.theta_deg, Unit::Deg)
         })
     };
+    let movements = Movements {
+        engagement: engagement.map_or(Movement::absent(Unit::Mm), |s| {
+            Movement::between(series, s, &series.station_mm, Unit::Mm)
+        }),
+        descent: descent(series),
+        flexion: flexion(series, flexion_peak),
+        internal_rotation: rotation(internal),
+        extension: extension(series, flexion_peak),
+        external_rotation: external_rotation(series, engagement.map(|s| s.end)),
+        expulsion: expulsion(series),
+    };
+    let head_born = delivery(series).map(|i| HeadBorn::at(series, i));
     Detected {
-        movements: Movements {
-            engagement: engagement.map_or(Movement::absent(Unit::Mm), |s| {
-                Movement::between(series, s, &series.station_mm, Unit::Mm)
-            }),
-            descent: descent(series),
-            flexion: flexion(series, flexion_peak),
-            internal_rotation: rotation(internal),
-            extension: extension(series, flexion_peak),
-            external_rotation: external_rotation(series, engagement.map(|s| s.end)),
-            expulsion: expulsion(series),
-        },
+        not_held_at_birth: not_held_at_birth(series, &movements, head_born),
+        movements,
         posterior_rotation: rotation(posterior),
         rotation_outside_window,
-        head_born: delivery(series).map(|i| HeadBorn::at(series, i)),
+        head_born,
     }
 }
 

@@ -584,3 +584,30 @@ fn the_head_born_is_read_at_its_first_delivered_sample() {
     let held = detect(&synthetic::inlet_arrest(&reference_canal())).unwrap();
     assert_eq!(held.head_born, None);
 }
+
+/// The rules count a rotation or an extension where it happens; one the
+/// head has lost by its birth (turned back from OA, flexed again) is
+/// reported as not held, with the head's figures. The textbook head keeps
+/// both.
+#[test]
+fn movements_lost_before_the_birth_are_reported_as_not_held() {
+    let (_, report) = textbook();
+    assert!(report.not_held_at_birth.is_empty(), "{:?}", report.not_held_at_birth);
+    let canal = reference_canal();
+    let outlet = canal.outlet_sigma() * 1e3;
+    let at = |station| synthetic::centre_sigma_at_station(&canal, station);
+    let mut plan = synthetic::textbook_plan(&canal);
+    // Extended by 70 deg between stations +35 and +55, flexed again by the
+    // outlet; turned to OA by station +40, then back by 40 deg.
+    plan.phi_ramps[1] = synthetic::Ramp { from_mm: at(35.0), to_mm: at(55.0), by: -70.0 };
+    plan.phi_ramps.push(synthetic::Ramp { from_mm: at(60.0), to_mm: outlet - 2.0, by: 70.0 });
+    plan.theta_ramps.push(synthetic::Ramp { from_mm: at(45.0), to_mm: outlet - 5.0, by: -40.0 });
+    let lost = detect(&plan.history(&canal)).unwrap();
+    assert!(lost.movements.internal_rotation.observed && lost.movements.extension.observed);
+    let born = lost.head_born.expect("delivered");
+    let keys: Vec<&str> = lost.not_held_at_birth.iter().map(|n| n.movement.as_str()).collect();
+    assert_eq!(keys, ["internal_rotation", "extension"], "{born}");
+    let [rotation, extension] = [0, 1].map(|k| lost.not_held_at_birth[k].to_string());
+    assert!(rotation.starts_with("internal_rotation not held at birth: the occiput had turned back to LOA (theta -40 deg)"), "{rotation}");
+    assert!(extension.contains(&format!("born at phi {:+.1} deg", born.phi_deg)) && extension.ends_with("it was born flexed"), "{extension}");
+}

@@ -104,6 +104,7 @@ impl Demo {
             history: &self.history,
             detector: &self.detector,
             floor_peak_stretch: Vec::new(),
+            floor_untrusted_from_s: None,
             head_axial_moments: Vec::new(),
             head_canal_forces: Vec::new(),
             scene: Some(ReportScene {

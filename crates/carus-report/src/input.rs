@@ -26,6 +26,10 @@ pub struct ReportInput<'a> {
     /// Peak principal stretch of the pelvic floor over time, `(time_s, stretch)`;
     /// empty when the run had no floor.
     pub floor_peak_stretch: Vec<(f64, f64)>,
+    /// When a floor element first had a corner turned inside out: the
+    /// floor's stretches from then on are not to be trusted (docs/LABOUR.md);
+    /// `None` when none ever did.
+    pub floor_untrusted_from_s: Option<f64>,
     /// What spun the head about the pelvic axis over time; empty when the
     /// history does not know (an imposed trajectory has no forces).
     pub head_axial_moments: Vec<AxialMomentSample>,

@@ -194,9 +194,13 @@ fn timeline(
                 let left = percent(start, range);
                 let width = (percent(end, range) - left).max(0.6);
                 let size = size_text(size, m.unit);
+                let flag = match d.not_held_at_birth.iter().any(|n| n.movement == row.key) {
+                    true => "<span class=\"flag lost\" title=\"counted where it happened, but lost by the birth: see below\">observed, not held</span>",
+                    false => "<span class=\"flag yes\">observed</span>",
+                };
                 let _ = write!(
                     w,
-                    "<span class=\"flag yes\">observed</span><span class=\"track\">\
+                    "{flag}<span class=\"track\">\
                      <span class=\"bar\" style=\"left:{left:.2}%;width:{width:.2}%;background:{colour}\" \
                      title=\"{}: {start:.1} s to {end:.1} s, {size}\"></span></span>\
                      <span class=\"when\">{start:.1} &ndash; {end:.1} s</span><span class=\"size\">{size}</span></div>",
@@ -239,6 +243,16 @@ fn timeline(
             "<p class=\"note\" data-note=\"head-born\">{}{}.</p>",
             text[..1].to_uppercase(),
             escape(&text[1..])
+        );
+    }
+    for lost in &d.not_held_at_birth {
+        let label = rows.iter().find(|r| r.key == lost.movement).map_or(lost.movement.as_str(), |r| r.label);
+        let _ = write!(
+            w,
+            "<p class=\"note\" data-note=\"not-held\" data-movement=\"{}\"><b>{label} not held at birth:</b> {}. \
+             The rule counts it where it happened (CARDINAL_MOVEMENTS.md); the textbook birth keeps it.</p>",
+            lost.movement,
+            escape(&lost.reason)
         );
     }
     let _ = writeln!(w, "</section>");
@@ -553,12 +567,19 @@ fn floor_plot(w: &mut String, input: &ReportInput, axis: &TimeAxis) -> Result<()
     }
     let (time_s, stretch): (Vec<f64>, Vec<f64>) = input.floor_peak_stretch.iter().copied().unzip();
     all_finite("floor_peak_stretch", &[&stretch, &time_s])?;
-    // The first sample of the greatest stretch, not the last of a tie.
-    let peak = input
-        .floor_peak_stretch
-        .iter()
-        .copied()
-        .reduce(|best, sample| if sample.1 > best.1 { sample } else { best });
+    // The first sample of the greatest stretch, not the last of a tie, and
+    // only while the floor's elements were whole: a corner turned inside
+    // out makes what follows untrustworthy.
+    let untrusted_from = input.floor_untrusted_from_s.unwrap_or(f64::INFINITY);
+    let greatest_of = |trusted: bool| {
+        input
+            .floor_peak_stretch
+            .iter()
+            .copied()
+            .filter(|&(t, _)| (t < untrusted_from) == trusted)
+            .reduce(|best, sample| if sample.1 > best.1 { sample } else { best })
+    };
+    let peak = greatest_of(true);
     let greatest = peak.map_or(1.0, |(_, s)| s);
     // Only the levels the run passes: a level above the data would squash
     // the curve of a floor that stays near rest.
@@ -584,7 +605,8 @@ fn floor_plot(w: &mut String, input: &ReportInput, axis: &TimeAxis) -> Result<()
     if peak.is_some_and(|(_, s)| s < UNSTRETCHED_BELOW) {
         let _ = write!(w, "<p class=\"legend\">The floor was not stretched (1.000 throughout).");
     } else if let Some((t, s)) = peak {
-        let _ = write!(w, "<p class=\"legend\">Greatest: {s:.3} at {t:.1} s.");
+        let before = if input.floor_untrusted_from_s.is_some() { " while its elements were whole" } else { "" };
+        let _ = write!(w, "<p class=\"legend\">Greatest{before}: {s:.3} at {t:.1} s.");
         if !passed.is_empty() {
             let levels: Vec<String> = passed
                 .iter()
@@ -600,6 +622,14 @@ fn floor_plot(w: &mut String, input: &ReportInput, axis: &TimeAxis) -> Result<()
             );
         }
         let _ = write!(w, "</p>");
+    }
+    if let (Some(from), Some((_, after))) = (input.floor_untrusted_from_s, greatest_of(false)) {
+        let _ = write!(
+            w,
+            "<p class=\"legend\" data-caveat=\"floor-corners\">From {from:.1} s floor elements had a corner \
+             turned inside out (the run's figures count them), and the floor's stretches from then on \
+             (up to {after:.3}) are not to be trusted.</p>"
+        );
     }
     let _ = write!(w, "</figure>");
     Ok(())
@@ -813,7 +843,7 @@ h1{margin:0 0 8px;font-size:28px}h2{font-size:19px;margin:28px 0 10px;border-bot
 .row.axis{font-size:12px;color:#777}
 .name{font-weight:600}.swatch{display:inline-block;width:12px;height:12px;border-radius:3px;margin-right:8px;vertical-align:-1px}
 .flag{font-size:12px;border-radius:10px;padding:1px 8px;text-align:center}
-.flag.yes{background:#e3f2e1;color:#1e5a1a}.flag.no{background:#eee;color:#888}
+.flag.yes{background:#e3f2e1;color:#1e5a1a}.flag.no{background:#eee;color:#888}.flag.lost{background:#fdf0d5;color:#7a4a00}
 .track{position:relative;height:16px;background:#f1f1f1;border-radius:3px}
 .row.axis .track{background:none}
 .track.empty{background:repeating-linear-gradient(45deg,#f6f6f6,#f6f6f6 6px,#ececec 6px,#ececec 12px)}

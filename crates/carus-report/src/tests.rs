@@ -167,6 +167,15 @@ fn floor_stretch_and_the_scenario_appear_when_given() {
     at_rest.floor_peak_stretch = untouched;
     let html = write_report_with(&at_rest, None).unwrap().html;
     assert!(html.contains("The floor was not stretched") && !html.contains("Greatest:"), "{html}");
+    // Once a floor element has a corner turned inside out, what the floor
+    // reads is not to be trusted: the greatest is taken before, and the rest is said.
+    let mut inverted = demo.input("inverted corners");
+    inverted.floor_peak_stretch = vec![(0.0, 1.0), (10.0, 1.4), (20.0, 3.0)];
+    inverted.floor_untrusted_from_s = Some(15.0);
+    let html = write_report_with(&inverted, None).unwrap().html;
+    assert!(html.contains("Greatest while its elements were whole: 1.400 at 10.0 s."), "{html}");
+    assert!(html.contains("From 15.0 s floor elements had a corner turned inside out") && html.contains("(up to 3.000)"));
+    assert!(!html.contains("Lien et al."), "3.0 came after: no cited level is passed");
     input.floor_peak_stretch[1].1 = f64::NAN;
     assert!(matches!(
         write_report_with(&input, None),
@@ -312,6 +321,30 @@ fn how_the_head_was_born_is_noted() {
     assert!(note.contains("The head was born at") && note.contains("occiput OA") && note.contains("flexion positive"), "{note}");
     demo.detector.head_born = None;
     assert!(!write_report_with(&demo.input("held"), None).unwrap().html.contains("head-born"));
+}
+
+/// A counted movement the head had lost by its birth is flagged in its
+/// row and explained under the timeline; the textbook's are not.
+#[test]
+fn a_movement_lost_by_the_birth_is_flagged() {
+    let mut demo = Demo::textbook().unwrap();
+    let html = write_report_with(&demo.input("held"), None).unwrap().html;
+    assert!(!html.contains("not-held") && !html.contains("observed, not held"));
+    demo.detector.not_held_at_birth = vec![carus_analysis::NotHeldAtBirth {
+        movement: "extension".into(),
+        reason: "the head was born at phi +19.8 deg".into(),
+    }];
+    let html = write_report_with(&demo.input("lost"), None).unwrap().html;
+    let whole_row = |key: &str| {
+        let start = html.find(&format!("<div class=\"row\" data-movement=\"{key}\"")).unwrap();
+        html[start..start + html[start..].find("</div>").unwrap()].to_string()
+    };
+    assert!(whole_row("extension").contains("observed, not held"));
+    assert!(!whole_row("internal_rotation").contains("not held"));
+    let at = html.find("data-note=\"not-held\"").expect("the note");
+    assert!(at < html.find("id=\"plots\"").unwrap(), "under the timeline");
+    let note = &html[at..at + html[at..].find("</p>").unwrap()];
+    assert!(note.contains("<b>Extension not held at birth:</b> the head was born at phi +19.8 deg."), "{note}");
 }
 
 /// Forces given for a key moment's sample are drawn as arrows in its

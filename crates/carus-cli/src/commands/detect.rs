@@ -65,6 +65,7 @@ pub fn run(args: &DetectArgs) -> anyhow::Result<Status> {
             "posterior_rotation": report.posterior_rotation,
             "internal_rotation_outside_window": report.internal_rotation_outside_window,
             "head_born": report.head_born,
+            "not_held_at_birth": report.not_held_at_birth,
             "contraction_period_s": report.contraction_period_s,
             "series": args.series.as_ref().map(|p| p.display().to_string()),
         }))?;
@@ -83,7 +84,7 @@ pub fn run(args: &DetectArgs) -> anyhow::Result<Status> {
             );
         }
         println!("{}: {}", path.display(), outcome_line(&report.outcome));
-        print_movements(&movements, report.internal_rotation_outside_window, report.head_born);
+        print_movements(&movements, Some(&report));
         if let Some(series) = &args.series {
             println!("per-sample series written to {}", series.display());
         }

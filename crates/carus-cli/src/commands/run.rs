@@ -11,7 +11,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{bail, Context};
-use carus_analysis::{ArrestStage, HeadBorn, Movement, Movements, Outcome, RotationOutsideWindow};
+use carus_analysis::{ArrestStage, DetectorReport, Movement, Movements, Outcome};
 use carus_labour::record::FloorAtMoment;
 use carus_labour::loads::GuideSummary;
 use carus_labour::{LabourError, Mode, Observer, RunOptions, RunRecord, Scenario, Scene, Simulation, BUILTINS};
@@ -262,6 +262,7 @@ pub(super) fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result
             .iter()
             .map(|f| (f.time_s, f.peak_stretch))
             .collect(),
+        floor_untrusted_from_s: record.floor.iter().find(|f| f.inverted_corner_elements > 0).map(|f| f.time_s),
         head_axial_moments: head_axial_moments(record, &scene),
         head_canal_forces: head_canal_forces(record, &scene),
         scene: Some(report_scene_with_forces(record, &scene, detector)?),
@@ -658,6 +659,7 @@ pub(super) fn json_summary(record: &RunRecord, out_dir: &Path) -> serde_json::Va
             .as_ref()
             .and_then(|d| d.internal_rotation_outside_window),
         "head_born": record.detector.as_ref().and_then(|d| d.head_born),
+        "not_held_at_birth": record.detector.as_ref().map_or(&[][..], |d| &d.not_held_at_birth),
         "scenario": record.summary.scenario,
         "mode": record.scenario.trajectory.mode.name(),
         "guide": GuideSummary::of(&record.loads),
@@ -699,11 +701,7 @@ fn print_summary(record: &RunRecord, out_dir: &Path) {
         "simulated {:.2} s in {:.1} s wall time ({} rigid steps)",
         s.simulated_s, s.wall_s, s.rigid_steps
     );
-    print_movements(
-        &movements(record),
-        record.detector.as_ref().and_then(|d| d.internal_rotation_outside_window),
-        record.detector.as_ref().and_then(|d| d.head_born),
-    );
+    print_movements(&movements(record), record.detector.as_ref());
     // Only what this run wrote: a run too short for a report has none.
     let mut written: Vec<&str> = ["report.html", "run.json", "movements.json", "pose_history.csv"]
         .into_iter()
@@ -772,17 +770,17 @@ pub(super) fn outcome_line(outcome: &Outcome) -> String {
 
 /// One line per movement: observed with its span and size, or not; an
 /// internal rotation the rule did not count for where it happened says so.
-/// Then how the head was born, if it was.
-pub(super) fn print_movements(
-    movements: &[(&'static str, Movement)],
-    rotation_outside_window: Option<RotationOutsideWindow>,
-    head_born: Option<HeadBorn>,
-) {
+/// Then how the head was born, if it was, and which counted movement it
+/// had lost by then (`detector`: none before there was anything to detect).
+pub(super) fn print_movements(movements: &[(&'static str, Movement)], detector: Option<&DetectorReport>) {
+    let rotation_outside_window = detector.and_then(|d| d.internal_rotation_outside_window);
+    let not_held = detector.map_or(&[][..], |d| &d.not_held_at_birth);
     for (key, m) in movements {
         let unit = serde_name(&m.unit);
         match (m.observed, m.start_s, m.end_s, m.size) {
             (true, Some(a), Some(b), Some(size)) => {
-                println!("  {key:18} observed  {a:6.1}-{b:6.1} s  {size:6.1} {unit}")
+                let lost = if not_held.iter().any(|n| n.movement == *key) { "  (not held at birth)" } else { "" };
+                println!("  {key:18} observed  {a:6.1}-{b:6.1} s  {size:6.1} {unit}{lost}")
             }
             _ => match rotation_outside_window.filter(|_| *key == "internal_rotation") {
                 Some(r) => println!("  {key:18} not observed: {r}"),
@@ -790,8 +788,11 @@ pub(super) fn print_movements(
             },
         }
     }
-    if let Some(born) = head_born {
+    if let Some(born) = detector.and_then(|d| d.head_born) {
         println!("  {born}");
+    }
+    for lost in not_held {
+        println!("  {lost}");
     }
 }
 

@@ -545,6 +545,7 @@ fn header(keys: &[&str]) -> Vec<String> {
             "head_born_s",
             "head_born_theta_deg",
             "head_born_phi_deg",
+            "not_held_at_birth",
         ]
         .map(String::from),
     );
@@ -590,6 +591,8 @@ fn table_row(
     row.push(number(born.map(|h| h.time_s)));
     row.push(number(born.map(|h| h.theta_deg)));
     row.push(number(born.map(|h| h.phi_deg)));
+    let lost = record.detector.as_ref().map_or(&[][..], |d| &d.not_held_at_birth);
+    row.push(lost.iter().map(|n| n.movement.as_str()).collect::<Vec<_>>().join(" "));
     row
 }
 
