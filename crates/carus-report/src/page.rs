@@ -38,9 +38,9 @@ pub fn headline(outcome: &Outcome) -> (&'static str, String) {
     match &outcome.arrest {
         Some(arrest) => {
             let place = match arrest.stage {
-                ArrestStage::Inlet => "at the pelvic inlet",
-                ArrestStage::MidPelvis => "in the mid-pelvis",
-                ArrestStage::Outlet => "at the pelvic outlet",
+                ArrestStage::Inlet => "at the pelvic inlet (not engaged: the parietal eminences stayed above the inlet plane)",
+                ArrestStage::MidPelvis => "in the mid-pelvis (engaged, the biparietal plane above the ischial spines)",
+                ArrestStage::Outlet => "at the pelvic outlet (the biparietal plane past the spines, the head not born)",
                 ArrestStage::Shoulders => "at the shoulders (head born, trunk not)",
             };
             let against = if arrest.against == "unknown" {
@@ -286,7 +286,11 @@ fn pictures(w: &mut String, parts: &Parts) {
                 let _ = write!(
                     w,
                     ", pelvic floor coloured by maximum principal stretch \
-                     <span class=\"ramp\"></span> {low:.2} &ndash; {high:.2}"
+                     <span class=\"ramp\"></span> {low:.2} &ndash; {high:.2}{}",
+                    match high <= crate::pictures::MIN_STRETCH_TOP {
+                        true => " (the scale's least span: the floor stretched less than its top)",
+                        false => "",
+                    }
                 );
             }
             if moments.iter().any(|m| !m.forces.is_empty()) {
@@ -890,11 +894,11 @@ mod tests {
         };
         let (class, text) = headline(&arrest("unknown"));
         assert_eq!(class, "arrested");
-        assert_eq!(text, "Arrested at the pelvic inlet, station -42 mm, against the sacral promontory");
+        assert_eq!(text, "Arrested at the pelvic inlet (not engaged: the parietal eminences stayed above the inlet plane), station -42 mm, against the sacral promontory");
         let (_, text) = headline(&arrest("trunk"));
         assert_eq!(
             text,
-            "Arrested at the pelvic inlet, station -42 mm, the trunk held against the sacral promontory, its shoulders at station -95 mm"
+            "Arrested at the pelvic inlet (not engaged: the parietal eminences stayed above the inlet plane), station -42 mm, the trunk held against the sacral promontory, its shoulders at station -95 mm"
         );
         let open = Outcome { delivered: false, arrest: None };
         assert!(headline(&open).1.contains("still progressing"));

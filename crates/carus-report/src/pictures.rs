@@ -53,7 +53,7 @@ pub fn see_through_under_forces(meshes: &mut [RenderMesh]) {
 const FLOOR_RGB: [f32; 3] = [0.78, 0.50, 0.50];
 /// Smallest upper end of the stretch colour scale, so a floor at rest is
 /// not stretched over the whole map by rounding noise.
-const MIN_STRETCH_TOP: f64 = 1.05;
+pub const MIN_STRETCH_TOP: f64 = 1.05;
 
 /// One picture as it goes into the page.
 #[derive(Debug, Clone, PartialEq)]

@@ -289,6 +289,8 @@ fn a_recorded_floor_is_coloured_by_stretch_and_a_bad_frame_costs_only_its_pictur
     assert!(report.html.contains(&format!(
         "<span class=\"ramp\"></span> 1.00 &ndash; {top:.2}"
     )));
+    // The scale spans the stretch recorded; only a floor near rest gets the least span, and says so.
+    assert!(top > 1.05 && !report.html.contains("least span"));
     assert!(report.html.contains("floor as recorded at 60.00 s"));
     assert_eq!(
         report.html.matches("src=\"data:image/png;base64,").count(),
