@@ -126,12 +126,13 @@ fn draw(spec: &PlotSpec, out: &mut String) -> Result<(), String> {
                 BLACK.mix(0.6).stroke_width(1),
             ))
             .map_err(|x| e(&x))?;
+        // A few pixels right of its line, so that the line does not strike
+        // through the label ("IR" read as "|R").
         chart
-            .draw_series(std::iter::once(Text::new(
-                mark.label.to_string(),
-                (mark.time_s, y1),
-                ("sans-serif", 12).into_font().color(&BLACK),
-            )))
+            .draw_series(std::iter::once(
+                EmptyElement::at((mark.time_s, y1))
+                    + Text::new(mark.label.to_string(), (3, 1), ("sans-serif", 12).into_font().color(&BLACK)),
+            ))
             .map_err(|x| e(&x))?;
     }
     for curve in &spec.curves {
