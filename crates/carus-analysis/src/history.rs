@@ -153,7 +153,7 @@ pub enum HistoryError {
     TooFewSamples { count: usize },
     #[error("sample {index}: {field} is not finite; every number must be a real value")]
     NotFinite { index: usize, field: &'static str },
-    #[error("sample {index}: time_s = {time_s} does not increase on the previous sample's {previous_s}; samples must be in strictly increasing time")]
+    #[error("sample {index}: time_s = {} does not increase on the previous sample's {}; samples must be in strictly increasing time", carus_io::shown_number(*time_s), carus_io::shown_number(*previous_s))]
     TimeNotIncreasing {
         index: usize,
         time_s: f64,

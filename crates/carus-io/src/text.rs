@@ -111,6 +111,15 @@ pub(crate) fn finite_f64(token: &str) -> Option<f64> {
     token.parse::<f64>().ok().filter(|v| v.is_finite())
 }
 
+/// A number as a message shows it: plainly, or in exponent form when
+/// huge (a slip of exponent, 1e300, would print three hundred digits).
+pub fn shown_number(x: f64) -> String {
+    match x.abs() < 1e6 {
+        true => format!("{x}"),
+        false => format!("{x:e}"),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

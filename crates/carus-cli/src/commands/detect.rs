@@ -406,6 +406,7 @@ mod tests {
             (&format!("{header}\n0,0,0,0,0,0,0,1\n1,0,0,0,0,0,0,2\n"), "poses.csv:3: the head's quaternion (qx, qy, qz, qw) has length 2"),
             (&format!("{header}\n0,0,0,0,0,0,0,1\n1,0,0,,0,0,0,1\n"), "poses.csv:3: the head's pose has 1 empty cells of 7"),
             (&format!("{header}\n1,0,0,0,0,0,0,1\n0.5,0,0,0,0,0,0,1\n"), "poses.csv:3: sample 1: time_s = 0.5 does not increase"),
+            (&format!("{header}\n1,0,0,0,0,0,0,1\n-1e300,0,0,0,0,0,0,1\n"), "poses.csv:3: sample 1: time_s = -1e300 does not increase"),
             (&format!("{header},dominant_contact\n0,0,0,0,0,0,0,1,sacrum\n1,0,0,0,0,0,0,1,knee\n"), "poses.csv:3: `dominant_contact` = \"knee\" names no part of the canal"),
         ] {
             std::fs::write(&table, body).unwrap();

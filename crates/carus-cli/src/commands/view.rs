@@ -70,8 +70,7 @@ pub fn run(args: &ViewArgs) -> anyhow::Result<Status> {
     let end = replay.duration_s();
     let at = args.at.unwrap_or(0.0);
     if !(at.is_finite() && (0.0..=end).contains(&at)) {
-        let shown = if at.abs() < 1e6 { at.to_string() } else { format!("{at:e}") };
-        anyhow::bail!("--at {shown}: the run was recorded from 0 to {end:.2} s; give a time in that range");
+        anyhow::bail!("--at {}: the run was recorded from 0 to {end:.2} s; give a time in that range", carus_io::shown_number(at));
     }
     let Some(path) = &args.picture else {
         if let Some(folder) = args.screenshot.as_ref().and_then(|p| p.parent()).filter(|f| !f.as_os_str().is_empty()) {

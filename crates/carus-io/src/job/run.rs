@@ -436,7 +436,7 @@ fn build_solver(
                  solver.end_time_s is far too long, or a material's stiffness is far too high or its \
                  density far too low (the step is an element's size over the wave speed, \
                  sqrt(E / density))",
-                shown_s(solver_spec.end_time_s)
+                crate::text::shown_number(solver_spec.end_time_s)
             ),
             fix: "check solver.end_time_s (seconds), each material's young_modulus_pa (Pa) and \
                   density_kg_m3 (kg/m^3), and solver.hourglass_coefficient"
@@ -464,14 +464,6 @@ fn build_solver(
         other => model_error(other),
     })?;
     Ok((solver, supports))
-}
-
-/// A time as a message shows it: plainly, or in exponent form when huge.
-fn shown_s(t: f64) -> String {
-    match t.abs() < 1e6 {
-        true => format!("{t}"),
-        false => format!("{t:e}"),
-    }
 }
 
 /// Runs the job file at `job_path`, writing into `out_dir`:
