@@ -32,7 +32,9 @@ pub fn parse_inp(path: &Path, bytes: &[u8]) -> Result<MeshFile, ReadError> {
     let text = String::from_utf8_lossy(bytes);
     let mut reader = Reader {
         path,
-        builder: MeshBuilder::new(path),
+        builder: MeshBuilder::new(path).with_surface_only_fix(
+            "export the 3-D mesh as solid elements (C3D8, C3D8R, C3D8H, C3D8I, C3D4, C3D4H), not only shells or faces",
+        ),
         set_names: HashMap::new(),
         volume_nodes: HashMap::new(),
         facets: HashMap::new(),

@@ -72,7 +72,13 @@ pub(crate) struct MeshBuilder {
     node_sets: BTreeMap<String, Vec<u64>>,
     surfaces: BTreeMap<String, Vec<[u64; 3]>>,
     notes: Vec<String>,
+    /// What to do about a file with no volume elements, in its format's terms.
+    surface_only_fix: &'static str,
 }
+
+/// The fix for a file that holds only a surface, where the reader gives none.
+const SURFACE_ONLY_FIX: &str =
+    "export the 3-D mesh, not only its surface (Gmsh: add a physical volume, or Mesh.SaveAll = 1)";
 
 impl MeshBuilder {
     pub(crate) fn new(path: &Path) -> Self {
@@ -88,7 +94,13 @@ impl MeshBuilder {
             node_sets: BTreeMap::new(),
             surfaces: BTreeMap::new(),
             notes: Vec::new(),
+            surface_only_fix: SURFACE_ONLY_FIX,
         }
+    }
+
+    /// The builder with its format's fix for a file without volume elements.
+    pub(crate) fn with_surface_only_fix(self, fix: &'static str) -> Self {
+        MeshBuilder { surface_only_fix: fix, ..self }
     }
 
     fn content_error(&self, problem: String, fix: &str) -> ReadError {
@@ -189,13 +201,9 @@ impl MeshBuilder {
                         true => String::new(),
                         false => format!(" ({})", self.notes.join("; ")),
                     };
-                    let abaqus = self.path.extension().is_some_and(|e| e.eq_ignore_ascii_case("inp"));
                     return Err(self.content_error(
                         format!("the file holds no volume elements (8-node hexahedra or 4-node tetrahedra){skipped}"),
-                        match abaqus {
-                            true => "export the 3-D mesh as solid elements (C3D8, C3D8R, C3D8H, C3D8I, C3D4, C3D4H), not only shells or faces",
-                            false => "export the 3-D mesh, not only its surface (Gmsh: add a physical volume, or Mesh.SaveAll = 1)",
-                        },
+                        self.surface_only_fix,
                     ));
                 }
                 (h, t) if h > 0 && t > 0 => {
