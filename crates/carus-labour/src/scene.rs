@@ -8,7 +8,7 @@
 use std::sync::Arc;
 
 use carus_analysis::{BirthCanal, ContactSite, HeadGeometry, TrunkGeometry};
-use carus_anatomy::fetus::{FetalHead, Trunk, TrunkDiameters};
+use carus_anatomy::fetus::{FetalHead, HeadLandmarks, Trunk, TrunkDiameters};
 use carus_anatomy::floor::{pelvic_floor, ATTACHED};
 use carus_anatomy::{Pelvis, Plane, TriSurface};
 use carus_contact::{
@@ -90,7 +90,7 @@ pub struct Scene {
     pub pivot_in_head: DVec3,
     /// The head's landmarks (fontanelles, eminences, occiput...) in its
     /// centre-of-mass frame, for pictures.
-    pub head_landmarks: Vec<(&'static str, DVec3)>,
+    pub head_landmarks: HeadLandmarks,
     /// The whole trunk, or the thorax when the spine bends.
     pub trunk: Option<FetalBody>,
     /// The shoulders, the trunk's centre and its spine axis, in the frame
@@ -153,7 +153,7 @@ impl Scene {
             vertex: DVec3::Z,
         };
         let pivot_in_head = head_anatomy.landmarks.atlanto_occipital + head.frame_origin;
-        let head_landmarks = head_anatomy.landmarks.named().map(|(name, p)| (name, p + head.frame_origin)).to_vec();
+        let head_landmarks = head_anatomy.landmarks.map(|p| p + head.frame_origin);
 
         let mut bodies = RigidBodyModel::default();
         bodies.add(head.mass)?;

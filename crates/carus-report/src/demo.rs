@@ -15,7 +15,7 @@ use carus_anatomy::Pelvis;
 use glam::DVec3;
 
 use crate::error::ReportError;
-use crate::input::{FloorSurface, ReportInput, ReportScene, RunFigures};
+use crate::input::{FloorSurface, Fontanelles, ReportInput, ReportScene, RunFigures};
 
 /// What the page says first about a synthetic report made by `function`
 /// of carus-analysis's `synthetic` module.
@@ -117,6 +117,10 @@ impl Demo {
                     .map(|_| self.fetus.trunk.surface.clone()),
                 lower_trunk: None,
                 floor: Some(self.floor.clone()),
+                fontanelles: Some(Fontanelles {
+                    anterior: self.fetus.head.landmarks.bregma,
+                    posterior: self.fetus.head.landmarks.lambda,
+                }),
                 forces: Vec::new(),
             }),
         }

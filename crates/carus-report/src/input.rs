@@ -114,9 +114,23 @@ pub struct ReportScene {
     pub lower_trunk: Option<TriSurface>,
     /// The pelvic floor, deforming, coloured by stretch.
     pub floor: Option<FloorSurface>,
+    /// The head's fontanelles, drawn on it so that a picture shows which
+    /// way the occiput points; `None`: the head's landmarks are not known.
+    pub fontanelles: Option<Fontanelles>,
     /// The forces on the fetus at pose samples, drawn as arrows in the
     /// pictures of the key moments at those samples (empty: none drawn).
     pub forces: Vec<SampleForces>,
+}
+
+/// The fontanelles in the head body frame of the history, m: what the
+/// accoucheur feels to tell the head's position (the occiput lies behind
+/// the posterior one).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Fontanelles {
+    /// Bregma, where the sagittal suture meets the coronal sutures.
+    pub anterior: DVec3,
+    /// Lambda, where the sagittal suture meets the lambdoid sutures.
+    pub posterior: DVec3,
 }
 
 /// The forces on the fetus at one pose sample, as arrows and in words.

@@ -32,7 +32,7 @@ use carus_render::Renderer;
 mod tests;
 
 pub use error::ReportError;
-pub use input::{AxialMomentSample, CanalForceSample, FloorFrame, FloorSurface, ReportInput, ReportScene, RunFigures, SampleForces};
+pub use input::{AxialMomentSample, CanalForceSample, FloorFrame, FloorSurface, Fontanelles, ReportInput, ReportScene, RunFigures, SampleForces};
 pub use moments::{key_moments, KeyMoment, MomentKind};
 
 /// A written page and what went wrong with its pictures.

@@ -136,7 +136,7 @@ pub fn page(input: &ReportInput, parts: &Parts) -> Result<String, ReportError> {
     let _ = writeln!(w, "</p></header>");
 
     timeline(w, &rows, d, parts, time_range);
-    pictures(w, parts);
+    pictures(w, parts, input.scene.as_ref().is_some_and(|s| s.fontanelles.is_some()));
     plots_section(w, input, &rows, parts, time_range)?;
     figures(w, input);
     reading_guide(w);
@@ -156,17 +156,20 @@ fn timeline(
     range: (f64, f64),
 ) {
     let series = &d.series;
+    let at: Vec<f64> = parts.moments.iter().map(|m| percent(m.time_s, range)).collect();
+    let ticks: Vec<(f64, usize)> = at.iter().copied().zip(tick_lines(&at)).collect();
     let _ = write!(
         w,
         "<section id=\"movements\"><h2>Cardinal movements</h2>\
          <div class=\"timeline\"><div class=\"row axis\"><span class=\"name\"></span>\
-         <span class=\"flag\"></span><span class=\"track\">"
+         <span class=\"flag\"></span><span class=\"track{}\">",
+        ["", " two-lines"][usize::from(ticks.iter().any(|&(_, line)| line == 1))]
     );
-    for m in parts.moments {
+    for (m, (at, line)) in parts.moments.iter().zip(ticks) {
         let _ = write!(
             w,
-            "<span class=\"tick\" style=\"left:{:.2}%\" title=\"{} at {:.1} s\">{}</span>",
-            percent(m.time_s, range),
+            "<span class=\"tick{}\" style=\"left:{at:.2}%\" title=\"{} at {:.1} s\">{}</span>",
+            ["", " second"][line],
             m.kind.label(),
             m.time_s,
             m.kind.mark()
@@ -258,7 +261,7 @@ fn timeline(
     let _ = writeln!(w, "</section>");
 }
 
-fn pictures(w: &mut String, parts: &Parts) {
+fn pictures(w: &mut String, parts: &Parts, fontanelles: bool) {
     let _ = write!(w, "<section id=\"pictures\"><h2>Key moments</h2>");
     match &parts.pictures {
         None => {
@@ -282,6 +285,15 @@ fn pictures(w: &mut String, parts: &Parts) {
                  and inferior view of the outlet (pubis at the top); one scale for all pictures. \
                  Bone semi-transparent, fetus opaque"
             );
+            if fontanelles {
+                let _ = write!(
+                    w,
+                    ", on the head the posterior fontanelle {} (the occiput lies behind it) \
+                     and the anterior {}",
+                    swatch(crate::pictures::POSTERIOR_FONTANELLE_RGB, "&#9679;"),
+                    swatch(crate::pictures::ANTERIOR_FONTANELLE_RGB, "&#9679;")
+                );
+            }
             if let Some([low, high]) = parts.stretch_range {
                 let _ = write!(
                     w,
@@ -320,10 +332,7 @@ fn pictures(w: &mut String, parts: &Parts) {
                     let listed: Vec<String> = m
                         .forces
                         .iter()
-                        .map(|(what, newtons, rgb)| {
-                            let [r, g, b] = rgb.map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8);
-                            format!("<span style=\"color:#{r:02x}{g:02x}{b:02x}\">&#9632;</span> {} {newtons:.0} N", escape(what))
-                        })
+                        .map(|(what, newtons, rgb)| format!("{} {} {newtons:.0} N", swatch(*rgb, "&#9632;"), escape(what)))
                         .collect();
                     let _ = write!(w, "<br><small class=\"forces\">{}</small>", listed.join(", "));
                 }
@@ -364,6 +373,32 @@ fn pictures(w: &mut String, parts: &Parts) {
         let _ = write!(w, "{}.</p>", missed.join("; "));
     }
     let _ = writeln!(w, "</section>");
+}
+
+/// Least distance between two key-moment marks on one line of the
+/// timeline's axis, per cent of its width: two bold letters or so in a
+/// window 800 px wide.
+const TICK_SPACING_PERCENT: f64 = 12.0;
+
+/// The line (0 or 1) of each key-moment mark at `at` per cent along the
+/// axis, in time order: a mark too near the one before it on the first
+/// line drops to the second, so that neighbours stay legible in a narrow
+/// window; when both are crowded it stays on the first.
+fn tick_lines(at: &[f64]) -> Vec<usize> {
+    let mut line_ends = [f64::NEG_INFINITY; 2];
+    at.iter()
+        .map(|&at| {
+            let line = usize::from(at - line_ends[0] < TICK_SPACING_PERCENT && at - line_ends[1] >= TICK_SPACING_PERCENT);
+            line_ends[line] = at;
+            line
+        })
+        .collect()
+}
+
+/// `symbol` (an HTML entity) in the sRGB colour `rgb`.
+fn swatch(rgb: [f32; 3], symbol: &str) -> String {
+    let [r, g, b] = rgb.map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8);
+    format!("<span style=\"color:#{r:02x}{g:02x}{b:02x}\">{symbol}</span>")
 }
 
 fn plots_section(
@@ -852,13 +887,15 @@ h1{margin:0 0 8px;font-size:28px}h2{font-size:19px;margin:28px 0 10px;border-bot
 .row.axis .track{background:none}
 .track.empty{background:repeating-linear-gradient(45deg,#f6f6f6,#f6f6f6 6px,#ececec 6px,#ececec 12px)}
 .bar{position:absolute;top:1px;bottom:1px;border-radius:3px}
-.tick{position:absolute;transform:translateX(-50%);font-weight:700;color:#444}
+.tick{position:absolute;transform:translateX(-50%);font-weight:700;color:#444}.tick.second{top:15px}
+.track.two-lines{height:32px}
 .when,.size{font-variant-numeric:tabular-nums;font-size:13px}
-.moments{display:grid;grid-template-columns:repeat(auto-fill,minmax(460px,1fr));gap:14px}
-.moment{margin:0;border:1px solid #e2e2e2;border-radius:8px;padding:8px}
-.view{display:inline-block;width:calc(50% - 4px);margin-right:4px;text-align:center;color:#888}
-.view img{width:100%;height:auto;display:block}
-.moment figcaption{margin-bottom:6px}
+.moments{display:grid;gap:14px}
+.moment{margin:0;border:1px solid #e2e2e2;border-radius:8px;padding:8px;display:grid;grid-template-columns:260px 1fr 1fr;gap:8px;align-items:start}
+.moment>.note{grid-column:span 2}
+.view{text-align:center;color:#888}
+.view img{width:100%;max-width:440px;height:auto;display:block;margin:0 auto}
+@media (max-width:900px){.moment{grid-template-columns:1fr 1fr}.moment figcaption,.moment>.note{grid-column:1/-1}}
 .plots{display:grid;grid-template-columns:repeat(auto-fill,minmax(540px,1fr));gap:12px}
 .plot{margin:0}.plot svg{width:100%;height:auto;display:block}
 figcaption small,.legend,.note,.missed{color:#666;font-size:13px}
@@ -874,6 +911,13 @@ details{margin-top:12px}pre{background:#f6f6f6;padding:10px;overflow:auto;font-s
 mod tests {
     use super::*;
     use carus_analysis::Arrest;
+
+    #[test]
+    fn crowded_key_moment_marks_take_a_second_line() {
+        assert_eq!(tick_lines(&[]), Vec::<usize>::new());
+        assert_eq!(tick_lines(&[14.8, 25.3, 49.7, 92.4]), [0, 1, 0, 0]);
+        assert_eq!(tick_lines(&[10.0, 15.0, 50.0, 55.0, 58.0, 70.0]), [0, 1, 0, 1, 0, 0]);
+    }
 
     #[test]
     fn markup_characters_are_escaped() {

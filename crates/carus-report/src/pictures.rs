@@ -49,6 +49,15 @@ pub fn see_through_under_forces(meshes: &mut [RenderMesh]) {
     }
 }
 
+/// The fontanelles' markers, sized as the fontanelles are told apart by
+/// touch (the posterior a small triangle, the anterior a diamond about
+/// 2.5 cm across), radius m, and coloured apart: the posterior dark, the
+/// anterior light. Drawing sizes, not anatomy.
+pub const POSTERIOR_FONTANELLE_M: f32 = 5.0e-3;
+pub const ANTERIOR_FONTANELLE_M: f32 = 7.0e-3;
+pub const POSTERIOR_FONTANELLE_RGB: [f32; 3] = [0.10, 0.14, 0.42];
+pub const ANTERIOR_FONTANELLE_RGB: [f32; 3] = [0.98, 0.88, 0.35];
+
 /// Muscle colour for a floor without recorded stretch.
 const FLOOR_RGB: [f32; 3] = [0.78, 0.50, 0.50];
 /// Smallest upper end of the stretch colour scale, so a floor at rest is
@@ -185,6 +194,11 @@ pub fn meshes_at_sample(
         &sample.head,
         HEAD_RGB,
     )];
+    if let Some(fontanelles) = &scene.fontanelles {
+        let marker = |name, at, radius, rgb| RenderMesh::sphere(name, sample.head.point(at).as_vec3().to_array(), radius, rgb);
+        meshes.push(marker("posterior fontanelle", fontanelles.posterior, POSTERIOR_FONTANELLE_M, POSTERIOR_FONTANELLE_RGB));
+        meshes.push(marker("anterior fontanelle", fontanelles.anterior, ANTERIOR_FONTANELLE_M, ANTERIOR_FONTANELLE_RGB));
+    }
     if let (Some(trunk), Some(pose)) = (&scene.trunk, &sample.trunk) {
         meshes.push(posed_mesh(TRUNK, trunk, pose, TRUNK_RGB));
     }

@@ -382,3 +382,39 @@ fn the_forces_at_a_key_moment_are_drawn_and_listed() {
     let changed: Vec<usize> = (0..with.len()).filter(|&i| with[i] != without[i]).collect();
     assert!(!changed.is_empty() && changed.iter().all(|&i| i / 2 == 1), "{changed:?}");
 }
+
+/// The fontanelles ride on the head in every moment's pictures, so the
+/// occiput's position reads off them, and the legend names their colours.
+#[test]
+fn the_fontanelles_mark_the_head_in_the_pictures() {
+    let demo = Demo::textbook().unwrap();
+    let input = demo.input("fontanelles");
+    let scene = input.scene.as_ref().unwrap();
+    let (moments, _) = crate::moments::key_moments(&demo.detector);
+    let sample = moments[1].sample;
+    let (meshes, _) = crate::pictures::meshes_at_sample(scene, &demo.history, sample, None);
+    let centre = |name: &str| {
+        let mesh = meshes.iter().find(|m| m.name == name).unwrap_or_else(|| panic!("no {name}"));
+        mesh.positions.iter().map(|p| glam::Vec3::from(*p)).sum::<glam::Vec3>() / mesh.positions.len() as f32
+    };
+    let pose = &demo.history.samples[sample].head;
+    for (name, landmark) in [("posterior fontanelle", demo.fetus.head.landmarks.lambda), ("anterior fontanelle", demo.fetus.head.landmarks.bregma)] {
+        let at = pose.point(landmark).as_vec3();
+        // The mean of the ball's vertices: its seam repeats some, a tenth of a millimetre off.
+        assert!(centre(name).distance(at) < 3e-4, "{name}: {} against {at}", centre(name));
+    }
+    let html = write_report(&input).unwrap().html;
+    assert!(html.contains("the posterior fontanelle <span style=\"color:#1a246b\">&#9679;</span> (the occiput lies behind it)"));
+
+    let mut unmarked = demo.input("unmarked");
+    unmarked.scene.as_mut().unwrap().fontanelles = None;
+    let plain = write_report(&unmarked).unwrap().html;
+    assert!(!plain.contains("fontanelle"));
+    let pictures = |html: &str| -> Vec<String> {
+        html.split("src=\"data:image/png;base64,").skip(1).map(|rest| rest[..rest.find('"').unwrap()].to_string()).collect()
+    };
+    let (with, without) = (pictures(&html), pictures(&plain));
+    for moment in 0..moments.len() {
+        assert!((0..2).any(|view| with[2 * moment + view] != without[2 * moment + view]), "moment {moment} drawn without its fontanelles");
+    }
+}

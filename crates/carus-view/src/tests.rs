@@ -30,7 +30,7 @@ fn a_frame_has_the_fetus_where_the_history_puts_it() {
     let k = demo.history.samples.len() / 2;
     let meshes = replay.meshes(k, Layers::default());
     let names: Vec<&str> = meshes.iter().map(|m| m.name.as_str()).collect();
-    assert_eq!(names, ["fetal head", "fetal trunk", "pelvic floor", "pelvis"]);
+    assert_eq!(names, ["fetal head", "posterior fontanelle", "anterior fontanelle", "fetal trunk", "pelvic floor", "pelvis"]);
     // The head's vertices are its surface moved by the sample's pose.
     let pose = demo.history.samples[k].head;
     let first = pose.point(demo.fetus.head.surface.vertices[0]);
@@ -304,22 +304,22 @@ mod forces {
         let replay = replay.with_markers(vec![marker]).with_head_markers(vec![("lambda".into(), lambda)], 0.0025, [1.0, 0.0, 0.0]);
         assert_eq!(replay.layers_available(), Layers { markers: true, forces: true });
         let names = |layers| replay.meshes(k, layers).iter().map(|m| m.name.clone()).collect::<Vec<_>>();
-        let anatomy = ["fetal head", "fetal trunk", "pelvic floor", "pelvis"];
+        let anatomy = ["fetal head", "posterior fontanelle", "anterior fontanelle", "fetal trunk", "pelvic floor", "pelvis"];
         assert_eq!(names(Layers::default()), anatomy);
-        assert_eq!(names(Layers { markers: true, forces: false })[4..], ["sacral_promontory", "lambda"]);
+        assert_eq!(names(Layers { markers: true, forces: false })[6..], ["sacral_promontory", "lambda"]);
         let both = names(Layers { markers: true, forces: true });
-        assert_eq!(both[..6], names(Layers { markers: true, forces: false })[..]);
+        assert_eq!(both[..8], names(Layers { markers: true, forces: false })[..]);
         assert_eq!(
-            both[6..],
+            both[8..],
             ["force: expulsion", "force: guide", "force: neck", "force: trunk on the head", "force: sacrum", "force: symphysis on the trunk", "force: pubic arch"]
         );
         // The head's landmark moves with the head.
-        let sphere = &replay.meshes(k, Layers { markers: true, forces: false })[5];
+        let sphere = &replay.meshes(k, Layers { markers: true, forces: false })[7];
         let centre = sphere.positions.iter().map(|p| Vec3::from(*p)).sum::<Vec3>() / sphere.positions.len() as f32;
         let at = replay.history.samples[k].head.point(lambda).as_vec3();
         assert!(centre.distance(at) < 1e-4, "{centre} against {at}");
         // The floor and the trunk turn see-through only under the forces.
-        for (mesh, name) in [(1, "fetal trunk"), (2, "pelvic floor")] {
+        for (mesh, name) in [(3, "fetal trunk"), (4, "pelvic floor")] {
             let opacity = |layers| replay.meshes(k, layers)[mesh].colour[3];
             assert_eq!(opacity(Layers::default()), 1.0, "{name}");
             assert!(opacity(Layers { markers: false, forces: true }) < 1.0, "{name}");
@@ -332,7 +332,7 @@ mod forces {
         // Without loads there is nothing to lay over.
         let (bare, _) = textbook();
         assert_eq!(bare.layers_available(), Layers::default());
-        assert_eq!(bare.meshes(k, Layers { markers: true, forces: true }).len(), 4);
+        assert_eq!(bare.meshes(k, Layers { markers: true, forces: true }).len(), 6);
         assert!(bare.force_readout(k).is_empty());
     }
 }

@@ -143,6 +143,26 @@ pub const HEAD_LANDMARK_NAMES: [&str; 14] = [
 ];
 
 impl HeadLandmarks {
+    /// Every landmark moved by `f`, for example into another frame.
+    pub fn map(&self, f: impl Fn(DVec3) -> DVec3) -> HeadLandmarks {
+        HeadLandmarks {
+            vertex: f(self.vertex),
+            occiput: f(self.occiput),
+            glabella: f(self.glabella),
+            nasion: f(self.nasion),
+            menton: f(self.menton),
+            submental: f(self.submental),
+            bregma: f(self.bregma),
+            lambda: f(self.lambda),
+            parietal_eminence_left: f(self.parietal_eminence_left),
+            parietal_eminence_right: f(self.parietal_eminence_right),
+            temporal_left: f(self.temporal_left),
+            temporal_right: f(self.temporal_right),
+            suboccipital: f(self.suboccipital),
+            atlanto_occipital: f(self.atlanto_occipital),
+        }
+    }
+
     pub fn named(&self) -> [(&'static str, DVec3); 14] {
         let p = [
             self.vertex,

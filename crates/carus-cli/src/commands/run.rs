@@ -380,6 +380,10 @@ pub(super) fn scene_with_floors(scene: &carus_labour::Scene, floors: Vec<&FloorA
         trunk: scene.trunk.as_ref().map(|t| t.surface.clone()),
         lower_trunk: scene.lower_trunk.as_ref().map(|t| t.surface.clone()),
         floor: scene.floor.as_ref().map(|floor| floor_surface(floor, floors)),
+        fontanelles: Some(carus_report::Fontanelles {
+            anterior: scene.head_landmarks.bregma,
+            posterior: scene.head_landmarks.lambda,
+        }),
         forces: Vec::new(),
     }
 }

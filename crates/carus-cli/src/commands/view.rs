@@ -232,7 +232,7 @@ impl RunShown {
             true => replay,
             false => replay.with_forces(self.loads, scene.pivot_in_head, scene.expulsion_at_pivot())?,
         };
-        let head_landmarks = scene.head_landmarks.iter().map(|(name, p)| (name.to_string(), *p)).collect();
+        let head_landmarks = scene.head_landmarks.named().iter().map(|(name, p)| (name.to_string(), *p)).collect();
         Ok(replay
             .with_markers(run_scene.pelvis_markers.clone())
             .with_head_markers(head_landmarks, HEAD_MARKER_M, LANDMARK_RGB))
