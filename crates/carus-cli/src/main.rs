@@ -29,7 +29,7 @@ enum Command {
     Solve(commands::solve::SolveArgs),
     /// Build or import anatomy and print every diameter, plane and landmark.
     Measure(commands::measure::MeasureArgs),
-    /// Write anatomy surfaces (STL) and volume meshes (VTU) for inspection.
+    /// Write anatomy surfaces (STL in mm, VTU in m) and volume meshes (VTU) for inspection.
     Mesh(commands::mesh::MeshArgs),
     /// Draw anatomy from standard views into a PNG contact sheet.
     Render(commands::render::RenderArgs),

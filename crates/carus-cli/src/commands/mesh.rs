@@ -1,6 +1,8 @@
 //! `carus mesh pelvis|head|floor [FILE.toml] --out DIR`: writes the anatomy
-//! for inspection in ParaView: surfaces as binary STL, the pelvic floor as
-//! VTU, landmarks as CSV and JSON beside them (mm, in each part's frame).
+//! for inspection: surfaces as binary STL in mm (for CAD tools and
+//! slicers) and as VTU in metres (for ParaView, beside the pelvic floor's
+//! VTU and a run's outputs), landmarks as CSV and JSON (mm), each part in
+//! its own frame.
 //! Each surface is checked for places where it crosses itself, which a
 //! mesher or the contact's inside test would trip on.
 
@@ -52,7 +54,7 @@ pub fn run(args: &MeshArgs) -> anyhow::Result<Status> {
     match args.part {
         MeshPart::Pelvis | MeshPart::Floor => {
             let pelvis = file.pelvis()?;
-            written.push(write_stl(&args.out.join("pelvis.stl"), &pelvis.surface)?);
+            written.extend(write_surface(&args.out, "pelvis", &pelvis.surface, "pelvis frame")?);
             crossings.push(("pelvis", self_crossings("pelvis", &pelvis.surface)));
             let landmarks: Vec<(String, [f64; 3])> =
                 pelvis.landmarks.named().iter().map(|(n, p)| (n.to_string(), p.to_array())).collect();
@@ -86,7 +88,7 @@ pub fn run(args: &MeshArgs) -> anyhow::Result<Status> {
         }
         MeshPart::Head => {
             let head = file.head()?;
-            written.push(write_stl(&args.out.join("head.stl"), &head.surface)?);
+            written.extend(write_surface(&args.out, "head", &head.surface, "head frame")?);
             crossings.push(("head", self_crossings("head", &head.surface)));
             let landmarks: Vec<(String, [f64; 3])> =
                 head.landmarks.named().iter().map(|(n, p)| (n.to_string(), p.to_array())).collect();
@@ -131,12 +133,21 @@ fn self_crossings(name: &'static str, surface: &TriSurface) -> Option<usize> {
     Some(pairs)
 }
 
-/// Binary STL, coordinates in millimetres (what ParaView and slicers expect of STL).
-fn write_stl(path: &Path, surface: &TriSurface) -> anyhow::Result<PathBuf> {
+/// `NAME.stl` (mm) and `NAME.vtu` (m) of `surface`, in `frame`.
+fn write_surface(out: &Path, name: &str, surface: &TriSurface, frame: &str) -> anyhow::Result<[PathBuf; 2]> {
+    let stl = write_stl(&out.join(format!("{name}.stl")), surface, frame)?;
+    let vtu = out.join(format!("{name}.vtu"));
+    carus_labour::output::write_surface_vtu(&vtu, &surface.vertices, &surface.triangles, &carus_analysis::RigidPose::default())?;
+    Ok([stl, vtu])
+}
+
+/// Binary STL, coordinates in millimetres (what CAD tools and slicers
+/// expect of STL), in `frame` (named in its header).
+fn write_stl(path: &Path, surface: &TriSurface, frame: &str) -> anyhow::Result<PathBuf> {
     let mut bytes = Vec::with_capacity(84 + 50 * surface.triangles.len());
     let mut header = [0u8; 80];
-    let title = b"carus anatomy, millimetres, pelvis frame";
-    header[..title.len()].copy_from_slice(title);
+    let title = format!("carus anatomy, millimetres, {frame}");
+    header[..title.len()].copy_from_slice(title.as_bytes());
     bytes.extend_from_slice(&header);
     bytes.extend_from_slice(&(surface.triangles.len() as u32).to_le_bytes());
     for t in 0..surface.triangles.len() {
@@ -198,5 +209,26 @@ mod tests {
         twice.vertices.extend(head.surface.vertices.iter().map(|&v| v + shift));
         twice.triangles.extend(head.surface.triangles.iter().map(|t| t.map(|k| k + n)));
         assert!(self_crossings("head", &twice).unwrap() > 0);
+    }
+
+    /// A surface goes out twice, in one frame: STL in millimetres for CAD
+    /// tools, VTU in metres to open in ParaView beside the floor's VTU.
+    #[test]
+    fn each_surface_is_written_in_millimetres_and_in_metres() {
+        let head = FetalHead::new(&HeadDiameters::default()).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let [stl, vtu] = write_surface(dir.path(), "head", &head.surface, "head frame").unwrap();
+        let stl = std::fs::read(stl).unwrap();
+        assert!(stl.starts_with(b"carus anatomy, millimetres, head frame"));
+        let f32_at = |k: usize| f32::from_le_bytes(stl[k..k + 4].try_into().unwrap()) as f64;
+        // The first triangle's first corner, after its normal.
+        let corner_mm = glam::DVec3::new(f32_at(96), f32_at(100), f32_at(104));
+        let first = head.surface.vertices[head.surface.triangles[0][0] as usize];
+        assert!((corner_mm * 1e-3 - first).length() < 1e-7, "{corner_mm} mm against {first} m");
+        let vtu = std::fs::read_to_string(vtu).unwrap();
+        let points = &vtu[vtu.find("format=\"ascii\">\n").unwrap() + 16..];
+        let vertex0: Vec<f64> = points.lines().next().unwrap().split(' ').map(|x| x.parse().unwrap()).collect();
+        assert_eq!(vertex0, head.surface.vertices[0].to_array());
+        assert!(vtu.contains(&format!("NumberOfCells=\"{}\"", head.surface.triangles.len())));
     }
 }
