@@ -72,7 +72,8 @@ pub struct Movement {
 }
 
 impl Movement {
-    fn absent(unit: Unit) -> Self {
+    /// Not observed: no start, end or size.
+    pub fn absent(unit: Unit) -> Self {
         Movement {
             observed: false,
             start_s: None,

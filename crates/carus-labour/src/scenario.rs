@@ -1912,6 +1912,20 @@ fn unit_in_value(path: &Path, text: &str, error: &toml::de::Error) -> Option<Sce
     })
 }
 
+/// serde's message with Rust's number types said as a reader would:
+/// "expected usize" is "expected a whole number".
+fn plain_types(message: &str) -> String {
+    let whole = ["usize", "u64", "u32", "u16", "u8", "isize", "i64", "i32", "i16", "i8"];
+    let mut plain = message.to_string();
+    for rust in whole {
+        plain = plain.replace(&format!("expected {rust}"), "expected a whole number");
+    }
+    for rust in ["f64", "f32"] {
+        plain = plain.replace(&format!("expected {rust}"), "expected a number");
+    }
+    plain
+}
+
 /// Whether the dotted key holds a number in a complete scenario file.
 fn takes_a_number(full_key: &str) -> bool {
     let Some(complete) = Scenario::builtin("normal").ok().and_then(|s| s.to_toml().ok()) else {
@@ -1928,8 +1942,24 @@ fn takes_a_number(full_key: &str) -> bool {
 }
 
 fn syntax(path: &Path, text: &str, key: String, error: &toml::de::Error) -> ScenarioError {
-    let line = error.span().map_or(0, |s| line_at(text, s.start));
-    let mut message = error.message().trim().to_string();
+    let mut line = error.span().map_or(0, |s| line_at(text, s.start));
+    let mut message = plain_types(error.message().trim());
+    // A key inside a nested table comes back as "...\nin `leaf`": one path.
+    let key = match message.split_once("\nin `") {
+        Some((said, leaf)) => {
+            let leaf = leaf.trim_end_matches('`');
+            // The span is the table's; the leaf's own line is the first of
+            // that table that sets it.
+            let sets_leaf = |l: &str| l.trim_start().strip_prefix(leaf).is_some_and(|rest| rest.trim_start().starts_with('='));
+            if let Some(k) = text.lines().enumerate().skip(line.saturating_sub(1)).find_map(|(k, l)| sets_leaf(l).then_some(k)) {
+                line = k + 1;
+            }
+            let key = if key == "." || key.is_empty() { leaf.to_string() } else { format!("{key}.{leaf}") };
+            message = said.to_string();
+            key
+        }
+        None => key,
+    };
     let twice = carus_io::toml_text::written_twice(text, error).map(|t| t.message_and_fix());
     let hint = if let Some((said, fix)) = twice {
         message = said;
@@ -1939,6 +1969,8 @@ fn syntax(path: &Path, text: &str, key: String, error: &toml::de::Error) -> Scen
             .to_string()
     } else if message.starts_with("unknown variant") {
         "use one of the values listed".to_string()
+    } else if message.starts_with("invalid type") && message.ends_with("expected a whole number") {
+        "this key takes a whole number: no decimal point, no quotes".to_string()
     } else if message.starts_with("invalid type") {
         "numbers without quotes, names in quotes; units are in the key names (mm, deg, s, n, pa)"
             .to_string()
@@ -2346,6 +2378,20 @@ mod tests {
         assert_eq!(back.pelvis, PelvisSpec::Generated(PelvisDiameters { inlet_ap_mm: 105.0, ..Default::default() }));
         let e = real.with_setting("pelvis.inlet_ap_mm", "105").unwrap_err().to_string();
         assert!(e.contains("cannot be combined") && e.contains("--set 'pelvis={inlet_ap_mm=...}'"), "{e}");
+    }
+
+    /// A wrong type in a nested table names the whole key and its own
+    /// line, and says the type as a reader would, not as Rust does.
+    #[test]
+    fn a_wrong_type_in_a_nested_table_names_the_whole_key() {
+        let e = parse("name = \"x\"\n[floor.mesh]\nelements_across = 6\nelements_around = 32.5\n").unwrap_err().to_string();
+        assert!(e.starts_with("test.toml:4: `floor.mesh.elements_around`: invalid type: floating point `32.5`, expected a whole number"), "{e}");
+        assert!(e.contains("this key takes a whole number") && !e.contains("usize"), "{e}");
+        let normal = Scenario::builtin("normal").unwrap();
+        let e = normal.with_setting("floor.mesh.elements_around", "32.5").unwrap_err().to_string();
+        assert!(e.contains("`floor.mesh.elements_around`: invalid type") && !e.contains("\nin `"), "{e}");
+        let e = normal.with_setting("contact.friction", "true").unwrap_err().to_string();
+        assert!(e.contains("expected a number") && !e.contains("f64"), "{e}");
     }
 
     #[test]

@@ -11,7 +11,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{bail, Context};
-use carus_analysis::{ArrestStage, DetectorReport, Movement, Movements, Outcome};
+use carus_analysis::{ArrestStage, DetectorReport, Movement, Movements, Outcome, Unit};
 use carus_labour::record::FloorAtMoment;
 use carus_labour::loads::GuideSummary;
 use carus_labour::{LabourError, Mode, Observer, RunOptions, RunRecord, Scenario, Scene, Simulation, BUILTINS};
@@ -657,7 +657,7 @@ pub(super) fn json_summary(record: &RunRecord, out_dir: &Path) -> serde_json::Va
         "out_dir": out_dir.display().to_string(),
         "completed": record.summary.completed,
         "failure": record.summary.failure,
-        "posterior_rotation": record.detector.as_ref().map(|d| d.posterior_rotation),
+        "posterior_rotation": record.detector.as_ref().map_or(Movement::absent(Unit::Deg), |d| d.posterior_rotation),
         "internal_rotation_outside_window": record
             .detector
             .as_ref()
@@ -667,6 +667,29 @@ pub(super) fn json_summary(record: &RunRecord, out_dir: &Path) -> serde_json::Va
         "scenario": record.summary.scenario,
         "mode": record.scenario.trajectory.mode.name(),
         "guide": GuideSummary::of(&record.loads),
+    })
+}
+
+/// [`json_summary`]'s object, key for key, for a run that could not be
+/// made (`failure` says why): nothing simulated, nothing observed, no
+/// outcome reached (as a run stopped at its start reads); the scenario and
+/// mode null, as the run never read them.
+pub(super) fn json_summary_not_run(out_dir: &Path, failure: &str) -> serde_json::Value {
+    json!({
+        "outcome": Outcome { delivered: false, arrest: None },
+        "movements": movements_json(&movement_list(&Movements::none())),
+        "simulated_s": 0.0,
+        "wall_s": 0.0,
+        "out_dir": out_dir.display().to_string(),
+        "completed": false,
+        "failure": failure,
+        "posterior_rotation": Movement::absent(Unit::Deg),
+        "internal_rotation_outside_window": null,
+        "head_born": null,
+        "not_held_at_birth": [],
+        "scenario": null,
+        "mode": null,
+        "guide": null,
     })
 }
 

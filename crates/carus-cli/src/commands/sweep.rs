@@ -17,12 +17,13 @@ use std::sync::{Arc, Mutex};
 use anyhow::{bail, Context};
 use carus_analysis::movements::ROTATION_STATION_MAX_MM;
 use carus_analysis::{Movements, Outcome};
+use carus_labour::record::RunSummary;
 use carus_labour::{RunRecord, Scenario, Scene, Simulation};
 use rayon::prelude::*;
 use serde_json::json;
 
 use super::run::{
-    go_on_into, json_summary, load, make_batch_dir, movements, outcome_line, read_record, run_ended, serde_name,
+    go_on_into, json_summary, json_summary_not_run, load, make_batch_dir, movements, outcome_line, read_record, run_ended, serde_name,
     OutputArgs,
 };
 use super::{ctrl_c_flag, labour_pool, print_json, Status};
@@ -101,13 +102,32 @@ pub(super) fn parse_setting(text: &str) -> anyhow::Result<Setting> {
     if key.trim().is_empty() || values.iter().any(String::is_empty) {
         bail!("--set {text}: a key and at least one value, none empty, e.g. --set contact.friction=0.1,0.35");
     }
-    if let Some(twice) = values.iter().enumerate().find_map(|(i, v)| values[..i].contains(v).then_some(v)) {
+    if let Some(twice) = values.iter().enumerate().find_map(|(i, v)| values[..i].iter().any(|u| same_value(u, v)).then_some(v)) {
         bail!("--set {text}: the value {twice} is given twice; each value runs once");
     }
     Ok(Setting {
         key: key.trim().to_string(),
         values,
     })
+}
+
+/// Whether two values as written are the same value for a key: equal as
+/// TOML (so `1`, `1.0` and `1e0` are one number), or, where either is not
+/// TOML (an enum's bare name), equal as written.
+fn same_value(a: &str, b: &str) -> bool {
+    let parsed = |v: &str| v.parse::<toml::Value>().ok();
+    match (parsed(a), parsed(b)) {
+        (Some(x), Some(y)) => match (number(&x), number(&y)) {
+            (Some(x), Some(y)) => x == y,
+            _ => x == y,
+        },
+        _ => a == b,
+    }
+}
+
+/// A TOML integer or float as a number.
+fn number(value: &toml::Value) -> Option<f64> {
+    value.as_float().or_else(|| value.as_integer().map(|i| i as f64))
 }
 
 /// The values of a list split at its commas, but not at those inside a
@@ -425,11 +445,7 @@ impl Variant<'_> {
         let record = go_on_into(self.scenario, dir, stop)?;
         if !quiet {
             let note = record.summary.failure.as_deref().map_or(String::new(), |f| format!(": {f}"));
-            let verb = match (&record.summary.failure, record.summary.completed) {
-                (Some(_), _) => "failed",
-                (None, true) => "finished",
-                (None, false) => "stopped",
-            };
+            let verb = state(&record.summary);
             eprintln!("{verb} {} in {:.0} s{note}", dir.display(), record.summary.wall_s);
         }
         Ok(self.row(&record))
@@ -477,20 +493,15 @@ fn unmade(dir: &Path, combination: &[(String, String)], keys: &[&str], error: &a
     for (k, v) in set_values(keys, combination).into_iter().enumerate() {
         row[k + 1] = v;
     }
-    for (column, value) in [("completed", "false"), ("failure", why.as_str())] {
+    for (column, value) in [("completed", "false"), ("failure", why.as_str()), ("state", "not run")] {
         if let Some(i) = columns.iter().position(|c| c == column) {
             row[i] = value.to_string();
         }
     }
-    Finished {
-        summary: json!({
-            "set": set_json(combination),
-            "out_dir": dir.display().to_string(),
-            "completed": false,
-            "failure": why,
-        }),
-        row,
-    }
+    let mut summary = json_summary_not_run(dir, &why);
+    summary["set"] = set_json(combination);
+    summary["at_station_50mm"] = serde_json::Value::Null;
+    Finished { summary, row }
 }
 
 /// Where the head was turned when its leading point first reached station
@@ -546,6 +557,7 @@ fn header(keys: &[&str]) -> Vec<String> {
             "head_born_theta_deg",
             "head_born_phi_deg",
             "not_held_at_birth",
+            "state",
         ]
         .map(String::from),
     );
@@ -593,7 +605,18 @@ fn table_row(
     row.push(number(born.map(|h| h.phi_deg)));
     let lost = record.detector.as_ref().map_or(&[][..], |d| &d.not_held_at_birth);
     row.push(lost.iter().map(|n| n.movement.as_str()).collect::<Vec<_>>().join(" "));
+    row.push(state(s).to_string());
     row
+}
+
+/// How a run that was made ended: "failed" (`failure` says why),
+/// "finished", or "stopped" (Ctrl-C; `--resume` goes on with it).
+fn state(summary: &RunSummary) -> &'static str {
+    match (&summary.failure, summary.completed) {
+        (Some(_), _) => "failed",
+        (None, true) => "finished",
+        (None, false) => "stopped",
+    }
 }
 
 /// A CSV field, quoted when it holds a comma, quote or line break.
@@ -610,7 +633,9 @@ fn write_table(out_dir: &Path, keys: &[&str], rows: &[Option<Finished>]) -> anyh
     let mut csv = header(keys).iter().map(|h| field(h)).collect::<Vec<_>>().join(",");
     csv.push('\n');
     for row in rows.iter().flatten() {
-        csv.push_str(&row.row.iter().map(|f| field(f)).collect::<Vec<_>>().join(","));
+        // One line per run, so that line-based tools count runs: a
+        // failure's hint joins its message (sweep.json keeps the breaks).
+        csv.push_str(&row.row.iter().map(|f| field(&f.split_whitespace().collect::<Vec<_>>().join(" "))).collect::<Vec<_>>().join(","));
         csv.push('\n');
     }
     let path = out_dir.join("sweep.csv");
@@ -650,6 +675,11 @@ fn print_table(keys: &[&str], rows: &[Option<Finished>]) {
             })
             .unwrap_or_default();
         let failure = match (r["failure"].as_str(), r["completed"].as_bool()) {
+            // A run never made read no scenario.
+            (Some(f), _) if r["scenario"].is_null() => {
+                println!("{set}: not run: {f}");
+                continue;
+            }
             (Some(f), _) => format!("; ended early: {f}"),
             (None, Some(false)) => format!("; stopped at t = {:.1} s", r["simulated_s"].as_f64().unwrap_or(0.0)),
             _ => String::new(),
@@ -684,6 +714,13 @@ mod tests {
         for bad in ["expulsion.period_s", "=8", "contact.friction=0.1,", "x=", "contact.friction=0.1,0.1"] {
             assert!(parse_setting(bad).is_err(), "{bad}");
         }
+        // The same value written two ways runs once too.
+        for twice in ["numerics.end_time_s=0.3,0.30", "expulsion.force_max_n=1,1.0", "contact.friction=1e-1,0.1", "floor.coupling=\"held\",\"held\""] {
+            let e = parse_setting(twice).err().unwrap_or_else(|| panic!("{twice} ran twice")).to_string();
+            assert!(e.contains("is given twice"), "{e}");
+        }
+        assert!(parse_setting("expulsion.direction=fetal_spine,pivot").is_ok());
+        assert!(parse_setting("expulsion.force_max_n=1,1.5").is_ok());
     }
 
     #[test]
@@ -734,8 +771,17 @@ mod tests {
         assert_eq!(at("completed"), "false");
         assert_eq!(at("failure"), "cannot create runs/x");
         assert_eq!(at("arrest_part"), "");
+        assert_eq!(at("state"), "not run");
         assert_eq!(r.summary["set"]["contact.friction"], "0.1");
         assert_eq!(r.summary["failure"], "cannot create runs/x");
+        // sweep.csv has one line per run, the hint joined to its message.
+        let dir = tempfile::tempdir().unwrap();
+        let two_lines = anyhow::anyhow!("no pelvis\n  hint: widen it");
+        let rows = [Some(unmade(&dir.path().join("01-a=1"), &[("a".into(), "1".into())], &["a"], &two_lines))];
+        write_table(dir.path(), &["a"], &rows).unwrap();
+        let csv = std::fs::read_to_string(dir.path().join("sweep.csv")).unwrap();
+        assert_eq!(csv.lines().count(), 2, "{csv}");
+        assert!(csv.contains(",no pelvis hint: widen it,"), "{csv}");
     }
 
     /// A sweep of `scenario`, written as a file in `dir`, over `settings`,
@@ -871,6 +917,11 @@ mod tests {
         assert_eq!(json["runs"].as_array().unwrap().len(), 2);
         assert_eq!(json["runs"][1]["set"]["expulsion.force_max_n"], "120");
         assert_eq!(json["runs"][1]["simulated_s"], json!(0.3));
+        assert!(lines[1].ends_with(",finished"), "{}", lines[1]);
+        // A run that could not be made has every key a made one has.
+        let keys = |run: &serde_json::Value| run.as_object().unwrap().keys().cloned().collect::<Vec<_>>();
+        let not_made = unmade(&out.join("03-x"), &[], &["expulsion.force_max_n"], &anyhow::anyhow!("no"));
+        assert_eq!(keys(&not_made.summary), keys(&json["runs"][1]));
 
         // The second variant against a plain run of the same scenario.
         s.expulsion.force_max_n = 120.0;
