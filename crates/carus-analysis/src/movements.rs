@@ -165,15 +165,18 @@ pub struct NotHeldAtBirth {
     pub reason: String,
 }
 
-/// Which of the counted internal rotation and extension the head `born`
-/// no longer showed: an occiput further than [`ROTATION_TO_DEG`] from OA,
-/// or phi less than [`EXTENSION_MIN_DEG`] below where the extension began.
+/// Which of the counted internal rotation and extension, begun before the
+/// head was `born`, it no longer showed then: an occiput further than
+/// [`ROTATION_TO_DEG`] from OA, or phi less than [`EXTENSION_MIN_DEG`]
+/// below where the extension began.
 fn not_held_at_birth(series: &Series, movements: &Movements, born: Option<HeadBorn>) -> Vec<NotHeldAtBirth> {
     let Some(born) = born else {
         return Vec::new();
     };
     let mut lost = Vec::new();
-    if movements.internal_rotation.observed && born.theta_deg.abs() > ROTATION_TO_DEG {
+    // Only what had happened by the birth can have been lost by it.
+    let before_birth = |m: &Movement| m.observed && m.start_s.is_some_and(|start| start <= born.time_s);
+    if before_birth(&movements.internal_rotation) && born.theta_deg.abs() > ROTATION_TO_DEG {
         lost.push(NotHeldAtBirth {
             movement: "internal_rotation".into(),
             reason: format!(
@@ -187,7 +190,7 @@ fn not_held_at_birth(series: &Series, movements: &Movements, born: Option<HeadBo
     let extension = &movements.extension;
     let extended_from = extension
         .start_s
-        .filter(|_| extension.observed)
+        .filter(|_| before_birth(extension))
         .and_then(|start| series.time_s.iter().position(|&t| t == start))
         .map(|i| series.phi_deg[i]);
     if let Some(from) = extended_from.filter(|from| from - born.phi_deg < EXTENSION_MIN_DEG) {
@@ -480,8 +483,10 @@ fn extension(series: &Series, peak: usize) -> Movement {
 /// External rotation (restitution): after the head's delivery, the largest
 /// turn of theta towards the side the occiput had at engagement (its sign
 /// at the engagement sample, or at the first sample if the head did not
-/// engage during the run); either way when that side was within 10 degrees
-/// of OA or OP. Observed when the turn is at least 30 degrees.
+/// engage during the run; either side when that was within 10 degrees of
+/// OA or OP): the largest fall of theta's angular distance from that side
+/// (+-90 deg), so a head born OP turns back to the side as one born OA
+/// does. Observed when the turn is at least 30 degrees.
 fn external_rotation(series: &Series, engagement_end: Option<usize>) -> Movement {
     let Some(delivered) = delivery(series) else {
         return Movement::absent(Unit::Deg);
@@ -497,7 +502,7 @@ fn external_rotation(series: &Series, engagement_end: Option<usize>) -> Movement
     let best = sides
         .iter()
         .filter_map(|&side| {
-            let toward: Vec<f64> = series.theta_deg.iter().map(|t| side * t).collect();
+            let toward: Vec<f64> = series.theta_deg.iter().map(|&t| -wrap_deg(t - 90.0 * side).abs()).collect();
             largest_rise(&toward, &window, ONSET_DEG)
         })
         .fold(None::<(Span, f64)>, |best, candidate| match best {

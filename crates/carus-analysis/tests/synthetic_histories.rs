@@ -155,6 +155,37 @@ fn a_rotation_to_direct_op_is_posterior_not_internal() {
     assert_eq!(r.posterior_rotation.unit, Unit::Deg);
 }
 
+/// Restitution is a turn back to the side the occiput had at engagement,
+/// from wherever the head was born: from OP as from OA.
+#[test]
+fn a_head_born_op_restitutes_towards_its_engagement_side() {
+    let canal = reference_canal();
+    let outlet = canal.outlet_sigma() * 1e3;
+    let at = |station| synthetic::centre_sigma_at_station(&canal, station);
+    let mut plan = synthetic::textbook_plan(&canal);
+    // Engaged LOT (-90), turned back to OP (-180), born there, then back
+    // to LOT once out.
+    plan.theta_ramps[0] = synthetic::Ramp { from_mm: at(0.0), to_mm: at(40.0), by: -90.0 };
+    plan.theta_ramps[1] = synthetic::Ramp { from_mm: outlet + 10.0, to_mm: outlet + 30.0, by: 90.0 };
+    plan.theta_ramps.truncate(2);
+    let r = detect(&plan.history(&canal)).unwrap();
+    let born = r.head_born.expect("delivered");
+    assert!((wrap(born.theta_deg).abs() - 180.0).abs() < 3.0, "{born}");
+    observed(&r.posterior_rotation);
+    let restitution = observed(&r.movements.external_rotation);
+    assert!((restitution.2 - 90.0).abs() < 3.0, "{restitution:?}");
+    // Past the side (from LOT on towards OP) is no turn back to it.
+    let mut past = synthetic::textbook_plan(&canal);
+    past.theta_ramps[0] = synthetic::Ramp { from_mm: at(0.0), to_mm: at(40.0), by: 0.0 };
+    past.theta_ramps[1] = synthetic::Ramp { from_mm: outlet + 10.0, to_mm: outlet + 30.0, by: -60.0 };
+    past.theta_ramps.truncate(2);
+    absent(&detect(&past.history(&canal)).unwrap().movements.external_rotation);
+}
+
+fn wrap(deg: f64) -> f64 {
+    (deg + 180.0).rem_euclid(360.0) - 180.0
+}
+
 #[test]
 fn the_json_shape_is_the_canonical_one() {
     let (_, r) = textbook();
@@ -610,4 +641,14 @@ fn movements_lost_before_the_birth_are_reported_as_not_held() {
     let [rotation, extension] = [0, 1].map(|k| lost.not_held_at_birth[k].to_string());
     assert!(rotation.starts_with("internal_rotation not held at birth: the occiput had turned back to LOA (theta -40 deg)"), "{rotation}");
     assert!(extension.contains(&format!("born at phi {:+.1} deg", born.phi_deg)) && extension.ends_with("it was born flexed"), "{extension}");
+
+    // An extension that begins only once the head is out was not lost by
+    // the birth: it had not happened.
+    let mut late = synthetic::textbook_plan(&canal);
+    late.phi_ramps[1] = synthetic::Ramp { from_mm: outlet + 5.0, to_mm: outlet + 25.0, by: -70.0 };
+    let late = detect(&late.history(&canal)).unwrap();
+    let born = late.head_born.expect("delivered");
+    let extension = late.movements.extension;
+    assert!(extension.observed && extension.start_s.unwrap() > born.time_s, "{extension:?} against {born}");
+    assert!(late.not_held_at_birth.iter().all(|n| n.movement != "extension"), "{:?}", late.not_held_at_birth);
 }

@@ -94,9 +94,14 @@ impl TriSurface {
             *v = map.transform_point3(*v);
         }
         if map.matrix3.determinant() < 0.0 {
-            for t in &mut self.triangles {
-                t.swap(1, 2);
-            }
+            self.turn_inside_out();
+        }
+    }
+
+    /// Reverses every triangle's winding, so each faces the other way.
+    pub fn turn_inside_out(&mut self) {
+        for t in &mut self.triangles {
+            t.swap(1, 2);
         }
     }
 

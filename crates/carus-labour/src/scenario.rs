@@ -929,6 +929,9 @@ impl Scenario {
 
     /// Parses and checks scenario text; `path` names it in errors.
     pub fn parse(path: &Path, text: &str, base_dir: PathBuf) -> Result<Scenario, ScenarioError> {
+        if let Ok(table) = text.parse::<toml::Table>() {
+            check_not_landmarks_file(path, text, &table)?;
+        }
         let deserializer = toml::Deserializer::parse(text).map_err(|e| toml_syntax(path, text, &e))?;
         let mut scenario: Scenario = serde_path_to_error::deserialize(deserializer)
             .map_err(|e| syntax(path, text, e.path().to_string(), e.inner()))?;
@@ -1843,6 +1846,27 @@ pub fn toml_table(path: &Path, text: &str) -> Result<toml::Table, ScenarioError>
     text.parse::<toml::Table>().map_err(|e| toml_syntax(path, text, &e))
 }
 
+/// A pelvis's landmarks file (it names a mesh and declares its axes) given
+/// where a scenario or anatomy file belongs is refused with how to use it.
+pub fn check_not_landmarks_file(path: &Path, text: &str, table: &toml::Table) -> Result<(), ScenarioError> {
+    if !(table.contains_key("mesh") && (table.contains_key("axes") || table.contains_key("landmarks"))) {
+        return Ok(());
+    }
+    Err(ScenarioError::Syntax {
+        path: path.to_path_buf(),
+        line: line_of_key(text, "mesh").map_or(1, NonZeroUsize::get),
+        key: String::new(),
+        message: "this is a pelvis's landmarks file (it names a `mesh` and its [axes] and [landmarks]), \
+                  not a scenario or anatomy file"
+            .into(),
+        hint: format!(
+            "refer to it from a scenario or anatomy file: a file holding `[pelvis]` and \
+             `import = {:?}` (the path relative to that file), as docs/IMPORT.md shows",
+            path.file_name().map_or(String::new(), |n| n.to_string_lossy().into_owned())
+        ),
+    })
+}
+
 /// `text` read as a `T`, a wrong value named by its line as in a scenario
 /// file (anatomy files: `carus measure`, `carus mesh`).
 pub fn from_toml_text<T: serde::de::DeserializeOwned>(path: &Path, text: &str) -> Result<T, ScenarioError> {
@@ -2378,6 +2402,15 @@ mod tests {
         assert_eq!(back.pelvis, PelvisSpec::Generated(PelvisDiameters { inlet_ap_mm: 105.0, ..Default::default() }));
         let e = real.with_setting("pelvis.inlet_ap_mm", "105").unwrap_err().to_string();
         assert!(e.contains("cannot be combined") && e.contains("--set 'pelvis={inlet_ap_mm=...}'"), "{e}");
+    }
+
+    /// A pelvis's landmarks file given as a scenario says what it is and how
+    /// to use it.
+    #[test]
+    fn a_landmarks_file_given_as_a_scenario_says_how_to_use_it() {
+        let path = carus_anatomy::import::visible_human_female_pelvis_path();
+        let e = Scenario::from_file(&path).unwrap_err().to_string();
+        assert!(e.contains("this is a pelvis's landmarks file") && e.contains("`[pelvis]` and `import = "), "{e}");
     }
 
     /// A wrong type in a nested table names the whole key and its own

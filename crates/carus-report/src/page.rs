@@ -168,7 +168,7 @@ fn timeline(
     for (m, (at, line)) in parts.moments.iter().zip(ticks) {
         let _ = write!(
             w,
-            "<span class=\"tick{}\" style=\"left:{at:.2}%\" title=\"{} at {:.1} s\">{}</span>",
+            "<span class=\"tick{}\" style=\"left:{at:.2}%\" title=\"{} at {:.2} s\">{}</span>",
             ["", " second"][line],
             m.kind.label(),
             m.time_s,
@@ -319,7 +319,7 @@ fn pictures(w: &mut String, parts: &Parts, fontanelles: bool) {
                 let _ = write!(
                     w,
                     "<figure class=\"moment\" data-moment=\"{}\"><figcaption><b>{}</b> \
-                     at {:.1} s<br><small>{}</small>",
+                     at {:.2} s<br><small>{}</small>",
                     m.moment.kind.mark(),
                     m.moment.kind.label(),
                     m.moment.time_s,
@@ -343,7 +343,7 @@ fn pictures(w: &mut String, parts: &Parts, fontanelles: bool) {
                             let _ = write!(
                                 w,
                                 "<span class=\"view\"><img src=\"{}\" width=\"{}\" height=\"{}\" \
-                                 alt=\"{} at {:.1} s, {} view\"><small>{} view</small></span>",
+                                 alt=\"{} at {:.2} s, {} view\"><small>{} view</small></span>",
                                 p.data_uri,
                                 PICTURE_SIZE.0,
                                 PICTURE_SIZE.1,

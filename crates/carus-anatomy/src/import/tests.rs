@@ -600,3 +600,32 @@ fn equivalent_axis_declarations_import_the_same_pelvis() {
     assert!(restated.pelvis.surface.signed_volume() > 0.0);
     std::fs::remove_dir_all(dir).ok();
 }
+
+/// A pelvis whose triangles face into the bone would draw the fetus into
+/// it; without holes its outside is certain, so it is turned and noted.
+#[test]
+fn a_pelvis_facing_into_its_bone_is_turned_outwards() {
+    let dir = scratch("inward");
+    let original = anatomy_assets_dir().join("visible-human-female-pelvis.stl");
+    let mut file = std::fs::File::open(&original).unwrap();
+    let mesh = stl_io::read_stl(&mut file).unwrap();
+    let mut inward: Vec<stl_io::Triangle> = mesh
+        .faces
+        .iter()
+        .map(|f| stl_io::Triangle {
+            normal: stl_io::Normal::new([0.0; 3]),
+            vertices: [f.vertices[0], f.vertices[2], f.vertices[1]].map(|k| mesh.vertices[k]),
+        })
+        .collect();
+    let mut bytes = Vec::new();
+    stl_io::write_stl(&mut bytes, inward.iter_mut().map(|t| &*t)).unwrap();
+    let flipped = write(&dir, "inward.stl", &bytes);
+    let as_shipped = import_pelvis(&edited_landmarks(&dir, |t| t)).unwrap();
+    assert!(!as_shipped.report.turned_outwards);
+    let turned = import_pelvis(&edited_landmarks(&dir, |t| t.replace(original.to_str().unwrap(), flipped.to_str().unwrap()))).unwrap();
+    assert!(turned.report.turned_outwards);
+    let volume = |p: &ImportedPelvis| p.pelvis.surface.signed_volume();
+    assert!(volume(&turned) > 0.0 && (volume(&turned) - volume(&as_shipped)).abs() < 1e-9 * volume(&as_shipped).abs().max(1.0), "{} against {}", volume(&turned), volume(&as_shipped));
+    assert_eq!(turned.pelvis.landmarks, as_shipped.pelvis.landmarks);
+    std::fs::remove_dir_all(dir).ok();
+}

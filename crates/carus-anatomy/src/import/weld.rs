@@ -30,6 +30,10 @@ pub struct MeshReport {
     pub open_edges: usize,
     /// Edges bordering more than two triangles.
     pub non_manifold_edges: usize,
+    /// Whether the surface, closed but facing into the bone (negative
+    /// volume), was turned to face outwards.
+    #[serde(default)]
+    pub turned_outwards: bool,
 }
 
 /// The farthest a vertex may lie from the origin, in metres: a body fits
@@ -175,5 +179,6 @@ fn survey(surface: &TriSurface, triangles_read: usize, degenerate_dropped: usize
         closed_parts: part_of.values().filter(|&&closed| closed).count(),
         open_edges,
         non_manifold_edges,
+        turned_outwards: false,
     }
 }

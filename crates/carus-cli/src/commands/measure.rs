@@ -145,8 +145,9 @@ fn read_text(path: &Path) -> anyhow::Result<String> {
     let not_toml = |what: &str| {
         anyhow::anyhow!(
             "{}: {what}; give an anatomy (or scenario) file, TOML text with a [pelvis] or [head] table \
-             (docs/ANATOMY.md)\n  hint: a mesh is imported through a landmarks file that names it: \
-             `[pelvis] import = \"pelvis.landmarks.toml\"` (docs/IMPORT.md)",
+             (docs/ANATOMY.md)\n  hint: a pelvis mesh is imported through a landmarks file that names it: \
+             `[pelvis] import = \"pelvis.landmarks.toml\"` (docs/IMPORT.md); a fetal head is built from \
+             its diameters (`[head]`), a head mesh cannot be imported yet",
             path.display()
         )
     };
@@ -202,6 +203,7 @@ impl AnatomyFile {
         };
         let text = read_text(path)?;
         let table = carus_labour::scenario::toml_table(path, &text)?;
+        carus_labour::scenario::check_not_landmarks_file(path, &text, &table)?;
         // A scenario (it has a `name`) is read whole, as `carus run` reads
         // it, and keeps the floor's shape in [floor.mesh]; an anatomy file
         // has the three tables only, so that a misspelt one is not quietly
@@ -282,6 +284,14 @@ impl AnatomyFile {
 /// fetus slip through (fix them); dropped degenerate triangles alone leave
 /// the surface whole.
 fn import_note(r: &carus_anatomy::import::MeshReport, mesh: &Path) -> Option<String> {
+    if r.turned_outwards {
+        return Some(format!(
+            "{}: its triangles faced into the bone (the closed surface's volume was negative), which would \
+             draw the fetus into it; they were turned to face outwards. Export the mesh with outward \
+             normals (MeshLab: Invert Faces Orientation) to silence this note",
+            mesh.display()
+        ));
+    }
     if r.open_edges > 0 {
         return Some(format!(
             "{}: {} open edges (holes), {} non-manifold edges, {} degenerate triangles dropped of {} read; \
@@ -321,12 +331,15 @@ mod tests {
             closed_parts: usize::from(open_edges == 0),
             open_edges,
             non_manifold_edges: 0,
+            turned_outwards: false,
         };
         let holes = import_note(&report(6, 1), mesh).unwrap();
         assert!(holes.starts_with("pelvis.stl: 6 open edges (holes)") && holes.contains("fill the holes"), "{holes}");
         let dropped = import_note(&report(0, 2), mesh).unwrap();
         assert!(dropped.contains("2 degenerate (zero-area) triangles dropped of 100") && !dropped.contains("fill"), "{dropped}");
         assert_eq!(import_note(&report(0, 0), mesh), None);
+        let turned = import_note(&carus_anatomy::import::MeshReport { turned_outwards: true, ..report(0, 0) }, mesh).unwrap();
+        assert!(turned.starts_with("pelvis.stl: its triangles faced into the bone") && turned.contains("turned to face outwards"), "{turned}");
     }
 
     fn load(text: &str) -> anyhow::Result<AnatomyFile> {

@@ -815,6 +815,12 @@ pub(super) fn print_movements(movements: &[(&'static str, Movement)], detector: 
             },
         }
     }
+    // Not one of the seven, but what a head that turned to OP did instead.
+    if let Some(Movement { observed: true, start_s: Some(a), end_s: Some(b), size: Some(size), .. }) =
+        detector.map(|d| d.posterior_rotation)
+    {
+        println!("  {:18} observed  {a:6.1}-{b:6.1} s  {size:6.1} deg  (to occiput posterior)", "posterior_rotation");
+    }
     if let Some(born) = detector.and_then(|d| d.head_born) {
         println!("  {born}");
     }
