@@ -1714,8 +1714,29 @@ fn set_key(table: &mut toml::Table, key: &str, value: &str) -> Result<(), Scenar
         .ok_or_else(|| refuse("no key given", "write SECTION.KEY=VALUE, e.g. expulsion.period_s=32"))?;
     let mut section = table;
     for part in parts {
-        section = match section.entry(part).or_insert_with(|| toml::Value::Table(toml::Table::new())) {
-            toml::Value::Table(t) => t,
+        // `waypoints[2]`: one entry of an array of tables, as errors name it.
+        let (name, index) = match part.split_once('[') {
+            Some((name, rest)) => match rest.strip_suffix(']').and_then(|i| i.parse::<usize>().ok()) {
+                Some(i) => (name, Some(i)),
+                None => return Err(refuse(&format!("`{part}` is not an entry's name"), "write NAME[INDEX], counted from 0, e.g. trajectory.waypoints[2].theta_deg")),
+            },
+            None => (part, None),
+        };
+        let entry = section.entry(name).or_insert_with(|| toml::Value::Table(toml::Table::new()));
+        section = match (entry, index) {
+            (toml::Value::Table(t), None) => t,
+            (toml::Value::Array(entries), Some(i)) => {
+                let count = entries.len();
+                match entries.get_mut(i) {
+                    Some(toml::Value::Table(t)) => t,
+                    _ => {
+                        return Err(refuse(
+                            &format!("`{name}` has {count} entries, counted from 0: there is no [{i}]"),
+                            "`carus scenarios show` lists them in order",
+                        ))
+                    }
+                }
+            }
             _ => {
                 return Err(refuse(
                     &format!("`{part}` is a value, not a section"),
@@ -2402,6 +2423,20 @@ mod tests {
         assert_eq!(back.pelvis, PelvisSpec::Generated(PelvisDiameters { inlet_ap_mm: 105.0, ..Default::default() }));
         let e = real.with_setting("pelvis.inlet_ap_mm", "105").unwrap_err().to_string();
         assert!(e.contains("cannot be combined") && e.contains("--set 'pelvis={inlet_ap_mm=...}'"), "{e}");
+    }
+
+    /// One way-point's value is set by its index, as errors name it.
+    #[test]
+    fn one_way_point_is_set_by_its_index() {
+        let textbook = Scenario::builtin("textbook").unwrap();
+        let turned = textbook.with_setting("trajectory.waypoints[2].theta_deg", "-30").unwrap();
+        assert_eq!(turned.trajectory.waypoints[2].theta_deg, -30.0);
+        assert_eq!(turned.trajectory.waypoints[3], textbook.trajectory.waypoints[3]);
+        let count = textbook.trajectory.waypoints.len();
+        let e = textbook.with_setting(&format!("trajectory.waypoints[{count}].theta_deg"), "0").unwrap_err().to_string();
+        assert!(e.contains(&format!("`waypoints` has {count} entries, counted from 0: there is no [{count}]")), "{e}");
+        let e = textbook.with_setting("trajectory.waypoints[x].theta_deg", "0").unwrap_err().to_string();
+        assert!(e.contains("is not an entry's name"), "{e}");
     }
 
     /// A pelvis's landmarks file given as a scenario says what it is and how

@@ -84,6 +84,8 @@ pub struct PelvisMeasurement {
     /// The largest distance of a landmark from the surface, mm (0 for a
     /// generated pelvis; a check on hand-picked landmarks of an imported one).
     pub landmark_surface_gap_mm: f64,
+    /// The landmark that lies that far (the first, where several do).
+    pub landmark_surface_gap_landmark: &'static str,
 }
 
 /// The diameters between the landmarks (see the module docs).
@@ -137,6 +139,11 @@ pub fn measure(pelvis: &Pelvis) -> PelvisMeasurement {
     let sigmas = pelvis.plane_sigmas();
     let inlet = pelvis.planes.inlet;
     let right = (l.iliopectineal_right - l.iliopectineal_left).normalize();
+    let gap = l
+        .named()
+        .into_iter()
+        .map(|(name, p)| (name, distance_to_surface(&pelvis.surface, p)))
+        .fold(("", 0.0), |far, next| if next.1 > far.1 { next } else { far });
     let plane = |p: Plane, ap: f64, transverse: Option<f64>, sigma: f64| PlaneMeasurement {
         centre_mm: mm3(p.centre),
         normal: p.normal.to_array(),
@@ -206,12 +213,8 @@ pub fn measure(pelvis: &Pelvis) -> PelvisMeasurement {
             .into_iter()
             .map(|(name, p)| (name, mm3(p)))
             .collect(),
-        landmark_surface_gap_mm: l
-            .named()
-            .iter()
-            .map(|(_, p)| distance_to_surface(&pelvis.surface, *p))
-            .fold(0.0, f64::max)
-            * MM,
+        landmark_surface_gap_mm: gap.1 * MM,
+        landmark_surface_gap_landmark: gap.0,
     }
 }
 

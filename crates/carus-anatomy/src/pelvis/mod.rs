@@ -178,6 +178,13 @@ mod tests {
         assert_measures_back(&d, &pelvis);
         let m = measure(&pelvis);
         assert!(m.landmark_surface_gap_mm < 1e-9, "a landmark is {} mm off the surface", m.landmark_surface_gap_mm);
+        assert_eq!(m.landmark_surface_gap_landmark, "");
+        // A landmark moved off the bone is named with its distance.
+        let mut moved = pelvis.clone();
+        moved.landmarks.coccyx_tip.z -= 0.005;
+        let m_moved = measure(&moved);
+        assert_eq!(m_moved.landmark_surface_gap_landmark, "coccyx_tip");
+        assert!(m_moved.landmark_surface_gap_mm > 1.0, "{}", m_moved.landmark_surface_gap_mm);
         // The canal is widest at the inlet and narrowest at the spines.
         let greatest = m.planes["greatest_dimensions"].transverse_mm.unwrap();
         assert!(greatest < d.inlet_transverse_mm && greatest > d.interspinous_mm, "greatest transverse {greatest}");

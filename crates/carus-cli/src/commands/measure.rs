@@ -101,7 +101,14 @@ fn print_pelvis(m: &PelvisMeasurement, source: String) {
     for (name, p) in &m.landmarks_mm {
         println!("  {name:<26} {:7.1} {:7.1} {:7.1}", p[0], p[1], p[2]);
     }
-    println!("  largest landmark distance from the surface: {:.2}", m.landmark_surface_gap_mm);
+    println!(
+        "  largest landmark distance from the surface: {:.2}{}",
+        m.landmark_surface_gap_mm,
+        match m.landmark_surface_gap_landmark {
+            "" => String::new(),
+            name => format!(" ({name})"),
+        }
+    );
 }
 
 fn print_head(m: &HeadMeasurement, source: String) {
