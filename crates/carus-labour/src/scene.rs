@@ -5,11 +5,13 @@
 //! the TLED pelvic floor, and the starting pose. All constant: the mutable
 //! state lives in [`crate::sim::SimState`].
 
+use std::path::PathBuf;
 use std::sync::Arc;
 
 use carus_analysis::{BirthCanal, ContactSite, HeadGeometry, TrunkGeometry};
 use carus_anatomy::fetus::{FetalHead, HeadLandmarks, Trunk, TrunkDiameters};
 use carus_anatomy::floor::{pelvic_floor, ATTACHED};
+use carus_anatomy::import::MeshReport;
 use carus_anatomy::{Pelvis, Plane, TriSurface};
 use carus_contact::{
     obstacle_contacts, pair_contacts, BodyContactState, BodyMotion, ContactLaw, HeadAxes, MassProperties, NeckGeometry, RegionTable,
@@ -76,6 +78,9 @@ pub struct FloorScene {
 pub struct Scene {
     pub scenario: Scenario,
     pub pelvis: Pelvis,
+    /// What importing the pelvis found in its mesh (holes, triangles turned
+    /// outwards), and the mesh's path; `None` for a generated pelvis.
+    pub pelvis_import: Option<(MeshReport, PathBuf)>,
     /// The sacrospinous ligaments, part of the canal's rigid wall.
     pub ligaments: TriSurface,
     pub canal: BirthCanal,
@@ -124,7 +129,7 @@ pub struct Scene {
 
 impl Scene {
     pub fn build(scenario: &Scenario) -> Result<Scene, LabourError> {
-        let pelvis = build_pelvis(scenario)?;
+        let (pelvis, pelvis_import) = build_pelvis(scenario)?;
         let canal = BirthCanal::from_pelvis(&pelvis)
             .map_err(|e| LabourError::Anatomy(format!("pelvic axis: {e}")))?;
         let ligaments = carus_anatomy::floor::sacrospinous_ligaments(&pelvis);
@@ -222,6 +227,7 @@ impl Scene {
         let mut scene = Scene {
             scenario: scenario.clone(),
             pelvis,
+            pelvis_import,
             ligaments,
             canal,
             pelvis_collider,
@@ -667,9 +673,11 @@ pub fn solid_properties(surface: &TriSurface, density: f64) -> (f64, DVec3, DMat
     (mass, com, inertia)
 }
 
-fn build_pelvis(s: &Scenario) -> Result<Pelvis, LabourError> {
+/// The pelvis, and for an imported one what its import found in the mesh
+/// and the mesh's path.
+fn build_pelvis(s: &Scenario) -> Result<(Pelvis, Option<(MeshReport, PathBuf)>), LabourError> {
     s.pelvis
-        .build(&s.base_dir)
+        .build_with_report(&s.base_dir)
         .map_err(|e| unbuildable("pelvis", e))
 }
 

@@ -290,7 +290,7 @@ impl AnatomyFile {
 /// What an imported pelvis's mesh report means for a run: holes let the
 /// fetus slip through (fix them); dropped degenerate triangles alone leave
 /// the surface whole.
-fn import_note(r: &carus_anatomy::import::MeshReport, mesh: &Path) -> Option<String> {
+pub(super) fn import_note(r: &carus_anatomy::import::MeshReport, mesh: &Path) -> Option<String> {
     if r.turned_outwards {
         return Some(format!(
             "{}: its triangles faced into the bone (the closed surface's volume was negative), which would \

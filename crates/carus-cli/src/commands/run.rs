@@ -97,6 +97,10 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
             // made, or an earlier run in it cleared by --force.
             let building = Instant::now();
             let scene = Scene::build(&scenario).with_context(context)?;
+            // Holes in an imported pelvis let the fetus through: said before it runs.
+            if let Some(note) = scene.pelvis_import.as_ref().and_then(|(report, mesh)| super::measure::import_note(report, mesh)) {
+                eprintln!("note: {note}");
+            }
             let sim = Simulation::new(&scene).with_context(context)?;
             let built = building.elapsed();
             let out_dir = chosen.make()?;
