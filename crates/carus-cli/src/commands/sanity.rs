@@ -143,7 +143,12 @@ pub fn run(args: &SanityArgs) -> anyhow::Result<Status> {
                 j.outcome_line
             );
         }
-        println!("{met} of {} cases met; runs in {}", judged.len(), out_dir.display());
+        // The changes are part of the verdict: "3 of 4" at another friction is another claim.
+        let with = match changes.is_empty() {
+            true => String::new(),
+            false => format!(" with {}", changes.iter().map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>().join(" ")),
+        };
+        println!("{met} of {} cases met{with}; runs in {}", judged.len(), out_dir.display());
     }
     if stop.load(Ordering::Relaxed) {
         eprintln!("stopped before every case ended; go on with: carus sanity --resume {}", out_dir.display());
