@@ -929,12 +929,12 @@ impl Scenario {
 
     /// Parses and checks scenario text; `path` names it in errors.
     pub fn parse(path: &Path, text: &str, base_dir: PathBuf) -> Result<Scenario, ScenarioError> {
-        if let Ok(table) = text.parse::<toml::Table>() {
-            check_not_landmarks_file(path, text, &table)?;
-        }
         let deserializer = toml::Deserializer::parse(text).map_err(|e| toml_syntax(path, text, &e))?;
-        let mut scenario: Scenario = serde_path_to_error::deserialize(deserializer)
-            .map_err(|e| syntax(path, text, e.path().to_string(), e.inner()))?;
+        // A landmarks file never reads as a scenario: looked for only then.
+        let mut scenario: Scenario = serde_path_to_error::deserialize(deserializer).map_err(|e| {
+            let landmarks_file = text.parse::<toml::Table>().ok().and_then(|t| check_not_landmarks_file(path, text, &t).err());
+            landmarks_file.unwrap_or_else(|| syntax(path, text, e.path().to_string(), e.inner()))
+        })?;
         scenario.base_dir = base_dir;
         scenario.check(path).map_err(|mut e| {
             if let ScenarioError::Value { line, key, .. } = &mut e {

@@ -341,12 +341,8 @@ const LANDMARK_SURFACE_GAP_MAX_MM: f64 = 10.0;
 /// another pelvis, leaves them off it, and the canal would not be the one
 /// they describe.
 fn check_landmarks_on_bone(path: &Path, mesh_path: &Path, units: Units, pelvis: &Pelvis) -> Result<(), ImportError> {
-    let (name, gap_mm) = pelvis
-        .landmarks
-        .named()
-        .into_iter()
-        .map(|(name, p)| (name, 1e3 * crate::pelvis::measure::distance_to_surface(&pelvis.surface, p)))
-        .fold(("", 0.0), |worst, next| if next.1 > worst.1 { next } else { worst });
+    let (name, gap_m) = crate::pelvis::measure::farthest_landmark_from_bone(pelvis);
+    let gap_mm = 1e3 * gap_m;
     if gap_mm <= LANDMARK_SURFACE_GAP_MAX_MM {
         return Ok(());
     }

@@ -139,11 +139,7 @@ pub fn measure(pelvis: &Pelvis) -> PelvisMeasurement {
     let sigmas = pelvis.plane_sigmas();
     let inlet = pelvis.planes.inlet;
     let right = (l.iliopectineal_right - l.iliopectineal_left).normalize();
-    let gap = l
-        .named()
-        .into_iter()
-        .map(|(name, p)| (name, distance_to_surface(&pelvis.surface, p)))
-        .fold(("", 0.0), |far, next| if next.1 > far.1 { next } else { far });
+    let gap = farthest_landmark_from_bone(pelvis);
     let plane = |p: Plane, ap: f64, transverse: Option<f64>, sigma: f64| PlaneMeasurement {
         centre_mm: mm3(p.centre),
         normal: p.normal.to_array(),
@@ -216,6 +212,17 @@ pub fn measure(pelvis: &Pelvis) -> PelvisMeasurement {
         landmark_surface_gap_mm: gap.1 * MM,
         landmark_surface_gap_landmark: gap.0,
     }
+}
+
+/// The landmark farthest from the pelvis's surface and its distance, m
+/// (the first, where several are as far; `("", 0)` when all lie on it).
+pub fn farthest_landmark_from_bone(pelvis: &Pelvis) -> (&'static str, f64) {
+    pelvis
+        .landmarks
+        .named()
+        .into_iter()
+        .map(|(name, p)| (name, distance_to_surface(&pelvis.surface, p)))
+        .fold(("", 0.0), |far, next| if next.1 > far.1 { next } else { far })
 }
 
 /// Distance from `p` to the nearest point of the surface's triangles, m

@@ -811,7 +811,7 @@ pub(super) fn print_movements(movements: &[(&'static str, Movement)], detector: 
         match (m.observed, m.start_s, m.end_s, m.size) {
             (true, Some(a), Some(b), Some(size)) => {
                 let lost = if not_held.iter().any(|n| n.movement == *key) { "  (not held at birth)" } else { "" };
-                println!("  {key:18} observed  {a:6.1}-{b:6.1} s  {size:6.1} {unit}{lost}")
+                println!("{}{lost}", observed_line(key, a, b, size, &unit))
             }
             _ => match rotation_outside_window.filter(|_| *key == "internal_rotation") {
                 Some(r) => println!("  {key:18} not observed: {r}"),
@@ -823,7 +823,7 @@ pub(super) fn print_movements(movements: &[(&'static str, Movement)], detector: 
     if let Some(Movement { observed: true, start_s: Some(a), end_s: Some(b), size: Some(size), .. }) =
         detector.map(|d| d.posterior_rotation)
     {
-        println!("  {:18} observed  {a:6.1}-{b:6.1} s  {size:6.1} deg  (to occiput posterior)", "posterior_rotation");
+        println!("{}  (to occiput posterior)", observed_line("posterior_rotation", a, b, size, "deg"));
     }
     if let Some(born) = detector.and_then(|d| d.head_born) {
         println!("  {born}");
@@ -831,6 +831,11 @@ pub(super) fn print_movements(movements: &[(&'static str, Movement)], detector: 
     for lost in not_held {
         println!("  {lost}");
     }
+}
+
+/// An observed movement's line: key, span and size.
+fn observed_line(key: &str, start_s: f64, end_s: f64, size: f64, unit: &str) -> String {
+    format!("  {key:18} observed  {start_s:6.1}-{end_s:6.1} s  {size:6.1} {unit}")
 }
 
 /// The name an enum value has in the JSON output (e.g. `mid-pelvis`), so
