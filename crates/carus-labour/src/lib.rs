@@ -111,8 +111,11 @@ pub enum LabourError {
     Diverged { time_s: f64, body: &'static str },
     /// A joint stiffer than the rigid step can integrate: the run would
     /// blow up within its first steps.
-    #[error("`{section}.{key}` = {stiffness}: the joint is unstable at the rigid step numerics.rigid_dt_s = {dt_s} s; the step must be below {limit_s:.3e} s for it\n  hint: {}", unstable_joint_fix(section, key, *limit_s))]
+    #[error("{at}`{section}.{key}` = {stiffness}: the joint is unstable at the rigid step numerics.rigid_dt_s = {dt_s} s; the step must be below {limit_s:.3e} s for it\n  hint: {}", unstable_joint_fix(section, key, *limit_s))]
     UnstableJoint {
+        /// `file:line: ` of the key in the scenario read, or empty
+        /// (`Scenario::located_key`).
+        at: String,
         section: &'static str,
         key: &'static str,
         /// As the scenario's messages show numbers (`scenario::shown`).

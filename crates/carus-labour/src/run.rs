@@ -1642,8 +1642,7 @@ mod tests {
         s.trajectory.waypoints[1] = into_bone;
         let e = Scene::build(&s).expect_err("refused").to_string();
         assert!(
-            e.contains("`trajectory.waypoints[1] (the way-point at time_s = 1)`")
-                && e.contains("puts the head at least ")
+            e.contains("`trajectory.waypoints[1].time_s = 1`: this way-point puts the head at least ")
                 && e.contains(" mm (the contact reads depths to 5 mm) into the bony canal")
                 && e.contains("anterior_mm"),
             "{e}"
@@ -1680,6 +1679,13 @@ mod tests {
         s.trajectory.guide_torsion_nm_per_rad = 1e6;
         let e = Simulation::new(&Scene::build(&s).unwrap()).err().expect("refused").to_string();
         assert!(e.contains("`trajectory.guide_torsion_nm_per_rad`"), "{e}");
+
+        // Read from a file, the error points at the key's line.
+        let text = s.to_toml().unwrap();
+        let line = text.lines().position(|l| l.starts_with("guide_torsion_nm_per_rad =")).unwrap() + 1;
+        let file = crate::Scenario::parse(Path::new("path.toml"), &text, ".".into()).unwrap();
+        let e = Simulation::new(&Scene::build(&file).unwrap()).err().expect("refused").to_string();
+        assert!(e.starts_with(&format!("path.toml:{line}: `trajectory.guide_torsion_nm_per_rad` = 1000000:")), "{e}");
     }
 
     /// The coarse normal scenario with a spine that bends at `bending` N m

@@ -743,6 +743,31 @@ pub struct Scenario {
     /// Folder an imported pelvis path is relative to (the file's folder).
     #[serde(skip)]
     pub base_dir: PathBuf,
+    /// The text this scenario was read from, so that a check made after
+    /// reading names a key's line as reading does ([`Scenario::refuse`]);
+    /// None for a built-in, whose lines no user has.
+    #[serde(skip)]
+    pub source: Option<std::sync::Arc<ScenarioSource>>,
+}
+
+/// A scenario file's name and text, and the keys changed since it was
+/// read (`--set`, a sweep), whose lines in it no longer hold their values.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScenarioSource {
+    path: PathBuf,
+    text: String,
+    changed: Vec<String>,
+}
+
+impl ScenarioSource {
+    /// Whether `key` (`trajectory.waypoints[2].theta_deg`) was changed
+    /// since reading: it, or a table or list holding it.
+    fn changed(&self, key: &str) -> bool {
+        self.changed.iter().any(|c| {
+            key.strip_prefix(c.as_str())
+                .is_some_and(|rest| rest.is_empty() || rest.starts_with('.') || rest.starts_with('['))
+        })
+    }
 }
 
 /// Reads `[pelvis]` key by key, so that a mistake in it is reported at the
@@ -878,11 +903,12 @@ impl Scenario {
             .iter()
             .find(|(n, _)| *n == name)
             .ok_or_else(|| ScenarioError::UnknownBuiltin(name.into()))?;
-        Scenario::parse(
+        let scenario = Scenario::parse(
             Path::new(&format!("<built-in {name}>")),
             text,
             PathBuf::from("."),
-        )
+        )?;
+        Ok(Scenario { source: None, ..scenario })
     }
 
     /// Reads a scenario file.
@@ -943,7 +969,44 @@ impl Scenario {
             e
         })?;
         check_pelvis_import(path, text, &scenario.pelvis, &scenario.base_dir)?;
+        scenario.source = Some(std::sync::Arc::new(ScenarioSource {
+            path: path.to_path_buf(),
+            text: text.to_string(),
+            changed: Vec::new(),
+        }));
         Ok(scenario)
+    }
+
+    /// Refuses `key` = `value` for a reason found after reading (the start
+    /// against the bony canal, a joint against the step): at the key's
+    /// line when the scenario was read from a file and the key is as the
+    /// file writes it; named as a setting otherwise (a built-in, a changed
+    /// key).
+    pub(crate) fn refuse(&self, key: String, value: String, problem: String, hint: String) -> ScenarioError {
+        match self.source.as_deref().filter(|source| !source.changed(&key)) {
+            Some(source) => ScenarioError::Value {
+                path: source.path.as_path().into(),
+                line: line_of_key(&source.text, &key),
+                key: key.into(),
+                value,
+                problem,
+                hint,
+            },
+            None => ScenarioError::Setting {
+                setting: format!("{key} = {value}"),
+                problem,
+                hint,
+            },
+        }
+    }
+
+    /// `file:line: ` where a check made after reading should point for
+    /// `key`, as [`Self::refuse`] chooses; empty where it names a setting.
+    pub(crate) fn located_key(&self, key: &str) -> String {
+        match self.source.as_deref().filter(|source| !source.changed(key)) {
+            Some(source) => format!("{}: ", located(&source.path, line_of_key(&source.text, key))),
+            None => String::new(),
+        }
     }
 
     /// The scenario as a complete TOML file (every key explicit). An
@@ -993,7 +1056,7 @@ impl Scenario {
         let label = PathBuf::from(format!("{} with {}", self.name, written.join(", ")));
         let text = toml::to_string(&table)?;
         // Line numbers would point into the generated text: name the settings instead.
-        Scenario::parse(&label, &text, self.base_dir.clone()).map_err(|e| match e {
+        let changed = Scenario::parse(&label, &text, self.base_dir.clone()).map_err(|e| match e {
             ScenarioError::Syntax {
                 key, message, hint, ..
             } => ScenarioError::Setting {
@@ -1007,7 +1070,14 @@ impl Scenario {
                 }
                 other
             }
-        })
+        })?;
+        // Later checks still point into the file read, but not at a changed key.
+        let source = self.source.as_deref().map(|source| {
+            let mut source = source.clone();
+            source.changed.extend(settings.iter().map(|(key, _)| key.clone()));
+            std::sync::Arc::new(source)
+        });
+        Ok(Scenario { source, ..changed })
     }
 
     /// This scenario with one key changed: `key` is a dotted path as `carus

@@ -406,21 +406,24 @@ impl Scene {
         }
         let site = self.site_name(found.main_region(self.sites.len()));
         let start = &self.scenario.start;
-        Err(crate::scenario::ScenarioError::Setting {
-            setting: format!("start.station_mm = {}", start.station_mm),
-            problem: format!(
-                "the head starts inside the bony canal, {:.1} mm deep at the {site}, more than the \
-                 {:.0} mm the contact allows at the start: at this station the canal is narrower \
-                 than the head in its starting attitude ({} deg) and position",
-                found.deepest_m * 1e3,
-                DESIGN_PENETRATION_M * 1e3,
-                start.attitude_deg
-            ),
-            hint: "start the head higher (the built-in scenarios start above the inlet, at -55 mm), \
-                   or in an attitude that fits there (start.attitude_deg)"
-                .into(),
-        }
-        .into())
+        Err(self
+            .scenario
+            .refuse(
+                "start.station_mm".into(),
+                crate::scenario::shown(start.station_mm),
+                format!(
+                    "the head starts inside the bony canal, {:.1} mm deep at the {site}, more than the \
+                     {:.0} mm the contact allows at the start: at this station the canal is narrower \
+                     than the head in its starting attitude ({} deg) and position",
+                    found.deepest_m * 1e3,
+                    DESIGN_PENETRATION_M * 1e3,
+                    start.attitude_deg
+                ),
+                "start the head higher (the built-in scenarios start above the inlet, at -55 mm), \
+                 or in an attitude that fits there (start.attitude_deg)"
+                    .into(),
+            )
+            .into())
     }
 
     /// The bone's contact on a head at rest at `pose`.
@@ -457,24 +460,28 @@ impl Scene {
                 found.deepest_m * 1e3,
                 self.pelvis_collider.search_depth_m() * 1e3
             );
-            return Err(crate::scenario::ScenarioError::Setting {
-                setting: format!("trajectory.waypoints[{i}] (the way-point at time_s = {})", w.time_s),
-                problem: format!(
-                    "puts the head {depth} into the bony canal at the {site}, more than the {:.0} mm \
-                     the contact allows: at station {} mm the canal is narrower than the head at \
-                     theta {} deg, phi {} deg and {} mm off the axis",
-                    DESIGN_PENETRATION_M * 1e3,
-                    w.station_mm,
-                    w.theta_deg,
-                    w.phi_deg,
-                    w.anterior_mm
-                ),
-                hint: "flex the head more there (phi_deg), turn its occiput along the canal's widest \
-                       diameter (theta_deg), or move its centre off the axis away from that wall \
-                       (anterior_mm)"
-                    .into(),
-            }
-            .into());
+            // Named by its time, the way-point's own key.
+            return Err(self
+                .scenario
+                .refuse(
+                    format!("trajectory.waypoints[{i}].time_s"),
+                    crate::scenario::shown(w.time_s),
+                    format!(
+                        "this way-point puts the head {depth} into the bony canal at the {site}, more \
+                         than the {:.0} mm the contact allows: at station {} mm the canal is narrower \
+                         than the head at theta {} deg, phi {} deg and {} mm off the axis",
+                        DESIGN_PENETRATION_M * 1e3,
+                        w.station_mm,
+                        w.theta_deg,
+                        w.phi_deg,
+                        w.anterior_mm
+                    ),
+                    "flex the head more there (phi_deg), turn its occiput along the canal's widest \
+                     diameter (theta_deg), or move its centre off the axis away from that wall \
+                     (anterior_mm)"
+                        .into(),
+                )
+                .into());
         }
         Ok(())
     }
@@ -505,17 +512,20 @@ impl Scene {
             } else {
                 format!("{:.1} mm deep", found.deepest_m * 1e3)
             };
-            return Err(crate::scenario::ScenarioError::Setting {
-                setting: format!("start.attitude_deg = {}", self.scenario.start.attitude_deg),
-                problem: format!(
-                    "the head starts inside the trunk below its thoracic inlet, {depth} (the chin in \
-                     the chest when flexed, the occiput in the back when extended), more \
-                     than the {:.0} mm the contact allows at the start",
-                    DESIGN_PENETRATION_M * 1e3
-                ),
-                hint: "bring start.attitude_deg nearer 0, or set contact.head_trunk = false".into(),
-            }
-            .into());
+            return Err(self
+                .scenario
+                .refuse(
+                    "start.attitude_deg".into(),
+                    crate::scenario::shown(self.scenario.start.attitude_deg),
+                    format!(
+                        "the head starts inside the trunk below its thoracic inlet, {depth} (the chin in \
+                         the chest when flexed, the occiput in the back when extended), more \
+                         than the {:.0} mm the contact allows at the start",
+                        DESIGN_PENETRATION_M * 1e3
+                    ),
+                    "bring start.attitude_deg nearer 0, or set contact.head_trunk = false".into(),
+                )
+                .into());
         }
         Ok(())
     }
@@ -886,6 +896,16 @@ mod tests {
         for part in ["start.station_mm = 60", "the head starts inside the bony canal", "deep at the sacrospinous_ligament", "start the head higher"] {
             assert!(e.contains(part), "{e}");
         }
+
+        // Read from a file, the key's line is named; once changed by a
+        // setting, the setting is.
+        let text = s.to_toml().unwrap();
+        let line = text.lines().position(|l| l.starts_with("station_mm = 60")).unwrap() + 1;
+        let file = Scenario::parse(std::path::Path::new("mine.toml"), &text, ".".into()).unwrap();
+        let e = Scene::build(&file).expect_err("refused").to_string();
+        assert!(e.starts_with(&format!("mine.toml:{line}: `start.station_mm` = 60: the head starts")), "{e}");
+        let e = Scene::build(&file.with_setting("start.station_mm", "61").unwrap()).expect_err("refused").to_string();
+        assert!(e.starts_with("`start.station_mm = 61`: the head starts"), "{e}");
         s.start.station_mm = 45.0;
         assert!(Scene::build(&s).is_ok());
     }

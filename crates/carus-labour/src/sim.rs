@@ -228,9 +228,11 @@ impl<'a> Simulation<'a> {
         ] {
             if let Some(limit) = joint.as_ref().map(|j| j.stable_step(&scene.bodies, &bodies)) {
                 if dt > limit.dt_s {
+                    let key = key_of(limit.limited_by);
                     return Err(LabourError::UnstableJoint {
+                        at: scene.scenario.located_key(&format!("{section}.{key}")),
                         section,
-                        key: key_of(limit.limited_by),
+                        key,
                         stiffness: crate::scenario::shown(limit.stiffness),
                         dt_s: dt,
                         limit_s: limit.dt_s,
@@ -1002,6 +1004,7 @@ fn check_guide_step(scene: &Scene, bodies: &RigidBodyState, dt: f64) -> Result<(
         let limit_s = 0.8 / omega;
         if dt > limit_s {
             return Err(LabourError::UnstableJoint {
+                at: scene.scenario.located_key(&format!("trajectory.{key}")),
                 section: "trajectory",
                 key,
                 stiffness: crate::scenario::shown(stiffness),

@@ -91,17 +91,17 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
         }
         None => {
             let scenario = load_changed(args.scenario.as_deref(), &args.settings)?;
-            let context = || format!("scenario {}", args.scenario.as_deref().unwrap_or(DEFAULT_SCENARIO));
+            let named = args.scenario.as_deref().unwrap_or(DEFAULT_SCENARIO);
             let chosen = choose_out_dir(args.output.out.as_deref(), &scenario.name, args.output.force)?;
             // A scenario that cannot start is refused before the out dir is
             // made, or an earlier run in it cleared by --force.
             let building = Instant::now();
-            let scene = Scene::build(&scenario).with_context(context)?;
+            let scene = in_scenario(Scene::build(&scenario), named)?;
             // Holes in an imported pelvis let the fetus through: said before it runs.
             if let Some(note) = scene.pelvis_import.as_ref().and_then(|(report, mesh)| super::measure::import_note(report, mesh)) {
                 eprintln!("note: {note}");
             }
-            let sim = Simulation::new(&scene).with_context(context)?;
+            let sim = in_scenario(Simulation::new(&scene), named)?;
             let built = building.elapsed();
             let out_dir = chosen.make()?;
             // The run's wall time counts the build, not the clearing.
@@ -117,8 +117,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
                     out_dir.display()
                 );
             }
-            let record = carus_labour::run_from_start(sim, &out_dir, &options, &mut observer, started)
-                .with_context(context);
+            let record = in_scenario(carus_labour::run_from_start(sim, &out_dir, &options, &mut observer, started), named);
             (out_dir, record)
         }
     };
@@ -441,6 +440,15 @@ pub(super) fn load(name: Option<&str>) -> anyhow::Result<Scenario> {
 pub(super) fn load_changed(name: Option<&str>, settings: &[String]) -> anyhow::Result<Scenario> {
     let changes = settings.iter().map(|text| one_setting(text)).collect::<anyhow::Result<Vec<_>>>()?;
     Ok(load(name)?.with_settings(&changes)?)
+}
+
+/// Names the scenario in an error from building or running it, unless
+/// the error already points into its file (`mine.toml:47: ...`).
+fn in_scenario<T>(result: Result<T, carus_labour::LabourError>, scenario: &str) -> anyhow::Result<T> {
+    result.map_err(|e| match e.to_string().starts_with(scenario) {
+        true => e.into(),
+        false => anyhow::Error::new(e).context(format!("scenario {scenario}")),
+    })
 }
 
 /// Where a run will write, chosen before anything is built.
@@ -1053,6 +1061,24 @@ mod tests {
             message: "not a whole JSON file; run the scenario again from the start".into(),
         });
         assert!(!format!("{:#}", resumable(damaged, dir.path())).contains("--resume"));
+    }
+
+    /// A scenario file's start refused by the anatomy points at its line,
+    /// once; a built-in's is named by the scenario.
+    #[test]
+    fn a_start_the_anatomy_refuses_names_its_file_once() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("high.toml");
+        let text = Scenario::builtin("normal").unwrap().with_setting("start.station_mm", "60").unwrap().to_toml().unwrap();
+        std::fs::write(&file, &text).unwrap();
+        let line = text.lines().position(|l| l.starts_with("station_mm = 60")).unwrap() + 1;
+        let named = file.display().to_string();
+        let scenario = load_changed(Some(&named), &[]).unwrap();
+        let e = crate::error_text(&in_scenario(Scene::build(&scenario), &named).map(drop).unwrap_err());
+        assert!(e.starts_with(&format!("{named}:{line}: `start.station_mm` = 60: the head starts")), "{e}");
+        let builtin = load_changed(Some("normal"), &["start.station_mm=60".into()]).unwrap();
+        let e = crate::error_text(&in_scenario(Scene::build(&builtin), "normal").map(drop).unwrap_err());
+        assert!(e.starts_with("scenario normal: `start.station_mm = 60`: the head starts"), "{e}");
     }
 
     /// An out dir filled between its choice and its making (another run
