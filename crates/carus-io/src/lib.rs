@@ -29,7 +29,7 @@ pub use error::{ReadError, WriteError};
 pub use pvd::PvdCollection;
 pub use text::shown_number;
 pub use units::LengthUnit;
-pub use vtk::{write_vtu, FrameFields};
+pub use vtk::{write_triangle_vtu, write_vtu, FrameFields};
 
 /// Reads a volume mesh, choosing the reader by the file's extension:
 /// `.msh` (Gmsh), `.vtk`/`.vtu` (VTK), `.inp` (Abaqus). Coordinates are

@@ -154,40 +154,15 @@ pub fn read_checkpoint(dir: &Path) -> Result<Checkpoint, LabourError> {
     })
 }
 
-/// A triangle surface as a VTU file (ASCII), placed by `pose`.
+/// A triangle surface as a VTU file, placed by `pose`.
 pub fn write_surface_vtu(
     path: &Path,
     vertices: &[DVec3],
     triangles: &[[u32; 3]],
     pose: &RigidPose,
 ) -> Result<(), LabourError> {
-    let mut s = String::with_capacity(64 * vertices.len() + 32 * triangles.len());
-    s.push_str("<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\">\n<UnstructuredGrid>\n");
-    let _ = writeln!(
-        s,
-        "<Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">",
-        vertices.len(),
-        triangles.len()
-    );
-    s.push_str("<Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n");
-    for v in vertices {
-        let p = pose.point(*v);
-        let _ = writeln!(s, "{} {} {}", p.x, p.y, p.z);
-    }
-    s.push_str("</DataArray></Points>\n<Cells><DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n");
-    for t in triangles {
-        let _ = writeln!(s, "{} {} {}", t[0], t[1], t[2]);
-    }
-    s.push_str("</DataArray><DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n");
-    for k in 0..triangles.len() {
-        let _ = writeln!(s, "{}", 3 * (k + 1));
-    }
-    s.push_str("</DataArray><DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n");
-    for _ in triangles {
-        s.push_str("5\n");
-    }
-    s.push_str("</DataArray></Cells>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n");
-    write_text(path, &s)
+    let points: Vec<[f64; 3]> = vertices.iter().map(|v| pose.point(*v).to_array()).collect();
+    carus_io::write_triangle_vtu(path, &points, triangles).map_err(|e| output_error(path, e))
 }
 
 /// The floor's current state as a VTU frame: the mesh where it is now, as
