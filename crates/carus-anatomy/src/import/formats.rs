@@ -2,7 +2,7 @@
 //! ASCII), OBJ, PLY and glTF/GLB. Each returns the triangles as stored, in
 //! the file's own units and axes, for [`super::weld`] to clean up.
 
-use std::io::{BufReader, Cursor};
+use std::io::BufReader;
 use std::path::Path;
 
 use base64::Engine;
@@ -78,57 +78,112 @@ fn format_error(path: &Path, format: &'static str, message: impl ToString) -> Im
     }
 }
 
-/// Binary STL: an 80-byte header, a triangle count, 50 bytes per triangle.
-/// Anything that does not start with `solid` or whose size fits the binary
-/// layout exactly is read as binary, so a truncated binary file, or one
-/// longer than its count (triangles the reader would silently drop), is
-/// caught with its counts rather than misread.
+/// STL, binary or ASCII. Read here rather than by stl_io, which takes any
+/// file beginning `solid ` for ASCII (binary exporters write `solid` into
+/// their header too, and its ASCII reader then drops what it cannot
+/// parse), cannot be told to read binary, and names no line in an ASCII
+/// error (docs/ARCHITECTURE.md).
 pub fn parse_stl(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
-    let announced =
-        (bytes.len() >= 84).then(|| u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as usize);
-    let fits_binary = announced.is_some_and(|n| bytes.len() == 84 + 50 * n);
-    let looks_ascii = bytes
-        .iter()
-        .skip_while(|b| b.is_ascii_whitespace())
-        .take(5)
-        .eq(b"solid".iter());
-    if !fits_binary && !looks_ascii {
-        match announced {
-            Some(expected) if bytes.len() < 84 + 50 * expected => {
-                return Err(ImportError::TruncatedStl {
-                    path: path.to_path_buf(),
-                    expected,
-                    found: (bytes.len() - 84) / 50,
-                })
+    let text = std::str::from_utf8(bytes).ok().filter(|t| !t.chars().any(|c| c.is_control() && !c.is_whitespace()));
+    match text {
+        Some(text) if text.trim_start().get(..5).is_some_and(|w| w.eq_ignore_ascii_case("solid")) => {
+            parse_ascii_stl(path, text)
+        }
+        Some(text) => Err(format_error(
+            path,
+            "STL",
+            format!(
+                "the file is text, but an ASCII STL begins with `solid` and line 1 reads `{}`; if it is \
+                 another format (OBJ, PLY), give it that extension",
+                text.lines().next().unwrap_or("").chars().take(60).collect::<String>()
+            ),
+        )),
+        None => parse_binary_stl(path, bytes),
+    }
+}
+
+/// Binary STL: an 80-byte header, a triangle count, then per triangle a
+/// normal, three corners (little-endian f32) and two attribute bytes. A
+/// file whose size does not fit its count, cut short or with triangles
+/// the count leaves out, is refused with both counts.
+fn parse_binary_stl(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
+    const HEADER: usize = 84;
+    const RECORD: usize = 50;
+    if bytes.len() < HEADER {
+        return Err(format_error(path, "STL", "the file is shorter than a binary STL header (84 bytes)"));
+    }
+    let expected = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as usize;
+    let body = bytes.len() - HEADER;
+    if body < RECORD * expected {
+        return Err(ImportError::TruncatedStl { path: path.to_path_buf(), expected, found: body / RECORD });
+    }
+    if body > RECORD * expected {
+        return Err(ImportError::OverlongStl {
+            path: path.to_path_buf(),
+            expected,
+            found: body / RECORD,
+            spare_bytes: body % RECORD,
+        });
+    }
+    let f32_at = |at: usize| f32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]]) as f64;
+    let mut mesh = RawMesh::default();
+    for record in bytes[HEADER..].chunks_exact(RECORD).enumerate().map(|(k, _)| HEADER + k * RECORD) {
+        // The stored normal (12 bytes) is not read: the corners' order is the truth.
+        let corner = |c: usize| {
+            let at = record + 12 + 12 * c;
+            DVec3::new(f32_at(at), f32_at(at + 4), f32_at(at + 8))
+        };
+        mesh.push_triangle([corner(0), corner(1), corner(2)]);
+    }
+    Ok(mesh)
+}
+
+/// ASCII STL: `solid`, then `facet normal`, `outer loop`, three `vertex x
+/// y z`, `endloop`, `endfacet` per triangle, then `endsolid`; keywords in
+/// any case, several solids one after another. Errors name the line.
+fn parse_ascii_stl(path: &Path, text: &str) -> Result<RawMesh, ImportError> {
+    let at_line = |line: usize, problem: String| format_error(path, "STL", format!("line {line}: {problem}"));
+    let mut mesh = RawMesh::default();
+    let mut corners: Vec<DVec3> = Vec::with_capacity(3);
+    let mut inside_loop = false;
+    for (number, line) in text.lines().enumerate().map(|(k, l)| (k + 1, l)) {
+        let words: Vec<&str> = line.split_whitespace().collect();
+        let Some(keyword) = words.first().map(|w| w.to_ascii_lowercase()) else { continue };
+        match keyword.as_str() {
+            "solid" | "endsolid" | "facet" | "endfacet" => {}
+            "outer" => {
+                inside_loop = true;
+                corners.clear();
             }
-            Some(expected) => {
-                let body = bytes.len() - 84;
-                return Err(ImportError::OverlongStl {
-                    path: path.to_path_buf(),
-                    expected,
-                    found: body / 50,
-                    spare_bytes: body % 50,
-                });
+            "vertex" if inside_loop => {
+                let [x, y, z] = words[1..] else {
+                    return Err(at_line(number, format!("`{}` should be `vertex` and three numbers", line.trim())));
+                };
+                let mut p = [0.0; 3];
+                for (value, word) in p.iter_mut().zip([x, y, z]) {
+                    *value = word.parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(|| {
+                        at_line(number, format!("`{word}` is not a finite number (a corner's coordinate)"))
+                    })?;
+                }
+                corners.push(DVec3::from_array(p));
             }
-            None => {
-                return Err(format_error(
-                    path,
-                    "STL",
-                    "the file is shorter than a binary STL header (84 bytes)",
+            "endloop" if inside_loop => {
+                let &[a, b, c] = corners.as_slice() else {
+                    return Err(at_line(number, format!("a facet's loop has {} corners; a triangle has 3", corners.len())));
+                };
+                mesh.push_triangle([a, b, c]);
+                inside_loop = false;
+            }
+            _ => {
+                return Err(at_line(
+                    number,
+                    format!("`{}` is not a line of an ASCII STL where it stands", line.trim().chars().take(60).collect::<String>()),
                 ))
             }
         }
     }
-    let mut cursor = Cursor::new(bytes);
-    let reader = stl_io::create_stl_reader(&mut cursor).map_err(|e| format_error(path, "STL", e))?;
-    let mut mesh = RawMesh::default();
-    for (index, triangle) in reader.enumerate() {
-        let triangle = triangle.map_err(|e| format_error(path, "STL", format!("triangle {index}: {e}")))?;
-        mesh.push_triangle(
-            triangle
-                .vertices
-                .map(|v| DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64)),
-        );
+    if inside_loop {
+        return Err(format_error(path, "STL", "the file ends inside a facet (no `endloop`): it was cut short"));
     }
     Ok(mesh)
 }

@@ -241,6 +241,30 @@ fn broken_meshes_say_what_and_where() {
     );
     assert!(err.to_string().contains("overlong.stl") && err.to_string().contains("export the mesh again"));
 
+    // A binary header that begins `solid`, as some exporters write it, is
+    // still binary: read whole, and its counts still checked.
+    let mut solid_header = stl.clone();
+    solid_header[..12].copy_from_slice(b"solid pelvis");
+    let read = read_surface(&write(&dir, "solid_header.stl", &solid_header), Units::Metres).unwrap();
+    assert_eq!(read.report.triangles_read, 4);
+    solid_header.extend_from_slice(&stl[84..84 + 50]);
+    let err = read_surface(&write(&dir, "solid_overlong.stl", &solid_header), Units::Metres).unwrap_err();
+    assert!(matches!(err, ImportError::OverlongStl { expected: 4, found: 5, spare_bytes: 0, .. }), "{err}");
+
+    // ASCII STL in capitals reads; a broken line is named.
+    let upper = read_surface(&write(&dir, "upper.stl", ascii_stl().to_uppercase().as_bytes()), Units::Metres).unwrap();
+    assert_eq!(upper.report.triangles_read, 4);
+    for (name, broken, said) in [
+        ("short_vertex.stl", ascii_stl().replacen("vertex 1 0 0", "vertex 1 0", 1), "line 6: `vertex 1 0` should be `vertex` and three numbers"),
+        ("nan_vertex.stl", ascii_stl().replacen("vertex 1 0 0", "vertex 1 nan 0", 1), "line 6: `nan` is not a finite number"),
+        ("two_corners.stl", ascii_stl().replacen("   vertex 1 0 0\n", "", 1), "line 6: a facet's loop has 2 corners"),
+        ("cut.stl", ascii_stl()[..60].to_string(), "ends inside a facet"),
+        ("obj_named_stl.stl", obj(), "the file is text, but an ASCII STL begins with `solid` and line 1 reads `# tetrahedron`"),
+    ] {
+        let e = read_surface(&write(&dir, name, broken.as_bytes()), Units::Metres).unwrap_err().to_string();
+        assert!(e.contains(name) && e.contains(said), "{e}");
+    }
+
     let nan = write(&dir, "nan.obj", obj().replacen("v 0 1 0", "v nan 1 0", 1).as_bytes());
     let err = read_surface(&nan, Units::Millimetres).unwrap_err();
     // The third vertex is the second corner of the first face.
