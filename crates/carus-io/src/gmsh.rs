@@ -30,10 +30,7 @@ pub fn read_msh(path: &Path) -> Result<MeshFile, ReadError> {
 /// Parses the bytes of a `.msh` file; `path` only names it in errors.
 pub fn parse_msh(path: &Path, bytes: &[u8]) -> Result<MeshFile, ReadError> {
     let text = std::str::from_utf8(bytes).map_err(|e| {
-        let line = 1 + bytes[..e.valid_up_to()]
-            .iter()
-            .filter(|&&b| b == b'\n')
-            .count();
+        let line = crate::input::line_at(bytes, e.valid_up_to());
         ReadError::Syntax {
             path: path.to_path_buf(),
             line,

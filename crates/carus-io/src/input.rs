@@ -45,6 +45,12 @@ pub fn read_text(path: &Path) -> io::Result<String> {
     })
 }
 
+/// The line, from 1, that byte `offset` of a file's bytes lies on, for
+/// messages that name the line at fault.
+pub fn line_at(bytes: &[u8], offset: usize) -> usize {
+    bytes[..offset.min(bytes.len())].iter().filter(|&&b| b == b'\n').count() + 1
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

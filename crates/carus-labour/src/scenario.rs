@@ -1824,10 +1824,6 @@ fn set_key(table: &mut toml::Table, key: &str, value: &str) -> Result<(), Scenar
     Ok(())
 }
 
-/// The line, from 1, that byte `offset` of `text` lies on.
-fn line_at(text: &str, offset: usize) -> usize {
-    text[..offset.min(text.len())].matches('\n').count() + 1
-}
 
 /// `file:line`, or the file alone where the line is not known.
 fn located(path: &Path, line: Option<NonZeroUsize>) -> String {
@@ -1856,7 +1852,7 @@ fn line_of_key(text: &str, key: &str) -> Option<NonZeroUsize> {
             value = items.get(i)?;
         }
         if n + 1 == parts.len() {
-            return NonZeroUsize::new(line_at(text, value.span().start));
+            return NonZeroUsize::new(carus_io::input::line_at(text.as_bytes(), value.span().start));
         }
         let DeValue::Table(inner) = value.get_ref() else { return None };
         table = inner;
@@ -1912,7 +1908,7 @@ pub fn check_pelvis_import(path: &Path, text: &str, pelvis: &PelvisSpec, base_di
     struct Import {
         import: toml::Spanned<String>,
     }
-    let line = toml::from_str::<File>(text).map_or(0, |f| line_at(text, f.pelvis.import.span().start));
+    let line = toml::from_str::<File>(text).map_or(0, |f| carus_io::input::line_at(text.as_bytes(), f.pelvis.import.span().start));
     let found = if resolved.is_dir() { "is a folder" } else { "does not exist" };
     Err(ScenarioError::Syntax {
         path: path.to_path_buf(),
@@ -1974,7 +1970,7 @@ fn toml_syntax(path: &Path, text: &str, error: &toml::de::Error) -> ScenarioErro
 /// 9.5cm`): TOML's own advice, to quote it, would only lead to a type
 /// error, for the unit belongs in the key's name.
 fn unit_in_value(path: &Path, text: &str, error: &toml::de::Error) -> Option<ScenarioError> {
-    let line = line_at(text, error.span()?.start);
+    let line = carus_io::input::line_at(text.as_bytes(), error.span()?.start);
     let (written_key, value) = text.lines().nth(line - 1)?.split_once('=')?;
     let written_key = written_key.trim();
     if written_key.is_empty() || !written_key.chars().all(|c| c.is_ascii_alphanumeric() || "_-.".contains(c)) {
@@ -2057,7 +2053,7 @@ fn takes_a_number(full_key: &str) -> bool {
 }
 
 fn syntax(path: &Path, text: &str, key: String, error: &toml::de::Error) -> ScenarioError {
-    let mut line = error.span().map_or(0, |s| line_at(text, s.start));
+    let mut line = error.span().map_or(0, |s| carus_io::input::line_at(text.as_bytes(), s.start));
     let mut message = plain_types(error.message().trim());
     // A key inside a nested table comes back as "...\nin `leaf`": one path.
     let key = match message.split_once("\nin `") {

@@ -376,7 +376,14 @@ fn ply_fault(bytes: &[u8], error: &std::io::Error) -> String {
         );
     }
     let mut lines = data.into_iter();
+    let mut previous: Option<&str> = None;
     for (name, count, properties) in &layout.elements {
+        // A first line that does not read as this element is often one of
+        // the previous, whose count in the header fell short.
+        let said = |index: usize, fault: String| match previous.filter(|_| index == 0) {
+            Some(p) => format!("{fault} (if the line holds a `{p}`, the header's `element {p}` count is smaller than the file's)"),
+            None => fault,
+        };
         for index in 0..*count {
             let Some((number, line)) = lines.next() else {
                 return library();
@@ -387,10 +394,10 @@ fn ply_fault(bytes: &[u8], error: &std::io::Error) -> String {
                     match values.next().map(|n| n.parse::<usize>()) {
                         Some(Ok(n)) => n,
                         _ => {
-                            return format!(
+                            return said(index, format!(
                                 "line {number} (`{name}` {index}): the list `{property}` does not start with its \
                                  length"
-                            )
+                            ))
                         }
                     }
                 } else {
@@ -399,31 +406,56 @@ fn ply_fault(bytes: &[u8], error: &std::io::Error) -> String {
                 for item in 0..items {
                     let Some(value) = values.next() else {
                         if *is_list {
-                            return format!(
+                            return said(index, format!(
                                 "line {number} (`{name}` {index}): the list `{property}` announces {items} values \
                                  but holds {item}"
-                            );
+                            ));
                         }
-                        return format!(
+                        return said(index, format!(
                             "line {number} (`{name}` {index}): `{property}` is missing; each `{name}` line holds \
                              the values of its {} properties in the header's order",
                             properties.len()
-                        );
+                        ));
                     };
                     let plain = value.chars().all(|c| c.is_ascii_digit() || "+-.eE".contains(c));
                     let fits = plain
                         && if *integer { value.parse::<i64>().is_ok() } else { value.parse::<f64>().is_ok() };
                     if !fits {
                         let kind = if *integer { "an integer" } else { "a finite number" };
-                        return format!(
+                        return said(index, format!(
                             "line {number} (`{name}` {index}): `{value}` is not {kind}, as `{property}` must be"
-                        );
+                        ));
                     }
                 }
             }
         }
+        previous = Some(name.as_str());
     }
     library()
+}
+
+/// The parser reads as many elements as the header's `element` lines
+/// count and stops: data past them (a count the exporter left short) would
+/// be dropped without a word, so it is refused, by line in ASCII.
+fn check_nothing_past_the_counts(path: &Path, bytes: &[u8], rest: &[u8], header: &ply_rs::ply::Header) -> Result<(), ImportError> {
+    let ascii = header.encoding == ply_rs::ply::Encoding::Ascii;
+    let Some(first) = rest.iter().position(|b| !(ascii && b.is_ascii_whitespace())) else {
+        return Ok(());
+    };
+    let announced: Vec<String> = header.elements.values().map(|e| format!("{} `{}`", e.count, e.name)).collect();
+    let past = match ascii {
+        true => format!("line {} holds data", carus_io::input::line_at(bytes, bytes.len() - rest.len() + first)),
+        false => format!("{} bytes of data remain", rest.len()),
+    };
+    Err(format_error(
+        path,
+        "PLY",
+        format!(
+            "{past} after the {} elements the header announces, which would be dropped; make the counts of \
+             the header's `element` lines match the data",
+            announced.join(" and ")
+        ),
+    ))
 }
 
 /// PLY (ASCII or binary): the `vertex` element's x, y, z and the `face`
@@ -431,9 +463,13 @@ fn ply_fault(bytes: &[u8], error: &std::io::Error) -> String {
 pub fn parse_ply(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
     use ply_rs::ply::Property;
     let parser = ply_rs::parser::Parser::<ply_rs::ply::DefaultElement>::new();
-    let ply = parser
-        .read_ply(&mut BufReader::new(bytes))
-        .map_err(|e| format_error(path, "PLY", ply_fault(bytes, &e)))?;
+    // Read from the slice itself, which then holds what the parser left.
+    let mut rest = bytes;
+    let fault = |e: std::io::Error| format_error(path, "PLY", ply_fault(bytes, &e));
+    let mut ply = ply_rs::ply::Ply::new();
+    ply.header = parser.read_header(&mut rest).map_err(fault)?;
+    ply.payload = parser.read_payload(&mut rest, &ply.header).map_err(fault)?;
+    check_nothing_past_the_counts(path, bytes, rest, &ply.header)?;
     let scalar = |p: &Property| -> Option<f64> {
         Some(match *p {
             Property::Char(v) => v as f64,

@@ -378,6 +378,16 @@ fn ply_faults_name_the_line_and_the_fix() {
     let e = err(ply_ascii().replacen("element vertex 4", "element vertex 6", 1));
     assert!(e.contains("bad.ply") && e.contains("announces 6 `vertex` and 4 `face` elements") && e.contains("`element` lines"), "{e}");
     assert!(!e.contains("Custom") && !e.contains("Couln't"), "{e}");
+    // Fewer announced than written: the rest is named, not dropped.
+    let e = err(ply_ascii().replacen("element face 4", "element face 3", 1));
+    assert!(e.contains("line 17 holds data after the 4 `vertex` and 3 `face` elements the header announces"), "{e}");
+    let mut binary = ply_binary();
+    binary.extend_from_slice(&[0; 7]);
+    let e = parse_ply(path, &binary).unwrap_err().to_string();
+    assert!(e.contains("7 bytes of data remain after the 4 `vertex` and 4 `face` elements"), "{e}");
+    assert!(parse_ply(path, (ply_ascii() + "\n\n").as_bytes()).is_ok(), "blank lines at the end are no data");
+    let e = err(ply_ascii().replacen("element vertex 4", "element vertex 3", 1).replacen("0 0 1\n", "0.5 0 1\n", 1));
+    assert!(e.contains("line 13 (`face` 0): the list `vertex_indices` does not start with its length (if the line holds a `vertex`, the header's `element vertex` count is smaller than the file's)"), "{e}");
     let e = err(ply_ascii().replacen("1 0 0", "1 nan 0", 1));
     assert!(e.contains("line 11 (`vertex` 1): `nan` is not a finite number, as `y` must be"), "{e}");
     let e = err(ply_ascii().replacen("3 0 1 3", "3 0 1", 1));

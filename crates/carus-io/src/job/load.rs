@@ -36,7 +36,7 @@ fn toml_error(path: &Path, text: &str, key: String, error: &toml::de::Error) -> 
     let (line, column) = match error.span() {
         Some(span) => {
             let before = &text[..span.start.min(text.len())];
-            let line = before.matches('\n').count() + 1;
+            let line = crate::input::line_at(text.as_bytes(), span.start);
             let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
             (line, column)
         }
