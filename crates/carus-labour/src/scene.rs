@@ -256,6 +256,7 @@ impl Scene {
                 Trajectory::new(scene.start_coordinates(), &scenario.trajectory.waypoints, |c| scene.centre_sigma_at(c))
             });
         scene.start = scene.start_poses();
+        scene.check_head_not_born()?;
         scene.check_head_clear_of_bone()?;
         scene.check_waypoints_clear_of_bone()?;
         scene.check_head_clear_of_trunk()?;
@@ -393,6 +394,28 @@ impl Scene {
             Presentation::Vertex => start.position.theta_deg(),
             Presentation::Face => start.position.theta_deg() + 180.0,
         }
+    }
+
+    /// Refuses a start below the outlet: the head would be born before the
+    /// first step (CARDINAL_MOVEMENTS.md: its centre past the outlet
+    /// plane), and the run would report a delivery that never happened.
+    fn check_head_not_born(&self) -> Result<(), LabourError> {
+        let past_mm = self.canal.outlet().signed_distance(self.start[HEAD].position_m) * 1e3;
+        if past_mm <= 0.0 {
+            return Ok(());
+        }
+        Err(self
+            .scenario
+            .refuse(
+                "start.station_mm".into(),
+                crate::scenario::shown(self.scenario.start.station_mm),
+                format!(
+                    "the head would start already born, its centre {past_mm:.1} mm past the outlet plane, \
+                     so there would be no labour to simulate"
+                ),
+                "start the head above the outlet (the built-in scenarios start above the inlet, at -55 mm)".into(),
+            )
+            .into())
     }
 
     /// Refuses a start where the head already presses into the bony canal
@@ -908,6 +931,18 @@ mod tests {
         assert!(e.starts_with("`start.station_mm = 61`: the head starts"), "{e}");
         s.start.station_mm = 45.0;
         assert!(Scene::build(&s).is_ok());
+    }
+
+    /// A start below the outlet is refused: the head would be born before
+    /// the first step.
+    #[test]
+    fn a_head_started_below_the_outlet_is_refused() {
+        let mut s = Scenario::builtin("normal").unwrap();
+        s.numerics.head_subdivisions = 3;
+        s.start.station_mm = 200.0;
+        let e = Scene::build(&s).expect_err("refused").to_string();
+        assert!(e.starts_with("`start.station_mm = 200`: the head would start already born, its centre "), "{e}");
+        assert!(e.contains("mm past the outlet plane") && e.contains("start the head above the outlet"), "{e}");
     }
 
     /// A floor that cannot be built names its table, its key and a fix.
