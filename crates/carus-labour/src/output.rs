@@ -58,6 +58,11 @@ pub struct Checkpoint {
     /// Wall time of the run's legs up to this checkpoint, s.
     #[serde(default)]
     pub wall_s: f64,
+    /// `Scene::pelvis_digest` of the pelvis the run started in, so that a
+    /// resume in a pelvis changed since (an imported mesh or its landmarks
+    /// edited) is refused; absent from checkpoints written before it.
+    #[serde(default)]
+    pub pelvis_digest: Option<String>,
 }
 
 impl Checkpoint {

@@ -212,6 +212,7 @@ pub fn resume(
     }
     check_scenario_file_unchanged(out_dir, &scenario, &checkpoint.base_dir)?;
     let scene = Scene::build(&scenario)?;
+    check_pelvis_unchanged(&scene, checkpoint.pelvis_digest.as_deref())?;
     let sim = Simulation::from_state(&scene, checkpoint.state)?;
     drive(
         sim,
@@ -248,6 +249,26 @@ fn check_scenario_file_unchanged(out_dir: &Path, scenario: &Scenario, base_dir: 
          checkpoint keeps that scenario); undo the change to resume, or make the same change in \
          the scenario file the run came from and run that from the start with a new --out",
         path.display()
+    )))
+}
+
+/// A resumed run goes on in the pelvis it started in: an imported mesh or
+/// landmarks file edited since would put the rest of the run in another,
+/// which the scenario's text (the same file names) does not show.
+fn check_pelvis_unchanged(scene: &Scene, started_in: Option<&str>) -> Result<(), LabourError> {
+    if started_in.is_none_or(|digest| digest == scene.pelvis_digest()) {
+        return Ok(());
+    }
+    let files = match (&scene.scenario.pelvis, &scene.pelvis_import) {
+        (carus_anatomy::pelvis::PelvisSpec::Imported { landmarks_file }, Some((_, mesh))) => {
+            format!("{} or its landmarks file {}", mesh.display(), scene.scenario.base_dir.join(landmarks_file).display())
+        }
+        _ => "the pelvis generated from the scenario's diameters (a different carus version)".into(),
+    };
+    Err(LabourError::Checkpoint(format!(
+        "the pelvis is not the one the run started in: {files} changed since, and the rest of the run \
+         would go on in another pelvis; undo the change to resume, or run the scenario again from the \
+         start with a new --out"
     )))
 }
 
@@ -457,6 +478,7 @@ fn save_checkpoint(
             state,
             frame_times: frame_times.to_vec(),
             wall_s,
+            pelvis_digest: Some(sim.scene.pelvis_digest()),
         },
     )
 }
@@ -1250,6 +1272,17 @@ mod tests {
         std::fs::write(&path, edited.to_string()).unwrap();
         let e = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).expect_err("refused").to_string();
         assert!(e.contains("saved pose history") && e.contains("quaternion"), "{e}");
+        // A pelvis other than the one the run started in (its mesh edited).
+        let mut edited: serde_json::Value = serde_json::from_str(&text).unwrap();
+        assert!(edited["pelvis_digest"].is_string());
+        edited["pelvis_digest"] = "00000000".into();
+        std::fs::write(&path, edited.to_string()).unwrap();
+        let e = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).expect_err("refused").to_string();
+        assert!(e.contains("the pelvis is not the one the run started in") && e.contains("undo the change"), "{e}");
+        // A checkpoint written before the digest resumes unchecked.
+        edited.as_object_mut().unwrap().remove("pelvis_digest");
+        std::fs::write(&path, edited.to_string()).unwrap();
+        assert!(output::read_checkpoint(dir.path()).unwrap().pelvis_digest.is_none());
         std::fs::write(&path, &text).unwrap();
         // A scenario.toml deleted since is written again, as the run started.
         std::fs::remove_file(&scenario).unwrap();

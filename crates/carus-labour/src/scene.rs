@@ -553,6 +553,23 @@ impl Scene {
         Ok(())
     }
 
+    /// A digest of the pelvis as built, its surface and landmarks to the
+    /// bit (CRC-32, hex): what a checkpoint keeps to tell the pelvis it
+    /// ran in from one changed since.
+    pub fn pelvis_digest(&self) -> String {
+        let mut digest = crc32fast::Hasher::new();
+        let surface = &self.pelvis.surface;
+        for v in &surface.vertices {
+            v.to_array().iter().for_each(|c| digest.update(&c.to_le_bytes()));
+        }
+        for t in &surface.triangles {
+            t.iter().for_each(|n| digest.update(&n.to_le_bytes()));
+        }
+        let landmarks = serde_json::to_string(&self.pelvis.landmarks).unwrap_or_default();
+        digest.update(landmarks.as_bytes());
+        format!("{:08x}", digest.finalize())
+    }
+
     /// How far `head_centre` lies from the pelvic axis (m), when it is
     /// farther than half the inlet's transverse diameter and its nearest
     /// axis point is above the outlet; `None` while it is in the canal. Inside the bony
@@ -931,6 +948,22 @@ mod tests {
         assert!(e.starts_with("`start.station_mm = 61`: the head starts"), "{e}");
         s.start.station_mm = 45.0;
         assert!(Scene::build(&s).is_ok());
+    }
+
+    /// The pelvis digest tells one vertex moved by a bit, or one landmark.
+    #[test]
+    fn the_pelvis_digest_changes_with_the_pelvis() {
+        let mut s = Scenario::builtin("normal").unwrap();
+        s.numerics.head_subdivisions = 3;
+        let mut scene = Scene::build(&s).unwrap();
+        let digest = scene.pelvis_digest();
+        assert_eq!(digest, Scene::build(&s).unwrap().pelvis_digest());
+        let x = &mut scene.pelvis.surface.vertices[17].x;
+        *x = f64::from_bits(x.to_bits() + 1);
+        assert_ne!(scene.pelvis_digest(), digest);
+        let mut moved = Scene::build(&s).unwrap();
+        moved.pelvis.landmarks.sacral_promontory.z += 1e-6;
+        assert_ne!(moved.pelvis_digest(), digest);
     }
 
     /// A start below the outlet is refused: the head would be born before
