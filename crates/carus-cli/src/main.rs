@@ -93,7 +93,7 @@ fn quiet_headless_vulkan() {
 /// The error and its causes, each once: many of the crates' errors already
 /// print their cause (`cannot read F: No such file`), which `{:#}` would
 /// repeat after them.
-fn error_text(error: &anyhow::Error) -> String {
+pub(crate) fn error_text(error: &anyhow::Error) -> String {
     let mut text = error.to_string();
     for cause in error.chain().skip(1) {
         let cause = cause.to_string();

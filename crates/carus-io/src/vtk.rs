@@ -647,7 +647,12 @@ fn write_piece(path: &Path, piece: UnstructuredGridPiece) -> Result<(), WriteErr
         cause,
     };
     let mut file = std::fs::File::create(path).map_err(io_error)?;
-    file.write_all(&bytes).map_err(io_error)
+    file.write_all(&bytes).map_err(|cause| {
+        // A frame cut short by a full disk is no frame: removed, not left half.
+        drop(file);
+        let _ = std::fs::remove_file(path);
+        io_error(cause)
+    })
 }
 
 thread_local! {

@@ -37,8 +37,15 @@ fn output_error(path: &Path, e: impl std::fmt::Display) -> LabourError {
     }
 }
 
+/// Writes `text` to `path`; one the disk refused part way is removed, so
+/// that no half file is taken for a result (and its space is freed).
 pub fn write_text(path: &Path, text: &str) -> Result<(), LabourError> {
-    std::fs::write(path, text).map_err(|e| output_error(path, e))
+    std::fs::write(path, text).map_err(|e| {
+        if path.is_file() {
+            let _ = std::fs::remove_file(path);
+        }
+        output_error(path, e)
+    })
 }
 
 pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<(), LabourError> {

@@ -367,10 +367,8 @@ fn drive(
             written = timed(&mut || save_checkpoint(&mut sim, out_dir, &frame_times, clock.wall_s()));
         }
         if let Err(e) = written {
-            failure = Some(format!(
-                "{OUTPUT_FAILURE} at t = {:.3} s: {e}; free space (or fix the folder) and go on with `carus run --resume`",
-                sim.time_s()
-            ));
+            // What to do next is said once the last checkpoint is tried.
+            failure = Some(format!("{OUTPUT_FAILURE} at t = {:.3} s: {e}", sim.time_s()));
             (completed, output_failed) = (false, true);
             break;
         }
@@ -401,14 +399,33 @@ fn drive(
     observer.progress(sim.time_s(), s.numerics.end_time_s);
     // After an output failure the last checkpoint is tried, not required:
     // what was simulated is still written below where the disk allows.
-    if let Err(e) = timed(&mut || save_checkpoint(&mut sim, out_dir, &frame_times, clock.wall_s())) {
-        match (&mut failure, output_failed) {
-            (Some(f), true) => f.push_str(&format!(" (the last checkpoint could not be written either: {e}; the run goes on from the one before)")),
-            _ => return Err(e),
+    let saved = timed(&mut || save_checkpoint(&mut sim, out_dir, &frame_times, clock.wall_s()));
+    match (&mut failure, output_failed, saved) {
+        (_, false, saved) => saved?,
+        (Some(f), true, Ok(())) => f.push_str("; free space (or fix the folder) and go on with `carus run --resume`"),
+        (Some(f), true, Err(e)) => {
+            // The checkpoint's own error only where it is not the one said.
+            let why = Some(e.to_string()).filter(|e| !f.contains(e.as_str())).map_or(String::new(), |e| format!(": {e}"));
+            f.push_str(&match out_dir.join(output::CHECKPOINT_FILE).is_file() {
+                true => format!(
+                    " (the last checkpoint could not be written either{why}); free space (or fix the folder) and \
+                     go on with `carus run --resume`, from the checkpoint before"
+                ),
+                false => format!(
+                    " (no checkpoint could be written either{why}); free space (or fix the folder) and run the \
+                     scenario again from the start"
+                ),
+            })
         }
+        (None, true, _) => unreachable!("an output failure is recorded with its flag"),
     }
+    // Files the disk refuses now are named after the failure that ended the run.
+    let first_failure = failure.clone().filter(|_| output_failed);
     let timing = Timing { clock, output_s };
-    finish(&mut sim, out_dir, &frame_times, &floor_snapshots, completed, failure, timing)
+    finish(&mut sim, out_dir, &frame_times, &floor_snapshots, completed, failure, timing).map_err(|e| match first_failure {
+        Some(first) => LabourError::Output { path: out_dir.to_path_buf(), message: format!("{e}, after {first}") },
+        None => e,
+    })
 }
 
 /// The wall clock of a run: when this leg began, and how long the legs
@@ -1422,7 +1439,7 @@ mod tests {
         std::fs::create_dir_all(dir.path().join(output::CHECKPOINT_FILE)).unwrap();
         let record = run(&s, dir.path(), &RunOptions::default(), &mut SilentObserver).unwrap();
         let failure = record.summary.failure.as_deref().unwrap_or_default();
-        assert!(failure.contains("the last checkpoint could not be written either"), "{failure}");
+        assert!(failure.contains("no checkpoint could be written either") && failure.ends_with("run the scenario again from the start"), "{failure}");
         assert!(dir.path().join(output::RUN_FILE).is_file() && dir.path().join(output::HISTORY_CSV).is_file());
     }
 

@@ -90,9 +90,12 @@ pub fn write_report_with(
 /// Writes the page to `path`; returns the picture warnings.
 pub fn write_report_file(input: &ReportInput, path: &Path) -> Result<Vec<String>, ReportError> {
     let report = write_report(input)?;
-    std::fs::write(path, &report.html).map_err(|source| ReportError::Write {
-        path: path.to_path_buf(),
-        source,
+    std::fs::write(path, &report.html).map_err(|source| {
+        // A page cut short by a full disk is removed, not left half.
+        if path.is_file() {
+            let _ = std::fs::remove_file(path);
+        }
+        ReportError::Write { path: path.to_path_buf(), source }
     })?;
     Ok(report.warnings)
 }

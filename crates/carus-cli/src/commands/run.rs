@@ -132,7 +132,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
                 eprintln!("warning: report.html: {warning}");
             }
         }
-        Err(error) => eprintln!("warning: report.html was not written: {error:#}"),
+        Err(error) => eprintln!("warning: report.html was not written: {}", crate::error_text(&error)),
     }
     if let Some(failure) = &record.summary.failure {
         if record.summary.completed {
@@ -607,7 +607,7 @@ pub(super) fn run_into(scenario: &Scenario, dir: &Path, stop: &Arc<AtomicBool>) 
     };
     let record = carus_labour::run(scenario, dir, &options, &mut carus_labour::SilentObserver)?;
     if let Err(error) = write_report(&record, dir) {
-        eprintln!("warning: {}: report.html was not written: {error:#}", dir.display());
+        eprintln!("warning: {}: report.html was not written: {}", dir.display(), crate::error_text(&error));
     }
     Ok(record)
 }
@@ -641,7 +641,7 @@ pub(super) fn go_on_into(scenario: &Scenario, dir: &Path, stop: &Arc<AtomicBool>
     };
     let record = carus_labour::resume(dir, &options, &mut carus_labour::SilentObserver)?;
     if let Err(error) = write_report(&record, dir) {
-        eprintln!("warning: {}: report.html was not written: {error:#}", dir.display());
+        eprintln!("warning: {}: report.html was not written: {}", dir.display(), crate::error_text(&error));
     }
     Ok(record)
 }
