@@ -37,8 +37,10 @@ pub enum LabourError {
     /// make every `Result` of the run as large.
     #[error(transparent)]
     Scenario(Box<ScenarioError>),
-    #[error("anatomy: {0}")]
-    Anatomy(String),
+    /// The anatomy cannot be built; `at` is `file:line: ` of the scenario
+    /// key to change, where one is known (`Scenario::located_key`), or empty.
+    #[error("{at}anatomy: {message}")]
+    Anatomy { at: String, message: String },
     #[error("contact: {0}")]
     Contact(#[from] carus_contact::ContactError),
     #[error("pelvic floor solver: {0}")]
@@ -123,6 +125,13 @@ pub enum LabourError {
         dt_s: f64,
         limit_s: f64,
     },
+}
+
+impl LabourError {
+    /// An anatomy that cannot be built, not tied to one key.
+    pub(crate) fn anatomy(message: impl Into<String>) -> Self {
+        LabourError::Anatomy { at: String::new(), message: message.into() }
+    }
 }
 
 impl From<ScenarioError> for LabourError {

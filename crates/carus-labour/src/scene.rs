@@ -131,7 +131,7 @@ impl Scene {
     pub fn build(scenario: &Scenario) -> Result<Scene, LabourError> {
         let (pelvis, pelvis_import) = build_pelvis(scenario)?;
         let canal = BirthCanal::from_pelvis(&pelvis)
-            .map_err(|e| LabourError::Anatomy(format!("pelvic axis: {e}")))?;
+            .map_err(|e| LabourError::anatomy(format!("pelvic axis: {e}")))?;
         let ligaments = carus_anatomy::floor::sacrospinous_ligaments(&pelvis);
         let CanalWall { surface: wall, labels, sites } = canal_wall(&pelvis, &ligaments);
         let names = sites.iter().map(|s| s.name().to_string()).collect();
@@ -173,7 +173,7 @@ impl Scene {
                 trunk_length_mm: s.trunk.trunk_length_mm,
             };
             let anatomy =
-                Trunk::new(&d).map_err(|e| LabourError::Anatomy(format!("fetal trunk: {e}")))?;
+                Trunk::new(&d).map_err(|e| LabourError::anatomy(format!("fetal trunk: {e}")))?;
             let density = s.fetus.density_kg_per_m3;
             let body = if s.spine.enabled {
                 let parts = anatomy.segments();
@@ -657,7 +657,7 @@ impl FetalBody {
     ) -> Result<FetalBody, LabourError> {
         let (mass, com, inertia) = solid_properties(surface, density);
         if mass.is_nan() || mass <= 0.0 {
-            return Err(LabourError::Anatomy(format!(
+            return Err(LabourError::anatomy(format!(
                 "the {what} surface encloses no volume (is it inside out?)"
             )));
         }
@@ -734,7 +734,7 @@ fn build_pelvis(s: &Scenario) -> Result<(Pelvis, Option<(MeshReport, PathBuf)>),
 /// A scenario's `[pelvis]` or `[head]` table that cannot be built, with the
 /// command that builds and measures it without a run.
 fn unbuildable(table: &str, e: impl std::fmt::Display) -> LabourError {
-    LabourError::Anatomy(format!(
+    LabourError::anatomy(format!(
         "[{table}]: {e}\n  hint: `carus measure {table} FILE` builds the {table} of a scenario \
          file and prints every diameter without running; `carus scenarios show normal` gives a \
          set that builds"
@@ -742,8 +742,10 @@ fn unbuildable(table: &str, e: impl std::fmt::Display) -> LabourError {
 }
 
 fn build_floor(s: &Scenario, pelvis: &Pelvis) -> Result<FloorScene, LabourError> {
-    let mesh = pelvic_floor(pelvis, &s.floor.mesh)
-        .map_err(|e| LabourError::Anatomy(format!("pelvic floor ([floor.mesh] in the scenario): {e}")))?;
+    let mesh = pelvic_floor(pelvis, &s.floor.mesh).map_err(|e| {
+        let at = s.located_key(&format!("floor.mesh.{}", e.key()));
+        LabourError::Anatomy { at, message: format!("pelvic floor ([floor.mesh] in the scenario): {e}") }
+    })?;
     let material = Material::neo_hookean(s.floor.shear_modulus_pa, s.floor.bulk_modulus_pa);
     let region = MaterialRegion {
         element_set: None,
@@ -761,7 +763,7 @@ fn build_floor(s: &Scenario, pelvis: &Pelvis) -> Result<FloorScene, LabourError>
     let attached = mesh
         .node_sets
         .get(ATTACHED)
-        .ok_or_else(|| LabourError::Anatomy("pelvic floor has no attached node set".into()))?;
+        .ok_or_else(|| LabourError::anatomy("pelvic floor has no attached node set"))?;
     bcs.fix_nodes(attached);
     let mut is_attached = vec![false; mesh.nodes.len()];
     for &n in attached {
@@ -987,6 +989,13 @@ mod tests {
         for part in ["[floor.mesh]", "bowl_mm", "dome"] {
             assert!(e.contains(part), "{e}");
         }
+        // Read from a file, the key's line leads the message.
+        s.floor.mesh.bowl_mm = -10.0;
+        let text = s.with_setting("floor.mesh.hiatus_width_mm", "90").unwrap().to_toml().unwrap();
+        let line = text.lines().position(|l| l.starts_with("hiatus_width_mm = 90")).unwrap() + 1;
+        let file = Scenario::parse(std::path::Path::new("wide.toml"), &text, ".".into()).unwrap();
+        let e = Scene::build(&file).expect_err("refused").to_string();
+        assert!(e.starts_with(&format!("wide.toml:{line}: anatomy: pelvic floor ([floor.mesh] in the scenario): hiatus_width_mm = 90")), "{e}");
     }
 
     /// The floor's hourglass control is the scenario's, not a constant of

@@ -141,6 +141,23 @@ pub enum FloorError {
     },
 }
 
+impl FloorError {
+    /// The `[floor.mesh]` key to change, for a message that points at it.
+    pub fn key(&self) -> &'static str {
+        match self {
+            FloorError::NotPositive { key, .. }
+            | FloorError::NotFinite { key, .. }
+            | FloorError::TooFewElements { key, .. }
+            | FloorError::OutOfRange { key, .. } => key,
+            FloorError::OddAround(_) | FloorError::TooManyElements { .. } => "elements_around",
+            FloorError::HiatusTooWide { .. } => "hiatus_width_mm",
+            FloorError::HiatusTooLong { .. } => "hiatus_length_mm",
+            FloorError::SagTooDeep { .. } => "sag_mm",
+            FloorError::Distorted { .. } => "thickness_mm",
+        }
+    }
+}
+
 /// The least scaled Jacobian (Knupp 2000) a generated floor element may
 /// have. Numerical choice: an offset sheet thicker than the radius it
 /// curves through pinches its inner layer, and elements skewed past this
@@ -219,15 +236,17 @@ impl FloorParameters {
                 return Err(FloorError::TooFewElements { key, value, min });
             }
         }
-        if !self.elements_around.is_multiple_of(2) {
-            return Err(FloorError::OddAround(self.elements_around));
-        }
+        // The count first, so that an odd count is only named where the
+        // even one offered would build.
         let count = self
             .elements_around
             .saturating_mul(self.elements_across)
             .saturating_mul(self.elements_through);
         if count > MAX_FLOOR_ELEMENTS {
             return Err(FloorError::TooManyElements { count });
+        }
+        if !self.elements_around.is_multiple_of(2) {
+            return Err(FloorError::OddAround(self.elements_around));
         }
         // Wide bands round the measured sizes the fields' docs cite: they
         // catch another unit (a thickness of 0.007 is metres) and values no
@@ -1135,6 +1154,11 @@ mod tests {
             pelvic_floor(&pelvis, &odd),
             Err(FloorError::OddAround(47))
         ));
+        assert_eq!(FloorError::OddAround(47).key(), "elements_around");
+        // Odd and far too many: the count is named, not an even number
+        // that would be refused next.
+        let huge_odd = FloorParameters { elements_around: 4_294_967_297, ..Default::default() };
+        assert!(matches!(pelvic_floor(&pelvis, &huge_odd), Err(FloorError::TooManyElements { .. })));
         // A size in another unit, or none a mesh can be built from, is
         // named with its band and default; a count that would not finish
         // is refused before anything is allocated.
