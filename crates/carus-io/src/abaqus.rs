@@ -145,6 +145,8 @@ impl Reader<'_> {
     fn run(&mut self, lines: &[&str]) -> Result<(), ReadError> {
         let mut block = Block::Skip;
         let mut pending: Vec<String> = Vec::new();
+        // The line an element's values began on, for one that runs over.
+        let mut pending_from = 0;
         let mut index = 0;
         while index < lines.len() {
             self.line = index + 1;
@@ -192,12 +194,31 @@ impl Reader<'_> {
                 .collect();
             match &block {
                 Block::Volume { per_element, set } => {
+                    if pending.is_empty() {
+                        pending_from = self.line;
+                    }
+                    let given_here = fields.len();
                     pending.append(&mut fields);
                     if pending.len() > per_element + 1 {
-                        return Err(self.error(
-                            format!("an element has {} values, more than its id and {per_element} nodes", pending.len()),
-                            "check the element type and the node list",
-                        ));
+                        let continued_on = self.line;
+                        let (problem, fix) = match pending_from == continued_on {
+                            true => (
+                                format!("an element has {} values, more than its id and {per_element} nodes", pending.len()),
+                                "check the element type and the node list".to_string(),
+                            ),
+                            false => (
+                                format!(
+                                    "this element has {} values, too few for its id and {per_element} nodes, so line \
+                                     {continued_on} was read as its rest, and with its {given_here} values it has {}",
+                                    pending.len() - given_here,
+                                    pending.len()
+                                ),
+                                format!("give this element its id and all {per_element} nodes"),
+                            ),
+                        };
+                        // Named at the line to mend, where the element began.
+                        self.line = pending_from;
+                        return Err(self.error(problem, fix));
                     }
                     if pending.len() == per_element + 1 {
                         let values = self.integers(&pending, "an element or node id")?;
@@ -676,6 +697,10 @@ mod tests {
             (
                 "*NODE\n1,0,0,0\n*ELEMENT, TYPE=C3D4\n1, 1, 1\n",
                 "m.inp:4: the file ends inside an element",
+            ),
+            (
+                "*NODE\n1,0,0,0\n*ELEMENT, TYPE=C3D4\n1, 1, 1\n2, 1, 1, 1, 1\n",
+                "m.inp:4: this element has 3 values, too few for its id and 4 nodes, so line 5 was read as its rest, and with its 5 values it has 8",
             ),
             (
                 "*NODE\n1,0,0,0\n*ELEMENT, TYPE=S4\n1, 1, 1, 1, 1\n",

@@ -332,6 +332,12 @@ impl MeshBuilder {
         for (name, triangles) in &self.surfaces {
             let mut compacted = Vec::with_capacity(triangles.len());
             for triangle in triangles {
+                if let Some(&undefined) = triangle.iter().find(|&&id| compact(id).is_none()) {
+                    return Err(self.content_error(
+                        format!("surface {name:?} has a face that names node {undefined}, which the file does not define"),
+                        "export the mesh again with all its nodes",
+                    ));
+                }
                 let mapped = triangle.map(|id| compact(id).unwrap_or(u32::MAX));
                 let Some(element) = (!mapped.contains(&u32::MAX))
                     .then(|| node_elements.element_with(&connectivity, per_element, &mapped))
@@ -508,6 +514,15 @@ mod tests {
         b.add_tetrahedron(4, [10, 11, 12, 14]);
         let err = b.finish().unwrap_err().to_string();
         assert!(err.contains("element 4 names node 14"), "{err}");
+
+        // A surface face that names a node the file lacks is named so, not
+        // as a face of no volume element.
+        let mut b = MeshBuilder::new(Path::new("m.msh"));
+        unit_tet(&mut b);
+        b.add_tetrahedron(1, [10, 11, 12, 13]);
+        b.add_surface_polygon("x0", &[10, 11, 9999]);
+        let err = b.finish().unwrap_err().to_string();
+        assert!(err.contains("surface \"x0\" has a face that names node 9999, which the file does not define"), "{err}");
     }
 
     #[test]

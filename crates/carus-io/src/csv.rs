@@ -266,13 +266,14 @@ impl<'a> LineCounter<'a> {
 }
 
 /// A header a table can be read by: every column named once, and the
-/// commas that separate them. A file of another separator, or JSON, reads
-/// as a header of one column.
+/// commas that separate them. A file of another separator reads as a
+/// header of one column; JSON as one whose first cell opens an object or
+/// a list (its commas split it into many).
 fn check_header(cells: &[String]) -> Result<(), (String, &'static str)> {
+    if cells.first().is_some_and(|first| first.trim_start().starts_with(['{', '['])) {
+        return Err(("the file is JSON, not CSV".into(), "give a JSON pose history a .json name"));
+    }
     if let [only] = cells {
-        if only.starts_with(['{', '[']) {
-            return Err(("the file is JSON, not CSV".into(), "give a JSON pose history a .json name"));
-        }
         if let Some(separator) = [';', '\t', '|'].into_iter().find(|c| only.contains(*c)) {
             return Err((
                 format!("the columns are separated by {separator:?}, not commas"),
@@ -406,6 +407,8 @@ mod tests {
         assert!(refused("time_s;x_mm\n0;1,5\n").contains("separated by ';'"));
         assert!(refused("time_s\tx_mm\n0\t1\n").contains("separated by '\\t'"));
         assert!(refused("{\"head\": 1}\n").contains("the file is JSON"));
+        // A JSON object of many keys on one line, as carus writes its pose history.
+        assert!(refused("{\"canal\":{\"normal\":[0.0,1.0,0.0]},\"samples\":[]}\n").contains("the file is JSON"));
         assert!(refused("t,x,T\n").contains("columns 1 and 3 are both named `T`"));
         let table = CsvTable::parse(Path::new("t.csv"), b"# from the tracker\nTIME_S,x\n1,inf\n").unwrap();
         assert_eq!(table.column("time_s"), Some(0));
