@@ -2034,6 +2034,12 @@ fn plain_types(message: &str) -> String {
     for rust in ["f64", "f32"] {
         plain = plain.replace(&format!("expected {rust}"), "expected a number");
     }
+    plain = plain.replace("expected path string", "expected a file's path in quotes");
+    // `expected struct Waypoint`: the Rust type's name means nothing in a scenario.
+    if let Some(at) = plain.find("expected struct ") {
+        let name_end = plain[at + 16..].find(|c: char| !c.is_alphanumeric() && c != '_').map_or(plain.len(), |n| at + 16 + n);
+        plain.replace_range(at..name_end, "expected a table of keys");
+    }
     plain
 }
 
@@ -2526,6 +2532,10 @@ mod tests {
         assert!(e.contains("`floor.mesh.elements_around`: invalid type") && !e.contains("\nin `"), "{e}");
         let e = normal.with_setting("contact.friction", "true").unwrap_err().to_string();
         assert!(e.contains("expected a number") && !e.contains("f64"), "{e}");
+        let e = normal.with_setting("contact", "0.3").unwrap_err().to_string();
+        assert!(e.contains("expected a table of keys") && !e.contains("struct"), "{e}");
+        let e = parse("name = \"x\"\n[pelvis]\nimport = 5\n").unwrap_err().to_string();
+        assert!(e.starts_with("test.toml:3: `pelvis.import`: invalid type: integer `5`, expected a file's path in quotes"), "{e}");
     }
 
     #[test]

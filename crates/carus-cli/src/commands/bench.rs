@@ -291,7 +291,7 @@ fn tled(args: &TledBenchArgs) -> anyhow::Result<Status> {
         ElementArg::T4 => ElementKind::T4,
     };
     let per_cell = if kind == ElementKind::H8 { 1 } else { 6 };
-    super::check_cube_size(args.n, per_cell)?;
+    super::check_cube_size(args.n, per_cell, false)?;
     let elements = args.n.pow(3) * per_cell;
     let steps = args.steps.unwrap_or((2e7 as u64 / elements as u64).clamp(10, 5000));
     if args.backend != BackendArg::Cpu {

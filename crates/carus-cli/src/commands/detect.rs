@@ -143,6 +143,12 @@ fn write_series(path: &Path, report: &DetectorReport) -> anyhow::Result<()> {
 /// The detector's report on the history in `path`, and for a table the
 /// scenario whose anatomy it was read with.
 fn detect_file(path: &Path, anatomy: Option<&str>) -> anyhow::Result<(DetectorReport, Option<TableAnatomy>)> {
+    if !path.exists() {
+        anyhow::bail!(
+            "{}: no such file or folder; give a run folder, or its pose_history.json or pose_history.csv",
+            path.display()
+        );
+    }
     let is_table = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv"));
     let (history, anatomy) = if is_table {
         let (scenario, mut chosen) = table_anatomy(path, anatomy)?;
@@ -234,6 +240,9 @@ mod tests {
         let missing = detect_file(&history_file(dir.path()), None).unwrap_err();
         let text = format!("{missing:#}");
         assert!(text.contains(HISTORY_JSON) && text.contains("run folder"), "{text}");
+        // A table that is not there is not called the wrong kind of table.
+        let text = format!("{:#}", detect_file(&dir.path().join("nosuch.csv"), None).unwrap_err());
+        assert!(text.contains("nosuch.csv: no such file") && !text.contains("not a table of poses"), "{text}");
 
         let wrong = dir.path().join("not_a_history.json");
         std::fs::write(&wrong, "{\"head\": 1}").unwrap();

@@ -98,11 +98,17 @@ pub fn create_out_folder(dir: &std::path::Path) -> anyhow::Result<()> {
 const MOST_CUBE_ELEMENTS: usize = 20_000_000;
 
 /// Refuses a cube of `n` elements per edge, `per_cell` elements in each of
-/// its n^3 cells (1 for H8, 6 for T4), that is larger than the commands build.
-pub fn check_cube_size(n: usize, per_cell: usize) -> anyhow::Result<()> {
+/// its n^3 cells (1 for H8, 6 for T4), that is larger than the commands
+/// build; `even`: only even n are built (the validation cube's), so the
+/// largest offered is even.
+pub fn check_cube_size(n: usize, per_cell: usize, even: bool) -> anyhow::Result<()> {
     let elements = n.checked_pow(3).and_then(|c| c.checked_mul(per_cell));
     if elements.is_none_or(|e| e > MOST_CUBE_ELEMENTS) {
-        let largest = (1..).take_while(|m: &usize| m.pow(3) * per_cell <= MOST_CUBE_ELEMENTS).last().unwrap_or(1);
+        let largest = (1..)
+            .take_while(|m: &usize| m.pow(3) * per_cell <= MOST_CUBE_ELEMENTS)
+            .filter(|m| !even || m.is_multiple_of(2))
+            .last()
+            .unwrap_or(2);
         anyhow::bail!(
             "--n {n}: a cube of {n}^3 cells is more than the {MOST_CUBE_ELEMENTS} elements these commands build; \
              use --n {largest} or less"
@@ -157,13 +163,16 @@ mod tests {
     /// built, before anything is allocated; the usual sizes pass.
     #[test]
     fn a_cube_too_large_is_refused_with_the_largest_size() {
-        super::check_cube_size(20, 6).unwrap();
-        super::check_cube_size(271, 1).unwrap();
-        let e = super::check_cube_size(272, 1).unwrap_err().to_string();
+        super::check_cube_size(20, 6, false).unwrap();
+        super::check_cube_size(271, 1, false).unwrap();
+        let e = super::check_cube_size(272, 1, false).unwrap_err().to_string();
         assert!(e.contains("--n 272") && e.contains("use --n 271 or less"), "{e}");
-        let e = super::check_cube_size(100_000, 6).unwrap_err().to_string();
+        let e = super::check_cube_size(100_000, 6, false).unwrap_err().to_string();
         assert!(e.contains("use --n 149 or less"), "{e}");
-        assert!(super::check_cube_size(usize::MAX, 1).is_err());
+        // The validation cube, even sizes only, is offered an even one.
+        let e = super::check_cube_size(100_000, 6, true).unwrap_err().to_string();
+        assert!(e.contains("use --n 148 or less"), "{e}");
+        assert!(super::check_cube_size(usize::MAX, 1, false).is_err());
     }
 
     /// A file where the out folder should be is named with the fix, by

@@ -121,7 +121,7 @@ fn run_cube(args: &ValidateArgs) -> anyhow::Result<Status> {
     let variants = args.variant.map_or(CubeVariant::ALL.to_vec(), |v| vec![variant(v)]);
     for &n in &sizes {
         let per_cell = if elements.iter().all(|&e| e == CubeElement::H8) { 1 } else { 6 };
-        super::check_cube_size(n, per_cell)?;
+        super::check_cube_size(n, per_cell, true)?;
     }
     let mut results: Vec<(String, CubeResult)> = Vec::new();
     for &n in &sizes {
