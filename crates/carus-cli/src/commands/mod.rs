@@ -97,6 +97,22 @@ pub fn create_out_folder(dir: &std::path::Path) -> anyhow::Result<()> {
 /// would abort the program.
 const MOST_CUBE_ELEMENTS: usize = 20_000_000;
 
+/// What a folder that carus wrote is, said when a command is given the
+/// wrong kind: the commands that take it. None for a folder of no kind
+/// carus writes.
+pub fn folder_kind(dir: &std::path::Path) -> Option<String> {
+    let d = dir.display();
+    if dir.join(sweep::PLAN_FILE).is_file() {
+        return Some(format!("{d} is a sweep's folder: `carus sweep --resume {d}` goes on with it, and each run in it is a run's folder"));
+    }
+    if dir.join(sanity::PLAN_FILE).is_file() {
+        return Some(format!("{d} is the folder of `carus sanity`: `carus sanity --resume {d}` goes on with it"));
+    }
+    let run = dir.join(carus_labour::output::SCENARIO_FILE).is_file()
+        && [carus_labour::output::RUN_FILE, carus_labour::output::CHECKPOINT_FILE].iter().any(|f| dir.join(f).is_file());
+    run.then(|| format!("{d} is a run's folder: `carus run --resume {d}` goes on with a stopped run, `carus view {d}` replays it"))
+}
+
 /// Refuses a cube of `n` elements per edge, `per_cell` elements in each of
 /// its n^3 cells (1 for H8, 6 for T4), that is larger than the commands
 /// build; `even`: only even n are built (the validation cube's), so the
@@ -157,6 +173,22 @@ mod tests {
         // One run still gets every core for its own parallel passes.
         assert_eq!(super::labour_pool(None, 1).unwrap().1, cores);
         assert!(super::labour_pool(Some(0), 2).err().unwrap().to_string().contains("at least 1"));
+    }
+
+    /// A folder given to the wrong command is named for what it is, with
+    /// the command that takes it.
+    #[test]
+    fn a_folder_is_named_for_what_carus_wrote_in_it() {
+        let dir = tempfile::tempdir().unwrap();
+        assert_eq!(super::folder_kind(dir.path()), None);
+        std::fs::write(dir.path().join(carus_labour::output::SCENARIO_FILE), "").unwrap();
+        assert_eq!(super::folder_kind(dir.path()), None, "a scenario alone is no run");
+        std::fs::write(dir.path().join(carus_labour::output::CHECKPOINT_FILE), "{}").unwrap();
+        assert!(super::folder_kind(dir.path()).unwrap().contains("is a run's folder: `carus run --resume"));
+        std::fs::write(dir.path().join(super::sanity::PLAN_FILE), "{}").unwrap();
+        assert!(super::folder_kind(dir.path()).unwrap().contains("`carus sanity --resume"));
+        std::fs::write(dir.path().join(super::sweep::PLAN_FILE), "{}").unwrap();
+        assert!(super::folder_kind(dir.path()).unwrap().contains("is a sweep's folder: `carus sweep --resume"));
     }
 
     /// A cube too large to allocate is refused with the largest that is

@@ -79,6 +79,10 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
 
     let (out_dir, record) = match &args.resume {
         Some(dir) => {
+            // A sweep's or sanity's folder given for one of its runs.
+            if let Some(kind) = super::folder_kind(dir).filter(|_| !dir.join(carus_labour::output::SCENARIO_FILE).exists()) {
+                bail!("{} holds no run to resume: {kind}", dir.display());
+            }
             // A run that ended or failed is refused by resume, unannounced.
             if !args.output.quiet && !run_ended(dir) {
                 eprintln!("resuming the run in {}", dir.display());

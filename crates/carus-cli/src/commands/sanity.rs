@@ -67,6 +67,9 @@ pub fn run(args: &SanityArgs) -> anyhow::Result<Status> {
     let plan = match &args.resume {
         Some(dir) => {
             let path = dir.join(PLAN_FILE);
+            if let Some(kind) = super::folder_kind(dir).filter(|_| !path.exists()) {
+                anyhow::bail!("{} holds no sanity cases: {kind}", dir.display());
+            }
             let text = carus_io::input::read_text(&path).with_context(|| {
                 format!("cannot read {}: --resume takes the folder of `carus sanity` run by this build", path.display())
             })?;

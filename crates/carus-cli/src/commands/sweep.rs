@@ -381,6 +381,9 @@ fn damaged_plan(dir: &Path) -> String {
 /// The sweep's plan in `dir`, with what to do when it is not there.
 fn read_plan(dir: &Path) -> anyhow::Result<SweepPlan> {
     let path = dir.join(PLAN_FILE);
+    if let Some(kind) = super::folder_kind(dir).filter(|_| !path.exists()) {
+        anyhow::bail!("{} holds no sweep: {kind}", dir.display());
+    }
     let text = carus_io::input::read_text(&path).with_context(|| {
         format!(
             "cannot read {}: --resume takes the folder of a sweep this build of carus made (older sweeps \
@@ -885,8 +888,12 @@ mod tests {
         assert!(matches!(run(&resume).unwrap(), Status::Success));
         assert_eq!([history(&first), history(&second)], whole);
 
-        // A folder without a plan is not a sweep to go on with.
-        let e = format!("{:#}", run(&SweepArgs { resume: Some(first.clone()), ..resume }).err().unwrap());
+        // A folder without a plan is not a sweep to go on with: one of
+        // its runs is named as a run's folder, any other by the plan it lacks.
+        let e = format!("{:#}", read_plan(&first).err().unwrap());
+        assert!(e.contains("holds no sweep") && e.contains("is a run's folder: `carus run --resume"), "{e}");
+        let empty = tempfile::tempdir().unwrap();
+        let e = format!("{:#}", run(&SweepArgs { resume: Some(empty.path().to_path_buf()), ..resume }).err().unwrap());
         assert!(e.contains("sweep_plan.json") && e.contains("--resume takes the folder of a sweep"), "{e}");
     }
 

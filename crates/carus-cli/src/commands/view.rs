@@ -156,6 +156,9 @@ fn warn_unreadable_floor_frames(unreadable: &[PathBuf]) {
 impl RunShown {
     fn read(dir: &Path) -> anyhow::Result<RunShown> {
         if !dir.join(RUN_FILE).exists() && !dir.join(CHECKPOINT_FILE).exists() {
+            if let Some(kind) = super::folder_kind(dir) {
+                anyhow::bail!("{} holds no run to show: {kind}", dir.display());
+            }
             anyhow::bail!(
                 "{} holds no run to show: neither {RUN_FILE} (written when a run ends) nor {CHECKPOINT_FILE} \
                  (written at each checkpoint while it goes); give a folder that `carus run` wrote, or wait \
