@@ -167,7 +167,17 @@ impl RunShown {
             );
         }
         if !checkpoint_is_newer(dir) {
-            return RunShown::from_record(dir);
+            // A record the disk cut short: the run's last checkpoint still shows it.
+            return RunShown::from_record(dir).or_else(|e| match dir.join(CHECKPOINT_FILE).is_file() {
+                true => {
+                    eprintln!(
+                        "warning: {}; showing the run as its last checkpoint holds it",
+                        crate::error_text(&e)
+                    );
+                    RunShown::from_checkpoint(dir, read_checkpoint(dir)?)
+                }
+                false => Err(e),
+            });
         }
         let checkpoint = read_checkpoint(dir)?;
         // A folder copied without its files' times can date the checkpoint
@@ -176,6 +186,10 @@ impl RunShown {
         if run_ending(dir).is_some_and(|e| e.simulated_s >= checkpoint_s) {
             return RunShown::from_record(dir);
         }
+        RunShown::from_checkpoint(dir, checkpoint)
+    }
+
+    fn from_checkpoint(dir: &Path, checkpoint: carus_labour::output::Checkpoint) -> anyhow::Result<RunShown> {
         // A run without a floor writes no floor frames at its frame times.
         let (floors, unreadable) = match checkpoint.state.floor {
             Some(_) => carus_labour::floor_frames_at(dir, &checkpoint.frame_times),
@@ -378,8 +392,13 @@ mod tests {
         assert!(e.contains("*.png"), "{e}");
         let e = refused(args(dir.path().join("nothing"), 0.1, png.clone()));
         assert!(e.contains("holds no run to show") && e.contains("run.json") && e.contains("checkpoint.json"), "{e}");
-        // A record damaged after the run (a sample out of time order) is
-        // named, not drawn.
+        // A record cut short (a full disk) is shown as the run's last
+        // checkpoint holds it; one damaged after the run (a sample out of
+        // time order) is named, not drawn.
+        let whole = serde_json::to_string(&record).unwrap();
+        std::fs::write(dir.path().join(RUN_FILE), &whole[..whole.len() / 2]).unwrap();
+        let shown = RunShown::read(dir.path()).unwrap();
+        assert!(shown.in_progress && shown.source.ends_with(CHECKPOINT_FILE));
         let mut damaged = record;
         damaged.history.samples.swap(3, 4);
         std::fs::write(dir.path().join(RUN_FILE), serde_json::to_string(&damaged).unwrap()).unwrap();
