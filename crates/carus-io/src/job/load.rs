@@ -270,6 +270,14 @@ fn check_values(path: &Path, spec: &JobSpec) -> Result<(), JobError> {
             "give the mesh file's path, relative to the job file",
         ));
     }
+    let mesh = mesh_path(path, spec);
+    if !mesh.exists() {
+        return Err(c.fail(
+            "mesh.file".into(),
+            format!("{:?} names {}, which does not exist", spec.mesh.file, mesh.display()),
+            "a relative path starts at the job file's folder, not the current one",
+        ));
+    }
     if spec.materials.is_empty() {
         return Err(c.fail(
             "material".into(),
