@@ -208,12 +208,17 @@ impl Reader<'_> {
                             ),
                             false => (
                                 format!(
-                                    "this element has {} values, too few for its id and {per_element} nodes, so line \
-                                     {continued_on} was read as its rest, and with its {given_here} values it has {}",
+                                    "the element begun here has {} values over lines {pending_from} to {continued_on} \
+                                     ({} on this line, too few for its id and {per_element} nodes, so the next was \
+                                     read as its rest, and {given_here} on line {continued_on}), more than its id and \
+                                     {per_element} nodes",
+                                    pending.len(),
                                     pending.len() - given_here,
-                                    pending.len()
                                 ),
-                                format!("give this element its id and all {per_element} nodes"),
+                                format!(
+                                    "give each element its id and {per_element} nodes: nodes missing from this line, \
+                                     or a value too many on line {continued_on}"
+                                ),
                             ),
                         };
                         // Named at the line to mend, where the element began.
@@ -700,7 +705,7 @@ mod tests {
             ),
             (
                 "*NODE\n1,0,0,0\n*ELEMENT, TYPE=C3D4\n1, 1, 1\n2, 1, 1, 1, 1\n",
-                "m.inp:4: this element has 3 values, too few for its id and 4 nodes, so line 5 was read as its rest, and with its 5 values it has 8",
+                "m.inp:4: the element begun here has 8 values over lines 4 to 5 (3 on this line, too few for its id and 4 nodes, so the next was read as its rest, and 5 on line 5)",
             ),
             (
                 "*NODE\n1,0,0,0\n*ELEMENT, TYPE=S4\n1, 1, 1, 1, 1\n",

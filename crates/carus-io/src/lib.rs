@@ -13,6 +13,7 @@ pub mod error;
 pub mod gmsh;
 pub mod input;
 pub mod job;
+pub mod output;
 pub mod pvd;
 mod text;
 pub mod toml_text;

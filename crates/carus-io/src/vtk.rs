@@ -10,7 +10,6 @@
 //! and cell indices.
 
 use std::collections::BTreeMap;
-use std::io::Write;
 use std::path::Path;
 
 use carus_fem::{ElementKind, Mesh};
@@ -646,13 +645,7 @@ fn write_piece(path: &Path, piece: UnstructuredGridPiece) -> Result<(), WriteErr
         path: path.to_path_buf(),
         cause,
     };
-    let mut file = std::fs::File::create(path).map_err(io_error)?;
-    file.write_all(&bytes).map_err(|cause| {
-        // A frame cut short by a full disk is no frame: removed, not left half.
-        drop(file);
-        let _ = std::fs::remove_file(path);
-        io_error(cause)
-    })
+    crate::output::write_whole(path, &bytes).map_err(io_error)
 }
 
 thread_local! {

@@ -37,15 +37,10 @@ fn output_error(path: &Path, e: impl std::fmt::Display) -> LabourError {
     }
 }
 
-/// Writes `text` to `path`; one the disk refused part way is removed, so
-/// that no half file is taken for a result (and its space is freed).
+/// Writes `text` to `path` whole, or leaves no half file
+/// (`carus_io::output::write_whole`).
 pub fn write_text(path: &Path, text: &str) -> Result<(), LabourError> {
-    std::fs::write(path, text).map_err(|e| {
-        if path.is_file() {
-            let _ = std::fs::remove_file(path);
-        }
-        output_error(path, e)
-    })
+    carus_io::output::write_whole(path, text.as_bytes()).map_err(|e| output_error(path, e))
 }
 
 pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<(), LabourError> {
@@ -99,11 +94,7 @@ pub fn write_json_whole<T: Serialize>(path: &Path, value: &T) -> Result<(), Labo
     let mut partial = path.as_os_str().to_owned();
     partial.push(".partial");
     let partial = std::path::PathBuf::from(partial);
-    if let Err(e) = write_json(&partial, value) {
-        // On a full disk the half-written copy must not keep the space.
-        let _ = std::fs::remove_file(&partial);
-        return Err(e);
-    }
+    write_json(&partial, value)?;
     std::fs::rename(&partial, path).map_err(|e| output_error(path, e))
 }
 

@@ -256,19 +256,20 @@ fn check_scenario_file_unchanged(out_dir: &Path, scenario: &Scenario, base_dir: 
 /// landmarks file edited since would put the rest of the run in another,
 /// which the scenario's text (the same file names) does not show.
 fn check_pelvis_unchanged(scene: &Scene, started_in: Option<&str>) -> Result<(), LabourError> {
-    if started_in.is_none_or(|digest| digest == scene.pelvis_digest()) {
+    let (Some(started_in), Some((_, mesh)), carus_anatomy::pelvis::PelvisSpec::Imported { landmarks_file }) =
+        (started_in, &scene.pelvis_import, &scene.scenario.pelvis)
+    else {
+        return Ok(());
+    };
+    if scene.pelvis_digest.as_deref() == Some(started_in) {
         return Ok(());
     }
-    let files = match (&scene.scenario.pelvis, &scene.pelvis_import) {
-        (carus_anatomy::pelvis::PelvisSpec::Imported { landmarks_file }, Some((_, mesh))) => {
-            format!("{} or its landmarks file {}", mesh.display(), scene.scenario.base_dir.join(landmarks_file).display())
-        }
-        _ => "the pelvis generated from the scenario's diameters (a different carus version)".into(),
-    };
     Err(LabourError::Checkpoint(format!(
-        "the pelvis is not the one the run started in: {files} changed since, and the rest of the run \
-         would go on in another pelvis; undo the change to resume, or run the scenario again from the \
-         start with a new --out"
+        "the pelvis is not the one the run started in: {} or its landmarks file {} changed since, and the \
+         rest of the run would go on in another pelvis; undo the change to resume, or run the scenario \
+         again from the start with a new --out",
+        mesh.display(),
+        scene.scenario.base_dir.join(landmarks_file).display()
     )))
 }
 
@@ -400,10 +401,10 @@ fn drive(
     // After an output failure the last checkpoint is tried, not required:
     // what was simulated is still written below where the disk allows.
     let saved = timed(&mut || save_checkpoint(&mut sim, out_dir, &frame_times, clock.wall_s()));
-    match (&mut failure, output_failed, saved) {
-        (_, false, saved) => saved?,
-        (Some(f), true, Ok(())) => f.push_str("; free space (or fix the folder) and go on with `carus run --resume`"),
-        (Some(f), true, Err(e)) => {
+    match (failure.as_mut().filter(|_| output_failed), saved) {
+        (None, saved) => saved?,
+        (Some(f), Ok(())) => f.push_str("; free space (or fix the folder) and go on with `carus run --resume`"),
+        (Some(f), Err(e)) => {
             // The checkpoint's own error only where it is not the one said.
             let why = Some(e.to_string()).filter(|e| !f.contains(e.as_str())).map_or(String::new(), |e| format!(": {e}"));
             f.push_str(&match out_dir.join(output::CHECKPOINT_FILE).is_file() {
@@ -417,14 +418,13 @@ fn drive(
                 ),
             })
         }
-        (None, true, _) => unreachable!("an output failure is recorded with its flag"),
     }
     // Files the disk refuses now are named after the failure that ended the run.
     let first_failure = failure.clone().filter(|_| output_failed);
     let timing = Timing { clock, output_s };
-    finish(&mut sim, out_dir, &frame_times, &floor_snapshots, completed, failure, timing).map_err(|e| match first_failure {
-        Some(first) => LabourError::Output { path: out_dir.to_path_buf(), message: format!("{e}, after {first}") },
-        None => e,
+    finish(&mut sim, out_dir, &frame_times, &floor_snapshots, completed, failure, timing).map_err(|e| match (e, first_failure) {
+        (LabourError::Output { path, message }, Some(first)) => LabourError::Output { path, message: format!("{message}, after {first}") },
+        (e, _) => e,
     })
 }
 
@@ -495,7 +495,7 @@ fn save_checkpoint(
             state,
             frame_times: frame_times.to_vec(),
             wall_s,
-            pelvis_digest: Some(sim.scene.pelvis_digest()),
+            pelvis_digest: sim.scene.pelvis_digest.clone(),
         },
     )
 }
@@ -1289,22 +1289,39 @@ mod tests {
         std::fs::write(&path, edited.to_string()).unwrap();
         let e = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).expect_err("refused").to_string();
         assert!(e.contains("saved pose history") && e.contains("quaternion"), "{e}");
-        // A pelvis other than the one the run started in (its mesh edited).
-        let mut edited: serde_json::Value = serde_json::from_str(&text).unwrap();
-        assert!(edited["pelvis_digest"].is_string());
-        edited["pelvis_digest"] = "00000000".into();
-        std::fs::write(&path, edited.to_string()).unwrap();
-        let e = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).expect_err("refused").to_string();
-        assert!(e.contains("the pelvis is not the one the run started in") && e.contains("undo the change"), "{e}");
-        // A checkpoint written before the digest resumes unchecked.
-        edited.as_object_mut().unwrap().remove("pelvis_digest");
-        std::fs::write(&path, edited.to_string()).unwrap();
-        assert!(output::read_checkpoint(dir.path()).unwrap().pelvis_digest.is_none());
         std::fs::write(&path, &text).unwrap();
         // A scenario.toml deleted since is written again, as the run started.
         std::fs::remove_file(&scenario).unwrap();
         assert!(resume(dir.path(), &RunOptions::default(), &mut SilentObserver).is_ok());
         assert_eq!(std::fs::read_to_string(&scenario).unwrap(), original);
+    }
+
+    /// A run in an imported pelvis resumes only in the files it started
+    /// with: the checkpoint's digest of them tells an edited mesh.
+    #[test]
+    fn an_imported_pelvis_edited_since_is_refused_on_resume() {
+        let dir = tempfile::tempdir().unwrap();
+        let assets = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/anatomy");
+        for file in ["visible-human-female-pelvis.landmarks.toml", "visible-human-female-pelvis.stl"] {
+            std::fs::copy(assets.join(file), dir.path().join(file)).unwrap();
+        }
+        let landmarks = dir.path().join("visible-human-female-pelvis.landmarks.toml");
+        let mut s = Scenario::builtin("real-pelvis").unwrap().with_setting("pelvis.import", &format!("{landmarks:?}")).unwrap();
+        s.numerics.head_subdivisions = 3;
+        let scene = Scene::build(&s).unwrap();
+        let digest = scene.pelvis_digest.clone().expect("an imported pelvis has a digest");
+        assert!(check_pelvis_unchanged(&scene, Some(&digest)).is_ok());
+        assert!(check_pelvis_unchanged(&scene, None).is_ok(), "a checkpoint from before the digest is not checked");
+        let e = check_pelvis_unchanged(&scene, Some("00000000")).unwrap_err().to_string();
+        assert!(e.contains("the pelvis is not the one the run started in") && e.contains("visible-human-female-pelvis.stl"), "{e}");
+        // One byte of the mesh changed: another digest.
+        let mesh = dir.path().join("visible-human-female-pelvis.stl");
+        let mut bytes = std::fs::read(&mesh).unwrap();
+        bytes[96] ^= 1;
+        std::fs::write(&mesh, bytes).unwrap();
+        assert_ne!(Scene::build(&s).unwrap().pelvis_digest, Some(digest));
+        // A generated pelvis is fixed by the scenario's text: no digest.
+        assert_eq!(Scene::build(&coarse(0.1)).unwrap().pelvis_digest, None);
     }
 
     /// The last step may end a hair past end_time_s when the rigid step
@@ -1731,9 +1748,7 @@ mod tests {
         assert!(e.contains("`trajectory.guide_torsion_nm_per_rad`"), "{e}");
 
         // Read from a file, the error points at the key's line.
-        let text = s.to_toml().unwrap();
-        let line = text.lines().position(|l| l.starts_with("guide_torsion_nm_per_rad =")).unwrap() + 1;
-        let file = crate::Scenario::parse(Path::new("path.toml"), &text, ".".into()).unwrap();
+        let (file, line) = s.as_read_from("path.toml", "guide_torsion_nm_per_rad =");
         let e = Simulation::new(&Scene::build(&file).unwrap()).err().expect("refused").to_string();
         assert!(e.starts_with(&format!("path.toml:{line}: `trajectory.guide_torsion_nm_per_rad` = 1000000:")), "{e}");
     }

@@ -245,6 +245,13 @@ impl SpineSection {
     }
 }
 
+/// The longest run a scenario may ask for, s: an hour of contractions,
+/// 7.2 million rigid steps at the default step and over an hour of wall
+/// time at the normal run's 0.6-0.8 ms a step (docs/PERFORMANCE.md). The
+/// outcomes settle within the built-ins' 60 s; more is a slip of units or
+/// digits, which would run for days and fill the memory with samples.
+pub const LONGEST_END_TIME_S: f64 = 3600.0;
+
 /// The finest rigid step a scenario may ask for, s: each rigid step takes
 /// about 0.4 ms of wall time (docs/PERFORMANCE.md), so a finer one could
 /// not finish a run.
@@ -745,14 +752,38 @@ pub struct Scenario {
     pub base_dir: PathBuf,
     /// The text this scenario was read from, so that a check made after
     /// reading names a key's line as reading does ([`Scenario::refuse`]);
-    /// None for a built-in, whose lines no user has.
+    /// none for a built-in, whose lines no user has.
     #[serde(skip)]
-    pub source: Option<std::sync::Arc<ScenarioSource>>,
+    pub source: ReadFrom,
+}
+
+/// The file a scenario was read from, if any. Where a scenario was read
+/// from is not what it says: two scenarios that say the same are equal, a
+/// built-in and its `carus scenarios show` read back among them.
+#[derive(Debug, Clone, Default)]
+pub struct ReadFrom(Option<std::sync::Arc<ScenarioSource>>);
+
+impl PartialEq for ReadFrom {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
+#[cfg(test)]
+impl Scenario {
+    /// This scenario as a user's file `name` would give it, and the line
+    /// there that begins `written` (`station_mm = 60`), for tests of the
+    /// messages that point into a file.
+    pub(crate) fn as_read_from(&self, name: &str, written: &str) -> (Scenario, usize) {
+        let text = self.to_toml().unwrap();
+        let line = text.lines().position(|l| l.starts_with(written)).expect("the key is written") + 1;
+        (Scenario::parse(Path::new(name), &text, ".".into()).unwrap(), line)
+    }
 }
 
 /// A scenario file's name and text, and the keys changed since it was
 /// read (`--set`, a sweep), whose lines in it no longer hold their values.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct ScenarioSource {
     path: PathBuf,
     text: String,
@@ -908,7 +939,7 @@ impl Scenario {
             text,
             PathBuf::from("."),
         )?;
-        Ok(Scenario { source: None, ..scenario })
+        Ok(Scenario { source: ReadFrom::default(), ..scenario })
     }
 
     /// Reads a scenario file.
@@ -969,11 +1000,11 @@ impl Scenario {
             e
         })?;
         check_pelvis_import(path, text, &scenario.pelvis, &scenario.base_dir)?;
-        scenario.source = Some(std::sync::Arc::new(ScenarioSource {
+        scenario.source = ReadFrom(Some(std::sync::Arc::new(ScenarioSource {
             path: path.to_path_buf(),
             text: text.to_string(),
             changed: Vec::new(),
-        }));
+        })));
         Ok(scenario)
     }
 
@@ -983,7 +1014,7 @@ impl Scenario {
     /// file writes it; named as a setting otherwise (a built-in, a changed
     /// key).
     pub(crate) fn refuse(&self, key: String, value: String, problem: String, hint: String) -> ScenarioError {
-        match self.source.as_deref().filter(|source| !source.changed(&key)) {
+        match self.source.0.as_deref().filter(|source| !source.changed(&key)) {
             Some(source) => ScenarioError::Value {
                 path: source.path.as_path().into(),
                 line: line_of_key(&source.text, &key),
@@ -1003,7 +1034,7 @@ impl Scenario {
     /// `file:line: ` where a check made after reading should point for
     /// `key`, as [`Self::refuse`] chooses; empty where it names a setting.
     pub(crate) fn located_key(&self, key: &str) -> String {
-        match self.source.as_deref().filter(|source| !source.changed(key)) {
+        match self.source.0.as_deref().filter(|source| !source.changed(key)) {
             Some(source) => format!("{}: ", located(&source.path, line_of_key(&source.text, key))),
             None => String::new(),
         }
@@ -1072,11 +1103,11 @@ impl Scenario {
             }
         })?;
         // Later checks still point into the file read, but not at a changed key.
-        let source = self.source.as_deref().map(|source| {
+        let source = ReadFrom(self.source.0.as_deref().map(|source| {
             let mut source = source.clone();
             source.changed.extend(settings.iter().map(|(key, _)| key.clone()));
             std::sync::Arc::new(source)
-        });
+        }));
         Ok(Scenario { source, ..changed })
     }
 
@@ -1490,6 +1521,15 @@ impl Scenario {
                 "0.5 to 0.9",
             ));
         }
+        if self.numerics.end_time_s > LONGEST_END_TIME_S {
+            return Err(err(
+                "numerics.end_time_s",
+                self.numerics.end_time_s,
+                "is more than an hour of labour (3600 s): a slip of units or digits (the built-in scenarios run 60 s, \
+                 each some 120 000 rigid steps and a minute or two of wall time)",
+                "seconds of simulated time, 3600 or less; 60.0 is the default",
+            ));
+        }
         if self.numerics.rigid_dt_s > 2e-3 {
             return Err(err(
                 "numerics.rigid_dt_s",
@@ -1503,7 +1543,7 @@ impl Scenario {
         for (key, every_s, finest_s, hint) in [
             ("output.every_s", self.output.every_s, self.numerics.rigid_dt_s, "at least the rigid step; 0.01 is the default"),
             ("numerics.checkpoint_every_s", self.numerics.checkpoint_every_s, self.numerics.rigid_dt_s, "at least the rigid step; 5.0 is the default"),
-            ("output.vtu_every_s", self.output.vtu_every_s, MIN_VTU_EVERY_S.max(self.numerics.rigid_dt_s), "at least 0.01 s (frames every 10 ms write some 36 MB a simulated second); 1.0 is the default"),
+            ("output.vtu_every_s", self.output.vtu_every_s, MIN_VTU_EVERY_S.max(self.numerics.rigid_dt_s), "at least 0.01 s (frames every 10 ms write some 14 MB a simulated second); 1.0 is the default"),
         ] {
             if every_s < finest_s * (1.0 - 1e-9) {
                 return Err(err(key, every_s, "is finer than can be recorded", hint));
@@ -2359,6 +2399,7 @@ mod tests {
             ("[neck]\naxial_rotation_limit_deg = 1000.0\n", "`neck.axial_rotation_limit_deg` = 1000"),
             ("[neck]\nlinear_damping_n_s_per_m = -1.0\n", "`neck.linear_damping_n_s_per_m` = -1"),
             ("[numerics]\nrigid_dt_s = 1e-300\n", "`numerics.rigid_dt_s` = 1e-300"),
+            ("[numerics]\nend_time_s = 1e9\n", "`numerics.end_time_s` = 1000000000: is more than an hour of labour"),
             ("[numerics]\nfloor_step_fraction = 0.001\n", "`numerics.floor_step_fraction` = 0.001"),
             ("[floor]\nbulk_modulus_pa = 1e300\n", "`floor.bulk_modulus_pa` = 1e300: is stiffer than any soft tissue"),
             ("", "`name` = 201 bytes"),

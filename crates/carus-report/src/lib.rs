@@ -90,13 +90,8 @@ pub fn write_report_with(
 /// Writes the page to `path`; returns the picture warnings.
 pub fn write_report_file(input: &ReportInput, path: &Path) -> Result<Vec<String>, ReportError> {
     let report = write_report(input)?;
-    std::fs::write(path, &report.html).map_err(|source| {
-        // A page cut short by a full disk is removed, not left half.
-        if path.is_file() {
-            let _ = std::fs::remove_file(path);
-        }
-        ReportError::Write { path: path.to_path_buf(), source }
-    })?;
+    carus_io::output::write_whole(path, report.html.as_bytes())
+        .map_err(|source| ReportError::Write { path: path.to_path_buf(), source })?;
     Ok(report.warnings)
 }
 

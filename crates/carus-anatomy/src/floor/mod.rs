@@ -142,18 +142,20 @@ pub enum FloorError {
 }
 
 impl FloorError {
-    /// The `[floor.mesh]` key to change, for a message that points at it.
-    pub fn key(&self) -> &'static str {
+    /// The one `[floor.mesh]` key to change, for a message that points at
+    /// it; None where the fault is of several together (the element count,
+    /// a distorted element).
+    pub fn key(&self) -> Option<&'static str> {
         match self {
             FloorError::NotPositive { key, .. }
             | FloorError::NotFinite { key, .. }
             | FloorError::TooFewElements { key, .. }
-            | FloorError::OutOfRange { key, .. } => key,
-            FloorError::OddAround(_) | FloorError::TooManyElements { .. } => "elements_around",
-            FloorError::HiatusTooWide { .. } => "hiatus_width_mm",
-            FloorError::HiatusTooLong { .. } => "hiatus_length_mm",
-            FloorError::SagTooDeep { .. } => "sag_mm",
-            FloorError::Distorted { .. } => "thickness_mm",
+            | FloorError::OutOfRange { key, .. } => Some(key),
+            FloorError::OddAround(_) => Some("elements_around"),
+            FloorError::HiatusTooWide { .. } => Some("hiatus_width_mm"),
+            FloorError::HiatusTooLong { .. } => Some("hiatus_length_mm"),
+            FloorError::SagTooDeep { .. } => Some("sag_mm"),
+            FloorError::TooManyElements { .. } | FloorError::Distorted { .. } => None,
         }
     }
 }
@@ -1154,7 +1156,7 @@ mod tests {
             pelvic_floor(&pelvis, &odd),
             Err(FloorError::OddAround(47))
         ));
-        assert_eq!(FloorError::OddAround(47).key(), "elements_around");
+        assert_eq!(FloorError::OddAround(47).key(), Some("elements_around"));
         // Odd and far too many: the count is named, not an even number
         // that would be refused next.
         let huge_odd = FloorParameters { elements_around: 4_294_967_297, ..Default::default() };

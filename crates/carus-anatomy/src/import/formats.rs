@@ -78,28 +78,41 @@ fn format_error(path: &Path, format: &'static str, message: impl ToString) -> Im
     }
 }
 
-/// STL, binary or ASCII. Read here rather than by stl_io, which takes any
-/// file beginning `solid ` for ASCII (binary exporters write `solid` into
-/// their header too, and its ASCII reader then drops what it cannot
-/// parse), cannot be told to read binary, and names no line in an ASCII
-/// error (docs/ARCHITECTURE.md).
+/// STL, binary or ASCII. Read here rather than by stl_io, whose ASCII
+/// reader stops at the first `endsolid` (a file of several solids loses
+/// the rest unsaid), wants `solid ` in lower case and names no line in an
+/// error, and whose binary reader reads only the triangles the header
+/// counts (docs/ARCHITECTURE.md). A file is binary when its size fits its
+/// header's count exactly, or when it is not text: binary triangles hold
+/// about two bytes no text has in every 50 (their attribute bytes are
+/// zero), while an ASCII file may carry a few stray ones (a Latin-1 letter
+/// in its name, a DOS end-of-file mark: up to 4, and one per 1000 bytes).
+/// So a binary header that begins `solid`, as some exporters write, is
+/// still read as binary.
 pub fn parse_stl(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
-    let text = std::str::from_utf8(bytes).ok().filter(|t| !t.chars().any(|c| c.is_control() && !c.is_whitespace()));
-    match text {
-        Some(text) if text.trim_start().get(..5).is_some_and(|w| w.eq_ignore_ascii_case("solid")) => {
-            parse_ascii_stl(path, text)
-        }
-        Some(text) => Err(format_error(
+    if bytes.iter().all(u8::is_ascii_whitespace) {
+        return Err(format_error(path, "STL", "the file is empty"));
+    }
+    let announced = (bytes.len() >= 84).then(|| u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as u64);
+    let fits_binary = announced.is_some_and(|n| bytes.len() as u64 == 84 + 50 * n);
+    let text = String::from_utf8_lossy(bytes);
+    let stray = text.chars().filter(|&c| (c.is_control() && !c.is_whitespace()) || c == char::REPLACEMENT_CHARACTER).count();
+    let is_text = !fits_binary && stray <= 4 + bytes.len() / 1000;
+    if !is_text {
+        return parse_binary_stl(path, bytes);
+    }
+    if !text.trim_start().get(..5).is_some_and(|w| w.eq_ignore_ascii_case("solid")) {
+        return Err(format_error(
             path,
             "STL",
             format!(
-                "the file is text, but an ASCII STL begins with `solid` and line 1 reads `{}`; if it is \
-                 another format (OBJ, PLY), give it that extension",
+                "the file is text, but an ASCII STL begins with `solid` and line 1 reads `{}`; if it is another \
+                 format (OBJ, PLY), give it that extension",
                 text.lines().next().unwrap_or("").chars().take(60).collect::<String>()
             ),
-        )),
-        None => parse_binary_stl(path, bytes),
+        ));
     }
+    parse_ascii_stl(path, &text)
 }
 
 /// Binary STL: an 80-byte header, a triangle count, then per triangle a
@@ -145,17 +158,28 @@ fn parse_ascii_stl(path: &Path, text: &str) -> Result<RawMesh, ImportError> {
     let at_line = |line: usize, problem: String| format_error(path, "STL", format!("line {line}: {problem}"));
     let mut mesh = RawMesh::default();
     let mut corners: Vec<DVec3> = Vec::with_capacity(3);
-    let mut inside_loop = false;
+    // The line of the `outer loop` and of the `solid` still open.
+    let mut open_loop: Option<usize> = None;
+    let mut open_solid: Option<usize> = None;
     for (number, line) in text.lines().enumerate().map(|(k, l)| (k + 1, l)) {
         let words: Vec<&str> = line.split_whitespace().collect();
         let Some(keyword) = words.first().map(|w| w.to_ascii_lowercase()) else { continue };
-        match keyword.as_str() {
-            "solid" | "endsolid" | "facet" | "endfacet" => {}
-            "outer" => {
-                inside_loop = true;
+        // A DOS end-of-file mark, or a byte no text has, on a line of its own.
+        if keyword.chars().all(|c| c.is_control() || c == char::REPLACEMENT_CHARACTER) {
+            continue;
+        }
+        match (keyword.as_str(), open_loop) {
+            ("solid" | "endsolid" | "facet" | "endfacet" | "outer", Some(opened)) => {
+                return Err(at_line(number, format!("`{keyword}` comes before the `endloop` of the loop opened on line {opened}")));
+            }
+            ("solid", None) => open_solid = Some(number),
+            ("endsolid", None) => open_solid = None,
+            ("facet" | "endfacet", None) => {}
+            ("outer", None) => {
+                open_loop = Some(number);
                 corners.clear();
             }
-            "vertex" if inside_loop => {
+            ("vertex", Some(_)) => {
                 let [x, y, z] = words[1..] else {
                     return Err(at_line(number, format!("`{}` should be `vertex` and three numbers", line.trim())));
                 };
@@ -167,12 +191,12 @@ fn parse_ascii_stl(path: &Path, text: &str) -> Result<RawMesh, ImportError> {
                 }
                 corners.push(DVec3::from_array(p));
             }
-            "endloop" if inside_loop => {
+            ("endloop", Some(_)) => {
                 let &[a, b, c] = corners.as_slice() else {
                     return Err(at_line(number, format!("a facet's loop has {} corners; a triangle has 3", corners.len())));
                 };
                 mesh.push_triangle([a, b, c]);
-                inside_loop = false;
+                open_loop = None;
             }
             _ => {
                 return Err(at_line(
@@ -182,8 +206,17 @@ fn parse_ascii_stl(path: &Path, text: &str) -> Result<RawMesh, ImportError> {
             }
         }
     }
-    if inside_loop {
-        return Err(format_error(path, "STL", "the file ends inside a facet (no `endloop`): it was cut short"));
+    if let Some(opened) = open_loop.or(open_solid) {
+        return Err(format_error(
+            path,
+            "STL",
+            format!(
+                "the file ends inside the {} opened on line {opened} (no `{}`), after {} whole triangles: it was cut short",
+                if open_loop.is_some() { "facet" } else { "solid" },
+                if open_loop.is_some() { "endloop" } else { "endsolid" },
+                mesh.triangles.len()
+            ),
+        ));
     }
     Ok(mesh)
 }
@@ -439,14 +472,25 @@ fn ply_fault(bytes: &[u8], error: &std::io::Error) -> String {
 /// be dropped without a word, so it is refused, by line in ASCII.
 fn check_nothing_past_the_counts(path: &Path, bytes: &[u8], rest: &[u8], header: &ply_rs::ply::Header) -> Result<(), ImportError> {
     let ascii = header.encoding == ply_rs::ply::Encoding::Ascii;
-    let Some(first) = rest.iter().position(|b| !(ascii && b.is_ascii_whitespace())) else {
-        return Ok(());
+    let past = match ascii {
+        // Blank lines and comments after the data are no data.
+        true => {
+            let start = bytes.len() - rest.len();
+            let mut offset = start;
+            let first = String::from_utf8_lossy(rest).split_inclusive('\n').find_map(|line| {
+                let at = offset;
+                offset += line.len();
+                let word = line.split_whitespace().next()?;
+                (word != "comment").then_some(at)
+            });
+            let Some(first) = first else { return Ok(()) };
+            format!("line {} holds data", carus_io::input::line_at(bytes, first))
+        }
+        // A line end some writers add after the binary data is no data.
+        false if rest.iter().all(u8::is_ascii_whitespace) && rest.len() <= 2 => return Ok(()),
+        false => format!("{} byte{} of data remain", rest.len(), if rest.len() == 1 { "" } else { "s" }),
     };
     let announced: Vec<String> = header.elements.values().map(|e| format!("{} `{}`", e.count, e.name)).collect();
-    let past = match ascii {
-        true => format!("line {} holds data", carus_io::input::line_at(bytes, bytes.len() - rest.len() + first)),
-        false => format!("{} bytes of data remain", rest.len()),
-    };
     Err(format_error(
         path,
         "PLY",

@@ -251,6 +251,16 @@ fn broken_meshes_say_what_and_where() {
     let err = read_surface(&write(&dir, "solid_overlong.stl", &solid_header), Units::Metres).unwrap_err();
     assert!(matches!(err, ImportError::OverlongStl { expected: 4, found: 5, spare_bytes: 0, .. }), "{err}");
 
+    // Two solids in one file are both read; a Latin-1 name and a DOS
+    // end-of-file mark do not make an ASCII file binary.
+    let two = format!("{}{}", ascii_stl(), ascii_stl());
+    assert_eq!(read_surface(&write(&dir, "two.stl", two.as_bytes()), Units::Metres).unwrap().report.triangles_read, 8);
+    let mut latin = ascii_stl().replacen("solid tetra", "solid Becken_\u{1}", 1).into_bytes();
+    let at = latin.iter().position(|&b| b == 1).unwrap();
+    latin[at] = 0xF6;
+    latin.push(0x1A);
+    assert_eq!(read_surface(&write(&dir, "latin.stl", &latin), Units::Metres).unwrap().report.triangles_read, 4);
+
     // ASCII STL in capitals reads; a broken line is named.
     let upper = read_surface(&write(&dir, "upper.stl", ascii_stl().to_uppercase().as_bytes()), Units::Metres).unwrap();
     assert_eq!(upper.report.triangles_read, 4);
@@ -258,7 +268,10 @@ fn broken_meshes_say_what_and_where() {
         ("short_vertex.stl", ascii_stl().replacen("vertex 1 0 0", "vertex 1 0", 1), "line 6: `vertex 1 0` should be `vertex` and three numbers"),
         ("nan_vertex.stl", ascii_stl().replacen("vertex 1 0 0", "vertex 1 nan 0", 1), "line 6: `nan` is not a finite number"),
         ("two_corners.stl", ascii_stl().replacen("   vertex 1 0 0\n", "", 1), "line 6: a facet's loop has 2 corners"),
-        ("cut.stl", ascii_stl()[..60].to_string(), "ends inside a facet"),
+        ("cut.stl", ascii_stl()[..60].to_string(), "the file ends inside the facet opened on line 3 (no `endloop`), after 0 whole triangles"),
+        ("no_endsolid.stl", ascii_stl().replace("endsolid tetra\n", ""), "the file ends inside the solid opened on line 1 (no `endsolid`), after 4 whole triangles"),
+        ("no_endloop.stl", ascii_stl().replacen("  endloop\n", "", 1), "line 7: `endfacet` comes before the `endloop` of the loop opened on line 3"),
+        ("empty.stl", " \n".to_string(), "the file is empty"),
         ("obj_named_stl.stl", obj(), "the file is text, but an ASCII STL begins with `solid` and line 1 reads `# tetrahedron`"),
     ] {
         let e = read_surface(&write(&dir, name, broken.as_bytes()), Units::Metres).unwrap_err().to_string();
@@ -385,7 +398,13 @@ fn ply_faults_name_the_line_and_the_fix() {
     binary.extend_from_slice(&[0; 7]);
     let e = parse_ply(path, &binary).unwrap_err().to_string();
     assert!(e.contains("7 bytes of data remain after the 4 `vertex` and 4 `face` elements"), "{e}");
-    assert!(parse_ply(path, (ply_ascii() + "\n\n").as_bytes()).is_ok(), "blank lines at the end are no data");
+    assert!(parse_ply(path, (ply_ascii() + "\n\ncomment made by hand\n").as_bytes()).is_ok(), "blank lines and comments at the end are no data");
+    let mut binary = ply_binary();
+    binary.push(b'\n');
+    assert!(parse_ply(path, &binary).is_ok(), "a line end after binary data is no data");
+    binary.push(0);
+    let e = parse_ply(path, &binary).unwrap_err().to_string();
+    assert!(e.contains("2 bytes of data remain"), "{e}");
     let e = err(ply_ascii().replacen("element vertex 4", "element vertex 3", 1).replacen("0 0 1\n", "0.5 0 1\n", 1));
     assert!(e.contains("line 13 (`face` 0): the list `vertex_indices` does not start with its length (if the line holds a `vertex`, the header's `element vertex` count is smaller than the file's)"), "{e}");
     let e = err(ply_ascii().replacen("1 0 0", "1 nan 0", 1));

@@ -449,7 +449,7 @@ pub(super) fn load_changed(name: Option<&str>, settings: &[String]) -> anyhow::R
 /// Names the scenario in an error from building or running it, unless
 /// the error already points into its file (`mine.toml:47: ...`).
 fn in_scenario<T>(result: Result<T, carus_labour::LabourError>, scenario: &str) -> anyhow::Result<T> {
-    result.map_err(|e| match e.to_string().starts_with(scenario) {
+    result.map_err(|e| match e.to_string().starts_with(&format!("{scenario}:")) {
         true => e.into(),
         false => anyhow::Error::new(e).context(format!("scenario {scenario}")),
     })
@@ -620,7 +620,14 @@ pub(super) fn run_into(scenario: &Scenario, dir: &Path, stop: &Arc<AtomicBool>) 
 pub(super) fn read_record(dir: &Path) -> anyhow::Result<RunRecord> {
     let path = dir.join(carus_labour::output::RUN_FILE);
     let text = carus_io::input::read_text(&path).with_context(|| format!("cannot read {}", path.display()))?;
-    serde_json::from_str(&text).with_context(|| format!("{} is damaged; run the scenario again", path.display()))
+    serde_json::from_str(&text).map_err(|e| {
+        // The run's last checkpoint holds what the record is written from.
+        let again = match dir.join(carus_labour::output::CHECKPOINT_FILE).is_file() {
+            true => format!("`carus run --resume {}` writes it again from the run's last checkpoint", dir.display()),
+            false => "run the scenario again".into(),
+        };
+        anyhow::anyhow!("{} is damaged ({e}); {again}", path.display())
+    })
 }
 
 /// Whether the run in `dir` is over for good (`RunEnding::is_over`).

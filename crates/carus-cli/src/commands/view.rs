@@ -167,17 +167,7 @@ impl RunShown {
             );
         }
         if !checkpoint_is_newer(dir) {
-            // A record the disk cut short: the run's last checkpoint still shows it.
-            return RunShown::from_record(dir).or_else(|e| match dir.join(CHECKPOINT_FILE).is_file() {
-                true => {
-                    eprintln!(
-                        "warning: {}; showing the run as its last checkpoint holds it",
-                        crate::error_text(&e)
-                    );
-                    RunShown::from_checkpoint(dir, read_checkpoint(dir)?)
-                }
-                false => Err(e),
-            });
+            return RunShown::from_record(dir);
         }
         let checkpoint = read_checkpoint(dir)?;
         // A folder copied without its files' times can date the checkpoint
@@ -392,13 +382,13 @@ mod tests {
         assert!(e.contains("*.png"), "{e}");
         let e = refused(args(dir.path().join("nothing"), 0.1, png.clone()));
         assert!(e.contains("holds no run to show") && e.contains("run.json") && e.contains("checkpoint.json"), "{e}");
-        // A record cut short (a full disk) is shown as the run's last
-        // checkpoint holds it; one damaged after the run (a sample out of
+        // A record cut short is named, with the way to write it again from
+        // the run's checkpoint; one damaged after the run (a sample out of
         // time order) is named, not drawn.
         let whole = serde_json::to_string(&record).unwrap();
         std::fs::write(dir.path().join(RUN_FILE), &whole[..whole.len() / 2]).unwrap();
-        let shown = RunShown::read(dir.path()).unwrap();
-        assert!(shown.in_progress && shown.source.ends_with(CHECKPOINT_FILE));
+        let e = crate::error_text(&RunShown::read(dir.path()).err().unwrap());
+        assert!(e.contains("run.json is damaged (EOF while parsing") && e.contains(&format!("; `carus run --resume {}` writes it again from the run's last checkpoint", dir.path().display())), "{e}");
         let mut damaged = record;
         damaged.history.samples.swap(3, 4);
         std::fs::write(dir.path().join(RUN_FILE), serde_json::to_string(&damaged).unwrap()).unwrap();

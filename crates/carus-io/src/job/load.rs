@@ -15,7 +15,8 @@ pub fn load_job(path: &Path) -> Result<JobSpec, JobError> {
     parse_job(path, &text)
 }
 
-/// Parses and checks job-file text; `path` names it in errors.
+/// Parses and checks job-file text; `path` names it in errors and is
+/// where a relative `mesh.file` is looked for from (which must exist).
 pub fn parse_job(path: &Path, text: &str) -> Result<JobSpec, JobError> {
     let deserializer =
         toml::Deserializer::parse(text).map_err(|e| toml_error(path, text, String::new(), &e))?;
@@ -275,7 +276,10 @@ fn check_values(path: &Path, spec: &JobSpec) -> Result<(), JobError> {
         return Err(c.fail(
             "mesh.file".into(),
             format!("{:?} names {}, which does not exist", spec.mesh.file, mesh.display()),
-            "a relative path starts at the job file's folder, not the current one",
+            match Path::new(&spec.mesh.file).is_absolute() {
+                true => "give the path of the mesh file",
+                false => "a relative path starts at the job file's folder, not the current one",
+            },
         ));
     }
     if spec.materials.is_empty() {
