@@ -944,6 +944,28 @@ impl Scenario {
 
     /// Reads a scenario file.
     pub fn from_file(path: &Path) -> Result<Scenario, ScenarioError> {
+        let (text, base) = Scenario::read_file(path)?;
+        Scenario::parse(path, &text, base)
+    }
+
+    /// Reads a scenario file with each (key, value) change of
+    /// [`Self::with_settings`] made before it is checked, so that a
+    /// setting can mend a value the file has wrong; what else the file has
+    /// wrong is still named at its line.
+    pub fn from_file_with_settings(path: &Path, settings: &[(String, String)]) -> Result<Scenario, ScenarioError> {
+        let (text, base) = Scenario::read_file(path)?;
+        let table = text.parse::<toml::Table>().map_err(|e| toml_syntax(path, &text, &e))?;
+        let source = ReadFrom(Some(std::sync::Arc::new(ScenarioSource {
+            path: path.to_path_buf(),
+            text,
+            changed: Vec::new(),
+        })));
+        let name = table.get("name").and_then(toml::Value::as_str).unwrap_or("the scenario").to_string();
+        Scenario::changed_table(table, settings, &name, base, source)
+    }
+
+    /// A scenario file's text, and the absolute folder it lies in.
+    fn read_file(path: &Path) -> Result<(String, PathBuf), ScenarioError> {
         let text = carus_io::input::read_text(path).map_err(|source| ScenarioError::Io {
             path: path.to_path_buf(),
             source: match source.kind() {
@@ -974,7 +996,7 @@ impl Scenario {
             source,
         })?;
         let base = absolute.parent().map(Path::to_path_buf).unwrap_or_default();
-        Scenario::parse(path, &text, base)
+        Ok((text, base))
     }
 
     /// Parses and checks the scenario text that the file `holder` keeps (a
@@ -1079,15 +1101,30 @@ impl Scenario {
                 });
             }
         }
-        let mut table = toml::Table::try_from(self)?;
+        let table = toml::Table::try_from(self)?;
+        Scenario::changed_table(table, settings, &self.name, self.base_dir.clone(), self.source.clone())
+    }
+
+    /// `table` with the settings made, checked as a file would be; `source`
+    /// is the file it was read from, which later checks point into, not at
+    /// a changed key.
+    fn changed_table(
+        mut table: toml::Table,
+        settings: &[(String, String)],
+        name: &str,
+        base_dir: PathBuf,
+        source: ReadFrom,
+    ) -> Result<Scenario, ScenarioError> {
         for (key, value) in settings {
             set_key(&mut table, key, value)?;
         }
         let written: Vec<String> = settings.iter().map(|(k, v)| format!("{k} = {v}")).collect();
-        let label = PathBuf::from(format!("{} with {}", self.name, written.join(", ")));
+        let label = PathBuf::from(format!("{name} with {}", written.join(", ")));
         let text = toml::to_string(&table)?;
-        // Line numbers would point into the generated text: name the settings instead.
-        let changed = Scenario::parse(&label, &text, self.base_dir.clone()).map_err(|e| match e {
+        // Line numbers would point into the generated text: name the
+        // settings instead, or the file's line of a key they did not change.
+        let in_file = |key: &str| source.0.as_deref().filter(|read| !read.changed(key) && !settings.iter().any(|(k, _)| k == key));
+        let changed = Scenario::parse(&label, &text, base_dir).map_err(|e| match e {
             ScenarioError::Syntax {
                 key, message, hint, ..
             } => ScenarioError::Setting {
@@ -1096,14 +1133,17 @@ impl Scenario {
                 hint,
             },
             mut other => {
-                if let ScenarioError::Value { line, .. } = &mut other {
-                    *line = None;
+                if let ScenarioError::Value { path, line, key, .. } = &mut other {
+                    match in_file(key) {
+                        Some(read) => (*path, *line) = (read.path.as_path().into(), line_of_key(&read.text, key)),
+                        None => *line = None,
+                    }
                 }
                 other
             }
         })?;
         // Later checks still point into the file read, but not at a changed key.
-        let source = ReadFrom(self.source.0.as_deref().map(|source| {
+        let source = ReadFrom(source.0.as_deref().map(|source| {
             let mut source = source.clone();
             source.changed.extend(settings.iter().map(|(key, _)| key.clone()));
             std::sync::Arc::new(source)

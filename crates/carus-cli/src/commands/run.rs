@@ -440,10 +440,24 @@ pub(super) fn load(name: Option<&str>) -> anyhow::Result<Scenario> {
     Ok(Scenario::from_file(path)?)
 }
 
-/// A scenario as loaded, with the `--set KEY=VALUE` changes applied in turn.
+/// A scenario as loaded, with the `--set KEY=VALUE` changes applied in
+/// turn. A file refused for a value a setting changes is read again with
+/// the settings made first, so that `--set` can mend it.
 pub(super) fn load_changed(name: Option<&str>, settings: &[String]) -> anyhow::Result<Scenario> {
     let changes = settings.iter().map(|text| one_setting(text)).collect::<anyhow::Result<Vec<_>>>()?;
-    Ok(load(name)?.with_settings(&changes)?)
+    match load(name) {
+        Ok(scenario) => Ok(scenario.with_settings(&changes)?),
+        Err(e) => {
+            let mended = e.downcast_ref::<carus_labour::ScenarioError>().is_some_and(|e| match e {
+                carus_labour::ScenarioError::Value { key, .. } => changes.iter().any(|(k, _)| k == key),
+                _ => false,
+            });
+            match (mended, name) {
+                (true, Some(file)) => Ok(Scenario::from_file_with_settings(Path::new(file), &changes)?),
+                _ => Err(e),
+            }
+        }
+    }
 }
 
 /// Names the scenario in an error from building or running it, unless
@@ -1072,6 +1086,27 @@ mod tests {
             message: "not a whole JSON file; run the scenario again from the start".into(),
         });
         assert!(!format!("{:#}", resumable(damaged, dir.path())).contains("--resume"));
+    }
+
+    /// `--set` mends a value the file has wrong; what else the file has
+    /// wrong is still named at its own line.
+    #[test]
+    fn a_setting_mends_a_bad_value_in_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("bad.toml");
+        let text = Scenario::builtin("normal").unwrap().to_toml().unwrap().replace("friction = 0.009", "friction = -0.1");
+        std::fs::write(&file, &text).unwrap();
+        let named = file.display().to_string();
+        let e = load_changed(Some(&named), &[]).unwrap_err().to_string();
+        assert!(e.contains("`contact.friction` = -0.1"), "{e}");
+        let mended = load_changed(Some(&named), &["contact.friction=0.05".into()]).unwrap();
+        assert_eq!(mended.contact.friction, 0.05);
+        // Another key the file has wrong is named at its line, not by the settings.
+        let twice_bad = text.replace("force_max_n = 120.0", "force_max_n = -5.0");
+        std::fs::write(&file, &twice_bad).unwrap();
+        let line = twice_bad.lines().position(|l| l.starts_with("force_max_n = -5.0")).unwrap() + 1;
+        let e = load_changed(Some(&named), &["contact.friction=0.05".into()]).unwrap_err().to_string();
+        assert!(e.starts_with(&format!("{named}:{line}: `expulsion.force_max_n` = -5")), "{e}");
     }
 
     /// A scenario file's start refused by the anatomy points at its line,
