@@ -73,15 +73,16 @@ pub fn run(args: &ViewArgs) -> anyhow::Result<Status> {
         anyhow::bail!("--at {}: the run was recorded from 0 to {end:.2} s; give a time in that range", carus_io::shown_number(at));
     }
     let Some(path) = &args.picture else {
+        // Made before the window opens, as `carus render` makes its folder.
         if let Some(folder) = args.screenshot.as_ref().and_then(|p| p.parent()).filter(|f| !f.as_os_str().is_empty()) {
-            anyhow::ensure!(folder.is_dir(), "--screenshot: the folder {} does not exist; make it first", folder.display());
+            super::create_out_folder(folder)?;
         }
         let follow = (!run_ended(&args.run)).then(|| follow_in_background(args.run.clone(), scene));
         carus_view::open(replay, at, args.view.into(), layers, args.screenshot.clone(), follow)?;
         return Ok(Status::Success);
     };
     if let Some(folder) = path.parent().filter(|f| !f.as_os_str().is_empty()) {
-        anyhow::ensure!(folder.is_dir(), "--picture: the folder {} does not exist; make it first", folder.display());
+        super::create_out_folder(folder)?;
     }
     let [width, height] = [args.size[0], args.size[1]];
     let picture = replay.picture(at, &replay.standard_camera(args.view.into()), layers, width, height)?;
@@ -374,10 +375,16 @@ mod tests {
         assert!(e.contains("--at 5") && e.contains("from 0 to 0.30 s"), "{e}");
         let e = refused(args(dir.path().to_path_buf(), -1e300, png.clone()));
         assert!(e.contains("--at -1e300:"), "{e}");
+        // A picture's folder is made, as `carus render` makes its own; a
+        // file where the folder goes is refused before a window opens.
+        let nested = dir.path().join("pictures/t0.1/inferior.png");
+        assert!(matches!(run(&args(dir.path().to_path_buf(), 0.1, nested.clone())).unwrap(), Status::Success));
+        assert!(nested.is_file());
+        std::fs::write(dir.path().join("a-file"), "").unwrap();
         let mut window = args(dir.path().to_path_buf(), 0.1, png.clone());
-        (window.picture, window.screenshot) = (None, Some(dir.path().join("no-such-folder/w.png")));
+        (window.picture, window.screenshot) = (None, Some(dir.path().join("a-file/w.png")));
         let e = refused(window);
-        assert!(e.contains("no-such-folder") && e.contains("does not exist"), "{e}");
+        assert!(e.contains("a-file is a file, not a folder"), "{e}");
         let e = refused(args(dir.path().to_path_buf(), 0.1, dir.path().join("frame.jpg")));
         assert!(e.contains("*.png"), "{e}");
         let e = refused(args(dir.path().join("nothing"), 0.1, png.clone()));
