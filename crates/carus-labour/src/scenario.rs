@@ -1990,15 +1990,19 @@ pub fn check_pelvis_import(path: &Path, text: &str, pelvis: &PelvisSpec, base_di
     }
     let line = toml::from_str::<File>(text).map_or(0, |f| carus_io::input::line_at(text.as_bytes(), f.pelvis.import.span().start));
     let found = if resolved.is_dir() { "is a folder" } else { "does not exist" };
-    Err(ScenarioError::Syntax {
-        path: path.to_path_buf(),
-        line,
-        key: "`pelvis.import`: ".into(),
-        message: format!(
+    let message = match landmarks_file.as_os_str().is_empty() {
+        true => "is empty: it names no landmarks file and no built-in pelvis".to_string(),
+        false => format!(
             "{:?} is neither a file ({} {found}) nor a built-in pelvis",
             landmarks_file.display().to_string(),
             std::path::absolute(&resolved).unwrap_or(resolved).display()
         ),
+    };
+    Err(ScenarioError::Syntax {
+        path: path.to_path_buf(),
+        line,
+        key: "`pelvis.import`: ".into(),
+        message,
         hint: format!(
             "the built-in pelvis names: `{VISIBLE_HUMAN_FEMALE}`; or a landmarks file's path from this \
              file's folder (docs/IMPORT.md)"
@@ -2692,6 +2696,8 @@ mod tests {
         let e = Scenario::from_file(&file).unwrap_err().to_string();
         let resolved = dir.path().join("visible-human-femal");
         assert!(e.starts_with(&format!("{}:4: `pelvis.import`: \"visible-human-femal\" is neither a file", file.display())), "{e}");
+        let e = parse("name = \"x\"\n[pelvis]\nimport = \"\"\n").unwrap_err().to_string();
+        assert!(e.starts_with("test.toml:3: `pelvis.import`: is empty: it names no landmarks file"), "{e}");
         assert!(e.contains(&format!("({} does not exist)", resolved.display())), "{e}");
         assert!(e.contains(&format!("`{VISIBLE_HUMAN_FEMALE}`")), "{e}");
     }
