@@ -2696,10 +2696,10 @@ mod tests {
         let e = Scenario::from_file(&file).unwrap_err().to_string();
         let resolved = dir.path().join("visible-human-femal");
         assert!(e.starts_with(&format!("{}:4: `pelvis.import`: \"visible-human-femal\" is neither a file", file.display())), "{e}");
-        let e = parse("name = \"x\"\n[pelvis]\nimport = \"\"\n").unwrap_err().to_string();
-        assert!(e.starts_with("test.toml:3: `pelvis.import`: is empty: it names no landmarks file"), "{e}");
         assert!(e.contains(&format!("({} does not exist)", resolved.display())), "{e}");
         assert!(e.contains(&format!("`{VISIBLE_HUMAN_FEMALE}`")), "{e}");
+        let e = parse("name = \"x\"\n[pelvis]\nimport = \"\"\n").unwrap_err().to_string();
+        assert!(e.starts_with("test.toml:3: `pelvis.import`: is empty: it names no landmarks file"), "{e}");
     }
 
     #[test]
