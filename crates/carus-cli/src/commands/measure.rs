@@ -418,7 +418,7 @@ biparietal_mn = 95.0
         assert!(e.contains("file.toml:2: `pelvis.import`") && e.contains("does not exist"), "{e}");
         assert!(e.contains(carus_anatomy::pelvis::VISIBLE_HUMAN_FEMALE), "{e}");
         let e = format!("{:#}", load("[pelvis]\nimport = \"\"\n").err().unwrap());
-        assert!(e.contains("is a folder) nor a built-in pelvis"), "{e}");
+        assert!(e.contains("file.toml:2: `pelvis.import`: is empty: it names no landmarks file"), "{e}");
     }
 
     #[test]
