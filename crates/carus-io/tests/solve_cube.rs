@@ -234,7 +234,6 @@ fn job_errors_name_the_key_the_line_and_the_fix() {
             "job.toml:17:1: `solver.time_stepp_s`: unknown field `time_stepp_s`",
         ),
         ("\n[solver]\nend_time_s = -1.0\n", "`solver.end_time_s`: -1 must be positive"),
-
         (
             "\n[[displacement]]\nnode_set = \"x9\"\nx_m = 0.001\nload = { shape = \"step\" }\n[solver]\nend_time_s = 1.0\n",
             "`displacement[0].node_set` names the node set \"x9\", which the mesh does not have; fix: use one of: x0, x1",
@@ -262,7 +261,6 @@ fn job_errors_name_the_key_the_line_and_the_fix() {
     ];
     for (extra, expected) in cases {
         let base = if expected.starts_with("`materials`") { BASE.replace("density_kg_m3 = 1000.0", "density_kg_m3 = 1e-300") } else { BASE.to_string() };
-
         let job = write_job(&dir, &format!("{base}{extra}"));
         let err = run_job(&job, &dir.join("out"), &RunOptions::default(), &mut |_| {})
             .unwrap_err()

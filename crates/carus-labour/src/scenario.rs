@@ -769,6 +769,19 @@ impl PartialEq for ReadFrom {
     }
 }
 
+impl ReadFrom {
+    fn file(path: &Path, text: String) -> ReadFrom {
+        ReadFrom(Some(std::sync::Arc::new(ScenarioSource { path: path.to_path_buf(), text, changed: Vec::new() })))
+    }
+
+    /// The file and line that `key` is written on, where a check made after
+    /// reading should point; None for a built-in or a key changed since.
+    fn locate(&self, key: &str) -> Option<(&Path, Option<NonZeroUsize>)> {
+        let read = self.0.as_deref().filter(|read| !read.changed(key))?;
+        Some((read.path.as_path(), line_of_key(&read.text, key)))
+    }
+}
+
 #[cfg(test)]
 impl Scenario {
     /// This scenario as a user's file `name` would give it, and the line
@@ -955,11 +968,7 @@ impl Scenario {
     pub fn from_file_with_settings(path: &Path, settings: &[(String, String)]) -> Result<Scenario, ScenarioError> {
         let (text, base) = Scenario::read_file(path)?;
         let table = text.parse::<toml::Table>().map_err(|e| toml_syntax(path, &text, &e))?;
-        let source = ReadFrom(Some(std::sync::Arc::new(ScenarioSource {
-            path: path.to_path_buf(),
-            text,
-            changed: Vec::new(),
-        })));
+        let source = ReadFrom::file(path, text);
         let name = table.get("name").and_then(toml::Value::as_str).unwrap_or("the scenario").to_string();
         Scenario::changed_table(table, settings, &name, base, source)
     }
@@ -1022,11 +1031,7 @@ impl Scenario {
             e
         })?;
         check_pelvis_import(path, text, &scenario.pelvis, &scenario.base_dir)?;
-        scenario.source = ReadFrom(Some(std::sync::Arc::new(ScenarioSource {
-            path: path.to_path_buf(),
-            text: text.to_string(),
-            changed: Vec::new(),
-        })));
+        scenario.source = ReadFrom::file(path, text.to_string());
         Ok(scenario)
     }
 
@@ -1036,10 +1041,10 @@ impl Scenario {
     /// file writes it; named as a setting otherwise (a built-in, a changed
     /// key).
     pub(crate) fn refuse(&self, key: String, value: String, problem: String, hint: String) -> ScenarioError {
-        match self.source.0.as_deref().filter(|source| !source.changed(&key)) {
-            Some(source) => ScenarioError::Value {
-                path: source.path.as_path().into(),
-                line: line_of_key(&source.text, &key),
+        match self.source.locate(&key) {
+            Some((path, line)) => ScenarioError::Value {
+                path: path.into(),
+                line,
                 key: key.into(),
                 value,
                 problem,
@@ -1056,10 +1061,7 @@ impl Scenario {
     /// `file:line: ` where a check made after reading should point for
     /// `key`, as [`Self::refuse`] chooses; empty where it names a setting.
     pub(crate) fn located_key(&self, key: &str) -> String {
-        match self.source.0.as_deref().filter(|source| !source.changed(key)) {
-            Some(source) => format!("{}: ", located(&source.path, line_of_key(&source.text, key))),
-            None => String::new(),
-        }
+        self.source.locate(key).map_or(String::new(), |(path, line)| format!("{}: ", located(path, line)))
     }
 
     /// The scenario as a complete TOML file (every key explicit). An
@@ -1123,7 +1125,7 @@ impl Scenario {
         let text = toml::to_string(&table)?;
         // Line numbers would point into the generated text: name the
         // settings instead, or the file's line of a key they did not change.
-        let in_file = |key: &str| source.0.as_deref().filter(|read| !read.changed(key) && !settings.iter().any(|(k, _)| k == key));
+        let in_file = |key: &str| source.locate(key).filter(|_| !settings.iter().any(|(k, _)| k == key));
         let changed = Scenario::parse(&label, &text, base_dir).map_err(|e| match e {
             ScenarioError::Syntax {
                 key, message, hint, ..
@@ -1135,7 +1137,7 @@ impl Scenario {
             mut other => {
                 if let ScenarioError::Value { path, line, key, .. } = &mut other {
                     match in_file(key) {
-                        Some(read) => (*path, *line) = (read.path.as_path().into(), line_of_key(&read.text, key)),
+                        Some((file, at)) => (*path, *line) = (file.into(), at),
                         None => *line = None,
                     }
                 }

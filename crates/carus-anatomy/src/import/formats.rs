@@ -138,14 +138,11 @@ fn parse_binary_stl(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
             spare_bytes: body % RECORD,
         });
     }
-    let f32_at = |at: usize| f32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]]) as f64;
     let mut mesh = RawMesh::default();
-    for record in bytes[HEADER..].chunks_exact(RECORD).enumerate().map(|(k, _)| HEADER + k * RECORD) {
+    for record in bytes[HEADER..].chunks_exact(RECORD) {
         // The stored normal (12 bytes) is not read: the corners' order is the truth.
-        let corner = |c: usize| {
-            let at = record + 12 + 12 * c;
-            DVec3::new(f32_at(at), f32_at(at + 4), f32_at(at + 8))
-        };
+        let f32_at = |at: usize| f32::from_le_bytes([record[at], record[at + 1], record[at + 2], record[at + 3]]) as f64;
+        let corner = |c: usize| DVec3::new(f32_at(12 + 12 * c), f32_at(16 + 12 * c), f32_at(20 + 12 * c));
         mesh.push_triangle([corner(0), corner(1), corner(2)]);
     }
     Ok(mesh)

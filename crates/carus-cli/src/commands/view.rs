@@ -177,10 +177,6 @@ impl RunShown {
         if run_ending(dir).is_some_and(|e| e.simulated_s >= checkpoint_s) {
             return RunShown::from_record(dir);
         }
-        RunShown::from_checkpoint(dir, checkpoint)
-    }
-
-    fn from_checkpoint(dir: &Path, checkpoint: carus_labour::output::Checkpoint) -> anyhow::Result<RunShown> {
         // A run without a floor writes no floor frames at its frame times.
         let (floors, unreadable) = match checkpoint.state.floor {
             Some(_) => carus_labour::floor_frames_at(dir, &checkpoint.frame_times),
