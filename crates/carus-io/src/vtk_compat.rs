@@ -121,6 +121,95 @@ pub(crate) fn raw_appended_to_base64(bytes: &[u8]) -> Result<Cow<'_, [u8]>, Stri
     Ok(Cow::Owned(text.into_bytes()))
 }
 
+/// The largest size a block can have for each byte of it compressed, by
+/// VTK's compressors: deflate's limit of 1032 to 1 (zlib's technical
+/// details), LZ4's 255 to 1 (one length byte per 255 repeated bytes), and
+/// for LZMA a bound well above what it reaches on runs of zeros.
+fn most_expansion(compressor: &str) -> u64 {
+    match compressor {
+        "vtkZLibDataCompressor" => 1032,
+        "vtkLZ4DataCompressor" => 256,
+        _ => 1 << 16,
+    }
+}
+
+/// A compressed array whose block header declares more bytes than its
+/// compressed blocks can hold: vtkio allocates what the header declares
+/// before reading a block, so a damaged header (or an empty array's, which
+/// vtkio miscounts) would end the program for want of memory instead of
+/// giving this file's error. Reads base64 data (inline, or appended after
+/// [`raw_appended_to_base64`]); `None` when every header is within bounds
+/// or cannot be read (vtkio then gives its own error).
+pub(crate) fn compressed_size_fault(bytes: &[u8]) -> Option<String> {
+    let appended_tag = find(bytes, b"<AppendedData", 0);
+    let head = String::from_utf8_lossy(&bytes[..appended_tag.unwrap_or(bytes.len())]);
+    let file_tag = &head[head.find("<VTKFile")?..];
+    let file_tag = &file_tag[..file_tag.find('>')?];
+    let expansion = most_expansion(&attribute(file_tag, "compressor")?);
+    let header_bytes = match attribute(file_tag, "header_type").as_deref() {
+        Some("UInt64") => 8,
+        _ => 4,
+    };
+    let big_endian = attribute(file_tag, "byte_order").as_deref() == Some("BigEndian");
+    let appended = appended_tag.and_then(|at| find(bytes, b"_", at)).map(|u| &bytes[u + 1..]);
+    let mut search = 0;
+    while let Some(at) = head[search..].find("<DataArray") {
+        let start = search + at;
+        let end = start + head[start..].find('>')? + 1;
+        search = end;
+        let tag = &head[start..end];
+        let data = match attribute(tag, "format").as_deref() {
+            Some("binary") => head[end..].trim_start().as_bytes(),
+            Some("appended") => appended?.get(attribute(tag, "offset")?.trim().parse::<usize>().ok()?..)?,
+            _ => continue,
+        };
+        if let Some(fault) = block_sizes_fault(data, header_bytes, big_endian, expansion) {
+            return Some(format!("the data array `{}` {fault}", attribute(tag, "Name").unwrap_or_default()));
+        }
+    }
+    None
+}
+
+/// [`compressed_size_fault`] for one array's base64 data, read as vtkio
+/// reads it: `[blocks][block size][last block size][compressed sizes...]`.
+fn block_sizes_fault(data: &[u8], header_bytes: usize, big_endian: bool, expansion: u64) -> Option<String> {
+    let base64_len = |n: usize| n.div_ceil(3) * 4;
+    let words = |count: usize| -> Option<Vec<u64>> {
+        let decoded = STANDARD.decode(data.get(..base64_len(count * header_bytes))?).ok()?;
+        let word = |w: &[u8]| {
+            let mut b = [0u8; 8];
+            if big_endian {
+                b[8 - header_bytes..].copy_from_slice(w);
+                u64::from_be_bytes(b)
+            } else {
+                b[..header_bytes].copy_from_slice(w);
+                u64::from_le_bytes(b)
+            }
+        };
+        Some(decoded.chunks_exact(header_bytes).take(count).map(word).collect())
+    };
+    let blocks = *words(1)?.first()?;
+    // The header's words must fit in the data, or vtkio counts past it.
+    let header_words = usize::try_from(blocks).ok().and_then(|b| b.checked_add(3)).filter(|w| {
+        w.checked_mul(header_bytes).is_some_and(|n| base64_len(n) <= data.len())
+    });
+    let Some(header_words) = header_words else {
+        return Some(format!("declares {blocks} compressed blocks, more than its data can hold: the file is damaged"));
+    };
+    let header = words(header_words)?;
+    let (block_size, last_size) = (header[1], header[2]);
+    let compressed = header[3..].iter().try_fold(0u64, |sum, &n| sum.checked_add(n));
+    // What vtkio allocates, wrapping as it does.
+    let declared = block_size.wrapping_mul(blocks.wrapping_sub(1)).wrapping_add(last_size);
+    match compressed {
+        Some(compressed) if declared <= expansion.saturating_mul(compressed) => None,
+        _ => Some(format!(
+            "declares {declared} bytes in {blocks} compressed blocks of {} bytes, more than they can hold: the file is damaged",
+            compressed.map_or("too many".to_string(), |c| c.to_string())
+        )),
+    }
+}
+
 /// Writers lay the arrays end to end, so array `k` of the appended data
 /// must end where the next begins (or, the last, where the data ends): an
 /// offset or byte count out by even one byte would otherwise be read as
@@ -167,6 +256,19 @@ pub(crate) fn without_component_ranges(xml: String) -> String {
     }
     out.push_str(rest);
     out
+}
+
+/// The `.vtu` text vtkio wrote (it has no dataset-level field data) with
+/// a `FieldData` block holding `TimeValue`, the name ParaView and VTK read
+/// a dataset's time from, first in its `UnstructuredGrid`.
+pub(crate) fn with_time_value(xml: String, time_s: f64) -> String {
+    let Some(grid_end) = xml.find("<UnstructuredGrid").and_then(|at| xml[at..].find('>').map(|e| at + e + 1)) else {
+        return xml;
+    };
+    let field = format!(
+        "<FieldData><DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" format=\"ascii\">{time_s:?}</DataArray></FieldData>"
+    );
+    format!("{}{field}{}", &xml[..grid_end], &xml[grid_end..])
 }
 
 /// `tag` without its ` name="..."` attribute.
@@ -428,6 +530,37 @@ mod tests {
         assert_eq!(
             without_component_ranges(xml.to_string()),
             r#"<Points><DataArray type="Float64" Name="Points" NumberOfComponents="3" format="binary">AAAA</DataArray></Points><DataArray type="Float64" Name="j" format="binary" RangeMin="1" RangeMax="2">"#
+        );
+    }
+
+    /// A header declaring more than its blocks can hold is named before
+    /// vtkio allocates it; a true one passes.
+    #[test]
+    fn a_compressed_header_past_its_blocks_is_refused() {
+        let file = |words: &[u64], compressed: usize| {
+            let header: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+            format!(
+                r#"<VTKFile type="UnstructuredGrid" header_type="UInt64" compressor="vtkZLibDataCompressor"><DataArray type="Float64" Name="v" format="binary">{}{}</DataArray>"#,
+                STANDARD.encode(header),
+                STANDARD.encode(vec![0u8; compressed])
+            )
+        };
+        assert_eq!(compressed_size_fault(file(&[1, 800, 800, 20], 20).as_bytes()), None);
+        let e = compressed_size_fault(file(&[1, 1 << 40, 1 << 40, 20], 20).as_bytes()).unwrap();
+        assert!(e.starts_with("the data array `v` declares 1099511627776 bytes in 1 compressed blocks of 20 bytes"), "{e}");
+        let e = compressed_size_fault(file(&[1 << 62, 800, 800, 20], 20).as_bytes()).unwrap();
+        assert!(e.contains("declares 4611686018427387904 compressed blocks, more than its data can hold"), "{e}");
+        // An empty array with a block size: vtkio would count -1 blocks.
+        assert!(compressed_size_fault(file(&[0, 32768, 0], 0).as_bytes()).is_some());
+        assert_eq!(compressed_size_fault(b"<VTKFile type=\"UnstructuredGrid\"><DataArray format=\"binary\">AAAA"), None);
+    }
+
+    #[test]
+    fn the_time_value_is_the_grid_s_first_child() {
+        let xml = r#"<VTKFile type="UnstructuredGrid"><UnstructuredGrid><Piece NumberOfPoints="1">"#;
+        assert_eq!(
+            with_time_value(xml.to_string(), 22.95),
+            r#"<VTKFile type="UnstructuredGrid"><UnstructuredGrid><FieldData><DataArray type="Float64" Name="TimeValue" NumberOfTuples="1" format="ascii">22.95</DataArray></FieldData><Piece NumberOfPoints="1">"#
         );
     }
 

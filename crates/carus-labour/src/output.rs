@@ -157,22 +157,24 @@ pub fn read_checkpoint(dir: &Path) -> Result<Checkpoint, LabourError> {
     })
 }
 
-/// A triangle surface as a VTU file, placed by `pose`.
+/// A triangle surface as a VTU file, placed by `pose`; `time_s`: the
+/// frame's time, for a frame of a series.
 pub fn write_surface_vtu(
     path: &Path,
     vertices: &[DVec3],
     triangles: &[[u32; 3]],
     pose: &RigidPose,
+    time_s: Option<f64>,
 ) -> Result<(), LabourError> {
     let points: Vec<[f64; 3]> = vertices.iter().map(|v| pose.point(*v).to_array()).collect();
-    carus_io::write_triangle_vtu(path, &points, triangles).map_err(|e| output_error(path, e))
+    carus_io::write_triangle_vtu(path, &points, triangles, time_s).map_err(|e| output_error(path, e))
 }
 
 /// The floor's current state as a VTU frame: the mesh where it is now, as
 /// the fetal frames are posed, so that the series opens in ParaView as the
 /// scene was; the displacement from the rest shape, von Mises stress,
 /// maximum principal stretch and J ride on it.
-pub fn write_floor_vtu(path: &Path, mesh: &Mesh, solver: &TledSolver) -> Result<(), LabourError> {
+pub fn write_floor_vtu(path: &Path, mesh: &Mesh, solver: &TledSolver, time_s: f64) -> Result<(), LabourError> {
     let u = solver.displacements();
     let fields = solver.element_fields();
     let mut placed = mesh.clone();
@@ -185,6 +187,7 @@ pub fn write_floor_vtu(path: &Path, mesh: &Mesh, solver: &TledSolver) -> Result<
         von_mises_pa: &fields.von_mises_pa,
         max_principal_stretch: &fields.max_principal_stretch,
         jacobian: &fields.jacobian,
+        time_s: Some(time_s),
     };
     carus_io::write_vtu(path, mesh, &frame).map_err(|e| output_error(path, e))
 }

@@ -509,12 +509,14 @@ fn write_static(scene: &Scene, out_dir: &Path) -> Result<(), LabourError> {
         &p.vertices,
         &p.triangles,
         &identity,
+        None,
     )?;
     output::write_surface_vtu(
         &out_dir.join(output::LIGAMENTS_VTU),
         &scene.ligaments.vertices,
         &scene.ligaments.triangles,
         &identity,
+        None,
     )?;
     let h = &scene.head.surface;
     output::write_surface_vtu(
@@ -522,6 +524,7 @@ fn write_static(scene: &Scene, out_dir: &Path) -> Result<(), LabourError> {
         &h.vertices,
         &h.triangles,
         &identity,
+        None,
     )?;
     for (t, file) in [
         (&scene.trunk, output::TRUNK_BODY_VTU),
@@ -533,6 +536,7 @@ fn write_static(scene: &Scene, out_dir: &Path) -> Result<(), LabourError> {
                 &t.surface.vertices,
                 &t.surface.triangles,
                 &identity,
+                None,
             )?;
         }
     }
@@ -546,6 +550,7 @@ fn write_frame(
 ) -> Result<(), LabourError> {
     let scene = sim.scene;
     let k = frame_times.len();
+    let time_s = Some(sim.time_s());
     let bodies = &sim.state.bodies;
     let h = &scene.head.surface;
     output::write_surface_vtu(
@@ -553,6 +558,7 @@ fn write_frame(
         &h.vertices,
         &h.triangles,
         &bodies.pose(HEAD),
+        time_s,
     )?;
     for (t, stem, b) in [
         (&scene.trunk, "trunk", TRUNK),
@@ -564,6 +570,7 @@ fn write_frame(
                 &t.surface.vertices,
                 &t.surface.triangles,
                 &bodies.pose(b),
+                time_s,
             )?;
         }
     }
@@ -572,6 +579,7 @@ fn write_frame(
             &out_dir.join(output::frame_name("floor", k)),
             &floor.mesh,
             solver,
+            sim.time_s(),
         )?;
     }
     frame_times.push(sim.time_s());
@@ -1505,6 +1513,7 @@ mod tests {
             von_mises_pa: &[0.0],
             max_principal_stretch: &[2.0],
             jacobian: &[1.0],
+            time_s: Some(1.0),
         };
         carus_io::write_vtu(&dir.path().join(output::frame_name("floor", 1)), &mesh, &frame).unwrap();
         let moment = |time_s: f64, frame: Option<usize>| KeyMoment {

@@ -471,13 +471,18 @@ pub fn sacrospinous_ligaments(pelvis: &Pelvis) -> TriSurface {
             .min_by(|a, b| (**a - spine).length_squared().total_cmp(&(**b - spine).length_squared()))
             .copied()
             .unwrap_or(l.sacrum_s4_s5);
+        // Pairs (line, base) from the top down; the two meet at the coccyx
+        // tip, one point.
         let first = surface.vertices.len() as u32;
-        for k in 0..=LIGAMENT_SEGMENTS {
+        for k in 0..LIGAMENT_SEGMENTS {
             let t = k as f64 / LIGAMENT_SEGMENTS as f64;
             surface.vertices.extend([sacrospinous_line(pelvis, right, left, t), margin.lerp(l.coccyx_tip, t)]);
         }
-        for k in 0..LIGAMENT_SEGMENTS as u32 {
-            let (a, b, c, d) = (first + 2 * k, first + 2 * k + 2, first + 2 * k + 3, first + 2 * k + 1);
+        surface.vertices.push(l.coccyx_tip);
+        let n = LIGAMENT_SEGMENTS as u32;
+        for k in 0..n {
+            let (a, b, d) = (first + 2 * k, first + 2 * k + 2, first + 2 * k + 1);
+            let c = if k + 1 < n { b + 1 } else { b };
             for [p, q, r] in [[a, b, c], [a, c, d]] {
                 let (vp, vq, vr) = (surface.vertices[p as usize], surface.vertices[q as usize], surface.vertices[r as usize]);
                 let normal = (vq - vp).cross(vr - vp);
@@ -1117,13 +1122,19 @@ mod tests {
                 let [a, b, c] = ligaments.corners(t);
                 assert!((b - a).cross(c - a).dot(middle - (a + b + c) / 3.0) > 0.0);
             }
-            let widths: Vec<f64> =
-                ligaments.vertices.chunks(2).map(|pair| (pair[1] - pair[0]).length()).collect();
-            let per_side = LIGAMENT_SEGMENTS + 1;
-            for side in widths.chunks(per_side) {
-                assert!(side[0] > 0.03 && side[per_side - 1] < 0.1 * side[0], "{side:?}");
+            let per_side = 2 * LIGAMENT_SEGMENTS + 1;
+            assert_eq!(ligaments.vertices.len(), 2 * per_side);
+            for side in ligaments.vertices.chunks(per_side) {
+                let widths: Vec<f64> = side.chunks(2).map(|pair| pair.last().unwrap().distance(pair[0])).collect();
+                let n = LIGAMENT_SEGMENTS;
+                assert!(widths[0] > 0.03 && widths[n - 1] < 0.2 * widths[0] && widths[n] == 0.0, "{widths:?}");
+                assert_eq!(side[per_side - 1], l.coccyx_tip);
             }
-            for margin in [1, 2 * per_side + 1] {
+            // Every point is a corner of some face (ParaView shows no strays).
+            let mut used = vec![false; ligaments.vertices.len()];
+            ligaments.triangles.iter().flatten().for_each(|&v| used[v as usize] = true);
+            assert!(used.iter().all(|&u| u), "{used:?}");
+            for margin in [1, per_side + 1] {
                 assert!(pelvis.surface.vertices.contains(&ligaments.vertices[margin]));
             }
         }

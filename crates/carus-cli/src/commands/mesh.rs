@@ -72,6 +72,7 @@ pub fn run(args: &MeshArgs) -> anyhow::Result<Status> {
                     von_mises_pa: &zeros_e,
                     max_principal_stretch: &ones_e,
                     jacobian: &ones_e,
+                    time_s: None,
                 };
                 write_vtu(&path, &floor, &fields)?;
                 written.push(path);
@@ -137,7 +138,7 @@ fn self_crossings(name: &'static str, surface: &TriSurface) -> Option<usize> {
 fn write_surface(out: &Path, name: &str, surface: &TriSurface, frame: &str) -> anyhow::Result<[PathBuf; 2]> {
     let stl = write_stl(&out.join(format!("{name}.stl")), surface, frame)?;
     let vtu = out.join(format!("{name}.vtu"));
-    carus_labour::output::write_surface_vtu(&vtu, &surface.vertices, &surface.triangles, &carus_analysis::RigidPose::default())?;
+    carus_labour::output::write_surface_vtu(&vtu, &surface.vertices, &surface.triangles, &carus_analysis::RigidPose::default(), None)?;
     Ok([stl, vtu])
 }
 

@@ -595,6 +595,15 @@ fn check_replaceable(dir: &Path) -> anyhow::Result<()> {
             dir.display()
         );
     }
+    // A run of a sweep or of sanity: their tables were written from it.
+    if let Some(batch) = canonical.parent().filter(|p| p.join(super::sweep::PLAN_FILE).is_file() || p.join(super::sanity::PLAN_FILE).is_file()) {
+        bail!(
+            "{} is one of the runs in {}, whose tables were written from it, and --force does not replace it; \
+             choose another --out",
+            dir.display(),
+            batch.display()
+        );
+    }
     if !carus_made(dir) {
         bail!(
             "{} is not a folder that carus made (it has no {OUT_DIR_MARK}, nor a run's scenario.toml with \
@@ -1168,6 +1177,20 @@ mod tests {
         std::fs::create_dir(&lone).unwrap();
         std::fs::write(lone.join("run.json"), "{}").unwrap();
         assert!(choose_out_dir(Some(&lone), "x", true).is_err());
+
+        // A run inside a sweep's or sanity's folder is theirs to redo.
+        for (name, plan) in [("sweep", super::super::sweep::PLAN_FILE), ("sanity", super::super::sanity::PLAN_FILE)] {
+            let batch = dir.path().join(name);
+            let member = batch.join("normal");
+            std::fs::create_dir_all(&member).unwrap();
+            std::fs::write(batch.join(plan), "{}").unwrap();
+            std::fs::write(member.join(OUT_DIR_MARK), "").unwrap();
+            let e = format!("{:#}", choose_out_dir(Some(&member), "x", true).err().unwrap());
+            assert!(e.contains("is one of the runs in") && !e.contains("add --force"), "{e}");
+            let e = format!("{:#}", choose_out_dir(Some(&member), "x", false).err().unwrap());
+            assert!(e.contains("is one of the runs in") && !e.contains("add --force"), "{e}");
+            assert!(member.join(OUT_DIR_MARK).exists());
+        }
 
         let marks: Vec<&[&str]> = [&[OUT_DIR_MARK][..]].into_iter().chain(EARLIER_OUTPUT_MARKS).collect();
         for (i, files) in marks.into_iter().enumerate() {

@@ -361,6 +361,7 @@ impl Recorder {
                 von_mises_pa: &fields.von_mises_pa,
                 max_principal_stretch: &fields.max_principal_stretch,
                 jacobian: &fields.jacobian,
+                time_s: Some(reported_time_s(solver.time_s())),
             },
         )?;
         self.pvd.push(reported_time_s(solver.time_s()), name);
