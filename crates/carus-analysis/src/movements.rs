@@ -194,14 +194,21 @@ fn not_held_at_birth(series: &Series, movements: &Movements, born: Option<HeadBo
         .and_then(|start| series.time_s.iter().position(|&t| t == start))
         .map(|i| series.phi_deg[i]);
     if let Some(from) = extended_from.filter(|from| from - born.phi_deg < EXTENSION_MIN_DEG) {
+        let fall = from - born.phi_deg;
+        let kept = match fall {
+            f if f <= -0.5 => format!("{:.0} deg more flexed than", -f),
+            f if f < 0.5 => "back at".to_string(),
+            f => format!("only {f:.0} deg less flexed than"),
+        };
         lost.push(NotHeldAtBirth {
             movement: "extension".into(),
             reason: format!(
-                "the head was born at phi {:+.1} deg, {:.0} deg below the {from:+.1} deg it had extended from, \
-                 where the rule counts a fall of {EXTENSION_MIN_DEG:.0} deg{}",
+                "the {:.0} deg of extension were undone before the birth: the head was born at phi {:+.1} deg, \
+                 {kept} the {from:+.1} deg it began to extend from, where the rule asks {EXTENSION_MIN_DEG:.0} \
+                 deg less{}",
+                extension.size.unwrap_or(0.0),
                 born.phi_deg,
-                (from - born.phi_deg).max(0.0),
-                if born.phi_deg > 0.0 { ": it was born flexed" } else { "" }
+                if born.phi_deg > 0.0 { "; it was born flexed" } else { "" }
             ),
         });
     }

@@ -641,6 +641,8 @@ fn movements_lost_before_the_birth_are_reported_as_not_held() {
     let [rotation, extension] = [0, 1].map(|k| lost.not_held_at_birth[k].to_string());
     assert!(rotation.starts_with("internal_rotation not held at birth: the occiput had turned back to LOA (theta -40 deg)"), "{rotation}");
     assert!(extension.contains(&format!("born at phi {:+.1} deg", born.phi_deg)) && extension.ends_with("it was born flexed"), "{extension}");
+    // Flexed past where it began: said as more flexed, never as a negative fall.
+    assert!(extension.contains("deg of extension were undone before the birth") && extension.contains("more flexed than the"), "{extension}");
 
     // An extension that begins only once the head is out was not lost by
     // the birth: it had not happened.

@@ -33,7 +33,7 @@ enum Command {
     Mesh(commands::mesh::MeshArgs),
     /// Draw anatomy from standard views into a PNG contact sheet.
     Render(commands::render::RenderArgs),
-    /// Simulate labour forward from physics and detect the cardinal movements.
+    /// Run a labour scenario (forward from physics, or along an imposed or hybrid trajectory) and detect the cardinal movements.
     Run(commands::run::RunArgs),
     /// List the built-in scenarios, or print one as TOML.
     Scenarios(commands::scenarios::ScenariosArgs),
@@ -75,8 +75,16 @@ fn main() -> ExitCode {
         Ok(Status::Failed) => ExitCode::from(1),
         Err(error) => {
             eprintln!("error: {}", error_text(&error));
-            ExitCode::from(1)
+            ExitCode::from(error_status(&error))
         }
+    }
+}
+
+/// 2 for a bad argument, 1 for any other error (CONVENTIONS.md).
+fn error_status(error: &anyhow::Error) -> u8 {
+    match error.downcast_ref::<commands::BadArgument>() {
+        Some(_) => 2,
+        None => 1,
     }
 }
 
@@ -142,6 +150,19 @@ mod tests {
         assert_eq!(super::error_text(&e), "[pelvis] import: cannot read x.stl: No such file");
         let e = anyhow::Error::from(missing()).context("scenario my.toml");
         assert_eq!(super::error_text(&e), "scenario my.toml: No such file");
+    }
+
+    /// A flag's value refused after parsing is a bad argument too (exit
+    /// status 2), with context or without; any other error is 1.
+    #[test]
+    fn a_value_refused_after_parsing_exits_2() {
+        use clap::Parser;
+        let cli = super::Cli::try_parse_from(["carus", "validate", "cube", "--n", "3"]).unwrap();
+        let super::Command::Validate(args) = &cli.command else { panic!("validate") };
+        let e = super::commands::validate::run(args).err().unwrap();
+        assert_eq!(super::error_status(&e), 2, "{e}");
+        assert_eq!(super::error_status(&e.context("in context")), 2);
+        assert_eq!(super::error_status(&anyhow::anyhow!("cannot read f")), 1);
     }
 
     /// A malformed `--set` is a bad argument (clap's exit status 2), named

@@ -33,14 +33,20 @@ fn the_example_job_matches_the_direct_api_and_writes_readable_results() {
         (report.elements, report.nodes, report.element_kind),
         (125, 216, "h8")
     );
+    assert_eq!((report.tet_formulation, report.hourglass_modulus), (None, Some("shear")));
     assert_eq!(report.steps, 5000);
     assert!((report.simulated_s - 10.0).abs() < 1e-9);
     assert_eq!(report.frames, 21, "t = 0, every 0.5 s to 10 s");
     assert!(progress_calls >= 20);
     assert!(report.dt_s <= report.critical_dt_s);
 
-    // The same model through carus-fem directly (the V3 set-up, n = 5).
-    let direct = simulate(&CubeSetup::miller(5, CubeElement::H8, CubeVariant::Clamped)).unwrap();
+    // The same model through carus-fem directly (the V3 set-up, n = 5,
+    // with the example's hourglass scaling, the solver's default).
+    let setup = CubeSetup {
+        hourglass_modulus: carus_fem::HourglassModulus::Shear,
+        ..CubeSetup::miller(5, CubeElement::H8, CubeVariant::Clamped)
+    };
+    let direct = simulate(&setup).unwrap();
     let frames =
         PvdCollection::parse(&std::fs::read_to_string(out.join("solution.pvd")).unwrap()).unwrap();
     assert_eq!(frames.frames().len(), 21);
@@ -92,7 +98,14 @@ fn the_example_job_matches_the_direct_api_and_writes_readable_results() {
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
     assert_eq!(&header[..3], ["time_s", "step", "max_displacement_m"]);
     assert!(header.contains(&"reaction_x0_x_n"));
-    assert_eq!(lines.count(), 201, "t = 0 and every 0.05 s");
+    let rows: Vec<&str> = lines.collect();
+    assert_eq!(rows.len(), 201, "t = 0 and every 0.05 s");
+    // The example is fit to copy: at rest, under 1 % of its strain energy
+    // is in hourglass modes (V3's criterion).
+    let column = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let last: Vec<f64> = rows[200].split(',').map(|v| v.parse().unwrap()).collect();
+    let share = last[column("hourglass_j")] / last[column("strain_j")];
+    assert!(share < 0.01, "hourglass energy {share:.4} of the strain energy");
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["steps"], 5000);
@@ -131,6 +144,8 @@ fn the_pad_example_sags_under_pressure_and_gravity() {
         (report.element_kind, report.elements, report.nodes),
         ("t4", 432, 147)
     );
+    // The summary says which tetrahedron the job asked for.
+    assert_eq!((report.tet_formulation, report.hourglass_modulus), (Some("t4anp"), None));
     assert!(report.dt_s < report.critical_dt_s);
     // Read in millimetres, scaled to metres: the pad is 20 mm wide.
     let last = out.join(format!("frames/frame_{:05}.vtu", report.frames - 1));

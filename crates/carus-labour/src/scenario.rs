@@ -1782,13 +1782,14 @@ impl Scenario {
             // step is read from the path, and a turn within one step would
             // be taken the short way round.
             if !(w.time_s.is_finite() && w.time_s >= previous_s + dt) {
+                let before = match i {
+                    0 => "the start, at 0 s, where [start] places the head".to_string(),
+                    _ => format!("the way-point before it, at {previous_s} s"),
+                };
                 return Err(err(
                     key("time_s"),
                     shown(w.time_s),
-                    &format!(
-                        "must come at least a rigid step (numerics.rigid_dt_s = {dt} s) after the way-point \
-                         before it ({previous_s} s; the start is at 0 s)"
-                    ),
+                    &format!("must come at least a rigid step (numerics.rigid_dt_s = {dt} s) after {before}"),
                     "list the way-points in time order, each at a later time",
                 ));
             }
@@ -2164,12 +2165,20 @@ fn syntax(path: &Path, text: &str, key: String, error: &toml::de::Error) -> Scen
         None => key,
     };
     let twice = carus_io::toml_text::written_twice(text, error).map(|t| t.message_and_fix());
+    // A way-point's keys are shown by a scenario that has way-points.
+    let in_trajectory = key.starts_with("trajectory");
     let hint = if let Some((said, fix)) = twice {
         message = said;
         fix.to_string()
+    } else if message.starts_with("unknown field") && in_trajectory {
+        "check the spelling against `carus scenarios show textbook`, whose way-points list every key \
+         (docs/TRAJECTORIES.md)"
+            .to_string()
     } else if message.starts_with("unknown field") {
         "check the spelling against `carus scenarios show normal`, which lists every key"
             .to_string()
+    } else if message.starts_with("missing field") && in_trajectory {
+        "docs/TRAJECTORIES.md lists what a way-point needs; `carus scenarios show textbook` has them".to_string()
     } else if message.starts_with("unknown variant") {
         "use one of the values listed".to_string()
     } else if message.starts_with("invalid type") && message.ends_with("expected a whole number") {
@@ -2299,7 +2308,7 @@ mod tests {
         let e = refused("imposed", &point(1.0, -40.0).replace("time_s = 1", "time_s = 1 s"));
         assert!(e.contains("`trajectory.waypoints.time_s`") && e.contains("write the number alone"), "{e}");
         let e = refused("imposed", &point(0.0, -40.0));
-        assert!(e.contains("`trajectory.waypoints[0].time_s` = 0") && e.contains("the start is at 0 s"), "{e}");
+        assert!(e.contains("`trajectory.waypoints[0].time_s` = 0") && e.contains("after the start, at 0 s, where [start] places the head"), "{e}");
         let e = refused("imposed", &point(61.0, -40.0));
         assert!(e.contains("`trajectory.waypoints[0].time_s` = 61") && e.contains("numerics.end_time_s"), "{e}");
         let e = refused("imposed", &point(1.0, -400.0));

@@ -71,6 +71,14 @@ pub struct FloorSample {
     pub inverted_corner_elements: usize,
 }
 
+impl FloorSample {
+    /// When a floor element first had a corner turned inside out among
+    /// `samples`: the floor's stretches from then on are not to be trusted.
+    pub fn first_inverted_s(samples: &[FloorSample]) -> Option<f64> {
+        samples.iter().find(|f| f.inverted_corner_elements > 0).map(|f| f.time_s)
+    }
+}
+
 /// Everything that changes during a run; serializable, so a checkpoint
 /// resumes bit for bit.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

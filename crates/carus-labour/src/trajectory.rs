@@ -95,6 +95,24 @@ impl Default for TrajectorySection {
     }
 }
 
+impl TrajectorySection {
+    /// A note for way-points whose angles, not all zero, all lie within a
+    /// full turn in radians (under 6.28 in size): the keys are degrees, and
+    /// angles written in radians (1.57 for a quarter turn) would hold the
+    /// head within a few degrees of the start's rotation and attitude.
+    pub fn radians_note(&self) -> Option<String> {
+        use std::f64::consts::TAU;
+        let angles = || self.waypoints.iter().flat_map(|w| [w.theta_deg, w.phi_deg]);
+        let small = angles().all(|a| a.abs() < TAU) && angles().any(|a| a != 0.0);
+        small.then(|| {
+            format!(
+                "every way-point's theta_deg and phi_deg is under {TAU:.2} in size; they are degrees: if they \
+                 were written in radians, multiply them by 57.3 (a quarter turn is 90 deg, not 1.57)"
+            )
+        })
+    }
+}
+
 /// The guide is critically damped, so the head settles on its path
 /// without ringing (engineering choice).
 pub const GUIDE_DAMPING_RATIO: f64 = 1.0;
@@ -242,6 +260,20 @@ mod tests {
 
     fn waypoint(time_s: f64, station_mm: f64, theta_deg: f64, phi_deg: f64) -> Waypoint {
         Waypoint { time_s, station_mm, theta_deg, phi_deg, anterior_mm: 0.0 }
+    }
+
+    /// Angles that read as radians get a note; degrees, and a path that
+    /// keeps the start's angles (all zero), do not.
+    #[test]
+    fn way_point_angles_in_radians_are_noted() {
+        let section = |points: Vec<Waypoint>| TrajectorySection { waypoints: points, ..TrajectorySection::default() };
+        let radians = section(vec![waypoint(5.0, 0.0, -1.57, 0.35), waypoint(9.0, 40.0, 0.0, -0.5)]);
+        let note = radians.radians_note().expect("a note");
+        assert!(note.contains("multiply them by 57.3"), "{note}");
+        assert_eq!(section(vec![waypoint(5.0, 0.0, -45.0, 20.0), waypoint(9.0, 40.0, 0.0, 3.0)]).radians_note(), None);
+        assert_eq!(section(vec![waypoint(5.0, 0.0, 0.0, 0.0)]).radians_note(), None);
+        assert_eq!(section(Vec::new()).radians_note(), None);
+        assert_eq!(crate::Scenario::builtin("textbook").unwrap().trajectory.radians_note(), None);
     }
 
     #[test]

@@ -49,6 +49,21 @@ impl View {
         }
     }
 
+    /// Where the eye is and which way the mother's body lies in the
+    /// picture (pelvis frame, CONVENTIONS.md: x her right, y anterior, z
+    /// cranial): the view's name alone does not tell inferior from
+    /// superior, which are mirror images. At most 48 characters, the
+    /// width of a 384 px tile.
+    pub fn orientation(self) -> &'static str {
+        match self {
+            View::Anterior => "from front: cranial up, her left to the right",
+            View::Lateral => "from her right: cranial up, front to the right",
+            View::Inferior => "from below: front up, her left to the right",
+            View::Superior => "from above: front up, her right to the right",
+            View::Oblique => "from her front right, above: cranial up",
+        }
+    }
+
     /// Unit vector from the looked-at point towards the eye, and the
     /// direction that appears upwards in the picture, both in the pelvis frame.
     pub fn eye_direction_and_up(self) -> (Vec3, Vec3) {
@@ -225,6 +240,34 @@ impl Camera {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Each view's orientation text says what its camera shows: the
+    /// picture's up and right directions, named in the pelvis frame.
+    #[test]
+    fn each_view_says_which_way_the_body_lies() {
+        // The axis `v` lies along (within `tolerance` of its cosine), named.
+        let word = |v: Vec3, tolerance: f32| -> Option<&'static str> {
+            let axes = [(Vec3::X, "her right"), (Vec3::Y, "front"), (Vec3::Z, "cranial")];
+            let opposite = ["her left", "posterior", "caudal"];
+            axes.iter().zip(opposite).find_map(|((axis, plus), minus)| match v.dot(*axis) {
+                d if d > tolerance => Some(*plus),
+                d if d < -tolerance => Some(minus),
+                _ => None,
+            })
+        };
+        for view in View::ALL {
+            let (eye, up) = view.eye_direction_and_up();
+            let camera = Camera::fitted(eye, up, &unit_box(), Projection::Orthographic);
+            let (right, up, _) = camera.basis();
+            let text = view.orientation();
+            assert!(text.len() <= 48, "{view:?}: {text}");
+            // The oblique view's up leans: named by the axis it is nearest.
+            assert!(text.contains(&format!("{} up", word(up, 0.7).unwrap())), "{view:?}: {text}");
+            if let Some(right) = word(right, 0.99) {
+                assert!(text.contains(&format!("{right} to the right")), "{view:?}: {text}");
+            }
+        }
+    }
 
     fn unit_box() -> Bounds {
         Bounds {

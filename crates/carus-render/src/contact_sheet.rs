@@ -16,7 +16,8 @@ pub struct ContactSheet {
     pub tile_size: [u32; 2],
     /// Pixels of background between and around the tiles.
     pub gap: u32,
-    /// Writes each view's name in a strip above its tile.
+    /// Writes each view's name in a strip above its tile, and under it
+    /// which way the mother's body lies in the picture ([`View::orientation`]).
     pub labels: bool,
 }
 
@@ -35,8 +36,9 @@ impl Default for ContactSheet {
 /// Pixels per font pixel of the labels (the font is 8 x 8).
 const LABEL_SCALE: u32 = 2;
 
-/// Height of the strip that holds a label: the text and a little air below it.
-pub const LABEL_STRIP: u32 = 8 * LABEL_SCALE + 6;
+/// Height of the strip that holds a label: the name, the orientation in
+/// the font at its own size below it, and a little air below each.
+pub const LABEL_STRIP: u32 = 8 * LABEL_SCALE + 4 + 8 + 6;
 
 impl Renderer {
     /// Renders `scene` from each view of `sheet` at one common scale
@@ -79,7 +81,11 @@ impl Renderer {
             picture.paste(&tile, x, sheet.gap + strip);
             if sheet.labels {
                 let ink = label_ink(scene.background);
-                draw_label(&mut picture, &view.name().to_uppercase(), x, sheet.gap, ink);
+                draw_label(&mut picture, &view.name().to_uppercase(), x, sheet.gap, ink, LABEL_SCALE);
+                // As much of the orientation as the tile's width holds.
+                let fits = (tile_w / 8) as usize;
+                let orientation: String = view.orientation().chars().take(fits).collect();
+                draw_label(&mut picture, &orientation, x, sheet.gap + 8 * LABEL_SCALE + 4, ink, 1);
             }
         }
         Ok(picture)
@@ -97,9 +103,9 @@ fn label_ink(background: [f32; 4]) -> [u8; 4] {
     }
 }
 
-/// Writes ASCII text with the public-domain 8x8 font, scaled up.
-fn draw_label(picture: &mut Image, text: &str, x: u32, y: u32, ink: [u8; 4]) {
-    let advance = 8 * LABEL_SCALE;
+/// Writes ASCII text with the public-domain 8x8 font, `scale` times its size.
+fn draw_label(picture: &mut Image, text: &str, x: u32, y: u32, ink: [u8; 4], scale: u32) {
+    let advance = 8 * scale;
     for (i, c) in text.chars().enumerate() {
         let Some(glyph) = font8x8::legacy::BASIC_LEGACY.get(c as usize) else {
             continue;
@@ -109,11 +115,11 @@ fn draw_label(picture: &mut Image, text: &str, x: u32, y: u32, ink: [u8; 4]) {
             for column in 0..8 {
                 // Bit 0 is the leftmost pixel of the row.
                 if bits & (1 << column) != 0 {
-                    for dy in 0..LABEL_SCALE {
-                        for dx in 0..LABEL_SCALE {
+                    for dy in 0..scale {
+                        for dx in 0..scale {
                             picture.set_pixel(
-                                left + column * LABEL_SCALE + dx,
-                                y + row as u32 * LABEL_SCALE + dy,
+                                left + column * scale + dx,
+                                y + row as u32 * scale + dy,
                                 ink,
                             );
                         }
@@ -137,7 +143,7 @@ mod tests {
     #[test]
     fn a_label_puts_ink_inside_its_box_only() {
         let mut picture = Image::filled(64, 32, [255; 4]);
-        draw_label(&mut picture, "AL", 4, 4, [0, 0, 0, 255]);
+        draw_label(&mut picture, "AL", 4, 4, [0, 0, 0, 255], LABEL_SCALE);
         let inked: Vec<(u32, u32)> = (0..32)
             .flat_map(|y| (0..64).map(move |x| (x, y)))
             .filter(|&(x, y)| picture.pixel(x, y) == Some([0, 0, 0, 255]))

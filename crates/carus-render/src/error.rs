@@ -45,7 +45,7 @@ pub enum RenderError {
         seconds: u64,
     },
     /// The requested picture size is zero or above the adapter's limit.
-    #[error("picture size {width}x{height} is invalid: each side must be 1..={max} pixels")]
+    #[error("picture size {width}x{height} is invalid: each side must be 1 to {max} pixels")]
     InvalidSize {
         /// Requested width.
         width: u32,

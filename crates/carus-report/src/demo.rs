@@ -107,6 +107,7 @@ impl Demo {
             floor_untrusted_from_s: None,
             head_axial_moments: Vec::new(),
             head_canal_forces: Vec::new(),
+            contact_load_n: Vec::new(),
             scene: Some(ReportScene {
                 pelvis: Some(self.pelvis.surface.clone()),
                 head: self.fetus.head.surface.clone(),

@@ -47,7 +47,7 @@ impl MomentKind {
         match self {
             MomentKind::Engagement => "end of engagement: both parietal eminences below the inlet",
             MomentKind::InternalRotation => "end of internal rotation",
-            MomentKind::Crowning => "the biparietal plane (head centre) passes the outlet",
+            MomentKind::Crowning => "the biparietal plane (head centre) passes the outlet: the instant the head counts as born",
             MomentKind::Restitution => "end of external rotation (restitution)",
             MomentKind::Arrest => "last sample of the arrested run",
         }

@@ -117,10 +117,26 @@ pub fn page(input: &ReportInput, parts: &Parts) -> Result<String, ReportError> {
             escape(notice)
         );
     }
+    // What the birth undid belongs beside the count, not only further down.
+    let not_held: Vec<&str> = d
+        .not_held_at_birth
+        .iter()
+        .map(|n| rows.iter().find(|r| r.key == n.movement).map_or(n.movement.as_str(), |r| r.label))
+        .collect();
+    let not_held = match (not_held.len(), d.head_born) {
+        (0, _) => String::new(),
+        (_, Some(born)) => format!(
+            ", {} not held at birth (the head was born {}, phi {:+.0}&deg;)",
+            not_held.join(" and ").to_lowercase(),
+            born.occiput_position(),
+            born.phi_deg
+        ),
+        (_, None) => format!(", {} not held at birth", not_held.join(" and ").to_lowercase()),
+    };
     let _ = write!(
         w,
         "<p class=\"headline {class}\" id=\"outcome\" data-delivered=\"{}\">{}</p>\
-         <p class=\"sub\">{observed} of 7 cardinal movements observed &middot; {:.1} s simulated",
+         <p class=\"sub\">{observed} of 7 cardinal movements observed{not_held} &middot; {:.1} s simulated",
         d.outcome.delivered,
         escape(&headline),
         input.run.simulated_s
@@ -492,7 +508,8 @@ fn plots_section(
         values: &s.phi_deg,
         colour: blue,
     }];
-    let force = vec![
+    let green = RGBColor(42, 138, 62);
+    let mut force = vec![
         Curve {
             values: &s.expulsion_force_n,
             colour: blue,
@@ -502,6 +519,26 @@ fn plots_section(
             colour: orange,
         },
     ];
+    // Only when it was recorded at every sample of the history.
+    let load_known = !input.contact_load_n.is_empty() && input.contact_load_n.len() == s.time_s.len();
+    if load_known {
+        all_finite("contact_load_n", &[&input.contact_load_n])?;
+        force.push(Curve {
+            values: &input.contact_load_n,
+            colour: green,
+        });
+    }
+    let force_caption = format!(
+        "<span style=\"color:#1f5799\">&#9632; expulsion force along the spine</span> \
+         <span style=\"color:#c85200\">&#9632; net contact force (bone + floor): the size of their vector \
+         total, in which pushes from opposite sides cancel</span>{}",
+        if load_known {
+            " <span style=\"color:#2a8a3e\">&#9632; contact load: the sum of the sizes of the forces from \
+             each part of the pelvis and the floor, how hard the fetus is pressed from all sides</span>"
+        } else {
+            ""
+        }
+    );
     let figures = [
         (
             "station",
@@ -524,8 +561,7 @@ fn plots_section(
         (
             "force",
             "Forces on the fetus",
-            "<span style=\"color:#1f5799\">&#9632; expulsion force along the spine</span> \
-             <span style=\"color:#c85200\">&#9632; magnitude of the total contact force (bone + floor)</span>",
+            force_caption.as_str(),
             plots::svg(&spec("force", "force (N)", force, vec![0.0]))?,
         ),
     ];

@@ -86,9 +86,14 @@ pub struct MomentPictures {
 
 /// The stretch range of the colour scale, shared by every picture.
 pub fn stretch_range(floor: &FloorSurface) -> Option<[f64; 2]> {
-    let top = floor
-        .frames
-        .iter()
+    stretch_range_of(&floor.frames)
+}
+
+/// The colour scale's stretch range over `frames`: from 1 (rest) to the
+/// largest stretch, at least [`MIN_STRETCH_TOP`]; none without a number.
+pub fn stretch_range_of<'a>(frames: impl IntoIterator<Item = &'a FloorFrame>) -> Option<[f64; 2]> {
+    let top = frames
+        .into_iter()
         .flat_map(|f| f.stretch.iter().copied())
         .filter(|s| s.is_finite())
         .fold(f64::NEG_INFINITY, f64::max);

@@ -325,6 +325,24 @@ fn how_the_head_was_born_is_noted() {
     assert!(!write_report_with(&demo.input("held"), None).unwrap().html.contains("head-born"));
 }
 
+/// The forces plot says that its contact curve is a vector total, and
+/// adds the contact load (the sum of the sizes) when it was recorded at
+/// every sample.
+#[test]
+fn the_contact_load_is_plotted_beside_the_net_contact_force() {
+    let demo = Demo::textbook().unwrap();
+    let mut input = demo.input("load");
+    let html = write_report_with(&input, None).unwrap().html;
+    assert!(html.contains("pushes from opposite sides cancel") && !html.contains("contact load:"));
+    input.contact_load_n = vec![120.0; input.history.samples.len()];
+    let html = write_report_with(&input, None).unwrap().html;
+    assert!(html.contains("contact load: the sum of the sizes of the forces"));
+    input.contact_load_n.pop();
+    assert!(!write_report_with(&input, None).unwrap().html.contains("contact load:"));
+    input.contact_load_n.push(f64::NAN);
+    assert!(write_report_with(&input, None).is_err());
+}
+
 /// A counted movement the head had lost by its birth is flagged in its
 /// row and explained under the timeline; the textbook's are not.
 #[test]
@@ -347,6 +365,14 @@ fn a_movement_lost_by_the_birth_is_flagged() {
     assert!(at < html.find("id=\"plots\"").unwrap(), "under the timeline");
     let note = &html[at..at + html[at..].find("</p>").unwrap()];
     assert!(note.contains("<b>Extension not held at birth:</b> the head was born at phi +19.8 deg."), "{note}");
+    // The headline's count says so too, with the position born in.
+    let born = demo.detector.head_born.expect("the textbook is born");
+    let sub = format!(
+        "7 of 7 cardinal movements observed, extension not held at birth (the head was born {}, phi {:+.0}&deg;)",
+        born.occiput_position(),
+        born.phi_deg
+    );
+    assert!(html.contains(&sub), "{sub}");
 }
 
 /// Forces given for a key moment's sample are drawn as arrows in its

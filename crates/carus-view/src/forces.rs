@@ -26,8 +26,9 @@ pub use carus_report::pictures::ARROW_M_PER_N;
 pub const SMALLEST_DRAWN_N: f64 = 2.0;
 /// Radius of an arrow's shaft, m.
 const SHAFT_RADIUS_M: f32 = 1.5e-3;
-/// The expulsion arrow's colour: dark grey.
-pub const EXPULSION_RGB: [f32; 3] = [0.2, 0.2, 0.2];
+/// The expulsion arrow's colour: mid grey, seen on the window's dark
+/// background and on the report's white one alike.
+pub const EXPULSION_RGB: [f32; 3] = [0.6, 0.6, 0.6];
 /// The guide's (the teacher's hand) colour: magenta.
 pub const GUIDE_RGB: [f32; 3] = [0.85, 0.1, 0.85];
 /// The neck's force on the head (the trunk's push at the pivot): olive.

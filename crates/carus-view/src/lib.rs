@@ -21,7 +21,7 @@ mod window;
 use carus_analysis::{DetectorReport, PoseHistory, Series};
 use carus_render::{Bounds, Camera, Image, Projection, RenderError, RenderMesh, Renderer, Scene, View};
 use forces::Forces;
-use carus_report::pictures::{fitting_bounds, meshes_at_sample, see_through_under_forces, stretch_range};
+use carus_report::pictures::{fitting_bounds, meshes_at_sample, see_through_under_forces, stretch_range, stretch_range_of};
 use carus_report::ReportScene;
 use glam::Vec3;
 
@@ -79,6 +79,9 @@ pub struct SampleState {
     pub station_mm: f64,
     pub theta_deg: f64,
     pub phi_deg: f64,
+    /// Both parietal eminences below the inlet plane (engagement's test,
+    /// CARDINAL_MOVEMENTS.md).
+    pub head_engaged: bool,
     pub head_delivered: bool,
     /// The observed movements whose span holds the sample, by canonical key.
     pub under_way: Vec<&'static str>,
@@ -231,6 +234,7 @@ impl Replay {
             station_mm: s.station_mm[k],
             theta_deg: s.theta_deg[k],
             phi_deg: s.phi_deg[k],
+            head_engaged: s.left_parietal_below_inlet_mm[k] > 0.0 && s.right_parietal_below_inlet_mm[k] > 0.0,
             head_delivered: s.head_delivered[k],
             under_way: self
                 .movements
@@ -250,7 +254,11 @@ impl Replay {
             format!("station {:+.1} mm", s.station_mm),
             format!("theta {:.1} deg", s.theta_deg),
             format!("phi {:.1} deg (flexion positive)", s.phi_deg),
-            if s.head_delivered { "head delivered".into() } else { "head in the canal".into() },
+            match (s.head_delivered, s.head_engaged) {
+                (true, _) => "head delivered".into(),
+                (false, true) => "head engaged, in the canal".into(),
+                (false, false) => "head not engaged (its widest part above the inlet)".into(),
+            },
             self.floor_shown(s.time_s),
             match s.under_way.is_empty() {
                 true => "no movement under way".into(),
@@ -270,7 +278,25 @@ impl Replay {
             .iter()
             .map(|f| f.time_s)
             .min_by(|a, b| (a - t).abs().total_cmp(&(b - t).abs()))
-            .map_or("floor at rest (no state recorded)".into(), |at| format!("floor as at t = {at:.2} s"))
+            .map_or("floor at rest (no state recorded)".into(), |at| match self.stretch_range {
+                Some([low, high]) => format!("floor as at t = {at:.2} s; colour: stretch {low:.2} (dark) to {high:.2} (bright)"),
+                None => format!("floor as at t = {at:.2} s"),
+            })
+    }
+
+    /// The floor's colour scale from its frames up to `t_s` only: the run's
+    /// floor had an element turned inside out then (docs/LABOUR.md), and
+    /// the stretches after it, not to be trusted, would stretch the scale
+    /// until the floor before looked at rest. Kept as it was when no frame
+    /// comes that early.
+    pub fn with_stretch_scale_until(mut self, t_s: f64) -> Replay {
+        let Some(floor) = &self.scene.floor else {
+            return self;
+        };
+        if let Some(range) = stretch_range_of(floor.frames.iter().filter(|f| f.time_s <= t_s)) {
+            self.stretch_range = Some(range);
+        }
+        self
     }
 
     /// The camera of `orbit`, fitted to the canal: zoom narrows the field

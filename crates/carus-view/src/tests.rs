@@ -85,7 +85,9 @@ fn the_readout_names_the_head_s_place_and_the_movements_under_way() {
     let lines = replay.readout(replay.sample_at(during));
     assert!(lines[0].starts_with("t = ") && lines[1].starts_with("station ") && lines[2].starts_with("theta "));
     assert!(lines.iter().any(|l| l.contains("internal rotation")), "{lines:?}");
-    assert_eq!(replay.readout(0)[4], "head in the canal");
+    assert_eq!(replay.readout(0)[4], "head not engaged (its widest part above the inlet)");
+    let engagement = demo.detector.movements.engagement.end_s.unwrap();
+    assert_eq!(replay.readout(replay.sample_at(engagement + 1.0))[4], "head engaged, in the canal");
     // The demonstration records no floor state: it is drawn at rest, and said so.
     assert_eq!(replay.readout(0)[5], "floor at rest (no state recorded)");
     assert_eq!(replay.readout(demo.history.samples.len() - 1)[4], "head delivered");
@@ -335,4 +337,26 @@ mod forces {
         assert_eq!(bare.meshes(k, Layers { markers: true, forces: true }).len(), 6);
         assert!(bare.force_readout(k).is_empty());
     }
+}
+
+/// The floor's colour scale is said in the readout, and a run whose floor
+/// had an element turned inside out takes it from the frames before.
+#[test]
+fn the_floor_colour_scale_is_read_from_the_trusted_frames() {
+    let demo = Demo::textbook().unwrap();
+    let mut scene = demo.input("textbook").scene.unwrap();
+    let floor = scene.floor.as_mut().expect("the demonstration draws a floor");
+    let frame = |time_s: f64, stretch: f64| carus_report::FloorFrame {
+        time_s,
+        positions_m: floor.rest_positions_m.clone(),
+        stretch: vec![stretch; floor.rest_positions_m.len()],
+    };
+    floor.frames = vec![frame(1.0, 2.0), frame(2.0, 9.0)];
+    let replay = Replay::new("textbook", scene, demo.history.clone(), Some(&demo.detector)).unwrap();
+    let shown = |replay: &Replay| replay.readout(replay.sample_at(1.0))[5].clone();
+    assert!(shown(&replay).ends_with("colour: stretch 1.00 (dark) to 9.00 (bright)"), "{}", shown(&replay));
+    let trusted = replay.with_stretch_scale_until(1.5);
+    assert!(shown(&trusted).ends_with("to 2.00 (bright)"), "{}", shown(&trusted));
+    // No frame before the time: the scale stays as it was.
+    assert!(shown(&trusted.with_stretch_scale_until(0.5)).ends_with("to 2.00 (bright)"));
 }

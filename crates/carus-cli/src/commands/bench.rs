@@ -13,7 +13,7 @@
 
 use std::time::Instant;
 
-use anyhow::{bail, Context};
+use anyhow::Context;
 use carus_fem::gpu::{bench_tled, AdapterChoice, DeviceError, GpuDevice, GpuError, MIN_TIMED_S};
 use carus_fem::validation::cube::{baseline_solver, CubeElement, CubeSetup, CubeVariant, RAMP_S};
 use carus_fem::validation::tissue_model;
@@ -275,16 +275,16 @@ fn labour_bench(scenario: Option<&str>, settings: &[String]) -> anyhow::Result<L
 
 fn tled(args: &TledBenchArgs) -> anyhow::Result<Status> {
     if args.n == 0 {
-        bail!("--n must be at least 1");
+        crate::bad_argument!("--n must be at least 1");
     }
     if args.threads == Some(0) {
-        bail!("--threads must be at least 1");
+        crate::bad_argument!("--threads must be at least 1");
     }
     if args.steps == Some(0) {
-        bail!("--steps must be at least 1: a rate needs timed steps");
+        crate::bad_argument!("--steps must be at least 1: a rate needs timed steps");
     }
     if let Some(peak) = args.peak_gbs.filter(|p| !(p.is_finite() && *p > 0.0)) {
-        bail!("--peak-gbs {peak}: the device's peak memory bandwidth, a positive number of GB/s (e.g. 3350 for an H100)");
+        crate::bad_argument!("--peak-gbs {peak}: the device's peak memory bandwidth, a positive number of GB/s (e.g. 3350 for an H100)");
     }
     let kind = match args.element {
         ElementArg::H8 => ElementKind::H8,

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use carus_analysis::{detect, DetectorReport, PoseHistory};
-use carus_labour::output::{HISTORY_CSV, HISTORY_JSON, SCENARIO_FILE};
+use carus_labour::output::{HISTORY_CSV, HISTORY_JSON, RUN_FILE, SCENARIO_FILE};
 use carus_labour::{Scenario, Scene, BUILTINS};
 use serde_json::json;
 
@@ -80,7 +80,13 @@ pub fn run(args: &DetectArgs) -> anyhow::Result<Status> {
                 path.display(),
                 if a.builtin { format!("the built-in `{}`", a.scenario) } else { a.scenario.clone() },
                 a.chosen,
-                if a.trunk { "" } else { "; no trunk poses, so neither the shoulders nor expulsion can be judged" }
+                if a.trunk {
+                    ""
+                } else {
+                    "; no trunk poses, so neither the shoulders nor expulsion can be judged, and phi (flexion, \
+                     extension) is measured against the expulsion force's direction (the canal's, without one) instead of the trunk's axis \
+                     (docs/DETECTOR.md): it can differ from the run's own phi by tens of degrees"
+                }
             );
         }
         println!("{}: {}", path.display(), outcome_line(&report.outcome));
@@ -116,7 +122,7 @@ fn check_series_target(series: &Path, history: &Path) -> anyhow::Result<()> {
     }
     let same = |a: &Path, b: &Path| a.canonicalize().ok().is_some_and(|a| b.canonicalize().ok() == Some(a));
     if same(series, history) {
-        anyhow::bail!("--series {}: that is the pose history being read; write the series to a new file", series.display());
+        crate::bad_argument!("--series {}: that is the pose history being read; write the series to a new file", series.display());
     }
     let folder = series.parent().filter(|f| !f.as_os_str().is_empty()).unwrap_or(Path::new("."));
     if super::run::carus_made(folder) {
@@ -143,9 +149,20 @@ fn write_series(path: &Path, report: &DetectorReport) -> anyhow::Result<()> {
 /// The detector's report on the history in `path`, and for a table the
 /// scenario whose anatomy it was read with.
 fn detect_file(path: &Path, anatomy: Option<&str>) -> anyhow::Result<(DetectorReport, Option<TableAnatomy>)> {
+    // A folder of another kind (a sweep's) is said as such.
+    let folder = path.parent().filter(|f| !f.as_os_str().is_empty() && f.is_dir());
+    if let Some(kind) = folder.filter(|_| !path.exists()).and_then(super::folder_kind) {
+        anyhow::bail!("{} holds no pose history: {kind}; give `carus detect` one run's folder", folder.unwrap_or(path).display());
+    }
     if !path.exists() {
         anyhow::bail!(
             "{}: no such file or folder; give a run folder, or its pose_history.json or pose_history.csv",
+            path.display()
+        );
+    }
+    if path.file_name().is_some_and(|name| name == RUN_FILE) {
+        anyhow::bail!(
+            "{} is a run's record, not its pose history: give the run's folder, or the {HISTORY_JSON} beside it",
             path.display()
         );
     }
@@ -251,6 +268,17 @@ mod tests {
 
         let text = format!("{:#}", detect_file(&wrong, Some("normal")).unwrap_err());
         assert!(text.contains("--anatomy is for a CSV table"), "{text}");
+
+        // A run's record, and a sweep's folder, are named for what they are.
+        let record = dir.path().join(RUN_FILE);
+        std::fs::write(&record, "{}").unwrap();
+        let text = format!("{:#}", detect_file(&record, None).unwrap_err());
+        assert!(text.contains("is a run's record, not its pose history") && text.contains(HISTORY_JSON), "{text}");
+        let sweep = dir.path().join("sweep");
+        std::fs::create_dir(&sweep).unwrap();
+        std::fs::write(sweep.join(super::super::sweep::PLAN_FILE), "{}").unwrap();
+        let text = format!("{:#}", detect_file(&history_file(&sweep), None).unwrap_err());
+        assert!(text.contains("holds no pose history") && text.contains("a sweep's folder") && text.contains("one run's folder"), "{text}");
 
         let misnamed = dir.path().join("table.json");
         std::fs::write(&misnamed, "time_s,head_x_m\n0,0\n").unwrap();

@@ -48,7 +48,7 @@ pub struct MeshArgs {
 
 pub fn run(args: &MeshArgs) -> anyhow::Result<Status> {
     let file = AnatomyFile::load(args.file.as_deref())?;
-    super::create_out_folder(&args.out)?;
+    super::create_out_folder(&args.out, "--out")?;
     let mut written = Vec::new();
     let mut crossings = Vec::new();
     match args.part {

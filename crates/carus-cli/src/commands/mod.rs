@@ -21,6 +21,28 @@ pub enum Status {
     Failed,
 }
 
+/// A flag's value the command cannot take, found after clap parsed it:
+/// exit status 2, as clap's own refusals (CONVENTIONS.md: 2 on bad
+/// arguments).
+#[derive(Debug)]
+pub struct BadArgument(pub String);
+
+impl std::fmt::Display for BadArgument {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for BadArgument {}
+
+/// Returns early with a [`BadArgument`] made as `format!` makes text.
+#[macro_export]
+macro_rules! bad_argument {
+    ($($text:tt)*) => {
+        return Err($crate::commands::BadArgument(format!($($text)*)).into())
+    };
+}
+
 /// The progress bar of long commands: permille done, elapsed, time left.
 pub fn progress_bar() -> indicatif::ProgressBar {
     let bar = indicatif::ProgressBar::new(1000);
@@ -68,7 +90,7 @@ pub fn ctrl_c_flag() -> std::sync::Arc<std::sync::atomic::AtomicBool> {
 /// whichever is more; also says how many.
 pub fn labour_pool(jobs: Option<usize>, runs: usize) -> anyhow::Result<(rayon::ThreadPool, usize)> {
     if jobs == Some(0) {
-        anyhow::bail!("--jobs must be at least 1");
+        crate::bad_argument!("--jobs must be at least 1");
     }
     // The runs' own parallel passes share the pool, so it keeps a thread
     // per core however few the runs; past that, a thread per run is all
@@ -82,11 +104,11 @@ pub fn labour_pool(jobs: Option<usize>, runs: usize) -> anyhow::Result<(rayon::T
     Ok((pool, jobs))
 }
 
-/// Makes the folder `dir` (and those above it) for a command's output; a
-/// file in its place is named, with the fix.
-pub fn create_out_folder(dir: &std::path::Path) -> anyhow::Result<()> {
+/// Makes the folder `dir` (and those above it) for a command's output,
+/// given with `flag`; a file in its place is named, with the fix.
+pub fn create_out_folder(dir: &std::path::Path, flag: &str) -> anyhow::Result<()> {
     if dir.exists() && !dir.is_dir() {
-        anyhow::bail!("{} is a file, not a folder; choose another --out", dir.display());
+        anyhow::bail!("{} is a file, not a folder; choose another {flag}", dir.display());
     }
     std::fs::create_dir_all(dir).map_err(|e| anyhow::anyhow!("cannot create the folder {}: {e}", dir.display()))
 }
@@ -125,7 +147,7 @@ pub fn check_cube_size(n: usize, per_cell: usize, even: bool) -> anyhow::Result<
             .filter(|m| !even || m.is_multiple_of(2))
             .last()
             .unwrap_or(2);
-        anyhow::bail!(
+        crate::bad_argument!(
             "--n {n}: a cube of {n}^3 cells is more than the {MOST_CUBE_ELEMENTS} elements these commands build; \
              use --n {largest} or less"
         );
@@ -214,12 +236,12 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let file = dir.path().join("afile");
         std::fs::write(&file, "mine").unwrap();
-        let e = super::create_out_folder(&file).unwrap_err().to_string();
-        assert!(e.contains("afile is a file, not a folder") && e.contains("--out"), "{e}");
+        let e = super::create_out_folder(&file, "--screenshot").unwrap_err().to_string();
+        assert!(e.ends_with("afile is a file, not a folder; choose another --screenshot"), "{e}");
         let e = super::run::choose_out_dir(Some(&file), "x", true).err().unwrap().to_string();
         assert!(e.contains("is a file, not a folder"), "{e}");
         assert_eq!(std::fs::read_to_string(&file).unwrap(), "mine");
-        super::create_out_folder(&dir.path().join("a/b")).unwrap();
+        super::create_out_folder(&dir.path().join("a/b"), "--out").unwrap();
         assert!(dir.path().join("a/b").is_dir());
     }
 }

@@ -83,7 +83,7 @@ pub struct RenderArgs {
 
 pub fn run(args: &RenderArgs) -> anyhow::Result<Status> {
     if !args.out.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
-        anyhow::bail!("--out {}: carus render writes a PNG picture; name the file *.png", args.out.display());
+        crate::bad_argument!("--out {}: carus render writes a PNG picture; name the file *.png", args.out.display());
     }
     let meshes = match args.part {
         RenderPart::Pelvis => pelvis_meshes(
@@ -127,7 +127,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<Status> {
     };
     let picture = renderer.contact_sheet(&Scene::new(meshes), &sheet)?;
     if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        super::create_out_folder(dir)?;
+        super::create_out_folder(dir, "--out")?;
     }
     picture
         .save_png(&args.out)
@@ -166,7 +166,12 @@ const LEVATOR_RGB: [f32; 3] = [0.78, 0.42, 0.42];
 const PERINEAL_BODY_RGB: [f32; 3] = [0.55, 0.27, 0.35];
 /// Landmarks of CONVENTIONS.md, and the further ones the planes and obliques use.
 pub(super) const LANDMARK_RGB: [f32; 3] = [0.80, 0.08, 0.10];
-const AUXILIARY_LANDMARK_RGB: [f32; 3] = [0.15, 0.30, 0.75];
+/// Light cyan: apart from the dark blue posterior fontanelle the viewer
+/// draws beside them.
+const AUXILIARY_LANDMARK_RGB: [f32; 3] = [0.55, 0.90, 0.95];
+/// The head's landmarks where the pelvis's are drawn too (the viewer):
+/// white, apart from the pelvis's red.
+pub(super) const HEAD_AMONG_PELVIS_RGB: [f32; 3] = [0.97, 0.97, 0.97];
 const ATTACHED_RGB: [f32; 3] = [0.20, 0.20, 0.20];
 const AXIS_RGB: [f32; 3] = [0.10, 0.55, 0.25];
 /// Inlet, greatest dimensions, mid-pelvis, outlet.

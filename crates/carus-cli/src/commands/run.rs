@@ -23,8 +23,8 @@ use super::{print_json, Status};
 /// Where a labour command writes and what it prints (`carus run`, `carus sweep`, `carus sanity`).
 #[derive(clap::Args)]
 pub struct OutputArgs {
-    /// Output folder; default the first free `runs/<scenario>-<n>` for `carus run`,
-    /// `runs/sweep-<scenario>-<n>` for `carus sweep`, `runs/sanity-<n>` for `carus sanity`.
+    /// Output folder; default the first free `runs/<scenario>-<n>` (`runs/sweep-<scenario>-<n>`
+    /// for a sweep, `runs/sanity-<n>` for sanity).
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Print one JSON object on standard output and nothing else there.
@@ -83,6 +83,15 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
             if let Some(kind) = super::folder_kind(dir).filter(|_| !dir.join(carus_labour::output::SCENARIO_FILE).exists()) {
                 bail!("{} holds no run to resume: {kind}", dir.display());
             }
+            // A file of the run (its scenario.toml) given for its folder.
+            if dir.is_file() {
+                let folder = dir.parent().filter(|f| !f.as_os_str().is_empty()).unwrap_or(Path::new("."));
+                bail!(
+                    "{} is a file; --resume takes the run's folder: `carus run --resume {}`",
+                    dir.display(),
+                    folder.display()
+                );
+            }
             // A run that ended or failed is refused by resume, unannounced.
             if !args.output.quiet && !run_ended(dir) {
                 eprintln!("resuming the run in {}", dir.display());
@@ -103,6 +112,9 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
             let scene = in_scenario(Scene::build(&scenario), named)?;
             // Holes in an imported pelvis let the fetus through: said before it runs.
             if let Some(note) = scene.pelvis_import.as_ref().and_then(|(report, mesh)| super::measure::import_note(report, mesh)) {
+                eprintln!("note: {note}");
+            }
+            if let Some(note) = scenario.trajectory.radians_note() {
                 eprintln!("note: {note}");
             }
             let sim = in_scenario(Simulation::new(&scene), named)?;
@@ -269,9 +281,14 @@ pub(super) fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result
             .iter()
             .map(|f| (f.time_s, f.peak_stretch))
             .collect(),
-        floor_untrusted_from_s: record.floor.iter().find(|f| f.inverted_corner_elements > 0).map(|f| f.time_s),
+        floor_untrusted_from_s: carus_labour::sim::FloorSample::first_inverted_s(&record.floor),
         head_axial_moments: head_axial_moments(record, &scene),
         head_canal_forces: head_canal_forces(record, &scene),
+        contact_load_n: record
+            .loads
+            .iter()
+            .map(|load| load.sites.iter().map(|site| site.force_n.length()).sum())
+            .collect(),
         scene: Some(report_scene_with_forces(record, &scene, detector)?),
     };
     Ok(carus_report::write_report_file(
@@ -525,7 +542,7 @@ impl OutDir {
     pub(super) fn make(self) -> anyhow::Result<PathBuf> {
         match self {
             OutDir::Numbered(name) => {
-                super::create_out_folder(Path::new("runs"))?;
+                super::create_out_folder(Path::new("runs"), "--out")?;
                 for n in 1.. {
                     let dir = PathBuf::from("runs").join(format!("{name}-{n}"));
                     // create_dir, not create_dir_all: it fails if the folder exists.
@@ -567,7 +584,7 @@ const EARLIER_OUTPUT_MARKS: [&[&str]; 3] =
 
 /// Makes `dir` and marks it as an out dir of carus.
 pub(super) fn make_marked(dir: &Path) -> anyhow::Result<()> {
-    super::create_out_folder(dir)?;
+    super::create_out_folder(dir, "--out")?;
     mark(dir)
 }
 
@@ -1044,6 +1061,16 @@ mod tests {
         let e = format!("{:#}", run(&args(earlier.clone(), false)).err().unwrap());
         assert!(e.contains("already holds files") && e.contains("not a folder that carus made"), "{e}");
         assert!(!e.contains("add --force"), "{e}");
+
+        // --resume given a run's file names the folder to give instead.
+        let resume = RunArgs {
+            scenario: None,
+            settings: Vec::new(),
+            output: OutputArgs { out: None, json: true, force: false, quiet: true },
+            resume: Some(earlier.join("run.json")),
+        };
+        let e = format!("{:#}", run(&resume).err().unwrap());
+        assert!(e.contains(&format!("is a file; --resume takes the run's folder: `carus run --resume {}`", earlier.display())), "{e}");
     }
 
     /// `--set` changes the scenario a run starts from, and its folder's

@@ -7,7 +7,6 @@
 
 use std::collections::BTreeMap;
 
-use anyhow::bail;
 use carus_fem::validation::cube::{self, CubeElement, CubeResult, CubeSetup, CubeVariant};
 use carus_fem::HourglassModulus;
 use carus_fem::validation::{
@@ -81,7 +80,7 @@ pub fn run(args: &ValidateArgs) -> anyhow::Result<Status> {
         return run_cube(args);
     }
     if args.n.is_some() || args.element.is_some() || args.variant.is_some() || args.hourglass_modulus.is_some() {
-        bail!("--n, --element, --variant and --hourglass-modulus apply to `carus validate cube` only");
+        crate::bad_argument!("--n, --element, --variant and --hourglass-modulus apply to `carus validate cube` only");
     }
     let ids: Vec<CaseArg> = match args.case {
         CaseArg::All => vec![CaseArg::V1, CaseArg::V2, CaseArg::V3, CaseArg::V4, CaseArg::V5, CaseArg::V6, CaseArg::V7],
@@ -120,6 +119,10 @@ fn run_cube(args: &ValidateArgs) -> anyhow::Result<Status> {
     let elements = args.element.map_or(CubeElement::ALL.to_vec(), |e| vec![element(e)]);
     let variants = args.variant.map_or(CubeVariant::ALL.to_vec(), |v| vec![variant(v)]);
     for &n in &sizes {
+        // The centre and the edges' midpoints are nodes only of an even cube.
+        if n < 2 || !n.is_multiple_of(2) {
+            crate::bad_argument!("--n {n}: the cube needs an even number of elements per edge, 2 or more (VALIDATION.md runs 10 and 20)");
+        }
         let per_cell = if elements.iter().all(|&e| e == CubeElement::H8) { 1 } else { 6 };
         super::check_cube_size(n, per_cell, true)?;
     }

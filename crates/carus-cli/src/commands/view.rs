@@ -12,10 +12,11 @@ use carus_analysis::{DetectorReport, PoseSample};
 use carus_labour::loads::LoadSample;
 use carus_labour::output::{read_checkpoint, run_ending, CHECKPOINT_FILE, RUN_FILE};
 use carus_labour::record::FloorAtMoment;
+use carus_labour::sim::FloorSample;
 use carus_labour::{Scenario, Scene};
 use carus_view::{Follow, Layers, Replay};
 
-use super::render::{pelvis_markers, ViewName, HEAD_MARKER_M, LANDMARK_RGB};
+use super::render::{pelvis_markers, ViewName, HEAD_AMONG_PELVIS_RGB, HEAD_MARKER_M};
 use super::run::{read_record, run_ended, run_title, scene_with_floors};
 use super::{print_json, Status};
 
@@ -26,7 +27,7 @@ pub struct ViewArgs {
     /// The time shown first, s; with --picture, the frame drawn.
     #[arg(long, allow_negative_numbers = true)]
     pub at: Option<f64>,
-    /// The PNG file the frame at --at is drawn to.
+    /// The PNG file the frame at --at is drawn to, without opening a window (needs --at).
     #[arg(long, requires = "at")]
     pub picture: Option<PathBuf>,
     /// The view the picture is drawn from, or the window first shows.
@@ -35,7 +36,7 @@ pub struct ViewArgs {
     /// Open the window, save a PNG of it once drawn, and close it.
     #[arg(long, conflicts_with = "picture")]
     pub screenshot: Option<PathBuf>,
-    /// Width and height of the picture, px.
+    /// With --picture: width and height of the picture, px (the window's --screenshot is the window's size).
     #[arg(long, requires = "picture", num_args = 2, default_values = ["800", "600"], value_names = ["WIDTH", "HEIGHT"])]
     pub size: Vec<u32>,
     /// Show the pelvis's landmarks, obstetric planes and axis, and the head's landmarks (a check box in the window).
@@ -64,25 +65,25 @@ pub fn run(args: &ViewArgs) -> anyhow::Result<Status> {
     let layers = Layers { markers: args.landmarks, forces: args.forces };
     for (flag, path) in [("--picture", &args.picture), ("--screenshot", &args.screenshot)] {
         if let Some(path) = path.as_ref().filter(|p| !p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png"))) {
-            anyhow::bail!("{flag} {}: the picture is written as a PNG; name the file *.png", path.display());
+            crate::bad_argument!("{flag} {}: the picture is written as a PNG; name the file *.png", path.display());
         }
     }
     let end = replay.duration_s();
     let at = args.at.unwrap_or(0.0);
     if !(at.is_finite() && (0.0..=end).contains(&at)) {
-        anyhow::bail!("--at {}: the run was recorded from 0 to {end:.2} s; give a time in that range", carus_io::shown_number(at));
+        crate::bad_argument!("--at {}: the run was recorded from 0 to {end:.2} s; give a time in that range", carus_io::shown_number(at));
     }
     let Some(path) = &args.picture else {
         // Made before the window opens, as `carus render` makes its folder.
         if let Some(folder) = args.screenshot.as_ref().and_then(|p| p.parent()).filter(|f| !f.as_os_str().is_empty()) {
-            super::create_out_folder(folder)?;
+            super::create_out_folder(folder, "--screenshot")?;
         }
         let follow = (!run_ended(&args.run)).then(|| follow_in_background(args.run.clone(), scene));
         carus_view::open(replay, at, args.view.into(), layers, args.screenshot.clone(), follow)?;
         return Ok(Status::Success);
     };
     if let Some(folder) = path.parent().filter(|f| !f.as_os_str().is_empty()) {
-        super::create_out_folder(folder)?;
+        super::create_out_folder(folder, "--picture")?;
     }
     let [width, height] = [args.size[0], args.size[1]];
     let picture = replay.picture(at, &replay.standard_camera(args.view.into()), layers, width, height)?;
@@ -112,6 +113,7 @@ fn picture_json(replay: &Replay, k: usize, path: &Path, args: &ViewArgs) -> serd
         "station_mm": state.station_mm,
         "theta_deg": state.theta_deg,
         "phi_deg": state.phi_deg,
+        "head_engaged": state.head_engaged,
         "head_delivered": state.head_delivered,
         "movements_under_way": state.under_way,
     });
@@ -135,6 +137,9 @@ struct RunShown {
     loads: Vec<LoadSample>,
     /// The floor's states kept: the key moments' and the VTU frames'.
     floors: Vec<FloorAtMoment>,
+    /// When a floor element first had a corner turned inside out, if one did:
+    /// the colour scale is read from the floor before it.
+    floor_trusted_until_s: Option<f64>,
     /// Read from the checkpoint: the run has not written its record.
     in_progress: bool,
     /// The file the samples were read from, for messages.
@@ -159,6 +164,22 @@ impl RunShown {
         if !dir.join(RUN_FILE).exists() && !dir.join(CHECKPOINT_FILE).exists() {
             if let Some(kind) = super::folder_kind(dir) {
                 anyhow::bail!("{} holds no run to show: {kind}", dir.display());
+            }
+            let d = dir.display();
+            // A scenario given where its run belongs: run it first.
+            let builtin = carus_labour::BUILTINS.iter().any(|(name, _)| Path::new(name) == dir);
+            if dir.is_file() || (builtin && !dir.exists()) {
+                let what = if dir.is_file() { "a file" } else { "a built-in scenario" };
+                anyhow::bail!(
+                    "{d} is {what}, not a run's folder: `carus view` replays a run; run the scenario first with \
+                     `carus run {d} --out DIR`, then `carus view DIR`"
+                );
+            }
+            if !dir.exists() {
+                anyhow::bail!(
+                    "there is no folder {d}: `carus view` replays the folder of a run (`carus run NAME --out DIR` \
+                     makes one; without --out, runs/NAME-N)"
+                );
             }
             anyhow::bail!(
                 "{} holds no run to show: neither {RUN_FILE} (written when a run ends) nor {CHECKPOINT_FILE} \
@@ -185,6 +206,7 @@ impl RunShown {
         warn_unreadable_floor_frames(&unreadable);
         Ok(RunShown {
             scenario: checkpoint.scenario(dir)?,
+            floor_trusted_until_s: FloorSample::first_inverted_s(&checkpoint.state.floor_samples),
             floors,
             samples: checkpoint.state.samples,
             detector: None,
@@ -204,6 +226,7 @@ impl RunShown {
             samples: record.history.samples,
             detector: record.detector,
             loads: record.loads,
+            floor_trusted_until_s: FloorSample::first_inverted_s(&record.floor),
             floors,
             in_progress: false,
             source: dir.join(RUN_FILE),
@@ -231,6 +254,10 @@ impl RunShown {
         }
         let floors = scene_with_floors(scene, self.floors.iter().collect());
         let replay = Replay::new(title, floors, history, detector.as_ref())?;
+        let replay = match self.floor_trusted_until_s {
+            Some(t_s) => replay.with_stretch_scale_until(t_s),
+            None => replay,
+        };
         // A run written before the loads were recorded has none to draw.
         let replay = match self.loads.is_empty() {
             true => replay,
@@ -239,7 +266,7 @@ impl RunShown {
         let head_landmarks = scene.head_landmarks.named().iter().map(|(name, p)| (name.to_string(), *p)).collect();
         Ok(replay
             .with_markers(run_scene.pelvis_markers.clone())
-            .with_head_markers(head_landmarks, HEAD_MARKER_M, LANDMARK_RGB))
+            .with_head_markers(head_landmarks, HEAD_MARKER_M, HEAD_AMONG_PELVIS_RGB))
     }
 }
 
@@ -383,8 +410,16 @@ mod tests {
         assert!(e.contains("a-file is a file, not a folder"), "{e}");
         let e = refused(args(dir.path().to_path_buf(), 0.1, dir.path().join("frame.jpg")));
         assert!(e.contains("*.png"), "{e}");
-        let e = refused(args(dir.path().join("nothing"), 0.1, png.clone()));
+        let empty = dir.path().join("empty");
+        std::fs::create_dir(&empty).unwrap();
+        let e = refused(args(empty, 0.1, png.clone()));
         assert!(e.contains("holds no run to show") && e.contains("run.json") && e.contains("checkpoint.json"), "{e}");
+        let e = refused(args(dir.path().join("nothing"), 0.1, png.clone()));
+        assert!(e.contains("there is no folder") && e.contains("nothing"), "{e}");
+        let e = refused(args(PathBuf::from("textbook"), 0.1, png.clone()));
+        assert!(e.contains("textbook is a built-in scenario, not a run's folder") && e.contains("`carus run textbook --out DIR`"), "{e}");
+        let e = refused(args(dir.path().join("a-file"), 0.1, png.clone()));
+        assert!(e.contains("a-file is a file, not a run's folder"), "{e}");
         // A record cut short is named, with the way to write it again from
         // the run's checkpoint; one damaged after the run (a sample out of
         // time order) is named, not drawn.

@@ -7,7 +7,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use carus_fem::{
-    BoundaryConditions, FemError, FixedDofs, ImposedDisplacement, LoadShape, Material,
+    BoundaryConditions, ElementKind, FemError, FixedDofs, ImposedDisplacement, LoadShape, Material,
     MaterialRegion, Mesh, ModelOptions, MooneyRivlin, NeoHookean, NodalForce, Precision,
     StepControl, SurfacePressure, TetFormulation, TledModel, TledSolver,
 };
@@ -64,6 +64,11 @@ pub struct JobReport {
     /// nodal forces), per fixed or displaced node set, N.
     pub reactions_n: BTreeMap<String, [f64; 3]>,
     pub element_kind: &'static str,
+    /// The tetrahedron's formulation (`t4`, `t4anp`): null for H8.
+    pub tet_formulation: Option<&'static str>,
+    /// What the H8 hourglass control is scaled by (`shear`,
+    /// `dilatational`): null for T4.
+    pub hourglass_modulus: Option<&'static str>,
     pub elements: usize,
     pub nodes: usize,
     /// Why the run stopped early (the last frame holds the last good
@@ -583,6 +588,11 @@ pub fn run_job(
         max_displacement_m: max_norm(&solver.displacements()),
         reactions_n: recorder.reactions.clone(),
         element_kind: mesh.kind.name(),
+        tet_formulation: (mesh.kind == ElementKind::T4).then_some(match spec.solver.tet_formulation {
+            TetSpec::T4 => "t4",
+            TetSpec::T4anp => "t4anp",
+        }),
+        hourglass_modulus: (mesh.kind == ElementKind::H8).then(|| spec.solver.hourglass_modulus.name()),
         elements: mesh.element_count(),
         nodes: mesh.node_count(),
         failure,
