@@ -508,8 +508,7 @@ fn plots_section(
         values: &s.phi_deg,
         colour: blue,
     }];
-    let green = RGBColor(42, 138, 62);
-    let mut force = vec![
+    let force = vec![
         Curve {
             values: &s.expulsion_force_n,
             colour: blue,
@@ -519,25 +518,11 @@ fn plots_section(
             colour: orange,
         },
     ];
-    // Only when it was recorded at every sample of the history.
-    let load_known = !input.contact_load_n.is_empty() && input.contact_load_n.len() == s.time_s.len();
-    if load_known {
-        all_finite("contact_load_n", &[&input.contact_load_n])?;
-        force.push(Curve {
-            values: &input.contact_load_n,
-            colour: green,
-        });
-    }
     let force_caption = format!(
         "<span style=\"color:#1f5799\">&#9632; expulsion force along the spine</span> \
          <span style=\"color:#c85200\">&#9632; net contact force (bone + floor): the size of their vector \
-         total, in which pushes from opposite sides cancel</span>{}",
-        if load_known {
-            " <span style=\"color:#2a8a3e\">&#9632; contact load: the sum of the sizes of the forces from \
-             each part of the pelvis and the floor, how hard the fetus is pressed from all sides</span>"
-        } else {
-            ""
-        }
+         total, in which pushes from opposite sides cancel{}</span>",
+        if load_plotted(input, &s.time_s) { " (the contact load below adds their sizes)" } else { "" }
     );
     let figures = [
         (
@@ -587,6 +572,7 @@ fn plots_section(
              <small>{caption}</small></figcaption>{svg}</figure>"
         );
     }
+    contact_load_plot(w, input, &axis, &s.time_s)?;
     floor_plot(w, input, &axis)?;
     axial_moment_plot(w, input, &axis)?;
     canal_force_plot(w, input, &axis)?;
@@ -802,6 +788,31 @@ fn axial_moment_plot(
 
 /// What pushed the head down the canal and what held it back: how much of
 /// the expulsion reached the head through the neck, against the canal.
+/// Whether the contact load was recorded at every sample (`time_s`).
+fn load_plotted(input: &ReportInput, time_s: &[f64]) -> bool {
+    !input.contact_load_n.is_empty() && input.contact_load_n.len() == time_s.len()
+}
+
+/// How hard the fetus is pressed, on a plot of its own: a wedged head's
+/// load runs to many times the push and would flatten the forces' plot.
+fn contact_load_plot(w: &mut String, input: &ReportInput, axis: &TimeAxis, time_s: &[f64]) -> Result<(), ReportError> {
+    let load = &input.contact_load_n;
+    if !load_plotted(input, time_s) {
+        return Ok(());
+    }
+    all_finite("contact_load_n", &[load])?;
+    let curves = vec![Curve { values: load, colour: RGBColor(42, 138, 62) }];
+    let svg = plots::svg(&axis.spec("contact-load", "force (N)", time_s, curves, vec![0.0]))?;
+    let _ = write!(
+        w,
+        "<figure class=\"plot\" id=\"plot-contact-load\"><figcaption><b>Contact load</b> <small>the sum of \
+         the sizes of the forces from each part of the pelvis (each bone, the ligaments) and the floor: how hard \
+         the fetus is pressed from all sides, where the net contact force above lets opposite pushes cancel\
+         </small></figcaption>{svg}</figure>"
+    );
+    Ok(())
+}
+
 fn canal_force_plot(w: &mut String, input: &ReportInput, axis: &TimeAxis) -> Result<(), ReportError> {
     let f = &input.head_canal_forces;
     if f.is_empty() {

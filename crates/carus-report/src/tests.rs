@@ -326,19 +326,19 @@ fn how_the_head_was_born_is_noted() {
 }
 
 /// The forces plot says that its contact curve is a vector total, and
-/// adds the contact load (the sum of the sizes) when it was recorded at
-/// every sample.
+/// the contact load (the sum of the sizes) has a plot of its own when it
+/// was recorded at every sample.
 #[test]
 fn the_contact_load_is_plotted_beside_the_net_contact_force() {
     let demo = Demo::textbook().unwrap();
     let mut input = demo.input("load");
     let html = write_report_with(&input, None).unwrap().html;
-    assert!(html.contains("pushes from opposite sides cancel") && !html.contains("contact load:"));
+    assert!(html.contains("pushes from opposite sides cancel") && !html.contains("plot-contact-load") && !html.contains("contact load below"));
     input.contact_load_n = vec![120.0; input.history.samples.len()];
     let html = write_report_with(&input, None).unwrap().html;
-    assert!(html.contains("contact load: the sum of the sizes of the forces"));
+    assert!(html.contains("id=\"plot-contact-load\"") && html.contains("the sum of the sizes of the forces") && html.contains("contact load below"));
     input.contact_load_n.pop();
-    assert!(!write_report_with(&input, None).unwrap().html.contains("contact load:"));
+    assert!(!write_report_with(&input, None).unwrap().html.contains("plot-contact-load"));
     input.contact_load_n.push(f64::NAN);
     assert!(write_report_with(&input, None).is_err());
 }
