@@ -140,6 +140,12 @@ pub fn wrap_deg(angle: f64) -> f64 {
 }
 
 impl Series {
+    /// Both parietal eminences below the inlet plane at sample `i`
+    /// (engagement's test, CARDINAL_MOVEMENTS.md).
+    pub fn engaged(&self, i: usize) -> bool {
+        self.left_parietal_below_inlet_mm[i].min(self.right_parietal_below_inlet_mm[i]) > 0.0
+    }
+
     /// Evaluates every quantity at every sample. The history must have
     /// passed [`PoseHistory::validate`].
     pub fn from_history(history: &PoseHistory) -> Series {

@@ -373,20 +373,15 @@ pub fn detect_movements(series: &Series, spines_sigma_mm: f64) -> Detected {
     }
 }
 
-/// Both parietal eminences below the inlet plane.
-fn engaged(series: &Series, i: usize) -> bool {
-    series.left_parietal_below_inlet_mm[i].min(series.right_parietal_below_inlet_mm[i]) > 0.0
-}
-
 /// Engagement: the head enters the inlet. End: the first sample with both
 /// eminences below the inlet plane (not so at the first sample). Start: the
 /// sample from which the leading point stayed below the inlet (sigma > 0)
 /// up to the end. Size: the station gained in between.
 fn engagement(series: &Series, spines_sigma_mm: f64) -> Option<Span> {
-    if engaged(series, 0) {
+    if series.engaged(0) {
         return None;
     }
-    let end = (1..series.len()).find(|&i| engaged(series, i))?;
+    let end = (1..series.len()).find(|&i| series.engaged(i))?;
     let leading_sigma = |i: usize| series.station_mm[i] + spines_sigma_mm;
     let start = (0..end)
         .rev()

@@ -123,8 +123,9 @@ pub(crate) fn raw_appended_to_base64(bytes: &[u8]) -> Result<Cow<'_, [u8]>, Stri
 
 /// The largest size a block can have for each byte of it compressed, by
 /// VTK's compressors: deflate's limit of 1032 to 1 (zlib's technical
-/// details), LZ4's 255 to 1 (one length byte per 255 repeated bytes), and
-/// for LZMA a bound well above what it reaches on runs of zeros.
+/// details), LZ4's 255 to 1 (one length byte per 255 repeated bytes;
+/// 256 for the block's own header), and for LZMA a bound well above what
+/// it reaches on runs of zeros.
 fn most_expansion(compressor: &str) -> u64 {
     match compressor {
         "vtkZLibDataCompressor" => 1032,
@@ -157,11 +158,21 @@ pub(crate) fn compressed_size_fault(bytes: &[u8]) -> Option<String> {
         let start = search + at;
         let end = start + head[start..].find('>')? + 1;
         search = end;
+        // vtkio does not read field data (a grid's TimeValue, say).
+        let before = &head[..start];
+        if before.rfind("<FieldData").is_some_and(|open| before.rfind("</FieldData>").is_none_or(|close| close < open)) {
+            continue;
+        }
         let tag = &head[start..end];
+        let offset = || attribute(tag, "offset")?.trim().parse::<usize>().ok();
         let data = match attribute(tag, "format").as_deref() {
-            Some("binary") => head[end..].trim_start().as_bytes(),
-            Some("appended") => appended?.get(attribute(tag, "offset")?.trim().parse::<usize>().ok()?..)?,
-            _ => continue,
+            Some("binary") => Some(head[end..].trim_start().as_bytes()),
+            Some("appended") => appended.zip(offset()).and_then(|(appended, offset)| appended.get(offset..)),
+            _ => None,
+        };
+        // An array that cannot be found is vtkio's to name.
+        let Some(data) = data else {
+            continue;
         };
         if let Some(fault) = block_sizes_fault(data, header_bytes, big_endian, expansion) {
             return Some(format!("the data array `{}` {fault}", attribute(tag, "Name").unwrap_or_default()));
@@ -201,6 +212,15 @@ fn block_sizes_fault(data: &[u8], header_bytes: usize, big_endian: bool, expansi
     let compressed = header[3..].iter().try_fold(0u64, |sum, &n| sum.checked_add(n));
     // What vtkio allocates, wrapping as it does.
     let declared = block_size.wrapping_mul(blocks.wrapping_sub(1)).wrapping_add(last_size);
+    // VTK writes an empty array as no blocks of its usual block size,
+    // which vtkio counts as minus one block.
+    if blocks == 0 && declared != 0 {
+        return Some(
+            "is empty (no compressed blocks), which this reader cannot read: leave the empty array out, or \
+             save the file uncompressed"
+                .to_string(),
+        );
+    }
     match compressed {
         Some(compressed) if declared <= expansion.saturating_mul(compressed) => None,
         _ => Some(format!(
@@ -550,8 +570,19 @@ mod tests {
         assert!(e.starts_with("the data array `v` declares 1099511627776 bytes in 1 compressed blocks of 20 bytes"), "{e}");
         let e = compressed_size_fault(file(&[1 << 62, 800, 800, 20], 20).as_bytes()).unwrap();
         assert!(e.contains("declares 4611686018427387904 compressed blocks, more than its data can hold"), "{e}");
-        // An empty array with a block size: vtkio would count -1 blocks.
-        assert!(compressed_size_fault(file(&[0, 32768, 0], 0).as_bytes()).is_some());
+        // An empty array with a block size (as VTK writes one): vtkio would
+        // count -1 blocks, so it is named as empty, not as damaged.
+        let e = compressed_size_fault(file(&[0, 32768, 0], 0).as_bytes()).unwrap();
+        assert!(e.starts_with("the data array `v` is empty (no compressed blocks)"), "{e}");
+        assert_eq!(compressed_size_fault(file(&[0, 0, 0], 0).as_bytes()), None);
+        // Field data, which vtkio does not read, is not judged.
+        let field = file(&[0, 32768, 0], 0).replace("<DataArray", "<FieldData><DataArray") + "</FieldData>";
+        assert_eq!(compressed_size_fault(field.as_bytes()), None);
+        // An appended array whose offset cannot be read is left to vtkio,
+        // and the arrays after it are still judged.
+        let after = file(&[1, 1 << 40, 1 << 40, 20], 20).replace("<VTKFile type=\"UnstructuredGrid\" header_type=\"UInt64\" compressor=\"vtkZLibDataCompressor\">", "");
+        let both = file(&[1, 800, 800, 20], 20).replace("format=\"binary\">", "format=\"appended\" offset=\"x\">") + &after;
+        assert!(compressed_size_fault(both.as_bytes()).is_some_and(|e| e.contains("1099511627776 bytes")));
         assert_eq!(compressed_size_fault(b"<VTKFile type=\"UnstructuredGrid\"><DataArray format=\"binary\">AAAA"), None);
     }
 

@@ -54,6 +54,13 @@ pub struct SiteLoad {
     pub friction_force_n: DVec3,
     /// Moment of the force about the atlanto-occipital pivot, N m.
     pub moment_about_pivot_nm: DVec3,
+    /// How hard the site presses, N: the sum of the sizes of its points'
+    /// forces, where `force_n` lets pushes from opposite sides (the two
+    /// spines, the two side walls) cancel. The floor's nodes are summed
+    /// into one reaction, so for the floor it is that reaction's size.
+    /// None in runs recorded before it was.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pressing_n: Option<f64>,
 }
 
 /// Moments on the head about the pelvic axis: the component along the
@@ -170,6 +177,7 @@ pub fn bone_loads(
                     force_n: DVec3::ZERO,
                     friction_force_n: DVec3::ZERO,
                     moment_about_pivot_nm: DVec3::ZERO,
+                    pressing_n: Some(0.0),
                 });
                 out.len() - 1
             }
@@ -179,6 +187,7 @@ pub fn bone_loads(
         l.force_n += c.force();
         l.friction_force_n += c.friction_force;
         l.moment_about_pivot_nm += c.moment_about(pivot);
+        l.pressing_n = l.pressing_n.map(|p| p + c.force().length());
     }
     out
 }
@@ -199,6 +208,7 @@ pub fn floor_load(
         force_n: wrench.force,
         friction_force_n: DVec3::ZERO,
         moment_about_pivot_nm: moment_about(wrench, com, pivot),
+        pressing_n: Some(wrench.force.length()),
     })
 }
 
@@ -233,6 +243,41 @@ mod tests {
             let direct = (at - pivot).cross(f);
             prop_assert!((moment_about(&w, com, pivot) - direct).length() < 1e-12);
         }
+    }
+
+    /// Two spines pushing the head from opposite sides: their site's net
+    /// force cancels, its pressing does not.
+    #[test]
+    fn a_site_s_pressing_adds_what_its_net_force_cancels() {
+        let push = |x: f64| carus_contact::Contact {
+            sample: 0,
+            body_point: DVec3::new(x, 0.0, 0.0),
+            obstacle_point: DVec3::new(x, 0.0, 0.0),
+            normal: DVec3::new(-x.signum(), 0.0, 0.0),
+            depth: 1e-4,
+            triangle: 0,
+            region: Some(0),
+            normal_force: DVec3::new(-x.signum() * 40.0, 0.0, 0.0),
+            friction_force: DVec3::new(0.0, 0.0, 3.0),
+            sliding: false,
+        };
+        let report = ContactReport {
+            contacts: vec![push(0.05), push(-0.05)],
+            force: DVec3::ZERO,
+            torque_about_com: DVec3::ZERO,
+            pivot: DVec3::ZERO,
+            moment_about_pivot: DVec3::ZERO,
+            normal_stiffness_n_per_m: 0.0,
+            too_deep: 0,
+            pushed_through: 0,
+            first_pushed_through: None,
+            deepest_m: 1e-4,
+        };
+        let loads = bone_loads(Body::Head, &report, &[ContactSite::IschialSpines], DVec3::ZERO);
+        assert_eq!((loads.len(), loads[0].points), (1, 2));
+        assert!((loads[0].force_n - DVec3::new(0.0, 0.0, 6.0)).length() < 1e-12);
+        let each = (40.0f64 * 40.0 + 3.0 * 3.0).sqrt();
+        assert!((loads[0].pressing_n.unwrap() - 2.0 * each).abs() < 1e-12);
     }
 
     #[test]

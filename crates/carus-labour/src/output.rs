@@ -664,7 +664,7 @@ fn pose_columns(pose: Option<RigidPose>) -> [f64; 7] {
 pub fn write_contacts_csv(path: &Path, loads: &[LoadSample]) -> Result<(), LabourError> {
     let mut text = String::from(
         "time_s,body,site,points,fx_n,fy_n,fz_n,friction_fx_n,friction_fy_n,friction_fz_n,\
-         moment_x_nm,moment_y_nm,moment_z_nm\n",
+         moment_x_nm,moment_y_nm,moment_z_nm,pressing_n\n",
     );
     for sample in loads {
         for l in &sample.sites {
@@ -679,7 +679,8 @@ pub fn write_contacts_csv(path: &Path, loads: &[LoadSample]) -> Result<(), Labou
             for v in [l.force_n, l.friction_force_n, l.moment_about_pivot_nm] {
                 let _ = write!(text, ",{},{},{}", v.x, v.y, v.z);
             }
-            text.push('\n');
+            // Empty for a run recorded before sites recorded it.
+            let _ = writeln!(text, ",{}", l.pressing_n.map_or(String::new(), |p| p.to_string()));
         }
     }
     write_text(path, &text)

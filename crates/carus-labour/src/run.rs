@@ -967,13 +967,18 @@ mod tests {
                 l.time_s
             );
             touched += usize::from(l.sites.iter().any(|x| x.body == Body::Head && x.points > 0));
+            // A site presses at least as hard as its net force.
+            for x in &l.sites {
+                let pressing = x.pressing_n.expect("recorded");
+                assert!(pressing >= x.force_n.length() * (1.0 - 1e-12), "{:?}: {pressing} < {}", x.site, x.force_n.length());
+            }
         }
         assert!(touched > 0, "the head never touched the pelvis or the floor");
         let csv = std::fs::read_to_string(dir.path().join(output::CONTACTS_CSV)).unwrap();
         let rows = record.loads.iter().map(|l| l.sites.len()).sum::<usize>();
         assert_eq!(csv.lines().count(), rows + 1);
         assert!(csv.starts_with("time_s,body,site,points,fx_n"));
-        assert!(csv.lines().skip(1).all(|r| r.split(',').count() == 13));
+        assert!(csv.lines().skip(1).all(|r| r.split(',').count() == 14 && !r.ends_with(',')));
     }
 
     /// The coarse normal run for 2 s from `station_mm`, the head flexed 60

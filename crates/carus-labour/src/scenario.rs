@@ -1150,7 +1150,15 @@ impl Scenario {
             source.changed.extend(settings.iter().map(|(key, _)| key.clone()));
             std::sync::Arc::new(source)
         }));
-        Ok(Scenario { source, ..changed })
+        // The description was written for the scenario as it was: it says
+        // what changed, so that a copy in a run folder or a report does
+        // not describe the unchanged one (an imposed teaching run set to
+        // forward, say).
+        let description = match settings.iter().any(|(key, _)| key == "description") {
+            true => changed.description.clone(),
+            false => format!("{} (changed: {})", changed.description, written.join(", ")),
+        };
+        Ok(Scenario { source, description, ..changed })
     }
 
     /// This scenario with one key changed: `key` is a dotted path as `carus
@@ -1782,15 +1790,18 @@ impl Scenario {
             // step is read from the path, and a turn within one step would
             // be taken the short way round.
             if !(w.time_s.is_finite() && w.time_s >= previous_s + dt) {
-                let before = match i {
-                    0 => "the start, at 0 s, where [start] places the head".to_string(),
-                    _ => format!("the way-point before it, at {previous_s} s"),
+                let (before, hint) = match i {
+                    0 => ("the start, at 0 s, where [start] places the head".to_string(), "give it a time after 0 s"),
+                    _ => (
+                        format!("the way-point before it, at {previous_s} s"),
+                        "list the way-points in time order, each at a later time",
+                    ),
                 };
                 return Err(err(
                     key("time_s"),
                     shown(w.time_s),
                     &format!("must come at least a rigid step (numerics.rigid_dt_s = {dt} s) after {before}"),
-                    "list the way-points in time order, each at a later time",
+                    hint,
                 ));
             }
             if w.time_s > self.numerics.end_time_s {
@@ -2239,7 +2250,9 @@ mod tests {
         let normal = Scenario::builtin("normal").unwrap();
         let slower = normal.with_setting("expulsion.period_s", "32").unwrap();
         assert_eq!(slower.expulsion.period_s, 32.0);
-        assert_eq!(Scenario { expulsion: normal.expulsion, ..slower.clone() }, normal);
+        // Nothing else changed, but the description says what did.
+        assert_eq!(slower.description, format!("{} (changed: expulsion.period_s = 32)", normal.description));
+        assert_eq!(Scenario { expulsion: normal.expulsion, description: normal.description.clone(), ..slower.clone() }, normal);
         let spine = normal.with_setting("spine.enabled", "true").unwrap();
         assert!(spine.spine.enabled);
         let pivot = normal.with_setting("expulsion.acts_on", "pivot").unwrap();
@@ -2308,7 +2321,7 @@ mod tests {
         let e = refused("imposed", &point(1.0, -40.0).replace("time_s = 1", "time_s = 1 s"));
         assert!(e.contains("`trajectory.waypoints.time_s`") && e.contains("write the number alone"), "{e}");
         let e = refused("imposed", &point(0.0, -40.0));
-        assert!(e.contains("`trajectory.waypoints[0].time_s` = 0") && e.contains("after the start, at 0 s, where [start] places the head"), "{e}");
+        assert!(e.contains("`trajectory.waypoints[0].time_s` = 0") && e.contains("after the start, at 0 s, where [start] places the head") && e.contains("a time after 0 s"), "{e}");
         let e = refused("imposed", &point(61.0, -40.0));
         assert!(e.contains("`trajectory.waypoints[0].time_s` = 61") && e.contains("numerics.end_time_s"), "{e}");
         let e = refused("imposed", &point(1.0, -400.0));
@@ -2333,6 +2346,11 @@ mod tests {
             .with_settings(&[setting("trajectory.mode", "forward"), setting("trajectory.waypoints", "[]")])
             .unwrap();
         assert_eq!((forward.trajectory.mode, forward.trajectory.waypoints.len()), (Mode::Forward, 0));
+        // Its description, written for the imposed run, says what changed.
+        let said = format!("{} (changed: trajectory.mode = forward, trajectory.waypoints = [])", textbook.description);
+        assert_eq!(forward.description, said);
+        assert!(forward.to_toml().unwrap().starts_with(&format!("# {said}\n")));
+        assert_eq!(textbook.with_setting("description", "\"mine\"").unwrap().description, "mine");
         let e = textbook
             .with_settings(&[setting("trajectory.mode", "forward"), setting("contact.fiction", "0.3")])
             .unwrap_err()

@@ -98,8 +98,8 @@ impl Default for TrajectorySection {
 impl TrajectorySection {
     /// A note for way-points whose angles, not all zero, all lie within a
     /// full turn in radians (under 6.28 in size): the keys are degrees, and
-    /// angles written in radians (1.57 for a quarter turn) would hold the
-    /// head within a few degrees of the start's rotation and attitude.
+    /// angles written in radians (1.57 for a quarter turn) would put the
+    /// head within a few degrees of occiput anterior and of phi 0.
     pub fn radians_note(&self) -> Option<String> {
         use std::f64::consts::TAU;
         let angles = || self.waypoints.iter().flat_map(|w| [w.theta_deg, w.phi_deg]);

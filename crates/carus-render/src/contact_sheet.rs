@@ -82,14 +82,21 @@ impl Renderer {
             if sheet.labels {
                 let ink = label_ink(scene.background);
                 draw_label(&mut picture, &view.name().to_uppercase(), x, sheet.gap, ink, LABEL_SCALE);
-                // As much of the orientation as the tile's width holds.
-                let fits = (tile_w / 8) as usize;
-                let orientation: String = view.orientation().chars().take(fits).collect();
-                draw_label(&mut picture, &orientation, x, sheet.gap + 8 * LABEL_SCALE + 4, ink, 1);
+                let orientation = in_width(view.orientation(), (tile_w / 8) as usize);
+                draw_label(&mut picture, orientation, x, sheet.gap + 8 * LABEL_SCALE + 4, ink, 1);
             }
         }
         Ok(picture)
     }
+}
+
+/// The whole words of `text` that fit in `chars` characters: a narrow
+/// tile keeps "from below: front up, her left", not "... her left t".
+fn in_width(text: &str, chars: usize) -> &str {
+    if text.len() <= chars {
+        return text;
+    }
+    text[..=chars].rfind(' ').map_or("", |end| text[..end].trim_end_matches([',', ':']))
 }
 
 /// Dark text on a light background, light text on a dark one.
@@ -138,6 +145,16 @@ mod tests {
     fn label_ink_contrasts_with_the_background() {
         assert_eq!(label_ink([1.0, 1.0, 1.0, 1.0]), [40, 40, 40, 255]);
         assert_eq!(label_ink([0.0, 0.0, 0.1, 1.0]), [230, 230, 230, 255]);
+    }
+
+    #[test]
+    fn a_narrow_tile_keeps_whole_words() {
+        let text = "from below: front up, her left to the right";
+        assert_eq!(in_width(text, 48), text);
+        assert_eq!(in_width(text, 32), "from below: front up, her left");
+        assert_eq!(in_width(text, 20), "from below: front");
+        assert_eq!(in_width(text, 12), "from below");
+        assert_eq!(in_width(text, 3), "");
     }
 
     #[test]

@@ -37,10 +37,11 @@ pub struct ReportInput<'a> {
     /// time; empty when not known (no forces recorded, or a run recorded
     /// before the neck's force was).
     pub head_canal_forces: Vec<CanalForceSample>,
-    /// At each sample of `history`, the sum of the sizes of the forces
-    /// that each part of the pelvis (a bone, a ligament) and the pelvic
-    /// floor put on the fetus, N: how hard it is pressed, where the vector
-    /// total lets pushes from opposite sides cancel. Empty when not known.
+    /// At each sample of `history`, the sum of the sizes of the contact
+    /// forces on the fetus, N: the bone's and ligaments' point by point,
+    /// and the pelvic floor's push: how hard it is pressed, where the
+    /// vector total lets pushes from opposite sides cancel. Empty when not
+    /// known.
     pub contact_load_n: Vec<f64>,
     /// The meshes for the pictures of the key moments; `None`: no pictures.
     pub scene: Option<ReportScene>,

@@ -61,6 +61,11 @@ pub fn shown(detector: &DetectorReport) -> Vec<Shown<'_>> {
     rows
 }
 
+/// The reader's name of the movement keyed `key` among `rows`, or the key.
+pub fn label_of<'a>(rows: &[Shown], key: &'a str) -> &'a str {
+    rows.iter().find(|r| r.key == key).map_or(key, |r| r.label)
+}
+
 /// The observed rotations (read from theta) during which the occiput was
 /// tilted out of the canal's cross-section past the angle where theta is
 /// ill-conditioned: each row's label and the steepest tilt, degrees.

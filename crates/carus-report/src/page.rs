@@ -10,7 +10,7 @@ use plotters::style::RGBColor;
 use crate::error::ReportError;
 use crate::input::{AxialMomentSample, CanalForceSample, ReportInput};
 use crate::moments::{KeyMoment, MissedMoment};
-use crate::movements::{css, ill_conditioned_rotations, shown, size_text, Shown};
+use crate::movements::{css, ill_conditioned_rotations, label_of, shown, size_text, Shown};
 use crate::pictures::{MomentPictures, PICTURE_SIZE};
 use crate::plots::{self, Band, Curve, Mark, PlotSpec};
 
@@ -121,7 +121,7 @@ pub fn page(input: &ReportInput, parts: &Parts) -> Result<String, ReportError> {
     let not_held: Vec<&str> = d
         .not_held_at_birth
         .iter()
-        .map(|n| rows.iter().find(|r| r.key == n.movement).map_or(n.movement.as_str(), |r| r.label))
+        .map(|n| label_of(&rows, &n.movement))
         .collect();
     let not_held = match (not_held.len(), d.head_born) {
         (0, _) => String::new(),
@@ -265,7 +265,7 @@ fn timeline(
         );
     }
     for lost in &d.not_held_at_birth {
-        let label = rows.iter().find(|r| r.key == lost.movement).map_or(lost.movement.as_str(), |r| r.label);
+        let label = label_of(rows, &lost.movement);
         let _ = write!(
             w,
             "<p class=\"note\" data-note=\"not-held\" data-movement=\"{}\"><b>{label} not held at birth:</b> {}. \
@@ -786,8 +786,6 @@ fn axial_moment_plot(
     Ok(())
 }
 
-/// What pushed the head down the canal and what held it back: how much of
-/// the expulsion reached the head through the neck, against the canal.
 /// Whether the contact load was recorded at every sample (`time_s`).
 fn load_plotted(input: &ReportInput, time_s: &[f64]) -> bool {
     !input.contact_load_n.is_empty() && input.contact_load_n.len() == time_s.len()
@@ -806,13 +804,15 @@ fn contact_load_plot(w: &mut String, input: &ReportInput, axis: &TimeAxis, time_
     let _ = write!(
         w,
         "<figure class=\"plot\" id=\"plot-contact-load\"><figcaption><b>Contact load</b> <small>the sum of \
-         the sizes of the forces from each part of the pelvis (each bone, the ligaments) and the floor: how hard \
-         the fetus is pressed from all sides, where the net contact force above lets opposite pushes cancel\
-         </small></figcaption>{svg}</figure>"
+         the sizes of the bone's and ligaments' contact forces, point by point, and of the floor's push: how \
+         hard the fetus is pressed from all sides, where the net contact force above lets opposite pushes \
+         cancel</small></figcaption>{svg}</figure>"
     );
     Ok(())
 }
 
+/// What pushed the head down the canal and what held it back: how much of
+/// the expulsion reached the head through the neck, against the canal.
 fn canal_force_plot(w: &mut String, input: &ReportInput, axis: &TimeAxis) -> Result<(), ReportError> {
     let f = &input.head_canal_forces;
     if f.is_empty() {

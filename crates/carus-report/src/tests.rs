@@ -336,7 +336,7 @@ fn the_contact_load_is_plotted_beside_the_net_contact_force() {
     assert!(html.contains("pushes from opposite sides cancel") && !html.contains("plot-contact-load") && !html.contains("contact load below"));
     input.contact_load_n = vec![120.0; input.history.samples.len()];
     let html = write_report_with(&input, None).unwrap().html;
-    assert!(html.contains("id=\"plot-contact-load\"") && html.contains("the sum of the sizes of the forces") && html.contains("contact load below"));
+    assert!(html.contains("id=\"plot-contact-load\"") && html.contains("the sum of the sizes of the bone") && html.contains("contact load below"));
     input.contact_load_n.pop();
     assert!(!write_report_with(&input, None).unwrap().html.contains("plot-contact-load"));
     input.contact_load_n.push(f64::NAN);

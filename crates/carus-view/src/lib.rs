@@ -234,7 +234,7 @@ impl Replay {
             station_mm: s.station_mm[k],
             theta_deg: s.theta_deg[k],
             phi_deg: s.phi_deg[k],
-            head_engaged: s.left_parietal_below_inlet_mm[k] > 0.0 && s.right_parietal_below_inlet_mm[k] > 0.0,
+            head_engaged: s.engaged(k),
             head_delivered: s.head_delivered[k],
             under_way: self
                 .movements
@@ -284,16 +284,17 @@ impl Replay {
             })
     }
 
-    /// The floor's colour scale from its frames up to `t_s` only: the run's
-    /// floor had an element turned inside out then (docs/LABOUR.md), and
+    /// The floor's colour scale from its frames before `t_s` only, as the
+    /// report's floor plot reads it: the run's floor had an element turned
+    /// inside out then (docs/LABOUR.md), and
     /// the stretches after it, not to be trusted, would stretch the scale
     /// until the floor before looked at rest. Kept as it was when no frame
     /// comes that early.
-    pub fn with_stretch_scale_until(mut self, t_s: f64) -> Replay {
+    pub fn with_stretch_scale_before(mut self, t_s: f64) -> Replay {
         let Some(floor) = &self.scene.floor else {
             return self;
         };
-        if let Some(range) = stretch_range_of(floor.frames.iter().filter(|f| f.time_s <= t_s)) {
+        if let Some(range) = stretch_range_of(floor.frames.iter().filter(|f| f.time_s < t_s)) {
             self.stretch_range = Some(range);
         }
         self

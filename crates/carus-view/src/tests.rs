@@ -182,6 +182,7 @@ mod forces {
             force_n,
             friction_force_n: DVec3::ZERO,
             moment_about_pivot_nm: (at - pivot).cross(force_n),
+            pressing_n: Some(force_n.length()),
         }
     }
 
@@ -355,8 +356,8 @@ fn the_floor_colour_scale_is_read_from_the_trusted_frames() {
     let replay = Replay::new("textbook", scene, demo.history.clone(), Some(&demo.detector)).unwrap();
     let shown = |replay: &Replay| replay.readout(replay.sample_at(1.0))[5].clone();
     assert!(shown(&replay).ends_with("colour: stretch 1.00 (dark) to 9.00 (bright)"), "{}", shown(&replay));
-    let trusted = replay.with_stretch_scale_until(1.5);
+    let trusted = replay.with_stretch_scale_before(2.0);
     assert!(shown(&trusted).ends_with("to 2.00 (bright)"), "{}", shown(&trusted));
     // No frame before the time: the scale stays as it was.
-    assert!(shown(&trusted.with_stretch_scale_until(0.5)).ends_with("to 2.00 (bright)"));
+    assert!(shown(&trusted.with_stretch_scale_before(1.0)).ends_with("to 2.00 (bright)"));
 }

@@ -149,10 +149,10 @@ fn write_series(path: &Path, report: &DetectorReport) -> anyhow::Result<()> {
 /// The detector's report on the history in `path`, and for a table the
 /// scenario whose anatomy it was read with.
 fn detect_file(path: &Path, anatomy: Option<&str>) -> anyhow::Result<(DetectorReport, Option<TableAnatomy>)> {
-    // A folder of another kind (a sweep's) is said as such.
-    let folder = path.parent().filter(|f| !f.as_os_str().is_empty() && f.is_dir());
-    if let Some(kind) = folder.filter(|_| !path.exists()).and_then(super::folder_kind) {
-        anyhow::bail!("{} holds no pose history: {kind}; give `carus detect` one run's folder", folder.unwrap_or(path).display());
+    // A folder of runs (a sweep's, sanity's) is said as such.
+    let batch = path.parent().filter(|f| !path.exists() && super::holds_batch(f));
+    if let Some((folder, kind)) = batch.and_then(|f| Some((f, super::folder_kind(f)?))) {
+        anyhow::bail!("{} holds no pose history: {kind}; give `carus detect` one run's folder", folder.display());
     }
     if !path.exists() {
         anyhow::bail!(
@@ -177,7 +177,7 @@ fn detect_file(path: &Path, anatomy: Option<&str>) -> anyhow::Result<(DetectorRe
         (history, Some(chosen))
     } else {
         if anatomy.is_some() {
-            anyhow::bail!(
+            crate::bad_argument!(
                 "{}: --anatomy is for a CSV table of poses; a JSON pose history carries its own anatomy",
                 path.display()
             );
@@ -279,6 +279,10 @@ mod tests {
         std::fs::write(sweep.join(super::super::sweep::PLAN_FILE), "{}").unwrap();
         let text = format!("{:#}", detect_file(&history_file(&sweep), None).unwrap_err());
         assert!(text.contains("holds no pose history") && text.contains("a sweep's folder") && text.contains("one run's folder"), "{text}");
+        // A file missing from a run's folder is named as missing.
+        std::fs::write(dir.path().join("scenario.toml"), "").unwrap();
+        let text = format!("{:#}", detect_file(&dir.path().join("nosuch.json"), None).unwrap_err());
+        assert!(text.contains("nosuch.json: no such file"), "{text}");
 
         let misnamed = dir.path().join("table.json");
         std::fs::write(&misnamed, "time_s,head_x_m\n0,0\n").unwrap();

@@ -119,6 +119,19 @@ pub fn create_out_folder(dir: &std::path::Path, flag: &str) -> anyhow::Result<()
 /// would abort the program.
 const MOST_CUBE_ELEMENTS: usize = 20_000_000;
 
+/// Whether `dir` is a run's folder: its scenario with its record or a
+/// checkpoint.
+pub fn holds_run(dir: &std::path::Path) -> bool {
+    use carus_labour::output::{CHECKPOINT_FILE, RUN_FILE, SCENARIO_FILE};
+    dir.join(SCENARIO_FILE).is_file() && [RUN_FILE, CHECKPOINT_FILE].iter().any(|f| dir.join(f).is_file())
+}
+
+/// Whether `dir` is a folder of runs: a sweep's or sanity's, whose tables
+/// were written from the runs in it.
+pub fn holds_batch(dir: &std::path::Path) -> bool {
+    [sweep::PLAN_FILE, sanity::PLAN_FILE].iter().any(|plan| dir.join(plan).is_file())
+}
+
 /// What a folder that carus wrote is, said when a command is given the
 /// wrong kind: the commands that take it. None for a folder of no kind
 /// carus writes.
@@ -130,9 +143,7 @@ pub fn folder_kind(dir: &std::path::Path) -> Option<String> {
     if dir.join(sanity::PLAN_FILE).is_file() {
         return Some(format!("{d} is the folder of `carus sanity`: `carus sanity --resume {d}` goes on with it"));
     }
-    let run = dir.join(carus_labour::output::SCENARIO_FILE).is_file()
-        && [carus_labour::output::RUN_FILE, carus_labour::output::CHECKPOINT_FILE].iter().any(|f| dir.join(f).is_file());
-    run.then(|| format!("{d} is a run's folder: `carus run --resume {d}` goes on with a stopped run, `carus view {d}` replays it"))
+    holds_run(dir).then(|| format!("{d} is a run's folder: `carus run --resume {d}` goes on with a stopped run, `carus view {d}` replays it"))
 }
 
 /// Refuses a cube of `n` elements per edge, `per_cell` elements in each of

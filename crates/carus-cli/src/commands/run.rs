@@ -83,14 +83,21 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
             if let Some(kind) = super::folder_kind(dir).filter(|_| !dir.join(carus_labour::output::SCENARIO_FILE).exists()) {
                 bail!("{} holds no run to resume: {kind}", dir.display());
             }
-            // A file of the run (its scenario.toml) given for its folder.
+            // A file given for a run's folder: its run's, or a scenario.
             if dir.is_file() {
                 let folder = dir.parent().filter(|f| !f.as_os_str().is_empty()).unwrap_or(Path::new("."));
-                bail!(
-                    "{} is a file; --resume takes the run's folder: `carus run --resume {}`",
-                    dir.display(),
-                    folder.display()
-                );
+                match super::holds_run(folder) {
+                    true => bail!(
+                        "{} is a file; --resume takes the run's folder: `carus run --resume {}`",
+                        dir.display(),
+                        folder.display()
+                    ),
+                    false => bail!(
+                        "{0} is a file, not a run's folder; --resume goes on with a run that `carus run` wrote \
+                         (a scenario is run with `carus run {0}`)",
+                        dir.display()
+                    ),
+                }
             }
             // A run that ended or failed is refused by resume, unannounced.
             if !args.output.quiet && !run_ended(dir) {
@@ -104,6 +111,10 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
         }
         None => {
             let scenario = load_changed(args.scenario.as_deref(), &args.settings)?;
+            // Before the build, which angles in radians often fail.
+            if let Some(note) = scenario.trajectory.radians_note() {
+                eprintln!("note: {note}");
+            }
             let named = args.scenario.as_deref().unwrap_or(DEFAULT_SCENARIO);
             let chosen = choose_out_dir(args.output.out.as_deref(), &scenario.name, args.output.force)?;
             // A scenario that cannot start is refused before the out dir is
@@ -112,9 +123,6 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
             let scene = in_scenario(Scene::build(&scenario), named)?;
             // Holes in an imported pelvis let the fetus through: said before it runs.
             if let Some(note) = scene.pelvis_import.as_ref().and_then(|(report, mesh)| super::measure::import_note(report, mesh)) {
-                eprintln!("note: {note}");
-            }
-            if let Some(note) = scenario.trajectory.radians_note() {
                 eprintln!("note: {note}");
             }
             let sim = in_scenario(Simulation::new(&scene), named)?;
@@ -284,11 +292,7 @@ pub(super) fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result
         floor_untrusted_from_s: carus_labour::sim::FloorSample::first_inverted_s(&record.floor),
         head_axial_moments: head_axial_moments(record, &scene),
         head_canal_forces: head_canal_forces(record, &scene),
-        contact_load_n: record
-            .loads
-            .iter()
-            .map(|load| load.sites.iter().map(|site| site.force_n.length()).sum())
-            .collect(),
+        contact_load_n: contact_load(record),
         scene: Some(report_scene_with_forces(record, &scene, detector)?),
     };
     Ok(carus_report::write_report_file(
@@ -356,6 +360,18 @@ fn head_axial_moments(record: &RunRecord, scene: &Scene) -> Vec<carus_report::Ax
             }
         })
         .collect()
+}
+
+/// How hard the pelvis and the floor pressed on the fetus at each recorded
+/// instant (the sum of every site's pressing); none for a run recorded
+/// before sites recorded it.
+fn contact_load(record: &RunRecord) -> Vec<f64> {
+    record
+        .loads
+        .iter()
+        .map(|load| load.sites.iter().map(|site| site.pressing_n).sum::<Option<f64>>())
+        .collect::<Option<Vec<f64>>>()
+        .unwrap_or_default()
 }
 
 /// What pushed the head down the canal at each recorded instant: each
@@ -613,7 +629,7 @@ fn check_replaceable(dir: &Path) -> anyhow::Result<()> {
         );
     }
     // A run of a sweep or of sanity: their tables were written from it.
-    if let Some(batch) = canonical.parent().filter(|p| p.join(super::sweep::PLAN_FILE).is_file() || p.join(super::sanity::PLAN_FILE).is_file()) {
+    if let Some(batch) = canonical.parent().filter(|p| super::holds_batch(p)) {
         bail!(
             "{} is one of the runs in {}, whose tables were written from it, and --force does not replace it; \
              choose another --out",
@@ -1062,15 +1078,19 @@ mod tests {
         assert!(e.contains("already holds files") && e.contains("not a folder that carus made"), "{e}");
         assert!(!e.contains("add --force"), "{e}");
 
-        // --resume given a run's file names the folder to give instead.
-        let resume = RunArgs {
+        // --resume given a run's file names the folder to give instead; a
+        // scenario file, the command that runs it.
+        let resume = |path: PathBuf| RunArgs {
             scenario: None,
             settings: Vec::new(),
             output: OutputArgs { out: None, json: true, force: false, quiet: true },
-            resume: Some(earlier.join("run.json")),
+            resume: Some(path),
         };
-        let e = format!("{:#}", run(&resume).err().unwrap());
+        std::fs::write(earlier.join("scenario.toml"), "").unwrap();
+        let e = format!("{:#}", run(&resume(earlier.join("run.json"))).err().unwrap());
         assert!(e.contains(&format!("is a file; --resume takes the run's folder: `carus run --resume {}`", earlier.display())), "{e}");
+        let e = format!("{:#}", run(&resume(file.clone())).err().unwrap());
+        assert!(e.contains(&format!("is a file, not a run's folder; --resume goes on with a run that `carus run` wrote (a scenario is run with `carus run {}`)", file.display())), "{e}");
     }
 
     /// `--set` changes the scenario a run starts from, and its folder's

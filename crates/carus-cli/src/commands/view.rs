@@ -37,7 +37,7 @@ pub struct ViewArgs {
     #[arg(long, conflicts_with = "picture")]
     pub screenshot: Option<PathBuf>,
     /// With --picture: width and height of the picture, px (the window's --screenshot is the window's size).
-    #[arg(long, requires = "picture", num_args = 2, default_values = ["800", "600"], value_names = ["WIDTH", "HEIGHT"])]
+    #[arg(long, requires = "picture", num_args = 2, default_values = ["800", "600"], value_names = ["WIDTH", "HEIGHT"], value_parser = clap::value_parser!(u32).range(1..))]
     pub size: Vec<u32>,
     /// Show the pelvis's landmarks, obstetric planes and axis, and the head's landmarks (a check box in the window).
     #[arg(long)]
@@ -168,6 +168,10 @@ impl RunShown {
             let d = dir.display();
             // A scenario given where its run belongs: run it first.
             let builtin = carus_labour::BUILTINS.iter().any(|(name, _)| Path::new(name) == dir);
+            // A file of a run (its run.json, its scenario.toml): its folder.
+            if let Some(run) = dir.parent().filter(|f| dir.is_file() && super::holds_run(f)) {
+                anyhow::bail!("{d} is a file of the run in {0}: `carus view {0}` replays it", run.display());
+            }
             if dir.is_file() || (builtin && !dir.exists()) {
                 let what = if dir.is_file() { "a file" } else { "a built-in scenario" };
                 anyhow::bail!(
@@ -255,7 +259,7 @@ impl RunShown {
         let floors = scene_with_floors(scene, self.floors.iter().collect());
         let replay = Replay::new(title, floors, history, detector.as_ref())?;
         let replay = match self.floor_trusted_until_s {
-            Some(t_s) => replay.with_stretch_scale_until(t_s),
+            Some(t_s) => replay.with_stretch_scale_before(t_s),
             None => replay,
         };
         // A run written before the loads were recorded has none to draw.
@@ -418,8 +422,13 @@ mod tests {
         assert!(e.contains("there is no folder") && e.contains("nothing"), "{e}");
         let e = refused(args(PathBuf::from("textbook"), 0.1, png.clone()));
         assert!(e.contains("textbook is a built-in scenario, not a run's folder") && e.contains("`carus run textbook --out DIR`"), "{e}");
-        let e = refused(args(dir.path().join("a-file"), 0.1, png.clone()));
-        assert!(e.contains("a-file is a file, not a run's folder"), "{e}");
+        let elsewhere = tempfile::tempdir().unwrap();
+        let notes = elsewhere.path().join("notes.txt");
+        std::fs::write(&notes, "").unwrap();
+        let e = refused(args(notes, 0.1, png.clone()));
+        assert!(e.contains("notes.txt is a file, not a run's folder"), "{e}");
+        let e = refused(args(dir.path().join(RUN_FILE), 0.1, png.clone()));
+        assert!(e.contains(&format!("is a file of the run in {0}: `carus view {0}` replays it", dir.path().display())), "{e}");
         // A record cut short is named, with the way to write it again from
         // the run's checkpoint; one damaged after the run (a sample out of
         // time order) is named, not drawn.
