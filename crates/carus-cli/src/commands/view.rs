@@ -24,7 +24,7 @@ use super::{print_json, Status};
 pub struct ViewArgs {
     /// A run folder, as `carus run` writes it.
     pub run: PathBuf,
-    /// The time shown first, s; with --picture, the frame drawn.
+    /// The time shown first, s (default 0, or the newest for a run not over); with --picture, the frame drawn.
     #[arg(long, allow_negative_numbers = true)]
     pub at: Option<f64>,
     /// The PNG file the frame at --at is drawn to, without opening a window (needs --at).
@@ -69,7 +69,9 @@ pub fn run(args: &ViewArgs) -> anyhow::Result<Status> {
         }
     }
     let end = replay.duration_s();
-    let at = args.at.unwrap_or(0.0);
+    // A run not over is followed: without --at it opens at its newest time.
+    let ended = run_ended(&args.run);
+    let at = args.at.unwrap_or(if ended { 0.0 } else { end });
     if !(at.is_finite() && (0.0..=end).contains(&at)) {
         crate::bad_argument!("--at {}: the run was recorded from 0 to {end:.2} s; give a time in that range", carus_io::shown_number(at));
     }
@@ -78,7 +80,7 @@ pub fn run(args: &ViewArgs) -> anyhow::Result<Status> {
         if let Some(folder) = args.screenshot.as_ref().and_then(|p| p.parent()).filter(|f| !f.as_os_str().is_empty()) {
             super::create_out_folder(folder, "--screenshot")?;
         }
-        let follow = (!run_ended(&args.run)).then(|| follow_in_background(args.run.clone(), scene));
+        let follow = (!ended).then(|| follow_in_background(args.run.clone(), scene));
         carus_view::open(replay, at, args.view.into(), layers, args.screenshot.clone(), follow)?;
         return Ok(Status::Success);
     };
