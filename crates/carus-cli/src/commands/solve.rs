@@ -59,7 +59,7 @@ pub fn run(args: &SolveArgs) -> anyhow::Result<Status> {
     }
     let report = report?;
     if !args.quiet {
-        for note in &report.mesh_notes {
+        for note in &report.notes {
             eprintln!("note: {note}");
         }
     }

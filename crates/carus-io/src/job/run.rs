@@ -74,9 +74,10 @@ pub struct JobReport {
     /// Why the run stopped early (the last frame holds the last good
     /// state), or null.
     pub failure: Option<String>,
-    /// What the mesh reader skipped on purpose, for the log.
+    /// What the log should say: what the mesh reader skipped on purpose,
+    /// and moduli that look given the wrong way round.
     #[serde(skip)]
-    pub mesh_notes: Vec<String>,
+    pub notes: Vec<String>,
 }
 
 fn load_shape(load: &LoadSpec) -> LoadShape {
@@ -157,6 +158,35 @@ impl Sets<'_> {
             available: self.file.mesh.element_sets.keys().cloned().collect(),
         })
     }
+}
+
+/// A note for each material given by shear and bulk moduli whose Poisson
+/// ratio, nu = (3K - 2mu) / (2 (3K + mu)), is below 0: a solid that widens
+/// sideways as it is pulled. The solver takes it (any nu in (-1, 0.5) is a
+/// stable solid), but soft tissue is nearly incompressible (Miller et al.
+/// 2007 model it with nu = 0.49, VALIDATION.md V3: a bulk modulus 50 times
+/// the shear), so such a pair is most likely the two moduli swapped.
+fn auxetic_notes(spec: &JobSpec) -> Vec<String> {
+    spec.materials
+        .iter()
+        .enumerate()
+        .filter_map(|(i, m)| {
+            let shear = match m.law {
+                Law::NeoHookean => m.shear_modulus_pa?,
+                Law::MooneyRivlin => 2.0 * (m.c10_pa? + m.c01_pa?),
+            };
+            let bulk = m.bulk_modulus_pa?;
+            let poisson = (3.0 * bulk - 2.0 * shear) / (2.0 * (3.0 * bulk + shear));
+            (poisson < 0.0).then(|| {
+                format!(
+                    "material[{i}]: bulk_modulus_pa = {bulk} with a small-strain shear modulus of {shear} Pa is a \
+                     Poisson ratio of {poisson:.2}, a solid that widens as it is pulled; soft tissue is nearly \
+                     incompressible (0.45-0.499, the bulk modulus tens of times the shear): check that the two \
+                     are not swapped"
+                )
+            })
+        })
+        .collect()
 }
 
 fn materials(spec: &JobSpec, sets: &Sets) -> Result<Vec<MaterialRegion>, JobError> {
@@ -596,7 +626,7 @@ pub fn run_job(
         elements: mesh.element_count(),
         nodes: mesh.node_count(),
         failure,
-        mesh_notes: file.notes.clone(),
+        notes: file.notes.iter().cloned().chain(auxetic_notes(&spec)).collect(),
     };
     let summary = out_dir.join("summary.json");
     let json = serde_json::to_string_pretty(&report).unwrap_or_default();
@@ -616,6 +646,24 @@ mod tests {
     fn set_names_become_csv_columns() {
         assert_eq!(column("x0"), "x0");
         assert_eq!(column("left face,1"), "left_face_1");
+    }
+
+    /// Shear and bulk moduli the wrong way round are noted; tissue-like
+    /// ones, and a Poisson ratio given outright, are not.
+    #[test]
+    fn swapped_moduli_are_noted() {
+        let job = |material: &str| {
+            let mesh = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/cube_n5.msh");
+            let text = format!("[mesh]\nfile = \"{mesh}\"\nlength_unit = \"m\"\n[[material]]\n{material}density_kg_m3 = 1000.0\n[solver]\nend_time_s = 1.0\n");
+            crate::job::load::parse_job(Path::new("job.toml"), &text).unwrap()
+        };
+        let swapped = auxetic_notes(&job("law = \"neo_hookean\"\nshear_modulus_pa = 50000.0\nbulk_modulus_pa = 1000.0\n"));
+        assert_eq!(swapped.len(), 1);
+        assert!(swapped[0].starts_with("material[0]: bulk_modulus_pa = 1000") && swapped[0].contains("Poisson ratio of -0.92"), "{swapped:?}");
+        assert!(auxetic_notes(&job("law = \"neo_hookean\"\nshear_modulus_pa = 1000.0\nbulk_modulus_pa = 50000.0\n")).is_empty());
+        assert!(auxetic_notes(&job("law = \"neo_hookean\"\nyoung_modulus_pa = 3000.0\npoisson_ratio = -0.2\n")).is_empty());
+        let mooney = job("law = \"mooney_rivlin\"\nc10_pa = 500.0\nc01_pa = 500.0\nbulk_modulus_pa = 100.0\n");
+        assert_eq!(auxetic_notes(&mooney).len(), 1);
     }
 
     #[test]
