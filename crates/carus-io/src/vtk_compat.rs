@@ -17,6 +17,39 @@ use base64::Engine;
 
 use crate::xml_attr::{attribute, attribute_spans};
 
+/// How a `.vtu`'s `<VTKFile>` tag says its binary arrays begin: the width
+/// and byte order of their header words, and the compressor, if any.
+struct BinaryLayout {
+    header_bytes: usize,
+    big_endian: bool,
+    compressor: Option<String>,
+}
+
+impl BinaryLayout {
+    fn of(file_tag: &str) -> BinaryLayout {
+        BinaryLayout {
+            header_bytes: match attribute(file_tag, "header_type").as_deref() {
+                Some("UInt64") => 8,
+                _ => 4,
+            },
+            big_endian: attribute(file_tag, "byte_order").as_deref() == Some("BigEndian"),
+            compressor: attribute(file_tag, "compressor"),
+        }
+    }
+
+    /// The header word held in `field`, `header_bytes` long.
+    fn word(&self, field: &[u8]) -> u64 {
+        let mut b = [0u8; 8];
+        if self.big_endian {
+            b[8 - self.header_bytes..].copy_from_slice(field);
+            u64::from_be_bytes(b)
+        } else {
+            b[..self.header_bytes].copy_from_slice(field);
+            u64::from_le_bytes(b)
+        }
+    }
+}
+
 /// The file with raw appended data re-encoded, or unchanged when it has none.
 pub(crate) fn raw_appended_to_base64(bytes: &[u8]) -> Result<Cow<'_, [u8]>, String> {
     let Some(appended_tag) = find(bytes, b"<AppendedData", 0) else {
@@ -36,26 +69,14 @@ pub(crate) fn raw_appended_to_base64(bytes: &[u8]) -> Result<Cow<'_, [u8]>, Stri
     let head = &bytes[..appended_tag];
     let file_tag_start = find(head, b"<VTKFile", 0).ok_or("there is no <VTKFile> tag")?;
     let file_tag = String::from_utf8_lossy(&head[file_tag_start..find(head, b">", file_tag_start).unwrap_or(head.len())]);
-    let header_bytes = match attribute(&file_tag, "header_type").as_deref() {
-        Some("UInt64") => 8,
-        _ => 4,
-    };
-    let big_endian = attribute(&file_tag, "byte_order").as_deref() == Some("BigEndian");
-    let compressed = attribute(&file_tag, "compressor").is_some();
+    let layout = BinaryLayout::of(&file_tag);
+    let header_bytes = layout.header_bytes;
+    let compressed = layout.compressor.is_some();
     let read_header = |at: usize| -> Result<usize, String> {
         let field = data
             .get(at..at + header_bytes)
             .ok_or_else(|| format!("the appended data ends inside an array header at byte {at}"))?;
-        let mut value: u64 = 0;
-        for k in 0..header_bytes {
-            let byte = if big_endian {
-                field[k]
-            } else {
-                field[header_bytes - 1 - k]
-            };
-            value = (value << 8) | byte as u64;
-        }
-        usize::try_from(value).map_err(|_| format!("array header at byte {at} is too large"))
+        usize::try_from(layout.word(field)).map_err(|_| format!("array header at byte {at} is too large"))
     };
 
     // Every array's offset, re-encoded block by block.
@@ -146,12 +167,8 @@ pub(crate) fn compressed_size_fault(bytes: &[u8]) -> Option<String> {
     let head = String::from_utf8_lossy(&bytes[..appended_tag.unwrap_or(bytes.len())]);
     let file_tag = &head[head.find("<VTKFile")?..];
     let file_tag = &file_tag[..file_tag.find('>')?];
-    let expansion = most_expansion(&attribute(file_tag, "compressor")?);
-    let header_bytes = match attribute(file_tag, "header_type").as_deref() {
-        Some("UInt64") => 8,
-        _ => 4,
-    };
-    let big_endian = attribute(file_tag, "byte_order").as_deref() == Some("BigEndian");
+    let layout = BinaryLayout::of(file_tag);
+    let expansion = most_expansion(layout.compressor.as_deref()?);
     let appended = appended_tag.and_then(|at| find(bytes, b"_", at)).map(|u| &bytes[u + 1..]);
     let mut search = 0;
     while let Some(at) = head[search..].find("<DataArray") {
@@ -174,7 +191,7 @@ pub(crate) fn compressed_size_fault(bytes: &[u8]) -> Option<String> {
         let Some(data) = data else {
             continue;
         };
-        if let Some(fault) = block_sizes_fault(data, header_bytes, big_endian, expansion) {
+        if let Some(fault) = block_sizes_fault(data, &layout, expansion) {
             return Some(format!("the data array `{}` {fault}", attribute(tag, "Name").unwrap_or_default()));
         }
     }
@@ -183,21 +200,12 @@ pub(crate) fn compressed_size_fault(bytes: &[u8]) -> Option<String> {
 
 /// [`compressed_size_fault`] for one array's base64 data, read as vtkio
 /// reads it: `[blocks][block size][last block size][compressed sizes...]`.
-fn block_sizes_fault(data: &[u8], header_bytes: usize, big_endian: bool, expansion: u64) -> Option<String> {
+fn block_sizes_fault(data: &[u8], layout: &BinaryLayout, expansion: u64) -> Option<String> {
+    let header_bytes = layout.header_bytes;
     let base64_len = |n: usize| n.div_ceil(3) * 4;
     let words = |count: usize| -> Option<Vec<u64>> {
         let decoded = STANDARD.decode(data.get(..base64_len(count * header_bytes))?).ok()?;
-        let word = |w: &[u8]| {
-            let mut b = [0u8; 8];
-            if big_endian {
-                b[8 - header_bytes..].copy_from_slice(w);
-                u64::from_be_bytes(b)
-            } else {
-                b[..header_bytes].copy_from_slice(w);
-                u64::from_le_bytes(b)
-            }
-        };
-        Some(decoded.chunks_exact(header_bytes).take(count).map(word).collect())
+        Some(decoded.chunks_exact(header_bytes).take(count).map(|w| layout.word(w)).collect())
     };
     let blocks = *words(1)?.first()?;
     // The header's words must fit in the data, or vtkio counts past it.

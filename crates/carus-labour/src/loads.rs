@@ -183,11 +183,12 @@ pub fn bone_loads(
             }
         };
         let l = &mut out[k];
+        let force = c.force();
         l.points += 1;
-        l.force_n += c.force();
+        l.force_n += force;
         l.friction_force_n += c.friction_force;
         l.moment_about_pivot_nm += c.moment_about(pivot);
-        l.pressing_n = l.pressing_n.map(|p| p + c.force().length());
+        l.pressing_n = l.pressing_n.map(|p| p + force.length());
     }
     out
 }

@@ -550,7 +550,7 @@ fn write_frame(
 ) -> Result<(), LabourError> {
     let scene = sim.scene;
     let k = frame_times.len();
-    let time_s = Some(sim.time_s());
+    let time_s = sim.time_s();
     let bodies = &sim.state.bodies;
     let h = &scene.head.surface;
     output::write_surface_vtu(
@@ -558,7 +558,7 @@ fn write_frame(
         &h.vertices,
         &h.triangles,
         &bodies.pose(HEAD),
-        time_s,
+        Some(time_s),
     )?;
     for (t, stem, b) in [
         (&scene.trunk, "trunk", TRUNK),
@@ -570,7 +570,7 @@ fn write_frame(
                 &t.surface.vertices,
                 &t.surface.triangles,
                 &bodies.pose(b),
-                time_s,
+                Some(time_s),
             )?;
         }
     }
@@ -579,10 +579,10 @@ fn write_frame(
             &out_dir.join(output::frame_name("floor", k)),
             &floor.mesh,
             solver,
-            sim.time_s(),
+            time_s,
         )?;
     }
-    frame_times.push(sim.time_s());
+    frame_times.push(time_s);
     Ok(())
 }
 

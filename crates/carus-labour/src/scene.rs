@@ -712,8 +712,6 @@ pub fn solid_properties(surface: &TriSurface, density: f64) -> (f64, DVec3, DMat
     (mass, com, inertia)
 }
 
-/// The pelvis, and for an imported one what its import found in the mesh
-/// and the mesh's path.
 /// [`Scene::pelvis_digest`] of the files an imported pelvis was built from.
 fn pelvis_files_digest(s: &Scenario, import: Option<&(MeshReport, PathBuf)>) -> Option<String> {
     let (carus_anatomy::pelvis::PelvisSpec::Imported { landmarks_file }, Some((_, mesh))) = (&s.pelvis, import) else {
@@ -729,6 +727,8 @@ fn pelvis_files_digest(s: &Scenario, import: Option<&(MeshReport, PathBuf)>) -> 
     Some(format!("{:08x}", digest.finalize()))
 }
 
+/// The pelvis, and for an imported one what its import found in the mesh
+/// and the mesh's path.
 fn build_pelvis(s: &Scenario) -> Result<(Pelvis, Option<(MeshReport, PathBuf)>), LabourError> {
     s.pelvis
         .build_with_report(&s.base_dir)

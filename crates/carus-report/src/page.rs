@@ -118,20 +118,18 @@ pub fn page(input: &ReportInput, parts: &Parts) -> Result<String, ReportError> {
         );
     }
     // What the birth undid belongs beside the count, not only further down.
-    let not_held: Vec<&str> = d
-        .not_held_at_birth
-        .iter()
-        .map(|n| label_of(&rows, &n.movement))
-        .collect();
-    let not_held = match (not_held.len(), d.head_born) {
-        (0, _) => String::new(),
-        (_, Some(born)) => format!(
-            ", {} not held at birth (the head was born {}, phi {:+.0}&deg;)",
-            not_held.join(" and ").to_lowercase(),
-            born.occiput_position(),
-            born.phi_deg
+    let lost: Vec<&str> = d.not_held_at_birth.iter().map(|n| label_of(&rows, &n.movement)).collect();
+    let not_held = match lost.is_empty() {
+        true => String::new(),
+        false => format!(
+            ", {} not held at birth{}",
+            lost.join(" and ").to_lowercase(),
+            d.head_born.map_or(String::new(), |born| format!(
+                " (the head was born {}, phi {:+.0}&deg;)",
+                born.occiput_position(),
+                born.phi_deg
+            ))
         ),
-        (_, None) => format!(", {} not held at birth", not_held.join(" and ").to_lowercase()),
     };
     let _ = write!(
         w,

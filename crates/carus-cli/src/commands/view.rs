@@ -140,8 +140,9 @@ struct RunShown {
     /// The floor's states kept: the key moments' and the VTU frames'.
     floors: Vec<FloorAtMoment>,
     /// When a floor element first had a corner turned inside out, if one did:
-    /// the colour scale is read from the floor before it.
-    floor_trusted_until_s: Option<f64>,
+    /// the colour scale is read from the floor before it (the report's
+    /// `floor_untrusted_from_s`).
+    floor_untrusted_from_s: Option<f64>,
     /// Read from the checkpoint: the run has not written its record.
     in_progress: bool,
     /// The file the samples were read from, for messages.
@@ -212,7 +213,7 @@ impl RunShown {
         warn_unreadable_floor_frames(&unreadable);
         Ok(RunShown {
             scenario: checkpoint.scenario(dir)?,
-            floor_trusted_until_s: FloorSample::first_inverted_s(&checkpoint.state.floor_samples),
+            floor_untrusted_from_s: FloorSample::first_inverted_s(&checkpoint.state.floor_samples),
             floors,
             samples: checkpoint.state.samples,
             detector: None,
@@ -232,7 +233,7 @@ impl RunShown {
             samples: record.history.samples,
             detector: record.detector,
             loads: record.loads,
-            floor_trusted_until_s: FloorSample::first_inverted_s(&record.floor),
+            floor_untrusted_from_s: FloorSample::first_inverted_s(&record.floor),
             floors,
             in_progress: false,
             source: dir.join(RUN_FILE),
@@ -260,7 +261,7 @@ impl RunShown {
         }
         let floors = scene_with_floors(scene, self.floors.iter().collect());
         let replay = Replay::new(title, floors, history, detector.as_ref())?;
-        let replay = match self.floor_trusted_until_s {
+        let replay = match self.floor_untrusted_from_s {
             Some(t_s) => replay.with_stretch_scale_before(t_s),
             None => replay,
         };
