@@ -200,13 +200,19 @@ fn not_held_at_birth(series: &Series, movements: &Movements, born: Option<HeadBo
             f if f < 0.5 => "back at".to_string(),
             f => format!("only {f:.0} deg less flexed than"),
         };
+        let size = extension.size.unwrap_or(0.0);
+        // A head still somewhat extended had part of it undone, not all.
+        let undone = if fall >= 0.5 && size - fall >= 0.5 {
+            format!("{:.0} of the {size:.0} deg of extension were", size - fall)
+        } else {
+            format!("the {size:.0} deg of extension were")
+        };
         lost.push(NotHeldAtBirth {
             movement: "extension".into(),
             reason: format!(
-                "the {:.0} deg of extension were undone before the birth: the head was born at phi {:+.1} deg, \
+                "{undone} undone before the birth: the head was born at phi {:+.1} deg, \
                  {kept} the {from:+.1} deg it began to extend from, where the rule asks {EXTENSION_MIN_DEG:.0} \
                  deg less{}",
-                extension.size.unwrap_or(0.0),
                 born.phi_deg,
                 if born.phi_deg > 0.0 { "; it was born flexed" } else { "" }
             ),

@@ -643,6 +643,21 @@ fn movements_lost_before_the_birth_are_reported_as_not_held() {
     assert!(extension.contains(&format!("born at phi {:+.1} deg", born.phi_deg)) && extension.ends_with("it was born flexed"), "{extension}");
     // Flexed past where it began: said as more flexed, never as a negative fall.
     assert!(extension.contains("deg of extension were undone before the birth") && extension.contains("more flexed than the"), "{extension}");
+    // Flexed again only in part: said as part of the extension undone.
+    let mut partly = plan.clone();
+    partly.phi_ramps.last_mut().unwrap().by = 55.0;
+    let partly = detect(&partly.history(&canal)).unwrap();
+    let lost = partly.not_held_at_birth.iter().find(|n| n.movement == "extension").expect("15 deg kept is under the rule's 30");
+    let extension = partly.movements.extension;
+    let began = partly.series.time_s.iter().position(|&t| Some(t) == extension.start_s).unwrap();
+    let kept = partly.series.phi_deg[began] - partly.head_born.unwrap().phi_deg;
+    let size = extension.size.unwrap();
+    assert!((10.0..20.0).contains(&kept), "{kept}");
+    assert!(
+        lost.reason.starts_with(&format!("{:.0} of the {size:.0} deg of extension were undone", size - kept))
+            && lost.reason.contains(&format!("only {kept:.0} deg less flexed than")),
+        "{lost}"
+    );
 
     // An extension that begins only once the head is out was not lost by
     // the birth: it had not happened.

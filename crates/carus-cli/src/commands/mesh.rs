@@ -44,10 +44,14 @@ pub struct MeshArgs {
     /// Print one JSON object (the files written) on standard output.
     #[arg(long)]
     pub json: bool,
+    /// Write over the files of an earlier `carus mesh` in the folder.
+    #[arg(long)]
+    pub force: bool,
 }
 
 pub fn run(args: &MeshArgs) -> anyhow::Result<Status> {
     let file = AnatomyFile::load(args.file.as_deref())?;
+    refuse_to_overwrite(&args.out, args.part, args.force)?;
     super::create_out_folder(&args.out, "--out")?;
     let mut written = Vec::new();
     let mut crossings = Vec::new();
@@ -111,6 +115,49 @@ pub fn run(args: &MeshArgs) -> anyhow::Result<Status> {
         }
     }
     Ok(Status::Success)
+}
+
+/// The names of the files `part` writes, in the order it writes them.
+fn file_names(part: MeshPart) -> Vec<String> {
+    let pair = |stem: &str, a: &str, b: &str| [format!("{stem}.{a}"), format!("{stem}.{b}")];
+    let mut names = Vec::new();
+    match part {
+        MeshPart::Pelvis | MeshPart::Floor => {
+            names.extend(pair("pelvis", "stl", "vtu"));
+            names.extend(pair("pelvis_landmarks", "csv", "json"));
+            names.push("pelvic_axis.csv".to_string());
+            if part == MeshPart::Floor {
+                names.push("pelvic_floor.vtu".to_string());
+                names.extend(pair("pelvic_floor_attached_nodes", "csv", "json"));
+            }
+        }
+        MeshPart::Head => {
+            names.extend(pair("head", "stl", "vtu"));
+            names.extend(pair("head_landmarks", "csv", "json"));
+        }
+    }
+    names
+}
+
+/// Checked before anything is written, so that a refusal leaves the folder
+/// as it was. A run's or a batch's folder is refused even with `--force`:
+/// its `pelvis.vtu` is the run's own, in the run's anatomy.
+fn refuse_to_overwrite(out: &Path, part: MeshPart, force: bool) -> anyhow::Result<()> {
+    if super::holds_run(out) || super::holds_batch(out) {
+        anyhow::bail!(
+            "{} holds carus runs, whose files `carus mesh` would write over; choose another --out",
+            out.display()
+        );
+    }
+    let existing: Vec<String> = file_names(part).into_iter().filter(|name| out.join(name).exists()).collect();
+    if !existing.is_empty() && !force {
+        anyhow::bail!(
+            "{} already holds {}; choose another --out, or add --force to write over them",
+            out.display(),
+            existing.join(", ")
+        );
+    }
+    Ok(())
 }
 
 /// How many pairs of the surface's triangles cross each other (not
@@ -197,6 +244,46 @@ fn write_axis(path: &Path, samples: &[AxisSample]) -> anyhow::Result<PathBuf> {
 mod tests {
     use super::*;
     use carus_anatomy::fetus::{FetalHead, HeadDiameters};
+
+    /// Each part writes exactly the files [`file_names`] lists (what the
+    /// overwrite check looks for), and a second run into the same folder is
+    /// refused without `--force` and leaves the files as they were.
+    #[test]
+    fn the_overwrite_check_knows_every_file_and_refuses_without_force() {
+        let dir = tempfile::tempdir().unwrap();
+        for part in [MeshPart::Head, MeshPart::Floor] {
+            let out = dir.path().join(format!("{part:?}"));
+            let args = MeshArgs { part, file: None, out: out.clone(), json: false, force: false };
+            run(&args).unwrap();
+            let mut written: Vec<String> =
+                std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+            let mut listed = file_names(part);
+            written.sort();
+            listed.sort();
+            assert_eq!(written, listed);
+            let stamp = |name: &str| std::fs::metadata(out.join(name)).unwrap().modified().unwrap();
+            let before = stamp(&listed[0]);
+            let refusal = run(&args).unwrap_err().to_string();
+            assert!(refusal.contains("--force") && refusal.contains(&listed[0]), "{refusal}");
+            assert_eq!(stamp(&listed[0]), before);
+            run(&MeshArgs { force: true, ..args }).unwrap();
+        }
+        // Pelvis writes a subset of the floor's files.
+        assert!(file_names(MeshPart::Pelvis).iter().all(|n| file_names(MeshPart::Floor).contains(n)));
+    }
+
+    /// A run's folder holds the run's own pelvis.vtu: never written over.
+    #[test]
+    fn a_run_folder_is_refused_even_with_force() {
+        use carus_labour::output::{RUN_FILE, SCENARIO_FILE};
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join(SCENARIO_FILE), "").unwrap();
+        std::fs::write(dir.path().join(RUN_FILE), "{}").unwrap();
+        let args = MeshArgs { part: MeshPart::Pelvis, file: None, out: dir.path().to_path_buf(), json: false, force: true };
+        let refusal = run(&args).unwrap_err().to_string();
+        assert!(refusal.contains("holds carus runs"), "{refusal}");
+        assert!(!dir.path().join("pelvis.stl").exists());
+    }
 
     /// The generated head is a clean shell; a copy of it moved half its
     /// width into itself is not.

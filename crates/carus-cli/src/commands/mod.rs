@@ -14,6 +14,7 @@ pub mod validate;
 pub mod view;
 
 /// How a command that ran to completion ended.
+#[derive(Debug)]
 pub enum Status {
     /// Everything asked for was done (and every check passed).
     Success,
