@@ -44,7 +44,7 @@ impl Clearance {
 
     /// Records a query of point `i` at `p` that searched `searched` far and
     /// found `hit`; contact means inside the surface by less than `band`.
-    /// Returns how far the point may now move without a new query.
+    /// Keeps how far the point may now move without a new query.
     pub(crate) fn record(&mut self, i: usize, p: DVec3, hit: Option<&SurfacePoint>, band: f64, searched: f64) {
         let travel = match hit {
             // Outside: it must cross the surface first.

@@ -145,7 +145,8 @@ impl TriangleCollider {
         let distance = offset.length();
         let inside = offset.dot(pseudo_normal) < 0.0;
         // The outward direction of the shortest way out; on the surface
-        // itself (distance ~ 0) the pseudo-normal is the only direction left.
+        // itself (distance ~ 0) the pseudo-normal is the only direction left,
+        // or the face's where a folded surface's normals cancel.
         let scale = 1e-12 * (1.0 + projection.point.abs().max_element());
         let normal = if distance > scale {
             if inside {
@@ -154,7 +155,7 @@ impl TriangleCollider {
                 offset / distance
             }
         } else {
-            pseudo_normal.normalize()
+            pseudo_normal.try_normalize().unwrap_or(self.face_normals[t])
         };
         Some(SurfacePoint {
             point: projection.point,

@@ -11,8 +11,8 @@ use crate::error::{check_non_negative, ContactError};
 /// Largest expulsive force of REFERENCE_DATA.md ("over about 70 cm2 of head
 /// this is roughly 70-140 N"), N: the load the default stiffness is sized for.
 pub const DESIGN_EXPULSION_FORCE_N: f64 = 140.0;
-/// Penetration accepted at that force, m: 1 mm, a tenth of the 0.1 mm x 10
-/// tolerance scale of the anatomy and well below the head-pelvis clearances
+/// Penetration accepted at that force, m: 1 mm, ten times the anatomy's
+/// 0.1 mm tolerance and well below the head-pelvis clearances
 /// (several mm) that decide arrest.
 pub const DESIGN_PENETRATION_M: f64 = 1.0e-3;
 /// Radius of a term fetal head, m: half the biparietal diameter (95 mm,

@@ -4,7 +4,7 @@
 //! Lapeer et al. 2019 / Sadulaev 2019).
 
 use glam::{DMat3, DQuat, DVec3};
-use parry3d_f64::glamx::DSymmetricEigen3;
+use parry3d_f64::math::SymmetricEigen3;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{check_non_negative, ContactError};
@@ -132,10 +132,10 @@ fn damped_stable_step(k: f64, inverse_mass: f64, c: f64) -> f64 {
     semi_implicit_step_limit(omega, 0.5 * c * inverse_mass / omega)
 }
 
-/// Largest eigenvalue of a symmetric 3 x 3 matrix (glamx's closed-form
-/// symmetric eigensolver, through parry's re-export).
+/// Largest eigenvalue of a symmetric 3 x 3 matrix (parry's closed-form
+/// symmetric eigensolver, as the rigid bodies' principal axes use).
 fn largest_eigenvalue(a: DMat3) -> f64 {
-    DSymmetricEigen3::eigenvalues(a).max_element()
+    SymmetricEigen3::eigenvalues(a).max_element()
 }
 
 /// The longest stable rigid step of a joint ([`Neck::stable_step`]).

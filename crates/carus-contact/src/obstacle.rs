@@ -277,11 +277,14 @@ pub fn obstacle_contacts(
     pivot: DVec3,
     memory: &mut BodyContactState,
 ) -> Result<ContactReport, ContactError> {
-    if memory.anchors.len() != samples.len() || memory.clearance.len() != samples.len() {
+    if memory.sample_count() != Some(samples.len()) {
         return Err(ContactError::LengthMismatch {
-            what: "body contact state (one entry per sample)",
+            what: "body contact state (anchors, depth flags and clearances, one of each per sample)",
             expected: samples.len(),
-            got: memory.anchors.len(),
+            got: [memory.anchors.len(), memory.too_deep.len(), memory.clearance.len()]
+                .into_iter()
+                .find(|&n| n != samples.len())
+                .unwrap_or(samples.len()),
         });
     }
     let com = motion.pose.position_m;

@@ -27,7 +27,8 @@ pub struct PairReport {
     pub active: usize,
     /// Deepest penetration, m.
     pub deepest_m: f64,
-    /// Samples deeper than the obstacle's search depth (no force).
+    /// Samples deeper than the search band, the larger of the obstacle's
+    /// search depth and twice the law's sink at its design load (no force).
     pub too_deep: usize,
 }
 

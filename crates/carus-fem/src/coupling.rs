@@ -138,11 +138,22 @@ impl CoupledNodes {
         }
     }
 
-    /// Every node of a restored snapshot's lists in range, and every
-    /// sliding node also held.
+    /// Every node of a restored snapshot's lists in range, every target
+    /// finite, every sliding normal of unit length (what [`Self::hold`]
+    /// and [`Self::hold_sliding`] ensure), and every sliding node also held.
     pub(crate) fn check_restored(&self, node_count: usize) -> Result<(), FemError> {
         for &(n, _) in self.held.iter().chain(&self.sliding) {
             check_node("a snapshot's coupled displacement", n, node_count)?;
+        }
+        let bad = |what: &str, n: u32, v: [f64; 3]| FemError::InvalidBoundaryCondition {
+            reason: format!("a snapshot's {what} of node {n} is {v:?}; the snapshot is damaged"),
+        };
+        if let Some(&(n, d)) = self.held.iter().find(|(_, d)| !d.iter().all(|v| v.is_finite())) {
+            return Err(bad("held displacement", n, d));
+        }
+        let unit = |v: &[f64; 3]| (v.iter().map(|c| c * c).sum::<f64>().sqrt() - 1.0).abs() <= 1e-9;
+        if let Some(&(n, v)) = self.sliding.iter().find(|(_, v)| !unit(v)) {
+            return Err(bad("sliding normal (not of unit length)", n, v));
         }
         if let Some(&(n, _)) = self
             .sliding

@@ -205,10 +205,7 @@ fn anp_nodal_state<T: Real>(k: &KernelData<T>, u: &[T]) -> (Vec<f64>, f64) {
     let shares: Vec<f64> = (0..eb.element_count)
         .into_par_iter()
         .map(|e| {
-            let ue: [[f64; 3]; 4] =
-                std::array::from_fn(|a| std::array::from_fn(|c| u[3 * eb.node(e, a) + c].to_f64()));
-            let dh: [[f64; 3]; 4] =
-                std::array::from_fn(|a| std::array::from_fn(|i| eb.shape_derivative(e, a, i)));
+            let (ue, dh) = element_state::<T, 4>(k, e, u);
             det3(&deformation_gradient(&ue, &dh)) * eb.quarter_volume[e].to_f64()
         })
         .collect();

@@ -11,6 +11,7 @@
 use std::collections::BTreeMap;
 
 use crate::mesh::{ElementKind, Mesh};
+use crate::model::{det3, sub};
 
 /// Offsets of the eight hexahedron corners in VTK order (bottom face
 /// counter-clockwise seen from above, then the top face).
@@ -79,15 +80,7 @@ const DIAGONAL_PATHS: [[usize; 3]; 6] = [
 /// Six times the signed volume of a tetrahedron.
 fn signed_volume6(nodes: &[[f64; 3]], tet: [u32; 4]) -> f64 {
     let p = tet.map(|n| nodes[n as usize]);
-    let a = sub(p[1], p[0]);
-    let b = sub(p[2], p[0]);
-    let c = sub(p[3], p[0]);
-    a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
-        + a[2] * (b[0] * c[1] - b[1] * c[0])
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+    det3(&[sub(p[1], p[0]), sub(p[2], p[0]), sub(p[3], p[0])])
 }
 
 /// The node grid of a box and its face sets.
@@ -193,12 +186,9 @@ impl Grid {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::cross;
     use proptest::prelude::*;
     use std::collections::HashSet;
-
-    fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-    }
 
     fn hex_volume(mesh: &Mesh, e: usize) -> f64 {
         // Bounding box volume: the structured hexahedra are axis-aligned boxes.

@@ -6,6 +6,9 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::error::FemError;
+use crate::solver::check_node;
+
 /// Time history of a load, value(t) in [0, 1].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "shape", rename_all = "snake_case")]
@@ -116,6 +119,50 @@ impl BoundaryConditions {
             components: [true; 3],
         });
         self
+    }
+
+    /// Refuses what no backend can run on a mesh of `node_count` nodes: a
+    /// node that does not exist, a value that is not finite, a load shape
+    /// that is not valid. The CPU and GPU backends call it alike, so they
+    /// refuse the same conditions with the same errors.
+    pub fn validate(&self, node_count: usize) -> Result<(), FemError> {
+        let bad = |reason: String| FemError::InvalidBoundaryCondition { reason };
+        for f in &self.fixed {
+            for &n in &f.nodes {
+                check_node("a fixed-dof set", n, node_count)?;
+            }
+        }
+        for d in &self.displacements {
+            d.shape.validate().map_err(bad)?;
+            for &n in &d.nodes {
+                check_node("an imposed displacement", n, node_count)?;
+                if d.components.iter().flatten().any(|v| !v.is_finite()) {
+                    return Err(bad(format!("imposed displacement of node {n} is not finite")));
+                }
+            }
+        }
+        for f in &self.forces {
+            f.shape.validate().map_err(bad)?;
+            if !f.force_n.iter().all(|v| v.is_finite()) {
+                return Err(bad(format!("nodal force {:?} N is not finite", f.force_n)));
+            }
+            for &n in &f.nodes {
+                check_node("a nodal force", n, node_count)?;
+            }
+        }
+        for p in &self.pressures {
+            p.shape.validate().map_err(bad)?;
+            if !p.pressure_pa.is_finite() {
+                return Err(bad(format!("surface pressure {} Pa is not finite", p.pressure_pa)));
+            }
+            for &n in p.triangles.iter().flatten() {
+                check_node("a pressure triangle", n, node_count)?;
+            }
+        }
+        match self.gravity_m_s2 {
+            Some(g) if !g.iter().all(|v| v.is_finite()) => Err(bad(format!("gravity {g:?} m/s^2 is not finite"))),
+            _ => Ok(()),
+        }
     }
 }
 

@@ -136,7 +136,7 @@ impl MaterialLaw for Material {
         let k = crate::kernel::element::Coefficients::from_f64(self.kernel_coefficients());
         let c = crate::kernel::element::Sym::from_mat(c);
         let j = c.det().sqrt();
-        crate::kernel::element::second_piola_kirchhoff(&c, j, j, &k).to_mat()
+        crate::kernel::element::second_piola_kirchhoff(&c, j, j, &k).to_rows()
     }
 
     fn lame_parameters(&self) -> (f64, f64) {

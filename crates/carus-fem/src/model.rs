@@ -7,6 +7,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::FemError;
 use crate::kernel::blocks::{ElementBlocks, ElementInput, KernelData, NodeTable};
+pub(crate) use crate::kernel::element::det3;
 use crate::kernel::lanes::Real;
 use crate::kernel::stability::max_angular_frequency;
 use crate::material::{Material, MaterialLaw};
@@ -175,10 +176,12 @@ const H8_GAMMA: [[f64; 4]; 8] = [
     [-1.0, 1.0, -1.0, -1.0],
 ];
 
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+// Small vector helpers on the mesh's [f64; 3] coordinates, shared by the
+// mesh generator and the quality checks.
+pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+pub(crate) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [
         a[1] * b[2] - a[2] * b[1],
         a[2] * b[0] - a[0] * b[2],
@@ -190,9 +193,6 @@ fn norm(a: [f64; 3]) -> f64 {
 }
 fn norm_squared(a: [f64; 3]) -> f64 {
     a[0] * a[0] + a[1] * a[1] + a[2] * a[2]
-}
-pub(crate) fn det3(m: &[[f64; 3]; 3]) -> f64 {
-    crate::kernel::element::det3(m)
 }
 fn inverse3(m: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
     let d = det3(m);
@@ -207,16 +207,18 @@ fn inverse3(m: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
     r
 }
 
+/// dN_a/dxi_i of the trilinear H8 shape function of the corner at natural
+/// coordinates `corner` (one of [`H8_CORNERS`]), at natural point `xi`.
+fn h8_natural_derivatives(corner: [f64; 3], xi: [f64; 3]) -> [f64; 3] {
+    let f = [1.0 + corner[0] * xi[0], 1.0 + corner[1] * xi[1], 1.0 + corner[2] * xi[2]];
+    [corner[0] * f[1] * f[2] / 8.0, corner[1] * f[0] * f[2] / 8.0, corner[2] * f[0] * f[1] / 8.0]
+}
+
 /// Jacobian dx_j/dxi_i of the trilinear H8 map at natural point `xi`.
 pub(crate) fn h8_jacobian(x: &[[f64; 3]; 8], xi: [f64; 3]) -> [[f64; 3]; 3] {
     let mut jac = [[0.0; 3]; 3];
     for (a, s) in H8_CORNERS.iter().enumerate() {
-        let f = [1.0 + s[0] * xi[0], 1.0 + s[1] * xi[1], 1.0 + s[2] * xi[2]];
-        let dn = [
-            s[0] * f[1] * f[2] / 8.0,
-            s[1] * f[0] * f[2] / 8.0,
-            s[2] * f[0] * f[1] / 8.0,
-        ];
+        let dn = h8_natural_derivatives(*s, xi);
         for i in 0..3 {
             for j in 0..3 {
                 jac[i][j] += dn[i] * x[a][j];
@@ -276,12 +278,7 @@ pub(crate) fn h8_geometry(e: usize, x: &[[f64; 3]; 8]) -> Result<ElementGeometry
         let det = det3(&jac);
         let inv = inverse3(&jac);
         for (a, s) in H8_CORNERS.iter().enumerate() {
-            let f = [1.0 + s[0] * xi[0], 1.0 + s[1] * xi[1], 1.0 + s[2] * xi[2]];
-            let dn = [
-                s[0] * f[1] * f[2] / 8.0,
-                s[1] * f[0] * f[2] / 8.0,
-                s[2] * f[0] * f[1] / 8.0,
-            ];
+            let dn = h8_natural_derivatives(*s, xi);
             for j in 0..3 {
                 dh[a][j] += det * (0..3).map(|i| dn[i] * inv[j][i]).sum::<f64>() / volume;
             }
@@ -442,7 +439,7 @@ impl TledModel {
             });
         }
         let region_of = assign_regions(mesh, materials)?;
-        let (kernel, (element_time_step_s, critical_element, min_length), element_scales) = match options.precision
+        let (kernel, StepLimits { element_time_step_s, critical_element, min_length_m }, element_scales) = match options.precision
         {
             Precision::F64 => {
                 let (k, limits, scales) = build_kernel::<f64>(mesh, materials, &region_of, options)?;
@@ -462,7 +459,7 @@ impl TledModel {
             }
         }
         // Probe displacements of 1e-3 of the smallest element size.
-        let probe_m = 1e-3 * min_length;
+        let probe_m = 1e-3 * min_length_m;
         let omega_max = match &kernel {
             KernelModel::F32(k) => max_angular_frequency(k, probe_m),
             KernelModel::F64(k) => max_angular_frequency(k, probe_m),
@@ -630,9 +627,15 @@ fn assign_regions(mesh: &Mesh, materials: &[MaterialRegion]) -> Result<Vec<u16>,
     Ok(region_of)
 }
 
-/// Element estimate of the critical step, its element, and the smallest
-/// characteristic length.
-type StepLimits = (f64, usize, f64);
+/// What the elements say of the critical step.
+struct StepLimits {
+    /// The element estimate min_e L_e / c_e, s.
+    element_time_step_s: f64,
+    /// The element that sets it.
+    critical_element: usize,
+    /// The smallest characteristic length L_e, m.
+    min_length_m: f64,
+}
 
 fn build_kernel<T: Real>(
     mesh: &Mesh,
@@ -649,7 +652,7 @@ fn build_kernel<T: Real>(
     let mut mass = vec![0.0f64; nn];
     let mut nodal_volume = if anp { vec![0.0f64; nn] } else { Vec::new() };
     let mut dt_crit = f64::INFINITY;
-    let mut dt_element = 0;
+    let mut critical_element = 0;
     let mut min_length = f64::INFINITY;
     let mut scales = Vec::with_capacity(ne);
     for (e, el) in mesh.elements().enumerate() {
@@ -686,7 +689,7 @@ fn build_kernel<T: Real>(
         min_length = min_length.min(geom.characteristic_length);
         if dt < dt_crit {
             dt_crit = dt;
-            dt_element = e;
+            critical_element = e;
         }
         let m = region.density_kg_m3 * geom.volume / npe as f64;
         for &n in el {
@@ -742,7 +745,7 @@ fn build_kernel<T: Real>(
             elements: blocks,
             nodes,
         },
-        (dt_crit, dt_element, min_length),
+        StepLimits { element_time_step_s: dt_crit, critical_element, min_length_m: min_length },
         scales,
     ))
 }

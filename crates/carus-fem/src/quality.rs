@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::FemError;
 use crate::mesh::{ElementKind, Mesh};
+use crate::model::sub;
 
 /// Quality of a whole mesh.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -52,10 +53,6 @@ impl QualityReport {
         }
         Ok(())
     }
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 
 /// det[e1 e2 e3] / (|e1| |e2| |e3|) of three edge vectors from one corner.

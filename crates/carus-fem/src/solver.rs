@@ -165,6 +165,15 @@ pub(crate) fn substeps_for(
 }
 
 
+/// An `advance_to` time the steps can reach: a time that is not finite
+/// would step for ever (shared with the GPU backend).
+pub(crate) fn check_end_time(t_s: f64) -> Result<(), FemError> {
+    if t_s.is_finite() {
+        return Ok(());
+    }
+    Err(FemError::InvalidOption { option: "advance_to", reason: format!("the end time is {t_s}; give a finite time, s") })
+}
+
 /// A boundary condition's node must exist (shared with the GPU backend).
 pub(crate) fn check_node(what: &'static str, n: u32, nn: usize) -> Result<(), FemError> {
     if (n as usize) < nn {
@@ -180,11 +189,10 @@ pub(crate) fn check_node(what: &'static str, n: u32, nn: usize) -> Result<(), Fe
 
 impl CompiledLoads {
     fn new(bc: &BoundaryConditions, nn: usize) -> Result<Self, FemError> {
-        let bad = |reason: String| FemError::InvalidBoundaryCondition { reason };
+        bc.validate(nn)?;
         let mut out = CompiledLoads::default();
         for f in &bc.fixed {
             for &n in &f.nodes {
-                check_node("a fixed-dof set", n, nn)?;
                 for c in 0..3 {
                     if f.components[c] {
                         out.fixed_dofs.push(n * 3 + c as u32);
@@ -193,17 +201,10 @@ impl CompiledLoads {
             }
         }
         for d in &bc.displacements {
-            d.shape.validate().map_err(bad)?;
             let mut dofs = Vec::new();
             for &n in &d.nodes {
-                check_node("an imposed displacement", n, nn)?;
                 for c in 0..3 {
                     if let Some(v) = d.components[c] {
-                        if !v.is_finite() {
-                            return Err(bad(format!(
-                                "imposed displacement of node {n} is not finite"
-                            )));
-                        }
                         dofs.push((n * 3 + c as u32, v));
                     }
                 }
@@ -211,39 +212,17 @@ impl CompiledLoads {
             out.imposed.push((d.shape, dofs));
         }
         for f in &bc.forces {
-            f.shape.validate().map_err(bad)?;
-            if !f.force_n.iter().all(|v| v.is_finite()) {
-                return Err(bad(format!("nodal force {:?} N is not finite", f.force_n)));
-            }
-            for &n in &f.nodes {
-                check_node("a nodal force", n, nn)?;
-                out.load_nodes.push(n);
-            }
+            out.load_nodes.extend(&f.nodes);
             out.forces.push((f.shape, f.nodes.clone(), f.force_n));
         }
         for p in &bc.pressures {
-            p.shape.validate().map_err(bad)?;
-            if !p.pressure_pa.is_finite() {
-                return Err(bad(format!(
-                    "surface pressure {} Pa is not finite",
-                    p.pressure_pa
-                )));
-            }
-            for t in &p.triangles {
-                for &n in t {
-                    check_node("a pressure triangle", n, nn)?;
-                    out.load_nodes.push(n);
-                }
-            }
+            out.load_nodes.extend(p.triangles.iter().flatten());
             out.pressures
                 .push((p.shape, p.pressure_pa, p.triangles.clone()));
         }
         out.load_nodes.sort_unstable();
         out.load_nodes.dedup();
         if let Some(g) = bc.gravity_m_s2 {
-            if !g.iter().all(|v| v.is_finite()) {
-                return Err(bad(format!("gravity {g:?} m/s^2 is not finite")));
-            }
             out.gravity = g;
         }
         Ok(out)
@@ -692,6 +671,7 @@ impl TledSolver {
 
     /// Steps until the time reaches `t_s` (within half a step).
     pub fn advance_to(&mut self, t_s: f64) -> Result<(), FemError> {
+        check_end_time(t_s)?;
         while self.time_s + 0.5 * self.dt_s < t_s {
             self.step()?;
         }
@@ -833,7 +813,12 @@ impl TledSolver {
         })
     }
 
-    /// A copy of the whole mutable state.
+    /// A copy of the whole mutable state. After an error it is the last
+    /// good state: failed sub-steps never commit, and an element found
+    /// inverted rolls the state back to the sub-step before, so every value
+    /// is finite and every element valid; except for an inversion found in
+    /// the first sub-step after [`Self::restore`] or a change of step, which
+    /// has no sub-step before it to go back to.
     pub fn snapshot(&self) -> SolverSnapshot {
         let (displacements_m, previous_displacements_m) = with_state_ref!(self, |_k, s| (
             State::to_vec3(&s.u_curr),
@@ -850,13 +835,6 @@ impl TledSolver {
             clock: self.clock,
             substep_s: Some(self.h_s),
         }
-    }
-
-    /// The last good state. Failed sub-steps never commit, and an element
-    /// found inverted rolls the state back to the sub-step before, so after
-    /// any error this is a state with every element valid and values finite.
-    pub fn last_good_state(&self) -> SolverSnapshot {
-        self.snapshot()
     }
 
     /// Puts the solver back into a snapshot's state (the same model and
@@ -1580,7 +1558,7 @@ mod run_tests {
             }) => assert_eq!(last_good_time_s, 0.0),
             other => panic!("expected divergence, got {other:?}"),
         }
-        assert_eq!(s.last_good_state(), before);
+        assert_eq!(s.snapshot(), before);
         assert!(s.displacements().iter().flatten().all(|v| v.is_finite()));
     }
 }

@@ -306,8 +306,18 @@ fn snapshots_resume_bit_for_bit() {
     assert_eq!(g.displacements().unwrap(), first);
 }
 
+/// Found anywhere in a submission, or in its first sub-step (one sub-step
+/// per submission), an inversion is named as the CPU names it and the state
+/// kept is the CPU's: the sub-step before the one that held the inverted
+/// element, with every element valid.
 #[test]
 fn an_inverting_element_is_named_and_the_last_good_state_kept() {
+    for options in [GpuOptions::default(), GpuOptions { max_steps_per_submission: 1, ..GpuOptions::default() }] {
+        inversion_keeps_the_last_good_state(options);
+    }
+}
+
+fn inversion_keeps_the_last_good_state(options: GpuOptions) {
     let gpu = device();
     let mesh = box_h8([EDGE_M; 3], [2, 2, 2]);
     let m = model(&mesh, TetFormulation::T4, Precision::F64);
@@ -330,7 +340,7 @@ fn an_inverting_element_is_named_and_the_last_good_state_kept() {
         &bcs,
         dt,
         StepControl::Refuse,
-        GpuOptions::default(),
+        options,
     )
     .unwrap();
     let gpu_error = g.advance_steps(100_000).unwrap_err();
@@ -356,8 +366,8 @@ fn an_inverting_element_is_named_and_the_last_good_state_kept() {
         }
         other => panic!("expected both to name an inverted element, got {other:?}"),
     };
-    // The kept state is the one the failing sub-step started from (as on
-    // the CPU): finite, with the named element inverted in it.
+    // The kept state is the last good one, as on the CPU: finite, the
+    // named element not yet inverted, one sub-step before the error's time.
     assert!((g.time_s() - cpu.time_s()).abs() <= 1.5 * dt);
     assert!(g
         .displacements()
@@ -365,7 +375,10 @@ fn an_inverting_element_is_named_and_the_last_good_state_kept() {
         .iter()
         .flatten()
         .all(|v| v.is_finite()));
-    assert!(g.element_fields().unwrap().jacobian[element] <= 0.0);
+    let jacobian = g.element_fields().unwrap().jacobian;
+    assert!(jacobian.iter().all(|&j| j > 0.0), "element {element}: J = {}", jacobian[element]);
+    let FemError::ElementInvertedDuringRun { time_s, .. } = cpu_error else { unreachable!() };
+    assert!(cpu.time_s() < time_s);
 }
 
 #[test]

@@ -120,7 +120,7 @@ pub fn bench_tled(
         // step the finest cubes invert near its end (H8 n = 100 at t = 0.92
         // s on an H100). Each try aims a fifth past the mark, since the
         // next run's rate is higher than the last's.
-        let most = ((0.5 * RAMP_S / dt) as u64).clamp(run, MAX_STEPS);
+        let most = ((0.5 * RAMP_S / dt) as u64).min(MAX_STEPS).max(run);
         while wall_s < min_wall_s && run < most {
             run = ((1.2 * run as f64 * min_wall_s / wall_s.max(1e-9)).ceil() as u64).clamp(run + 1, most);
             wall_s = timed(run)?;

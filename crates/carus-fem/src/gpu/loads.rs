@@ -15,9 +15,7 @@
 //! of the CPU solver is kept: fixed, then imposed displacements (the last
 //! one naming a component wins), then the coupling API (its own kernel).
 
-use crate::error::FemError;
 use crate::loads::{BoundaryConditions, LoadShape};
-use crate::solver::check_node;
 
 use super::error::GpuError;
 
@@ -50,22 +48,18 @@ struct NodeRecord {
     pressure_slots: Vec<u32>,
 }
 
-fn invalid(reason: String) -> FemError {
-    FemError::InvalidBoundaryCondition { reason }
-}
-
 impl CompiledLoads {
     /// Compiles `bc` for a mesh of `node_count` nodes whose triangle force
     /// copies start at `triangle_forces_at` in the force buffer. Refuses
-    /// what the CPU solver refuses, with the same errors.
+    /// what the CPU solver refuses ([`BoundaryConditions::validate`]).
     pub fn new(
         bc: &BoundaryConditions,
         node_count: usize,
         triangle_forces_at: u32,
     ) -> Result<CompiledLoads, GpuError> {
+        bc.validate(node_count)?;
         let mut shapes: Vec<LoadShape> = Vec::new();
-        let mut shape_index = |shape: LoadShape| -> Result<u32, GpuError> {
-            shape.validate().map_err(invalid)?;
+        let mut shape_index = |shape: LoadShape| -> u32 {
             let i = match shapes.iter().position(|s| *s == shape) {
                 Some(i) => i,
                 None => {
@@ -73,12 +67,11 @@ impl CompiledLoads {
                     shapes.len() - 1
                 }
             };
-            Ok(i as u32)
+            i as u32
         };
         let mut records: Vec<Option<NodeRecord>> = vec![None; node_count];
         for f in &bc.fixed {
             for &n in &f.nodes {
-                check_node("a fixed-dof set", n, node_count)?;
                 let r = records[n as usize].get_or_insert_with(NodeRecord::default);
                 for c in 0..3 {
                     if f.components[c] {
@@ -89,18 +82,11 @@ impl CompiledLoads {
             }
         }
         for d in &bc.displacements {
-            let s = shape_index(d.shape)?;
+            let s = shape_index(d.shape);
             for &n in &d.nodes {
-                check_node("an imposed displacement", n, node_count)?;
                 let r = records[n as usize].get_or_insert_with(NodeRecord::default);
                 for c in 0..3 {
                     if let Some(v) = d.components[c] {
-                        if !v.is_finite() {
-                            return Err(invalid(format!(
-                                "imposed displacement of node {n} is not finite"
-                            ))
-                            .into());
-                        }
                         r.kinds = (r.kinds & !(3 << (2 * c))) | (IMPOSED << (2 * c));
                         r.shapes = (r.shapes & !(0xff << (8 * c))) | (s << (8 * c));
                         r.values[c] = v as f32;
@@ -109,12 +95,8 @@ impl CompiledLoads {
             }
         }
         for f in &bc.forces {
-            let s = shape_index(f.shape)?;
-            if !f.force_n.iter().all(|v| v.is_finite()) {
-                return Err(invalid(format!("nodal force {:?} N is not finite", f.force_n)).into());
-            }
+            let s = shape_index(f.shape);
             for &n in &f.nodes {
-                check_node("a nodal force", n, node_count)?;
                 let r = records[n as usize].get_or_insert_with(NodeRecord::default);
                 r.forces.push([
                     s,
@@ -126,18 +108,10 @@ impl CompiledLoads {
         }
         let mut triangles = Vec::new();
         for p in &bc.pressures {
-            let s = shape_index(p.shape)?;
-            if !p.pressure_pa.is_finite() {
-                return Err(invalid(format!(
-                    "surface pressure {} Pa is not finite",
-                    p.pressure_pa
-                ))
-                .into());
-            }
+            let s = shape_index(p.shape);
             for tri in &p.triangles {
                 let t = (triangles.len() / 5) as u32;
                 for (a, &n) in tri.iter().enumerate() {
-                    check_node("a pressure triangle", n, node_count)?;
                     let r = records[n as usize].get_or_insert_with(NodeRecord::default);
                     r.pressure_slots
                         .push(triangle_forces_at + 9 * t + 3 * a as u32);
@@ -157,13 +131,7 @@ impl CompiledLoads {
                 max: MAX_LOAD_SHAPES,
             });
         }
-        let gravity_m_s2 = match bc.gravity_m_s2 {
-            Some(g) if !g.iter().all(|v| v.is_finite()) => {
-                return Err(invalid(format!("gravity {g:?} m/s^2 is not finite")).into())
-            }
-            Some(g) => g,
-            None => [0.0; 3],
-        };
+        let gravity_m_s2 = bc.gravity_m_s2.unwrap_or([0.0; 3]);
         let mut node_loads = vec![NONE; node_count];
         for (n, r) in records.iter().enumerate() {
             if let Some(r) = r {
@@ -207,6 +175,7 @@ impl CompiledLoads {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::error::FemError;
     use crate::loads::{FixedDofs, ImposedDisplacement, NodalForce, SurfacePressure};
 
     #[test]

@@ -3,8 +3,8 @@
 //! transfers for the coupling hooks. Mirrors [`crate::solver::TledSolver`].
 //!
 //! One sub-step is a fixed sequence of dispatches (each a full barrier in
-//! wgpu's usage tracking): [T4ANP volume shares, nodal dilatation],
-//! [surface pressure], element forces, node update, [coupled nodes]. The
+//! wgpu's usage tracking): [surface pressure], [T4ANP volume shares, nodal
+//! dilatation], element forces, node update, [coupled nodes]. The
 //! three displacement buffers rotate with the sub-step count (previous,
 //! current, next), so no copies are made inside the loop. Per sub-step
 //! values (the load-shape values at t_n and t_n+1) are written for the whole
@@ -77,8 +77,9 @@ type Rotations = [wgpu::BindGroup; 3];
 struct StateBuffers {
     /// Displacements; at sub-step k, current = k % 3, next = (k + 1) % 3, previous = (k + 2) % 3.
     u: [wgpu::Buffer; 3],
-    /// Current and previous displacement at the start of a submission.
-    backup: [wgpu::Buffer; 2],
+    /// Current and previous displacement at the start of a submission, and
+    /// the one before them (the third slot, for going back a sub-step).
+    backup: [wgpu::Buffer; 3],
     /// Element force copies, then the triangle force copies of surface pressure.
     forces: wgpu::Buffer,
     status: wgpu::Buffer,
@@ -130,6 +131,9 @@ pub struct GpuSolver {
     time_s: f64,
     steps: u64,
     substeps: u64,
+    /// Whether the third displacement slot holds the state one sub-step
+    /// back: after a committed sub-step, not after a restore (the CPU's rule).
+    can_roll_back: bool,
     coupled: CoupledNodes,
     coupled_uploaded: bool,
     probe_nodes: Vec<u32>,
@@ -264,6 +268,7 @@ impl GpuSolver {
             time_s: 0.0,
             steps: 0,
             substeps: 0,
+            can_roll_back: false,
             coupled: CoupledNodes::default(),
             coupled_uploaded: true,
             probe_nodes: Vec::new(),
@@ -623,22 +628,10 @@ impl GpuSolver {
                         label: Some("tled steps"),
                     });
             if backup {
-                let (curr, prev) = Self::current_slots(k0);
                 let bytes = self.state.u[0].size();
-                encoder.copy_buffer_to_buffer(
-                    &self.state.u[curr],
-                    0,
-                    &self.state.backup[0],
-                    0,
-                    bytes,
-                );
-                encoder.copy_buffer_to_buffer(
-                    &self.state.u[prev],
-                    0,
-                    &self.state.backup[1],
-                    0,
-                    bytes,
-                );
+                for (slot, backup) in Self::rotation(k0).into_iter().zip(&self.state.backup) {
+                    encoder.copy_buffer_to_buffer(&self.state.u[slot], 0, backup, 0, bytes);
+                }
             }
             self.encode_substeps(&mut encoder, k0, n);
             self.gpu.queue().submit([encoder.finish()]);
@@ -650,9 +643,15 @@ impl GpuSolver {
         Ok(status)
     }
 
+    /// The slots of sub-step `k`: current, previous, and the one before
+    /// (the slot the sub-step writes next into).
+    fn rotation(k: u64) -> [usize; 3] {
+        let (curr, prev) = Self::current_slots(k);
+        [curr, prev, ((k + 1) % 3) as usize]
+    }
+
     /// Puts the submission-start state back into the rotation of sub-step `k0`.
     fn restore_backup(&self, k0: u64) -> Result<(), GpuError> {
-        let (curr, prev) = Self::current_slots(k0);
         self.gpu.scoped("restoring the last good state", || {
             let mut encoder =
                 self.gpu
@@ -661,8 +660,9 @@ impl GpuSolver {
                         label: Some("tled restore"),
                     });
             let bytes = self.state.u[0].size();
-            encoder.copy_buffer_to_buffer(&self.state.backup[0], 0, &self.state.u[curr], 0, bytes);
-            encoder.copy_buffer_to_buffer(&self.state.backup[1], 0, &self.state.u[prev], 0, bytes);
+            for (backup, slot) in self.state.backup.iter().zip(Self::rotation(k0)) {
+                encoder.copy_buffer_to_buffer(backup, 0, &self.state.u[slot], 0, bytes);
+            }
             self.gpu.queue().submit([encoder.finish()]);
         })?;
         Ok(self
@@ -670,12 +670,29 @@ impl GpuSolver {
             .wait(None, "restoring the last good state", self.options.wait_timeout)?)
     }
 
-    fn commit(&mut self, n: u32) {
-        let before = self.substeps;
-        self.substeps += n as u64;
-        self.time_s = self.substeps as f64 * self.h_s;
+    /// Moves the counters to sub-step `k` (forwards or back).
+    fn set_substeps(&mut self, k: u64) {
         let sps = self.substeps_per_step as u64;
-        self.steps += self.substeps / sps - before / sps;
+        let (before, after) = (self.substeps / sps, k / sps);
+        self.steps = (self.steps as i64 + after as i64 - before as i64) as u64;
+        self.substeps = k;
+        self.time_s = k as f64 * self.h_s;
+    }
+
+    fn commit(&mut self, n: u32) {
+        self.set_substeps(self.substeps + n as u64);
+    }
+
+    /// Back to the submission that started at `start` (its counters), and
+    /// `n` of its sub-steps replayed (the kernels are deterministic).
+    fn replay(&mut self, start: (u64, f64, u64), n: u32) -> Result<(), GpuError> {
+        (self.substeps, self.time_s, self.steps) = start;
+        self.restore_backup(self.substeps)?;
+        if n > 0 {
+            self.submit_substeps(n, false)?;
+            self.commit(n);
+        }
+        Ok(())
     }
 
     /// Runs `n` sub-steps in submissions sized to the measured speed.
@@ -695,28 +712,36 @@ impl GpuSolver {
                 return Err(self.recover(status.first_bad_substep));
             }
             self.commit(batch);
+            self.can_roll_back = true;
             n -= batch as u64;
         }
         Ok(())
     }
 
     /// Rewinds to the submission's start, replays the good sub-steps and
-    /// names the element or node of the first bad one (CPU semantics: the
-    /// state is the last good sub-step's).
+    /// names the element or node of the first bad one, with the CPU's
+    /// semantics: the state kept is the last good sub-step's, one before
+    /// the state that held an inverted element.
     fn recover(&mut self, good: u32) -> GpuError {
-        let k0 = self.substeps;
+        let start = (self.substeps, self.time_s, self.steps);
+        let could_roll_back = self.can_roll_back;
         let attempt = (|| -> Result<GpuError, GpuError> {
-            self.restore_backup(k0)?;
-            if good > 0 {
-                self.submit_substeps(good, false)?;
-                self.commit(good);
-            }
-            let status = self.submit_substeps(1, true)?;
-            self.restore_backup(self.substeps)?;
+            self.replay(start, good)?;
+            // Run alone, the failing sub-step names its element or node.
+            let status = self.submit_substeps(1, false)?;
+            self.replay(start, good)?;
             let t = self.time_s;
             if status.element != u32::MAX {
                 let element = status.element as usize;
                 let jacobian = self.element_fields()?.jacobian[element];
+                // The state at t made the bad element: go back to the
+                // sub-step before, whose elements were all checked.
+                if good > 0 {
+                    self.replay(start, good - 1)?;
+                } else if could_roll_back {
+                    self.set_substeps(self.substeps - 1);
+                }
+                self.can_roll_back = false;
                 if jacobian.is_finite() {
                     return Ok(FemError::ElementInvertedDuringRun {
                         element,
@@ -758,6 +783,7 @@ impl GpuSolver {
 
     /// Steps until the time reaches `t_s` (within half a step).
     pub fn advance_to(&mut self, t_s: f64) -> Result<(), GpuError> {
+        crate::solver::check_end_time(t_s)?;
         let (mut k, mut t, mut n) = (self.substeps, self.time_s, 0u64);
         while t + 0.5 * self.dt_s < t_s {
             k += self.substeps_per_step as u64;
@@ -1091,6 +1117,7 @@ impl GpuSolver {
         self.time_s = snap.time_s;
         self.steps = snap.steps;
         self.substeps = snap.substeps;
+        self.can_roll_back = false;
         self.coupled = coupled;
         self.coupled_uploaded = false;
         Ok(())

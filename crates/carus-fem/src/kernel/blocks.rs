@@ -112,15 +112,6 @@ impl<T: Real> ElementBlocks<T> {
         block * LANES + slot % LANES
     }
 
-    /// Local node of a force slot.
-    #[inline]
-    pub fn slot_local_node(&self, slot: usize) -> usize {
-        match self.nodes_per_element {
-            4 => (slot / (3 * LANES)) % 4,
-            _ => (slot / (3 * LANES)) % 8,
-        }
-    }
-
     /// Length of the per-element force-copy array.
     pub fn force_copy_len(&self) -> usize {
         self.block_count * LANES * self.nodes_per_element * 3

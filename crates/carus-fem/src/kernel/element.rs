@@ -64,10 +64,6 @@ impl Sym<f64> {
             xz: 0.5 * (m[0][2] + m[2][0]),
         }
     }
-
-    pub fn to_mat(&self) -> [[f64; 3]; 3] {
-        self.to_rows()
-    }
 }
 
 /// Coefficients of the shared isotropic kernel:

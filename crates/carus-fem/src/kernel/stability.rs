@@ -12,7 +12,10 @@
 //! K v is evaluated with the step loop's own element pass, as a central
 //! difference of the internal forces at +-d v with strains of about 1e-3, so
 //! it costs two element passes per iteration and needs no second element
-//! implementation. The Rayleigh quotient converges from below; on the V3
+//! implementation. For T4ANP it is plain T4's pass (no nodal dilatation):
+//! ANP averages the volumetric strain over each node's elements, so its
+//! volumetric energy is no larger (Jensen's inequality) and plain T4's
+//! limit is the safe side. The Rayleigh quotient converges from below; on the V3
 //! cube meshes (n = 20, H8 and T4) 30 iterations come within 0.1 % of 200.
 
 use super::blocks::KernelData;
