@@ -47,11 +47,24 @@ impl CsvWriter {
         Ok(writer)
     }
 
+    /// One write per line, so that the buffer goes to the file in whole
+    /// lines and a full disk never leaves half a row.
     fn write_line(&mut self, line: &str) -> Result<(), WriteError> {
-        writeln!(self.out, "{line}").map_err(|cause| WriteError::Io {
-            path: self.path.clone(),
-            cause,
-        })
+        let written = self.out.write_all(format!("{line}\n").as_bytes());
+        written.map_err(|cause| self.failed(cause))
+    }
+
+    /// The error of a write that failed, after cutting the file back to its
+    /// last whole line: a full disk can take part of a buffer, and a table
+    /// that ends in half a row would be read as a wrong number.
+    fn failed(&self, cause: std::io::Error) -> WriteError {
+        if let Ok(text) = std::fs::read(&self.path) {
+            let whole = text.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
+            if whole < text.len() {
+                let _ = self.out.get_ref().set_len(whole as u64);
+            }
+        }
+        WriteError::Io { path: self.path.clone(), cause }
     }
 
     /// Appends one row; a NaN is a value not recorded (no trunk, a spine
@@ -92,10 +105,8 @@ impl CsvWriter {
     /// Flushes what is buffered to the file (done on drop too, but without
     /// a chance to see the error).
     pub fn flush(&mut self) -> Result<(), WriteError> {
-        self.out.flush().map_err(|cause| WriteError::Io {
-            path: self.path.clone(),
-            cause,
-        })
+        let flushed = self.out.flush();
+        flushed.map_err(|cause| self.failed(cause))
     }
 }
 

@@ -240,6 +240,28 @@ fn a_run_that_inverts_an_element_stops_with_its_last_good_frame() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// A history interval longer than the run still gives the row at its end,
+/// and the summary's reactions are that row's, at the end.
+#[test]
+fn the_history_ends_with_the_end_and_the_reactions_are_its() {
+    let dir = fresh_dir("history-end");
+    let body = format!(
+        "{BASE}\n[[displacement]]\nnode_set = \"x1\"\nx_m = 1e-5\nload = {{ shape = \"ramp\", duration_s = 1e-2 }}\n\n[solver]\nend_time_s = 0.01\ntime_step_s = \"auto\"\n\n[output]\nhistory_interval_s = 100.0\n"
+    );
+    let job = write_job(&dir, &body);
+    let out = dir.join("out");
+    let report = run_job(&job, &out, &RunOptions::default(), &mut |_| {}).unwrap();
+    assert!(report.failure.is_none(), "{:?}", report.failure);
+    let table = carus_io::CsvTable::read(&out.join("history.csv")).unwrap();
+    let cell = |name: &str, row: usize| table.number(&table.rows[row], table.column(name).unwrap()).unwrap().unwrap();
+    assert_eq!(table.rows.len(), 2, "the start and the end");
+    assert_eq!(cell("time_s", 1), report.simulated_s);
+    let reaction = report.reactions_n["x1"];
+    assert!(reaction[0].abs() > 0.0, "{reaction:?}");
+    assert_eq!(cell("reaction_x1_x_n", 1), reaction[0]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 #[test]
 fn job_errors_name_the_key_the_line_and_the_fix() {
     let dir = fresh_dir("errors");

@@ -30,7 +30,7 @@ pub struct OutputArgs {
     /// Print one JSON object on standard output and nothing else there.
     #[arg(long)]
     pub json: bool,
-    /// Replace what the output folder holds, if carus wrote it (a run, sweep or sanity folder).
+    /// Replace what the output folder holds, if carus wrote it all (a run, sweep or sanity folder; refused if it holds anything else).
     #[arg(long)]
     pub force: bool,
     /// No progress or notes on standard error.
@@ -297,7 +297,7 @@ pub(super) fn write_report(record: &RunRecord, out_dir: &Path) -> anyhow::Result
     };
     Ok(carus_report::write_report_file(
         &input,
-        &out_dir.join("report.html"),
+        &out_dir.join(REPORT_FILE),
     )?)
 }
 
@@ -588,6 +588,9 @@ impl OutDir {
     }
 }
 
+/// A run's report page.
+pub(super) const REPORT_FILE: &str = "report.html";
+
 /// The mark carus leaves in every out dir it makes, the moment it makes
 /// it: a run cut off before it wrote anything else is still known as ours.
 const OUT_DIR_MARK: &str = ".carus-out";
@@ -596,7 +599,7 @@ const OUT_DIR_MARK: &str = ".carus-out";
 /// [`OUT_DIR_MARK`]: a run (its scenario with its record or checkpoint) or
 /// a sweep (its two tables). One common file name alone is not enough.
 const EARLIER_OUTPUT_MARKS: [&[&str]; 3] =
-    [&["scenario.toml", "run.json"], &["scenario.toml", "checkpoint.json"], &["sweep.csv", "sweep.json"]];
+    [&["scenario.toml", "run.json"], &["scenario.toml", "checkpoint.json"], &[super::sweep::CSV_FILE, super::sweep::JSON_FILE]];
 
 /// Makes `dir` and marks it as an out dir of carus.
 pub(super) fn make_marked(dir: &Path) -> anyhow::Result<()> {
@@ -645,7 +648,61 @@ fn check_replaceable(dir: &Path) -> anyhow::Result<()> {
             dir.display()
         );
     }
+    let foreign = foreign_entries(dir)?;
+    if !foreign.is_empty() {
+        let shown: Vec<String> = foreign.iter().take(5).map(|p| p.display().to_string()).collect();
+        bail!(
+            "{} holds what carus did not write ({}{}), and --force deletes only carus's own files; \
+             move them out first, or choose another --out",
+            dir.display(),
+            shown.join(", "),
+            if foreign.len() > 5 { format!(" and {} more", foreign.len() - 5) } else { String::new() }
+        );
+    }
     Ok(())
+}
+
+/// What a folder carus made holds that carus did not write there (a
+/// user's notes, an analysis folder), which `--force` must not delete: a
+/// run's files, the frames folder's VTU series, a sweep's or sanity's
+/// plan and tables, and its run folders, each checked the same way.
+pub(super) fn foreign_entries(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
+    use carus_labour::output::*;
+    let own = [
+        OUT_DIR_MARK, SCENARIO_FILE, CHECKPOINT_FILE, HISTORY_JSON, HISTORY_CSV, CONTACTS_CSV, MOVEMENTS_FILE,
+        RUN_FILE, PELVIS_VTU, LIGAMENTS_VTU, HEAD_BODY_VTU, TRUNK_BODY_VTU, LOWER_TRUNK_BODY_VTU, REPORT_FILE,
+        super::sweep::PLAN_FILE, super::sweep::CSV_FILE, super::sweep::JSON_FILE, super::sanity::PLAN_FILE,
+        super::sanity::RECORD_FILE,
+    ];
+    // A JSON written whole goes through NAME.partial (write_json_whole).
+    let ours = |name: &str| own.contains(&name.strip_suffix(".partial").unwrap_or(name)) || name.ends_with(".pvd");
+    let frame = |name: &str| {
+        name.strip_suffix(".vtu")
+            .and_then(|stem| stem.rsplit_once('_'))
+            .is_some_and(|(_, k)| k.len() >= 4 && k.bytes().all(|b| b.is_ascii_digit()))
+    };
+    let list = |dir: &Path| -> anyhow::Result<Vec<(PathBuf, String, bool)>> {
+        let mut entries = Vec::new();
+        for entry in std::fs::read_dir(dir).with_context(|| format!("{}", dir.display()))? {
+            let entry = entry.with_context(|| format!("{}", dir.display()))?;
+            let is_dir = entry.file_type().is_ok_and(|t| t.is_dir());
+            entries.push((entry.path(), entry.file_name().to_string_lossy().into_owned(), is_dir));
+        }
+        entries.sort();
+        Ok(entries)
+    };
+    let mut foreign = Vec::new();
+    for (path, name, is_dir) in list(dir)? {
+        match is_dir {
+            false if ours(&name) => {}
+            true if name == FRAMES_DIR => {
+                foreign.extend(list(&path)?.into_iter().filter(|(_, n, d)| *d || !frame(n)).map(|(p, ..)| p))
+            }
+            true if carus_made(&path) => foreign.extend(foreign_entries(&path)?),
+            _ => foreign.push(path),
+        }
+    }
+    Ok(foreign)
 }
 
 fn holds_files(dir: &Path) -> anyhow::Result<bool> {
@@ -809,7 +866,7 @@ fn print_summary(record: &RunRecord, out_dir: &Path) {
     );
     print_movements(&movements(record), record.detector.as_ref());
     // Only what this run wrote: a run too short for a report has none.
-    let mut written: Vec<&str> = ["report.html", "run.json", "movements.json", "pose_history.csv"]
+    let mut written: Vec<&str> = [REPORT_FILE, "run.json", "movements.json", "pose_history.csv"]
         .into_iter()
         .filter(|f| out_dir.join(f).is_file())
         .collect();
@@ -1112,6 +1169,21 @@ mod tests {
         let kept = Scenario::from_file(&out.join("scenario.toml")).unwrap();
         assert_eq!(kept.contact.friction, 0.35);
         assert_eq!(kept.numerics.end_time_s, 0.02);
+        // --force knows every file a run writes, and refuses to delete what
+        // a user added to the folder.
+        assert_eq!(foreign_entries(&out).unwrap(), Vec::<PathBuf>::new());
+        let forced = |out: &Path| RunArgs {
+            output: OutputArgs { out: Some(out.to_path_buf()), json: true, force: true, quiet: true },
+            ..args(out.to_path_buf(), &["numerics.end_time_s=0.02"])
+        };
+        std::fs::write(out.join("my_notes.txt"), "mine").unwrap();
+        std::fs::create_dir(out.join("analysis")).unwrap();
+        let e = format!("{:#}", run(&forced(&out)).err().unwrap());
+        assert!(e.contains("my_notes.txt") && e.contains("analysis") && e.contains("move them out first"), "{e}");
+        assert!(out.join("my_notes.txt").exists() && out.join(carus_labour::output::RUN_FILE).exists());
+        std::fs::remove_file(out.join("my_notes.txt")).unwrap();
+        std::fs::remove_dir(out.join("analysis")).unwrap();
+        run(&forced(&out)).unwrap();
 
         let misspelt = dir.path().join("misspelt");
         let e = format!("{:#}", run(&args(misspelt.clone(), &["contact.fiction=0.35"])).err().unwrap());

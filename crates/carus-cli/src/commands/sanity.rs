@@ -56,6 +56,8 @@ struct Judged {
 
 /// The changes the cases run with, kept in their folder for `--resume`.
 pub(super) const PLAN_FILE: &str = "sanity_plan.json";
+/// The cases' verdicts.
+pub(super) const RECORD_FILE: &str = "sanity.json";
 
 #[derive(serde::Serialize, serde::Deserialize)]
 struct SanityPlan {
@@ -128,7 +130,7 @@ pub fn run(args: &SanityArgs) -> anyhow::Result<Status> {
         "set": changes.iter().map(|(k, v)| (k.clone(), json!(v))).collect::<serde_json::Map<_, _>>(),
         "out_dir": out_dir.display().to_string(),
     });
-    let record = out_dir.join("sanity.json");
+    let record = out_dir.join(RECORD_FILE);
     std::fs::write(&record, serde_json::to_string_pretty(&verdicts)?)
         .with_context(|| format!("cannot write {}", record.display()))?;
     if args.output.json {
@@ -263,6 +265,8 @@ mod tests {
         let verdicts: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(out.join("sanity.json")).unwrap()).unwrap();
         assert_eq!((verdicts["met"].clone(), verdicts["of"].clone()), (json!(0), json!(4)));
+        // --force knows every file sanity writes.
+        assert_eq!(super::super::run::foreign_entries(&out).unwrap(), Vec::<std::path::PathBuf>::new());
         for case in SanityCase::ALL {
             let toml = std::fs::read_to_string(out.join(case.scenario()).join("scenario.toml")).unwrap();
             assert!(toml.contains("end_time_s = 0.2"), "{}", case.scenario());

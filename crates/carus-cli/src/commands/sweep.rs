@@ -206,6 +206,9 @@ struct SweepPlan {
 }
 
 pub(super) const PLAN_FILE: &str = "sweep_plan.json";
+/// The sweep's tables: one row per run.
+pub(super) const CSV_FILE: &str = "sweep.csv";
+pub(super) const JSON_FILE: &str = "sweep.json";
 
 pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
     let (plan, base, out_dir) = match &args.resume {
@@ -641,9 +644,9 @@ fn write_table(out_dir: &Path, keys: &[&str], rows: &[Option<Finished>]) -> anyh
         csv.push_str(&row.row.iter().map(|f| field(&f.split_whitespace().collect::<Vec<_>>().join(" "))).collect::<Vec<_>>().join(","));
         csv.push('\n');
     }
-    let path = out_dir.join("sweep.csv");
+    let path = out_dir.join(CSV_FILE);
     std::fs::write(&path, csv).with_context(|| format!("cannot write {}", path.display()))?;
-    let path = out_dir.join("sweep.json");
+    let path = out_dir.join(JSON_FILE);
     let text = serde_json::to_string_pretty(&sweep_json(out_dir, keys, rows))?;
     std::fs::write(&path, text).with_context(|| format!("cannot write {}", path.display()))
 }
@@ -827,6 +830,8 @@ mod tests {
         assert!(lines[3].starts_with("03-contact.friction=0.1,,0.1,"), "{}", lines[3]);
         let base = std::fs::read_to_string(out.join("01-base/scenario.toml")).unwrap();
         assert_eq!(base, s.to_toml().unwrap());
+        // --force knows every file a sweep writes.
+        assert_eq!(super::super::run::foreign_entries(&out).unwrap(), Vec::<PathBuf>::new());
     }
 
     /// A sweep stopped with one run part way and one not started goes on

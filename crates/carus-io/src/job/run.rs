@@ -380,6 +380,7 @@ struct Recorder {
     history: CsvWriter,
     supports: Supports,
     last_frame_time_s: Option<f64>,
+    last_history_time_s: Option<f64>,
     reactions: BTreeMap<String, [f64; 3]>,
 }
 
@@ -425,6 +426,19 @@ impl Recorder {
             row.extend_from_slice(&reaction);
         }
         self.history.row(&row)?;
+        self.last_history_time_s = Some(solver.time_s());
+        Ok(())
+    }
+
+    /// The frame and history row the end of a run owes, unless the last
+    /// ones were taken at its time: the summary's reactions are the end's.
+    fn close(&mut self, solver: &mut TledSolver, mesh: &Mesh) -> Result<(), JobError> {
+        if self.last_frame_time_s != Some(solver.time_s()) {
+            self.frame(solver, mesh)?;
+        }
+        if self.last_history_time_s != Some(solver.time_s()) {
+            self.history(solver)?;
+        }
         Ok(())
     }
 }
@@ -555,12 +569,16 @@ pub fn run_job(
         history: CsvWriter::create(&out_dir.join("history.csv"), &header)?,
         supports,
         last_frame_time_s: None,
+        last_history_time_s: None,
         reactions: BTreeMap::new(),
     };
     recorder.frame(&solver, mesh)?;
     recorder.history(&mut solver)?;
     let (mut next_frame, mut next_history) = (1u64, 1u64);
     let mut failure = None;
+    // An output that cannot be written stops the run; what was written
+    // before it is kept, and the summary says where it stopped.
+    let mut output_failed = None;
     // Half a step of slack: the run ends on the step nearest end_time_s.
     while solver.time_s() + 0.5 * dt_s < end_s {
         if options.stop.as_ref().is_some_and(|s| s.load(std::sync::atomic::Ordering::Relaxed)) {
@@ -581,17 +599,29 @@ pub fn run_job(
             break;
         }
         let t = solver.time_s() + 0.5 * dt_s;
-        let mut recorded = false;
-        if t >= next_history as f64 * history_interval_s {
-            recorder.history(&mut solver)?;
-            next_history = (t / history_interval_s).floor() as u64 + 1;
-            recorded = true;
+        let due_history = t >= next_history as f64 * history_interval_s;
+        let due_frame = t >= next_frame as f64 * frame_interval_s;
+        let written = (|| {
+            if due_history {
+                recorder.history(&mut solver)?;
+                next_history = (t / history_interval_s).floor() as u64 + 1;
+            }
+            if due_frame {
+                recorder.frame(&solver, mesh)?;
+                next_frame = (t / frame_interval_s).floor() as u64 + 1;
+            }
+            Ok::<(), JobError>(())
+        })();
+        if let Err(e) = written {
+            failure = Some(format!(
+                "{e}; the run stopped at t = {:.6e} s (step {}): the frames and history rows before it are kept",
+                solver.time_s(),
+                solver.steps()
+            ));
+            output_failed = Some(e);
+            break;
         }
-        if t >= next_frame as f64 * frame_interval_s {
-            recorder.frame(&solver, mesh)?;
-            next_frame = (t / frame_interval_s).floor() as u64 + 1;
-            recorded = true;
-        }
+        let recorded = due_history || due_frame;
         if recorded {
             progress(&Progress {
                 time_s: solver.time_s(),
@@ -601,11 +631,13 @@ pub fn run_job(
             });
         }
     }
-    if recorder.last_frame_time_s != Some(solver.time_s()) {
-        recorder.frame(&solver, mesh)?;
-        recorder.history(&mut solver)?;
+    if output_failed.is_none() {
+        recorder.close(&mut solver, mesh)?;
+        recorder.history.flush()?;
+    } else {
+        // The rows before the failure, whole; the failure itself is the error kept.
+        let _ = recorder.history.flush();
     }
-    recorder.history.flush()?;
     let report = JobReport {
         out_dir: out_dir.display().to_string(),
         frames: recorder.pvd.frames().len(),
@@ -630,11 +662,17 @@ pub fn run_job(
     };
     let summary = out_dir.join("summary.json");
     let json = serde_json::to_string_pretty(&report).unwrap_or_default();
-    std::fs::write(&summary, json + "\n").map_err(|cause| crate::WriteError::Io {
-        path: summary,
-        cause,
-    })?;
-    Ok(report)
+    let written = std::fs::write(&summary, json + "\n");
+    if written.is_err() {
+        // Half a summary would read as a damaged one.
+        let _ = std::fs::remove_file(&summary);
+    }
+    match (written, output_failed) {
+        (Ok(()), _) => Ok(report),
+        // With no room for the summary either, the first failure is the one to fix.
+        (Err(_), Some(first)) => Err(first),
+        (Err(cause), None) => Err(crate::WriteError::Io { path: summary, cause }.into()),
+    }
 }
 
 #[cfg(test)]
