@@ -140,8 +140,10 @@ pub fn outcome(history: &PoseHistory, series: &Series, spines_sigma_mm: f64, per
     }
     // Contractions too few to time (a run stopped in its first ones): no
     // window of two periods fits, and a pause between two pushes is not an
-    // arrest. Too soon to tell.
-    if period_s.is_none() && force_extremes(series).is_some() {
+    // arrest. Nor is a fetus that nothing has pushed down yet (a run of a
+    // step or two, before its force rose from zero). Too soon to tell.
+    let never_pushed = series.expulsion_force_n.iter().all(|&f| f <= 0.0);
+    if never_pushed || (period_s.is_none() && force_extremes(series).is_some()) {
         return Outcome {
             delivered,
             arrest: None,

@@ -509,6 +509,10 @@ fn a_run_stopped_in_its_first_contractions_is_not_an_arrest() {
     }
     plan.duration_s = 10.0 * plan.period_s;
     assert_eq!(detect(&plan.history(&canal)).unwrap().outcome.arrest.unwrap().stage, ArrestStage::Inlet);
+    // Nothing has pushed the fetus yet (a run of a step or two, its force
+    // still at zero): too soon to tell, however long the history.
+    let unpushed = synthetic::Plan { force_mean_n: 0.0, force_swing_n: 0.0, ..plan };
+    assert_eq!(detect(&unpushed.history(&canal)).unwrap().outcome.arrest, None);
 }
 
 /// The turtle sign: a head born at the height of each contraction that

@@ -681,7 +681,7 @@ fn finish(
         .map_or_else(Vec::new, |r| key_moments(&history, r, frame_times));
     attach_floor(&mut moments, floor_snapshots, out_dir, frame_times);
     let record = RunRecord {
-        scenario: scene.scenario.clone(),
+        scenario: scene.scenario.kept(),
         summary,
         key_moments: moments,
         history,

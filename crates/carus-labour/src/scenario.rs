@@ -1064,26 +1064,32 @@ impl Scenario {
         self.source.locate(key).map_or(String::new(), |(path, line)| format!("{}: ", located(path, line)))
     }
 
-    /// The scenario as a complete TOML file (every key explicit). An
-    /// imported pelvis's file is named by its absolute path when the
-    /// scenario came from a file, so that the copy in a run folder finds it
-    /// from there; a built-in pelvis keeps its name.
+    /// The scenario as a complete TOML file (every key explicit), as a run
+    /// folder keeps it ([`Self::kept`]).
     pub fn to_toml(&self) -> Result<String, ScenarioError> {
         let mut text = String::new();
         if !self.description.is_empty() {
             text.push_str(&format!("# {}\n", self.description));
         }
         text.push_str("# Every key is written out; units are in the key names (CONVENTIONS.md).\n");
+        text.push_str(&toml::to_string(&self.kept())?);
+        Ok(text)
+    }
+
+    /// The scenario as a run keeps it, readable from anywhere: an imported
+    /// pelvis's file named by its absolute path when the scenario came from
+    /// a file (the path it gave is relative to that file's folder, which
+    /// the run's record does not keep); a built-in pelvis keeps its name.
+    pub fn kept(&self) -> Scenario {
         match &self.pelvis {
             PelvisSpec::Imported { landmarks_file }
                 if landmarks_file.as_os_str() != VISIBLE_HUMAN_FEMALE && self.base_dir.is_absolute() =>
             {
                 let pelvis = PelvisSpec::Imported { landmarks_file: self.base_dir.join(landmarks_file) };
-                text.push_str(&toml::to_string(&Scenario { pelvis, ..self.clone() })?);
+                Scenario { pelvis, ..self.clone() }
             }
-            _ => text.push_str(&toml::to_string(self)?),
+            _ => self.clone(),
         }
-        Ok(text)
     }
 
     /// This scenario with each (key, value) change of
@@ -2574,6 +2580,11 @@ mod tests {
             s.pelvis.build(&s.base_dir).unwrap();
             assert_eq!(s.to_toml().unwrap(), shown, "written again unchanged");
         }
+        // The run's record (run.json, which `carus view` builds from) keeps
+        // the scenario without its folder: it names the file absolutely too.
+        let recorded: Scenario = serde_json::from_str(&serde_json::to_string(&scenario.kept()).unwrap()).unwrap();
+        assert_eq!(recorded.pelvis, PelvisSpec::Imported { landmarks_file: landmarks.clone() });
+        recorded.pelvis.build(&recorded.base_dir).unwrap();
     }
 
     /// A mistake in `[pelvis]` is named at its own line and dotted path, as

@@ -53,7 +53,8 @@ pub struct ViewArgs {
 
 pub fn run(args: &ViewArgs) -> anyhow::Result<Status> {
     let shown = RunShown::read(&args.run)?;
-    let scene = RunScene::build(&shown.scenario)?;
+    let scene = RunScene::build(&shown.scenario)
+        .with_context(|| format!("the scenario kept in {}", shown.source.display()))?;
     let replay = shown.replay(&scene).with_context(|| args.run.display().to_string())?;
     if args.forces && !replay.layers_available().forces {
         anyhow::bail!(
