@@ -28,7 +28,7 @@ pub use builder::MeshFile;
 pub use csv::{missing_as_nan, CsvRow, CsvTable, CsvWriter};
 pub use error::{ReadError, WriteError};
 pub use pvd::PvdCollection;
-pub use text::shown_number;
+pub use text::{shown_line, shown_number};
 pub use units::LengthUnit;
 pub use vtk::{write_triangle_vtu, write_vtu, FrameFields};
 

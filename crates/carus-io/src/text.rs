@@ -120,9 +120,34 @@ pub fn shown_number(x: f64) -> String {
     }
 }
 
+/// A line of a file as a message quotes it: trimmed, at most 60
+/// characters, and any byte no text has shown escaped (`\u{0}`), so that
+/// a binary file read as text does not write control bytes to a terminal.
+pub fn shown_line(line: &str) -> String {
+    let line = line.trim();
+    let mut shown: String = line
+        .chars()
+        .take(60)
+        .map(|c| match c.is_control() && c != '\t' {
+            true => c.escape_default().to_string(),
+            false => c.to_string(),
+        })
+        .collect();
+    if line.chars().nth(60).is_some() {
+        shown.push_str("...");
+    }
+    shown
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_quoted_line_shows_no_control_bytes() {
+        assert_eq!(shown_line("  ply\u{0}\u{1}x  "), "ply\\u{0}\\u{1}x");
+        assert_eq!(shown_line(&"a".repeat(70)), format!("{}...", "a".repeat(60)));
+    }
 
     #[test]
     fn tokens_carry_their_line_numbers() {

@@ -37,16 +37,53 @@ pub enum MeshFormat {
 impl MeshFormat {
     pub fn from_path(path: &Path) -> Result<Self, ImportError> {
         let extension = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
-        match extension.as_deref() {
-            Some("stl") => Ok(MeshFormat::Stl),
-            Some("obj") => Ok(MeshFormat::Obj),
-            Some("ply") => Ok(MeshFormat::Ply),
-            Some("gltf" | "glb") => Ok(MeshFormat::Gltf),
-            _ => Err(ImportError::UnknownFormat {
-                path: path.to_path_buf(),
-            }),
+        extension.as_deref().and_then(MeshFormat::from_extension).ok_or_else(|| ImportError::UnknownFormat {
+            path: path.to_path_buf(),
+        })
+    }
+
+    fn from_extension(extension: &str) -> Option<Self> {
+        match extension {
+            "stl" => Some(MeshFormat::Stl),
+            "obj" => Some(MeshFormat::Obj),
+            "ply" => Some(MeshFormat::Ply),
+            "gltf" | "glb" => Some(MeshFormat::Gltf),
+            _ => None,
         }
     }
+
+    fn name(self) -> &'static str {
+        match self {
+            MeshFormat::Stl => "STL",
+            MeshFormat::Obj => "OBJ",
+            MeshFormat::Ply => "PLY",
+            MeshFormat::Gltf => "glTF",
+        }
+    }
+}
+
+/// What a file's first bytes say it is, where they say it surely, with
+/// the extension that format takes: a mesh renamed by mistake (an STL
+/// saved as .ply) is then named as what it is, instead of failing deep in
+/// the wrong reader. A binary STL is known by its size fitting its
+/// triangle count (a text file's bytes 80-83 would count hundreds of
+/// millions of triangles); JSON glTF is left to its reader.
+fn content_format(bytes: &[u8]) -> Option<(String, &'static str)> {
+    let starts = |magic: &[u8]| bytes.len() >= magic.len() && bytes[..magic.len()].eq_ignore_ascii_case(magic);
+    if bytes.len() >= 84 {
+        let count = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as u64;
+        if count > 0 && bytes.len() as u64 == 84 + 50 * count {
+            return Some((format!("a binary STL ({count} triangles)"), "stl"));
+        }
+    }
+    if starts(b"glTF") {
+        return Some(("a binary glTF (GLB)".into(), "glb"));
+    }
+    if starts(b"ply\n") || starts(b"ply\r\n") {
+        return Some(("a PLY mesh".into(), "ply"));
+    }
+    let head = String::from_utf8_lossy(&bytes[..bytes.len().min(1024)]).to_ascii_lowercase();
+    (head.trim_start().starts_with("solid") && head.contains("facet")).then(|| ("an ASCII STL".into(), "stl"))
 }
 
 /// Reads a mesh file of any supported format.
@@ -62,6 +99,13 @@ pub fn read_raw(path: &Path) -> Result<RawMesh, ImportError> {
         path: path.to_path_buf(),
         source,
     })?;
+    if let Some((content, extension)) = content_format(&bytes).filter(|(_, e)| MeshFormat::from_extension(e) != Some(format)) {
+        return Err(format_error(
+            path,
+            format.name(),
+            format!("the file holds {content}, not {}: give it the .{extension} extension", format.name()),
+        ));
+    }
     match format {
         MeshFormat::Stl => parse_stl(path, &bytes),
         MeshFormat::Obj => parse_obj(path, &bytes),
@@ -108,7 +152,7 @@ pub fn parse_stl(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
             format!(
                 "the file is text, but an ASCII STL begins with `solid` and line 1 reads `{}`; if it is another \
                  format (OBJ, PLY), give it that extension",
-                text.lines().next().unwrap_or("").chars().take(60).collect::<String>()
+                carus_io::shown_line(text.lines().next().unwrap_or(""))
             ),
         ));
     }
@@ -335,7 +379,7 @@ fn ply_layout(text: &str) -> Result<PlyLayout, String> {
     };
     for (number, line) in text.lines().enumerate().map(|(i, l)| (i + 1, l)) {
         let words: Vec<&str> = line.split_whitespace().collect();
-        let bad = |what: &str| Err(format!("line {number}: `{}` {what}", line.trim()));
+        let bad = |what: &str| Err(format!("line {number}: `{}` {what}", carus_io::shown_line(line)));
         match words.as_slice() {
             ["ply"] if number == 1 => {}
             _ if number == 1 => return bad("is not `ply`, the first line of every PLY file"),

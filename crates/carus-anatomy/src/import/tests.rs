@@ -330,6 +330,19 @@ fn broken_meshes_say_what_and_where() {
     let err = read_surface(&edge, Units::Metres).unwrap_err().to_string();
     assert!(err.contains("edge.obj") && err.contains("the face has 2 corners; a face needs 3 or more"), "{err}");
 
+    // A mesh saved under another format's extension is named as what it is.
+    for (content, name, says) in [
+        (binary_stl(), "renamed.ply", "holds a binary STL (4 triangles), not PLY: give it the .stl extension"),
+        (binary_stl(), "renamed.obj", "holds a binary STL (4 triangles), not OBJ"),
+        (ascii_stl().into_bytes(), "renamed.glb", "holds an ASCII STL, not glTF: give it the .stl extension"),
+        (ply_binary(), "renamed.stl", "holds a PLY mesh, not STL: give it the .ply extension"),
+        (glb(""), "renamed.obj", "holds a binary glTF (GLB), not OBJ: give it the .glb extension"),
+    ] {
+        let renamed = write(&dir, name, &content);
+        let err = read_surface(&renamed, Units::Metres).unwrap_err().to_string();
+        assert!(err.contains(name) && err.contains(says), "{err}");
+    }
+
     let unknown = write(&dir, "mesh.xyz", b"1 2 3");
     assert!(matches!(
         read_surface(&unknown, Units::Metres),
