@@ -1024,12 +1024,7 @@ impl Scenario {
             landmarks_file.unwrap_or_else(|| syntax(path, text, e.path().to_string(), e.inner()))
         })?;
         scenario.base_dir = base_dir;
-        scenario.check(path).map_err(|mut e| {
-            if let ScenarioError::Value { line, key, .. } = &mut e {
-                *line = line_of_key(text, key);
-            }
-            e
-        })?;
+        scenario.check_at_lines(path, text)?;
         check_pelvis_import(path, text, &scenario.pelvis, &scenario.base_dir)?;
         scenario.source = ReadFrom::file(path, text.to_string());
         Ok(scenario)
@@ -1177,6 +1172,26 @@ impl Scenario {
     }
 
     /// Impossible values, named by their key with a hint.
+    /// [`Self::check`], a refused value named at its line of `text`.
+    fn check_at_lines(&self, path: &Path, text: &str) -> Result<(), ScenarioError> {
+        self.check(path).map_err(|mut e| {
+            if let ScenarioError::Value { line, key, .. } = &mut e {
+                *line = line_of_key(text, key);
+            }
+            e
+        })
+    }
+
+    /// The checks a scenario's `[pelvis]` and `[head]` get (a value in
+    /// another unit, a size no pelvis or head has), for an anatomy file,
+    /// which has those tables without the rest of a scenario: `carus
+    /// measure`, `mesh` and `render` refuse what `carus run` refuses, at
+    /// the same line.
+    pub fn check_anatomy_tables(path: &Path, text: &str, pelvis: &PelvisSpec, head: &HeadDiameters) -> Result<(), ScenarioError> {
+        let scenario = Scenario { pelvis: pelvis.clone(), head: *head, ..Scenario::builtin("normal")? };
+        scenario.check_at_lines(path, text)
+    }
+
     fn check(&self, path: &Path) -> Result<(), ScenarioError> {
         let err = |key: &'static str, value: f64, problem: &str, hint: &str| ScenarioError::Value {
             path: path.into(),

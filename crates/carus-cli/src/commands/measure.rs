@@ -242,6 +242,7 @@ impl AnatomyFile {
             head: HeadDiameters,
         }
         let Tables { pelvis, head } = carus_labour::scenario::from_toml_text(path, &text)?;
+        carus_labour::Scenario::check_anatomy_tables(path, &text, &pelvis, &head)?;
         let base = path.parent().unwrap_or(Path::new("."));
         carus_labour::scenario::check_pelvis_import(path, &text, &pelvis, base)?;
         Ok(AnatomyFile {
@@ -399,6 +400,19 @@ biparietal_mm = \"abc\"\n").err().unwrap());
 biparietal_mn = 95.0
 ").err().unwrap());
         assert!(error.contains("file.toml:2") && error.contains("biparietal_mn"), "{error}");
+    }
+
+    /// An anatomy file's sizes get the checks a scenario's get: a head in
+    /// cm, a pelvis in metres, named at their line with the unit.
+    #[test]
+    fn an_anatomy_file_in_another_unit_is_refused_as_a_scenario_is() {
+        for (text, key) in [
+            ("[head]\nbiparietal_mm = 950.0\n", "`head.biparietal_mm` = 950"),
+            ("[pelvis]\ninlet_ap_mm = 0.11\n", "`pelvis.inlet_ap_mm` = 0.11"),
+        ] {
+            let e = format!("{:#}", load(text).err().unwrap());
+            assert!(e.contains(":2: ") && e.contains(key) && e.contains("mm (not cm)"), "{e}");
+        }
     }
 
     #[test]
