@@ -31,7 +31,7 @@ pub use law::{
     default_penalty_stiffness, ContactForce, ContactLaw, SoftCover, DESIGN_EXPULSION_FORCE_N, DESIGN_HEAD_RADIUS_M,
     DESIGN_PENETRATION_M,
 };
-pub use neck::{HeadAxes, Neck, NeckAngles, NeckGeometry, NeckLoad, NeckStiffness, StableStep};
+pub use neck::{HeadAxes, Neck, NeckAngles, NeckGeometry, NeckLoad, NeckRest, NeckStiffness, StableStep};
 pub use overlap::{overlapping_triangles, self_intersections};
 pub use pair::{pair_contacts, PairReport};
 pub use obstacle::{

@@ -11,6 +11,26 @@ use crate::error::{check_non_negative, ContactError};
 use crate::law::semi_implicit_step_limit;
 use crate::rigid::{RigidBodyModel, RigidBodyState, Wrench};
 
+/// Where the neck's rotational springs are at rest (`[neck] rest_attitude`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum NeckRest {
+    /// At the attitude the head is joined in, the scenario's start: the
+    /// fetus holds the attitude it presents in, flexed in a vertex
+    /// presentation, deflexed in a face presentation ("attitude" is the
+    /// posture of the fetus, which the presentation is named by; Williams
+    /// Obstetrics, chapter "Normal Labor"). No measured resting moment of a fetal
+    /// neck was found, so the springs resist departures from that posture.
+    #[default]
+    Start,
+    /// At the anatomical neutral attitude, the head in line with the trunk:
+    /// the passive reading of the stiffness figures, which are measured
+    /// from neutral. A head joined away from neutral is then pulled
+    /// towards it from the first step (a face presentation, joined 80 deg
+    /// extended, by 80 x `extension_nm_per_deg`).
+    Neutral,
+}
+
 /// Stiffness and damping of the neck. Angles in degrees as the source gives
 /// them. Also a scenario's `[neck]` table: a key left out keeps its default.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -95,6 +115,10 @@ pub struct NeckStiffness {
     /// moved the normal head 1.2 mm in 10 s, against 0.04 mm with this one
     /// (docs/LABOUR.md, sixteenth session).
     pub end_range_compression_n_per_m: f64,
+    /// Where the rotational springs rest ([`NeckRest`]): `start` (the
+    /// default) or `neutral`. The range limits are measured from neutral
+    /// either way. docs/LABOUR.md gives the outcomes of both.
+    pub rest_attitude: NeckRest,
 }
 
 
@@ -117,6 +141,7 @@ impl Default for NeckStiffness {
             end_range_stiffness_nm_per_deg: 1.0,
             compression_limit_mm: 6.0,
             end_range_compression_n_per_m: 3.0e4,
+            rest_attitude: NeckRest::Start,
         }
     }
 }
@@ -349,6 +374,16 @@ impl Neck {
         }
         let axes = HeadAxes { occipitofrontal: o, vertex: v };
         let (qh, qt) = (state.orientation[head], state.orientation[trunk]);
+        // Flexion turns the head about its own biparietal axis, so neutral
+        // is the joining pose unflexed about it, in the head's frame.
+        let joined = (qt.inverse() * qh).normalize();
+        let (rest, rest_flexion_rad) = match stiffness.rest_attitude {
+            NeckRest::Start => (joined, joined_flexion_deg.to_radians()),
+            NeckRest::Neutral => {
+                let unflex = DQuat::from_axis_angle(axes.biparietal().normalize(), -joined_flexion_deg.to_radians());
+                ((joined * unflex).normalize(), 0.0)
+            }
+        };
         // The joint coordinate system needs the head's biparietal axis
         // across the neck: a head joined tipped more than 60 degrees onto
         // its side is not an anatomical pose.
@@ -368,8 +403,8 @@ impl Neck {
             pivot_in_trunk: state.pose(trunk).inverse_point(pivot),
             axes,
             neck_axis_in_trunk: qt.inverse() * axis,
-            rest: (qt.inverse() * qh).normalize(),
-            rest_flexion_rad: joined_flexion_deg.to_radians(),
+            rest,
+            rest_flexion_rad,
         })
     }
 
@@ -604,6 +639,30 @@ mod tests {
         let m = neck.load(&model, &state).elastic_moment_on_head.dot(-DVec3::X);
         let expected = 7.0 * s.extension_nm_per_deg + 2.0 * s.end_range_stiffness_nm_per_deg;
         assert!((m - expected).abs() < 1e-9, "{m} vs {expected}");
+    }
+
+    /// At rest at neutral, a neck joined 15 deg flexed reads 15 deg of
+    /// flexion at once and pulls the head back by 15 x the flexion
+    /// stiffness; at rest at the start it reads none.
+    #[test]
+    fn a_neck_at_rest_at_neutral_pulls_a_joined_flexion_back() {
+        let s = NeckStiffness::default();
+        let axes = HeadAxes { occipitofrontal: DVec3::Y, vertex: DVec3::Z };
+        let geometry = NeckGeometry { head: 0, trunk: 1, pivot: DVec3::ZERO, axes, neck_axis: DVec3::Z, joined_flexion_deg: 15.0 };
+        let (model, mut state, _) = setup();
+        turn_head(&mut state, -DVec3::X, 15.0);
+        let at = |rest_attitude| {
+            let neck = Neck::new(&model, &state, geometry, NeckStiffness { rest_attitude, ..s }).unwrap();
+            neck.load(&model, &state)
+        };
+        let start = at(NeckRest::Start);
+        assert!(start.angles.flexion_deg.abs() < 1e-9 && start.elastic_moment_on_head.length() < 1e-12, "{start:?}");
+        let neutral = at(NeckRest::Neutral);
+        let a = neutral.angles;
+        assert!((a.flexion_deg - 15.0).abs() < 1e-9 && a.lateral_bending_deg.abs() < 1e-9 && a.axial_rotation_deg.abs() < 1e-9, "{a:?}");
+        // About the head's biparietal axis, turned about itself: -x still.
+        let about_biparietal = neutral.elastic_moment_on_head.dot(-DVec3::X);
+        assert!((about_biparietal + 15.0 * s.flexion_nm_per_deg).abs() < 1e-9, "{about_biparietal}");
     }
 
     #[test]

@@ -231,6 +231,8 @@ impl SpineSection {
             // No stop: the joint spring alone keeps the segments together.
             compression_limit_mm: 0.0,
             end_range_compression_n_per_m: 0.0,
+            // Joined straight: start and neutral are the same.
+            rest_attitude: carus_contact::NeckRest::Start,
         }
     }
 
