@@ -340,8 +340,16 @@ const LANDMARK_SURFACE_GAP_MAX_MM: f64 = 10.0;
 /// The landmarks must lie on the mesh: a mesh in another unit, or from
 /// another pelvis, leaves them off it, and the canal would not be the one
 /// they describe.
-fn check_landmarks_on_bone(path: &Path, mesh_path: &Path, units: Units, pelvis: &Pelvis) -> Result<(), ImportError> {
-    let (name, gap_m) = crate::pelvis::measure::farthest_landmark_from_bone(pelvis);
+/// Checked before the canal is built from them, so that one landmark off
+/// the bone (a slip of a digit) is named, not the plane it bends.
+fn check_landmarks_on_bone(
+    path: &Path,
+    mesh_path: &Path,
+    units: Units,
+    landmarks: &PelvisLandmarks,
+    surface: &crate::TriSurface,
+) -> Result<(), ImportError> {
+    let (name, gap_m) = crate::pelvis::measure::farthest_landmark_from_bone(landmarks, surface);
     let gap_mm = 1e3 * gap_m;
     if gap_mm <= LANDMARK_SURFACE_GAP_MAX_MM {
         return Ok(());
@@ -390,11 +398,11 @@ pub fn assemble_pelvis(
         surface.turn_inside_out();
         report.turned_outwards = true;
     }
+    check_landmarks_on_bone(path, &mesh_path, file.units, &landmarks, &surface)?;
     let pelvis = Pelvis::from_landmarks(landmarks, surface).map_err(|source| ImportError::Pelvis {
         path: path.to_path_buf(),
         source,
     })?;
-    check_landmarks_on_bone(path, &mesh_path, file.units, &pelvis)?;
     Ok(ImportedPelvis {
         pelvis,
         report,

@@ -494,6 +494,12 @@ fn landmark_file_mistakes_are_named_with_their_fix() {
         "{err}"
     );
 
+    // A slip of a digit in one landmark: that landmark is named, not the
+    // canal plane it bends.
+    let slipped = edited_landmarks(&dir, |t| t.replace("141.04032516479492", "14.104032516479492"));
+    let err = import_pelvis(&slipped).unwrap_err().to_string();
+    assert!(err.contains("landmark `coccyx_tip` lies") && err.contains("from the bone of"), "{err}");
+
     let missing = edited_landmarks(&dir, |t| {
         t.lines()
             .filter(|l| !l.starts_with("coccyx_tip") && !l.starts_with("sacral_apex"))

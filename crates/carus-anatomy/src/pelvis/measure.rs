@@ -139,7 +139,7 @@ pub fn measure(pelvis: &Pelvis) -> PelvisMeasurement {
     let sigmas = pelvis.plane_sigmas();
     let inlet = pelvis.planes.inlet;
     let right = (l.iliopectineal_right - l.iliopectineal_left).normalize();
-    let gap = farthest_landmark_from_bone(pelvis);
+    let gap = farthest_landmark_from_bone(&pelvis.landmarks, &pelvis.surface);
     let plane = |p: Plane, ap: f64, transverse: Option<f64>, sigma: f64| PlaneMeasurement {
         centre_mm: mm3(p.centre),
         normal: p.normal.to_array(),
@@ -216,12 +216,11 @@ pub fn measure(pelvis: &Pelvis) -> PelvisMeasurement {
 
 /// The landmark farthest from the pelvis's surface and its distance, m
 /// (the first, where several are as far; `("", 0)` when all lie on it).
-pub fn farthest_landmark_from_bone(pelvis: &Pelvis) -> (&'static str, f64) {
-    pelvis
-        .landmarks
+pub fn farthest_landmark_from_bone(landmarks: &PelvisLandmarks, surface: &TriSurface) -> (&'static str, f64) {
+    landmarks
         .named()
         .into_iter()
-        .map(|(name, p)| (name, distance_to_surface(&pelvis.surface, p)))
+        .map(|(name, p)| (name, distance_to_surface(surface, p)))
         .fold(("", 0.0), |far, next| if next.1 > far.1 { next } else { far })
 }
 
