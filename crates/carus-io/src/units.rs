@@ -22,4 +22,12 @@ impl LengthUnit {
             LengthUnit::Millimetre => 1e-3,
         }
     }
+
+    /// As a job file writes it.
+    pub const fn name(self) -> &'static str {
+        match self {
+            LengthUnit::Metre => "m",
+            LengthUnit::Millimetre => "mm",
+        }
+    }
 }

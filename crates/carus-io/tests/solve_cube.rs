@@ -228,6 +228,12 @@ fn a_run_that_inverts_an_element_stops_with_its_last_good_frame() {
         failure.contains("cube_n5.msh"),
         "names the element's id in the mesh file: {failure}"
     );
+    // A pull larger than the mesh is noted as a likely unit slip.
+    assert!(
+        report.notes.iter().any(|n| n.contains("displacement[0] on `x1`") && n.contains("times the mesh's size") && n.contains("length_unit = \"mm\"")),
+        "{:?}",
+        report.notes
+    );
     let frames =
         PvdCollection::parse(&std::fs::read_to_string(out.join("solution.pvd")).unwrap()).unwrap();
     assert_eq!(frames.frames().len(), report.frames);

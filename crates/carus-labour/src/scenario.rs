@@ -1022,8 +1022,10 @@ impl Scenario {
         let deserializer = toml::Deserializer::parse(text).map_err(|e| toml_syntax(path, text, &e))?;
         // A landmarks file never reads as a scenario: looked for only then.
         let mut scenario: Scenario = serde_path_to_error::deserialize(deserializer).map_err(|e| {
-            let landmarks_file = text.parse::<toml::Table>().ok().and_then(|t| check_not_landmarks_file(path, text, &t).err());
-            landmarks_file.unwrap_or_else(|| syntax(path, text, e.path().to_string(), e.inner()))
+            let another_kind = text.parse::<toml::Table>().ok().and_then(|t| {
+                check_not_landmarks_file(path, text, &t).and_then(|()| check_not_solve_job(path, &t)).err()
+            });
+            another_kind.unwrap_or_else(|| syntax(path, text, e.path().to_string(), e.inner()))
         })?;
         scenario.base_dir = base_dir;
         scenario.check_at_lines(path, text)?;
@@ -2075,6 +2077,21 @@ pub fn check_not_landmarks_file(path: &Path, text: &str, table: &toml::Table) ->
     })
 }
 
+/// A `carus solve` job (a volume mesh with its materials and solver) given
+/// for a scenario: named as one, with the command that runs it.
+fn check_not_solve_job(path: &Path, table: &toml::Table) -> Result<(), ScenarioError> {
+    if !(table.contains_key("mesh") && (table.contains_key("solver") || table.contains_key("material"))) {
+        return Ok(());
+    }
+    Err(ScenarioError::Syntax {
+        path: path.to_path_buf(),
+        line: 1,
+        key: String::new(),
+        message: "this is a `carus solve` job (it has [mesh] with [solver] or [[material]]), not a labour scenario".into(),
+        hint: format!("solve it with `carus solve {} --out DIR` (docs/SOLVE.md)", path.display()),
+    })
+}
+
 /// `text` read as a `T`, a wrong value named by its line as in a scenario
 /// file (anatomy files: `carus measure`, `carus mesh`).
 pub fn from_toml_text<T: serde::de::DeserializeOwned>(path: &Path, text: &str) -> Result<T, ScenarioError> {
@@ -2616,6 +2633,18 @@ mod tests {
         std::fs::write(dir.path().join(crate::output::SCENARIO_FILE), "").unwrap();
         let e = Scenario::from_file(dir.path()).unwrap_err().to_string();
         assert!(e.contains(&format!("carus run --resume {}", dir.path().display())) && e.contains("--out NEW_FOLDER"), "{e}");
+    }
+
+    /// A `carus solve` job given for a scenario is named as one, with the
+    /// command that solves it; so is a scenario given to `carus solve`.
+    #[test]
+    fn a_solve_job_and_a_scenario_are_told_apart() {
+        let job = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cube_extension.toml");
+        let e = Scenario::from_file(&job).unwrap_err().to_string();
+        assert!(e.contains("this is a `carus solve` job") && e.contains(&format!("carus solve {} --out DIR", job.display())), "{e}");
+        let scenario = Scenario::builtin("normal").unwrap().to_toml().unwrap();
+        let e = carus_io::job::parse_job(Path::new("normal.toml"), &scenario).unwrap_err().to_string();
+        assert!(e.contains("this is a labour scenario") && e.contains("carus run normal.toml"), "{e}");
     }
 
     /// A device that never ends is named, not read until the memory runs out.

@@ -22,10 +22,33 @@ pub fn parse_job(path: &Path, text: &str) -> Result<JobSpec, JobError> {
         toml::Deserializer::parse(text).map_err(|e| toml_error(path, text, String::new(), &e))?;
     let spec: JobSpec = serde_path_to_error::deserialize(deserializer).map_err(|e| {
         let key = e.path().to_string();
-        toml_error(path, text, key, e.inner())
+        another_kind_of_file(path, text).unwrap_or_else(|| toml_error(path, text, key, e.inner()))
     })?;
     check_values(path, &spec)?;
     Ok(spec)
+}
+
+/// A file of another kind given for a job (a labour scenario, a pelvis's
+/// landmarks file), named as what it is with the command that takes it,
+/// instead of its first key the job does not know.
+fn another_kind_of_file(path: &Path, text: &str) -> Option<JobError> {
+    let table: toml::Table = text.parse().ok()?;
+    let has = |key: &str| table.contains_key(key);
+    let name = path.display();
+    let (message, hint) = if has("mesh") && (has("axes") || has("landmarks")) {
+        (
+            "this is a pelvis's landmarks file (a `mesh` with its [axes] and [landmarks]), not a `carus solve` job".to_string(),
+            "a labour scenario imports it (`[pelvis] import = ...`, docs/IMPORT.md); `carus measure pelvis` measures a file that does; a job's [mesh] names a volume mesh (docs/SOLVE.md)".to_string(),
+        )
+    } else if has("name") || ["pelvis", "head", "expulsion", "trajectory", "start", "numerics"].iter().any(|k| has(k)) {
+        (
+            "this is a labour scenario (it has a `name` or a scenario's tables), not a `carus solve` job".to_string(),
+            format!("run it with `carus run {name}`; `carus solve` takes a job with [mesh], [[material]] and [solver] (docs/SOLVE.md)"),
+        )
+    } else {
+        return None;
+    };
+    Some(JobError::Syntax { path: path.to_path_buf(), line: 1, column: 1, key: String::new(), message, hint })
 }
 
 /// The most steps a job may take: at the cube benchmark's 0.035 us per

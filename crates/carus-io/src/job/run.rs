@@ -189,6 +189,33 @@ fn auxetic_notes(spec: &JobSpec) -> Vec<String> {
         .collect()
 }
 
+/// Notes on imposed displacements larger than the whole mesh: a mesh read
+/// in the wrong `length_unit` (a 0.1 m cube read in mm is 0.1 mm across)
+/// turns a modest pull into a crush, and the run then fails as if the
+/// physics had.
+fn displacement_notes(spec: &JobSpec, mesh: &Mesh) -> Vec<String> {
+    let (lo, hi) = mesh.nodes.iter().fold(([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]), |(lo, hi), p| {
+        (std::array::from_fn(|c| lo[c].min(p[c])), std::array::from_fn(|c| hi[c].max(p[c])))
+    });
+    let size_m = (0..3).map(|c| (hi[c] - lo[c]).powi(2)).sum::<f64>().sqrt();
+    spec.displacements
+        .iter()
+        .enumerate()
+        .filter_map(|(i, d)| {
+            let length_m = [d.x_m, d.y_m, d.z_m].iter().flatten().map(|v| v * v).sum::<f64>().sqrt();
+            (size_m > 0.0 && length_m > size_m).then(|| {
+                format!(
+                    "displacement[{i}] on `{}` is {length_m:.3e} m, {:.0} times the mesh's size ({size_m:.3e} m \
+                     corner to corner, with `mesh.length_unit = \"{}\"`): check that the unit is the mesh file's",
+                    d.node_set,
+                    length_m / size_m,
+                    spec.mesh.length_unit.name()
+                )
+            })
+        })
+        .collect()
+}
+
 fn materials(spec: &JobSpec, sets: &Sets) -> Result<Vec<MaterialRegion>, JobError> {
     let mut regions = Vec::with_capacity(spec.materials.len());
     for (i, m) in spec.materials.iter().enumerate() {
@@ -658,7 +685,7 @@ pub fn run_job(
         elements: mesh.element_count(),
         nodes: mesh.node_count(),
         failure,
-        notes: file.notes.iter().cloned().chain(auxetic_notes(&spec)).collect(),
+        notes: file.notes.iter().cloned().chain(auxetic_notes(&spec)).chain(displacement_notes(&spec, mesh)).collect(),
     };
     let summary = out_dir.join("summary.json");
     let json = serde_json::to_string_pretty(&report).unwrap_or_default();
