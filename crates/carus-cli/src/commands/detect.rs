@@ -120,13 +120,20 @@ fn check_series_target(series: &Path, history: &Path) -> anyhow::Result<()> {
     if !series.exists() {
         return Ok(());
     }
+    if series.is_dir() {
+        crate::bad_argument!(
+            "--series {}: that is a folder; give the CSV file to write, e.g. {}",
+            series.display(),
+            series.join("series.csv").display()
+        );
+    }
     let same = |a: &Path, b: &Path| a.canonicalize().ok().is_some_and(|a| b.canonicalize().ok() == Some(a));
     if same(series, history) {
         crate::bad_argument!("--series {}: that is the pose history being read; write the series to a new file", series.display());
     }
     let folder = series.parent().filter(|f| !f.as_os_str().is_empty()).unwrap_or(Path::new("."));
     if super::run::carus_made(folder) {
-        anyhow::bail!(
+        crate::bad_argument!(
             "--series {}: that file is in a folder carus wrote (a run's or a sweep's), and is not replaced; \
              write the series outside it",
             series.display()
@@ -426,6 +433,8 @@ mod tests {
         assert!(e.contains("the pose history being read") && e.contains("new file"), "{e}");
         let e = format!("{:#}", check_series_target(&run.join("run.json"), &history).unwrap_err());
         assert!(e.contains("run.json") && e.contains("folder carus wrote") && e.contains("outside it"), "{e}");
+        let e = format!("{:#}", check_series_target(dir.path(), &history).unwrap_err());
+        assert!(e.contains("that is a folder") && e.contains("series.csv"), "{e}");
         // A new file, even in the run's folder, and a user's own file elsewhere are written.
         check_series_target(&run.join("series.csv"), &history).unwrap();
         let own = dir.path().join("series.csv");

@@ -178,6 +178,11 @@ fn run_floor() -> FloorParameters {
 fn floor_part(path: &Path, table: &toml::Table) -> anyhow::Result<FloorParameters> {
     match table.get("floor") {
         None => Ok(run_floor()),
+        Some(toml::Value::Table(keys)) if keys.contains_key("mesh") => anyhow::bail!(
+            "{}: [floor.mesh] is a scenario's table; an anatomy file gives the same keys in [floor] itself \
+             (`[floor]` then `sag_mm = ...`; docs/ANATOMY.md), or give the file a `name` to read it as a scenario",
+            path.display()
+        ),
         Some(toml::Value::Table(keys)) => carus_labour::scenario::floor_mesh_from(keys.clone())
             .with_context(|| format!("{}: in the [floor] table (keys and units: docs/ANATOMY.md)", path.display())),
         Some(other) => anyhow::bail!("{}: `floor` must be a table, not {}", path.display(), other.type_str()),
@@ -400,6 +405,13 @@ biparietal_mm = \"abc\"\n").err().unwrap());
 biparietal_mn = 95.0
 ").err().unwrap());
         assert!(error.contains("file.toml:2") && error.contains("biparietal_mn"), "{error}");
+    }
+
+    /// A scenario's [floor.mesh] in an anatomy file says where its keys go.
+    #[test]
+    fn a_scenario_floor_table_in_an_anatomy_file_says_where_its_keys_go() {
+        let e = format!("{:#}", load("[floor.mesh]\nsag_mm = 20.0\n").err().unwrap());
+        assert!(e.contains("[floor.mesh] is a scenario's table") && e.contains("in [floor] itself"), "{e}");
     }
 
     /// An anatomy file's sizes get the checks a scenario's get: a head in

@@ -18,12 +18,30 @@ pub use spec::JobSpec;
 
 use crate::error::{ReadError, WriteError};
 
+/// The fix for a job file that could not be read, by why.
+fn read_fix(cause: &std::io::Error) -> &'static str {
+    match cause.kind() {
+        std::io::ErrorKind::InvalidData => {
+            "save it as a UTF-8 text file (TOML, as examples/cube_extension.toml; an editor may have saved it as UTF-16)"
+        }
+        _ => "check the path",
+    }
+}
+
+/// The fix for an output folder that could not be made.
+fn out_dir_fix(dir: &std::path::Path) -> &'static str {
+    match dir.is_file() {
+        true => "it is a file, not a folder; choose another --out",
+        false => "check the path and its permissions",
+    }
+}
+
 /// Why a job could not run (a solver failure mid-run is not one of these:
 /// it ends in a [`JobReport`] whose `failure` says what happened).
 #[derive(Debug, thiserror::Error)]
 pub enum JobError {
     /// The job file could not be read.
-    #[error("{}: cannot read the job file: {cause}; fix: check the path", path.display())]
+    #[error("{}: cannot read the job file: {cause}; fix: {}", path.display(), read_fix(cause))]
     Io {
         path: PathBuf,
         cause: std::io::Error,
@@ -67,7 +85,7 @@ pub enum JobError {
     #[error("{}: the output folder exists and is not empty; fix: choose another --out, or pass --force to replace the run in it", dir.display())]
     OutDirExists { dir: PathBuf },
     /// The output folder could not be prepared.
-    #[error("{}: cannot prepare the output folder: {cause}; fix: check the path and its permissions", dir.display())]
+    #[error("{}: cannot prepare the output folder: {cause}; fix: {}", dir.display(), out_dir_fix(dir))]
     OutDir { dir: PathBuf, cause: std::io::Error },
     /// A result file could not be written.
     #[error(transparent)]
