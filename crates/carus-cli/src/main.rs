@@ -82,9 +82,20 @@ fn main() -> ExitCode {
 
 /// 2 for a bad argument, 1 for any other error (CONVENTIONS.md).
 fn error_status(error: &anyhow::Error) -> u8 {
-    match error.downcast_ref::<commands::BadArgument>() {
-        Some(_) => 2,
-        None => 1,
+    // A scenario's refusal of a `--set KEY=VALUE` (a key it lacks, a value
+    // it refuses), and a picture size over the adapter's limit (`--size`),
+    // are bad arguments too.
+    let refused_setting = error.chain().any(|e| {
+        matches!(e.downcast_ref::<carus_labour::ScenarioError>(), Some(carus_labour::ScenarioError::Setting { .. }))
+            || matches!(e.downcast_ref::<carus_render::RenderError>(), Some(carus_render::RenderError::InvalidSize { .. }))
+            || matches!(
+                e.downcast_ref::<carus_view::ViewError>(),
+                Some(carus_view::ViewError::Render(carus_render::RenderError::InvalidSize { .. }))
+            )
+    });
+    match error.downcast_ref::<commands::BadArgument>().is_some() || refused_setting {
+        true => 2,
+        false => 1,
     }
 }
 
@@ -163,6 +174,15 @@ mod tests {
         assert_eq!(super::error_status(&e), 2, "{e}");
         assert_eq!(super::error_status(&e.context("in context")), 2);
         assert_eq!(super::error_status(&anyhow::anyhow!("cannot read f")), 1);
+        // A `--set` whose key or value the scenario refuses, as well.
+        for setting in ["numerics.end_time_s=abc", "contact.fiction=0.3"] {
+            let e = super::commands::run::load_changed(None, &[setting.to_string()]).err().unwrap();
+            assert_eq!(super::error_status(&e), 2, "{setting}: {e}");
+        }
+        // And a picture size past the adapter's limit, however it comes.
+        let size = || carus_render::RenderError::InvalidSize { width: 100_000, height: 10, max: 16_384 };
+        assert_eq!(super::error_status(&size().into()), 2);
+        assert_eq!(super::error_status(&anyhow::Error::from(carus_view::ViewError::from(size())).context("picture")), 2);
     }
 
     /// A malformed `--set` is a bad argument (clap's exit status 2), named

@@ -476,7 +476,7 @@ pub(super) fn load(name: Option<&str>) -> anyhow::Result<Scenario> {
 /// A scenario as loaded, with the `--set KEY=VALUE` changes applied in
 /// turn. A file refused for a value a setting changes is read again with
 /// the settings made first, so that `--set` can mend it.
-pub(super) fn load_changed(name: Option<&str>, settings: &[String]) -> anyhow::Result<Scenario> {
+pub(crate) fn load_changed(name: Option<&str>, settings: &[String]) -> anyhow::Result<Scenario> {
     let changes = settings.iter().map(|text| one_setting(text)).collect::<anyhow::Result<Vec<_>>>()?;
     match load(name) {
         Ok(scenario) => Ok(scenario.with_settings(&changes)?),
