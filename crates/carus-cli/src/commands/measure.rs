@@ -199,6 +199,10 @@ pub struct AnatomyFile {
     /// The head's atlanto-occipital pivot: a scenario's `[fetus]` keys, else the default.
     pub pivot: AtlantoOccipitalPlacement,
     pub floor: FloorParameters,
+    /// The tables an anatomy file left out (the defaults stand in), noted
+    /// when the part is built so that an empty or misnamed file is not
+    /// taken for a measured one.
+    left_out: Vec<&'static str>,
 }
 
 impl AnatomyFile {
@@ -211,6 +215,7 @@ impl AnatomyFile {
                 head: HeadDiameters::default(),
                 pivot: AtlantoOccipitalPlacement::default(),
                 floor: run_floor(),
+                left_out: Vec::new(),
             });
         };
         let text = read_text(path)?;
@@ -228,6 +233,7 @@ impl AnatomyFile {
                 pivot: scenario.fetus.atlanto_occipital(),
                 floor: scenario.floor.mesh,
                 path: Some(path.to_path_buf()),
+                left_out: Vec::new(),
             });
         }
         if let Some(unknown) = table.keys().find(|k| !["pelvis", "head", "floor"].contains(&k.as_str())) {
@@ -248,6 +254,7 @@ impl AnatomyFile {
         }
         let Tables { pelvis, head } = carus_labour::scenario::from_toml_text(path, &text)?;
         carus_labour::Scenario::check_anatomy_tables(path, &text, &pelvis, &head)?;
+
         let base = path.parent().unwrap_or(Path::new("."));
         carus_labour::scenario::check_pelvis_import(path, &text, &pelvis, base)?;
         Ok(AnatomyFile {
@@ -256,6 +263,7 @@ impl AnatomyFile {
             pivot: AtlantoOccipitalPlacement::default(),
             floor: floor_part(path, &table)?,
             path: Some(path.to_path_buf()),
+            left_out: ["pelvis", "head", "floor"].into_iter().filter(|t| !table.contains_key(*t)).collect(),
         })
     }
 
@@ -263,6 +271,7 @@ impl AnatomyFile {
     /// An imported mesh with holes or dropped triangles gets a note on
     /// standard error: contact samples can slip through a hole.
     pub fn pelvis(&self) -> anyhow::Result<Pelvis> {
+        self.note_if_left_out("pelvis");
         let base = self.path.as_deref().and_then(Path::parent).unwrap_or(Path::new("."));
         let where_ = self.path.as_ref().map_or("the default pelvis".to_string(), |p| format!("{}: [pelvis]", p.display()));
         let (pelvis, report) = self.pelvis.build_with_report(base).with_context(|| where_)?;
@@ -274,13 +283,21 @@ impl AnatomyFile {
 
     /// Builds the head the file describes; a failure names the file.
     pub fn head(&self) -> anyhow::Result<FetalHead> {
+        self.note_if_left_out("head");
         FetalHead::with_subdivisions(&self.head, &self.pivot, DEFAULT_HEAD_SUBDIVISIONS).with_context(|| format!("{}: the [head] diameters cannot be built", self.describe()))
     }
 
     /// Builds the pelvic floor the file describes on `pelvis`; a failure names the file.
     pub fn floor(&self, pelvis: &Pelvis) -> anyhow::Result<carus_fem::Mesh> {
+        self.note_if_left_out("floor");
         pelvic_floor(pelvis, &self.floor)
             .with_context(|| format!("{}: the [floor] cannot be built for this pelvis", self.describe()))
+    }
+
+    fn note_if_left_out(&self, table: &str) {
+        if let Some(path) = self.path.as_ref().filter(|_| self.left_out.contains(&table)) {
+            eprintln!("note: {} has no [{table}] table: the default {table} is used", path.display());
+        }
     }
 
     /// Where the anatomy came from, for headings.
