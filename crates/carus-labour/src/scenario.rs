@@ -1023,7 +1023,10 @@ impl Scenario {
         // A landmarks file never reads as a scenario: looked for only then.
         let mut scenario: Scenario = serde_path_to_error::deserialize(deserializer).map_err(|e| {
             let another_kind = text.parse::<toml::Table>().ok().and_then(|t| {
-                check_not_landmarks_file(path, text, &t).and_then(|()| check_not_solve_job(path, &t)).err()
+                check_not_landmarks_file(path, text, &t)
+                    .and_then(|()| check_not_solve_job(path, &t))
+                    .and_then(|()| check_not_anatomy_file(path, &t))
+                    .err()
             });
             another_kind.unwrap_or_else(|| syntax(path, text, e.path().to_string(), e.inner()))
         })?;
@@ -2092,6 +2095,25 @@ fn check_not_solve_job(path: &Path, table: &toml::Table) -> Result<(), ScenarioE
     })
 }
 
+/// An anatomy file (`[pelvis]`, `[head]`, `[floor]` and no `name`) given
+/// for a scenario: named as one, with what to do instead.
+fn check_not_anatomy_file(path: &Path, table: &toml::Table) -> Result<(), ScenarioError> {
+    let anatomy = ["pelvis", "head", "floor"];
+    if table.contains_key("name") || table.is_empty() || !table.keys().all(|k| anatomy.contains(&k.as_str())) {
+        return Ok(());
+    }
+    Err(ScenarioError::Syntax {
+        path: path.to_path_buf(),
+        line: 1,
+        key: String::new(),
+        message: "this is an anatomy file ([pelvis], [head], [floor] without a `name`), not a scenario".into(),
+        hint: "`carus measure`, `carus mesh` and `carus render` read it as it is; to run or detect with it, add \
+               `name = \"...\"` at its top, which makes it a scenario with the other tables at their defaults \
+               (`carus scenarios show normal` lists them)"
+            .into(),
+    })
+}
+
 /// `text` read as a `T`, a wrong value named by its line as in a scenario
 /// file (anatomy files: `carus measure`, `carus mesh`).
 pub fn from_toml_text<T: serde::de::DeserializeOwned>(path: &Path, text: &str) -> Result<T, ScenarioError> {
@@ -2645,6 +2667,9 @@ mod tests {
         let scenario = Scenario::builtin("normal").unwrap().to_toml().unwrap();
         let e = carus_io::job::parse_job(Path::new("normal.toml"), &scenario).unwrap_err().to_string();
         assert!(e.contains("this is a labour scenario") && e.contains("carus run normal.toml"), "{e}");
+        // An anatomy file, too.
+        let e = Scenario::parse(Path::new("anatomy.toml"), "[head]\nbiparietal_mm = 94.0\n", PathBuf::new()).unwrap_err().to_string();
+        assert!(e.contains("this is an anatomy file") && e.contains("add `name"), "{e}");
     }
 
     /// A device that never ends is named, not read until the memory runs out.
