@@ -234,8 +234,20 @@ impl<'a> Parser<'a> {
 
     fn node(&mut self, id: u64) -> Result<(), ReadError> {
         let mut xyz = [0.0; 3];
-        for x in &mut xyz {
+        let mut first_line = None;
+        for (k, x) in xyz.iter_mut().enumerate() {
             let token = self.tokens.expect("a node coordinate")?;
+            // Gmsh writes a node's x y z on one line: one short of them
+            // would shift every token after it, and the error would land
+            // far away, on the wrong node.
+            let line = *first_line.get_or_insert(self.tokens.line());
+            if self.tokens.line() != line {
+                return Err(self.tokens.error_at(
+                    line,
+                    format!("node {id} has {k} coordinates on its line; a node needs 3 (x y z)"),
+                    "fix or remove the node in the mesh generator and export again",
+                ));
+            }
             *x = finite_f64(token).ok_or_else(|| {
                 self.tokens.error(
                     format!("node {id} has the coordinate {token:?}, which is not a finite number"),
@@ -619,5 +631,10 @@ mod tests {
         let err = read("n.msh", &bad).unwrap_err().to_string();
         assert!(err.contains("node 3 has the coordinate \"nan\""), "{err}");
         assert!(err.starts_with("n.msh:"), "{err}");
+        // A node short of a coordinate is named at its own line, not where
+        // the shifted tokens run out (4.1: the fourth node's x y z on line 34).
+        let short = CUBE_V41.replacen("\n0 1 0\n", "\n0 1\n", 1);
+        let err = read("s.msh", &short).unwrap_err().to_string();
+        assert!(err.starts_with("s.msh:34:") && err.contains("node 4 has 2 coordinates on its line"), "{err}");
     }
 }
