@@ -309,7 +309,7 @@ mod tests {
             },
             ..args
         };
-        let e = run(&several).err().expect("refused").to_string();
+        let e = run(&several).expect_err("refused").to_string();
         assert!(e.contains("one value per key") && e.contains("carus sweep"), "{e}");
         assert!(!dir.path().join("several").exists());
     }

@@ -968,7 +968,7 @@ mod tests {
             },
             ..bad
         };
-        let e = run(&twice).err().expect("a key given twice is refused").to_string();
+        let e = run(&twice).expect_err("a key given twice is refused").to_string();
         assert!(e.contains("contact.friction is given twice"), "{e}");
         // Diameters that make no pelvis in every variant: refused before
         // any out dir, each variant named with its reason.
@@ -980,7 +980,7 @@ mod tests {
             },
             ..twice
         };
-        let e = format!("{:#}", run(&unbuildable).err().expect("no variant can start"));
+        let e = format!("{:#}", run(&unbuildable).expect_err("no variant can start"));
         assert!(e.contains("no run of the sweep can start"), "{e}");
         assert!(e.contains("01-pelvis.inlet_oblique_mm=155: ") && e.contains("02-pelvis.inlet_oblique_mm=160: "), "{e}");
         assert!(e.contains("inlet_oblique_mm"), "{e}");

@@ -401,7 +401,7 @@ mod tests {
         let magnitudes: Vec<f64> = forces.iter().map(|f| f["magnitude_n"].as_f64().unwrap()).collect();
         assert!(magnitudes.windows(2).all(|w| w[0] >= w[1]), "{magnitudes:?}");
 
-        let refused = |a: ViewArgs| format!("{:#}", run(&a).err().expect("refused"));
+        let refused = |a: ViewArgs| format!("{:#}", run(&a).expect_err("refused"));
         let e = refused(args(dir.path().to_path_buf(), 5.0, png.clone()));
         assert!(e.contains("--at 5") && e.contains("from 0 to 0.30 s"), "{e}");
         let e = refused(args(dir.path().to_path_buf(), -1e300, png.clone()));
