@@ -99,6 +99,13 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
                     ),
                 }
             }
+            // A folder the run cannot write in is found now, not after
+            // simulating to the next checkpoint (the mark is rewritten).
+            if super::holds_run(dir) && !run_ended(dir) {
+                mark(dir).with_context(|| {
+                    format!("--resume {}: the run cannot write its frames and checkpoint there", dir.display())
+                })?;
+            }
             // A run that ended or failed is refused by resume, unannounced.
             if !args.output.quiet && !run_ended(dir) {
                 eprintln!("resuming the run in {}", dir.display());
