@@ -663,6 +663,17 @@ mod tests {
         // About the head's biparietal axis, turned about itself: -x still.
         let about_biparietal = neutral.elastic_moment_on_head.dot(-DVec3::X);
         assert!((about_biparietal + 15.0 * s.flexion_nm_per_deg).abs() < 1e-9, "{about_biparietal}");
+
+        // Joined turned 40 deg on the spine as well, then flexed about its
+        // own (turned) biparietal axis: neutral undoes the flexion alone,
+        // so the joining pose reads 15 deg of flexion and nothing else.
+        let (model, mut state, _) = setup();
+        turn_head(&mut state, DVec3::Z, 40.0);
+        let biparietal = DQuat::from_axis_angle(DVec3::Z, 40f64.to_radians()) * -DVec3::X;
+        turn_head(&mut state, biparietal, 15.0);
+        let neck = Neck::new(&model, &state, geometry, NeckStiffness { rest_attitude: NeckRest::Neutral, ..s }).unwrap();
+        let a = neck.load(&model, &state).angles;
+        assert!((a.flexion_deg - 15.0).abs() < 1e-9 && a.lateral_bending_deg.abs() < 1e-9 && a.axial_rotation_deg.abs() < 1e-9, "{a:?}");
     }
 
     #[test]

@@ -1215,6 +1215,27 @@ mod run_tests {
         assert_eq!(a.snapshot(), b.snapshot());
     }
 
+    /// A damaged snapshot's coupling (a target not finite, a sliding normal
+    /// not of unit length) is refused, not projected on the wrong plane; an
+    /// end time that is not finite is refused, not stepped to for ever.
+    #[test]
+    fn a_damaged_coupling_and_an_endless_time_are_refused() {
+        let (mesh, m) = model(2, ModelOptions::default());
+        let dt = 0.9 * m.critical_time_step();
+        let mut s = TledSolver::new(m, &pull(&mesh, 0.02), dt, StepControl::Refuse).unwrap();
+        let good = SolverSnapshot { coupled: vec![(0, [0.0; 3])], sliding: vec![(0, [0.0, 0.0, 1.0])], ..s.snapshot() };
+        s.restore(&good).unwrap();
+        for (damage, why) in [
+            (SolverSnapshot { coupled: vec![(0, [f64::NAN, 0.0, 0.0])], sliding: Vec::new(), ..good.clone() }, "held displacement of node 0"),
+            (SolverSnapshot { sliding: vec![(0, [0.0, 0.0, 2.0])], ..good.clone() }, "not of unit length"),
+        ] {
+            let e = s.restore(&damage).unwrap_err().to_string();
+            assert!(e.contains(why) && e.contains("damaged"), "{e}");
+        }
+        let e = s.advance_to(f64::INFINITY).unwrap_err().to_string();
+        assert!(e.contains("advance_to") && e.contains("finite"), "{e}");
+    }
+
     /// A snapshot resumes only on a clock it can continue: at the sub-step
     /// it was taken at, with its clock origin before its state and its
     /// times finite; each refusal says why, and the solver is untouched.

@@ -15,7 +15,9 @@ use crate::error::{ReadError, WriteError};
 pub struct CsvWriter {
     path: PathBuf,
     columns: usize,
-    out: BufWriter<File>,
+    /// None once a write failed: the rows not written are dropped, never
+    /// written later behind a cut (see [`CsvWriter::failed`]).
+    out: Option<BufWriter<File>>,
 }
 
 impl CsvWriter {
@@ -40,7 +42,7 @@ impl CsvWriter {
         let mut writer = CsvWriter {
             path: path.to_path_buf(),
             columns: header.len(),
-            out: BufWriter::new(file),
+            out: Some(BufWriter::new(file)),
         };
         let line = header.join(",");
         writer.write_line(&line)?;
@@ -50,20 +52,34 @@ impl CsvWriter {
     /// One write per line, so that the buffer goes to the file in whole
     /// lines and a full disk never leaves half a row.
     fn write_line(&mut self, line: &str) -> Result<(), WriteError> {
-        let written = self.out.write_all(format!("{line}\n").as_bytes());
+        let Some(out) = self.out.as_mut() else {
+            return Err(self.stopped());
+        };
+        let written = out.write_all(format!("{line}\n").as_bytes());
         written.map_err(|cause| self.failed(cause))
     }
 
     /// The error of a write that failed, after cutting the file back to its
     /// last whole line: a full disk can take part of a buffer, and a table
-    /// that ends in half a row would be read as a wrong number.
-    fn failed(&self, cause: std::io::Error) -> WriteError {
-        if let Ok(text) = std::fs::read(&self.path) {
-            let whole = text.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
-            if whole < text.len() {
-                let _ = self.out.get_ref().set_len(whole as u64);
+    /// that ends in half a row would be read as a wrong number. The rows
+    /// still buffered are dropped with the writer, so that no later flush
+    /// (nor the drop) writes them behind the cut.
+    fn failed(&mut self, cause: std::io::Error) -> WriteError {
+        if let Some(out) = self.out.take() {
+            let (file, _unwritten) = out.into_parts();
+            if let Ok(text) = std::fs::read(&self.path) {
+                let whole = text.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
+                if whole < text.len() {
+                    let _ = file.set_len(whole as u64);
+                }
             }
         }
+        WriteError::Io { path: self.path.clone(), cause }
+    }
+
+    /// The error of a write after one failed.
+    fn stopped(&self) -> WriteError {
+        let cause = std::io::Error::other("an earlier write to it failed; the rows before that are kept");
         WriteError::Io { path: self.path.clone(), cause }
     }
 
@@ -105,7 +121,10 @@ impl CsvWriter {
     /// Flushes what is buffered to the file (done on drop too, but without
     /// a chance to see the error).
     pub fn flush(&mut self) -> Result<(), WriteError> {
-        let flushed = self.out.flush();
+        let Some(out) = self.out.as_mut() else {
+            return Err(self.stopped());
+        };
+        let flushed = out.flush();
         flushed.map_err(|cause| self.failed(cause))
     }
 }

@@ -1,7 +1,6 @@
 //! ParaView collection (`.pvd`): the list of frames with their simulated
 //! times, which ParaView opens as one time series.
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use crate::error::WriteError;
@@ -53,8 +52,13 @@ impl PvdCollection {
             path: PathBuf::from(path),
             cause,
         };
-        let mut file = std::fs::File::create(path).map_err(io_error)?;
-        file.write_all(self.to_xml().as_bytes()).map_err(io_error)
+        // Written beside and renamed over: a full disk leaves the earlier
+        // list, whose frames ParaView still opens, not a cut one.
+        let mut partial = path.as_os_str().to_owned();
+        partial.push(".partial");
+        let partial = PathBuf::from(partial);
+        crate::output::write_whole(&partial, self.to_xml().as_bytes()).map_err(io_error)?;
+        std::fs::rename(&partial, path).map_err(io_error)
     }
 
     /// Reads the frames of a `.pvd` written by [`PvdCollection::write`] (or

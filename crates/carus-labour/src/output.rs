@@ -192,8 +192,13 @@ pub fn write_floor_vtu(path: &Path, mesh: &Mesh, solver: &TledSolver, time_s: f6
     carus_io::write_vtu(path, mesh, &frame).map_err(|e| output_error(path, e))
 }
 
+/// The stems of a run's ParaView series (`<stem>.pvd` listing
+/// `frames/<stem>_NNNN.vtu`): what `carus run --force` knows as its own.
+pub const SERIES_STEMS: [&str; 4] = ["head", "trunk", "lower_trunk", "floor"];
+
 /// A PVD time series of `frames/<stem>_NNNN.vtu`.
 pub fn write_pvd(dir: &Path, stem: &str, times: &[f64]) -> Result<String, LabourError> {
+    assert!(SERIES_STEMS.contains(&stem), "a series `{stem}` missing from SERIES_STEMS");
     let mut pvd = PvdCollection::new();
     for (k, t) in times.iter().enumerate() {
         pvd.push(*t, frame_name(stem, k));
@@ -206,6 +211,7 @@ pub fn write_pvd(dir: &Path, stem: &str, times: &[f64]) -> Result<String, Labour
 
 /// Relative path of VTU frame `k` of a series.
 pub fn frame_name(stem: &str, k: usize) -> String {
+    assert!(SERIES_STEMS.contains(&stem), "a series `{stem}` missing from SERIES_STEMS");
     format!("{FRAMES_DIR}/{stem}_{k:04}.vtu")
 }
 

@@ -1178,7 +1178,6 @@ impl Scenario {
         self.with_settings(&[(key.to_string(), value.to_string())])
     }
 
-    /// Impossible values, named by their key with a hint.
     /// [`Self::check`], a refused value named at its line of `text`.
     fn check_at_lines(&self, path: &Path, text: &str) -> Result<(), ScenarioError> {
         self.check(path).map_err(|mut e| {
@@ -1199,6 +1198,7 @@ impl Scenario {
         scenario.check_at_lines(path, text)
     }
 
+    /// Impossible values, named by their key with a hint.
     fn check(&self, path: &Path) -> Result<(), ScenarioError> {
         let err = |key: &'static str, value: f64, problem: &str, hint: &str| ScenarioError::Value {
             path: path.into(),
@@ -2668,8 +2668,11 @@ mod tests {
         let e = carus_io::job::parse_job(Path::new("normal.toml"), &scenario).unwrap_err().to_string();
         assert!(e.contains("this is a labour scenario") && e.contains("carus run normal.toml"), "{e}");
         // An anatomy file, too.
-        let e = Scenario::parse(Path::new("anatomy.toml"), "[head]\nbiparietal_mm = 94.0\n", PathBuf::new()).unwrap_err().to_string();
+        let anatomy = "[head]\nbiparietal_mm = 94.0\n";
+        let e = Scenario::parse(Path::new("anatomy.toml"), anatomy, PathBuf::new()).unwrap_err().to_string();
         assert!(e.contains("this is an anatomy file") && e.contains("add `name"), "{e}");
+        let e = carus_io::job::parse_job(Path::new("anatomy.toml"), anatomy).unwrap_err().to_string();
+        assert!(e.contains("this is an anatomy file") && e.contains("carus mesh floor anatomy.toml"), "{e}");
     }
 
     /// A device that never ends is named, not read until the memory runs out.

@@ -38,14 +38,12 @@ impl Image {
         Image::from_rgba(width, height, decoded.into_raw())
     }
 
-    /// Writes the picture as a PNG file; a write that fails (a full disk)
-    /// leaves no file, rather than an empty or cut one that would read as
-    /// a damaged picture.
+    /// Writes the picture as a PNG file.
     pub fn save_png(&self, path: impl AsRef<Path>) -> Result<(), RenderError> {
         let path = path.as_ref();
-        std::fs::write(path, self.encode_png()?).map_err(|source| {
-            let _ = std::fs::remove_file(path);
-            RenderError::Write { path: path.to_path_buf(), source }
+        std::fs::write(path, self.encode_png()?).map_err(|source| RenderError::Write {
+            path: path.to_path_buf(),
+            source,
         })
     }
 }

@@ -69,18 +69,16 @@ impl MeshFormat {
 /// triangle count (a text file's bytes 80-83 would count hundreds of
 /// millions of triangles); JSON glTF is left to its reader.
 fn content_format(bytes: &[u8]) -> Option<(String, &'static str)> {
-    let starts = |magic: &[u8]| bytes.len() >= magic.len() && bytes[..magic.len()].eq_ignore_ascii_case(magic);
-    if bytes.len() >= 84 {
-        let count = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as u64;
-        if count > 0 && bytes.len() as u64 == 84 + 50 * count {
-            return Some((format!("a binary STL ({count} triangles)"), "stl"));
-        }
-    }
-    if starts(b"glTF") {
+    let word = |at: usize| bytes.get(at..at + 4).map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]));
+    // A GLB header: its magic, version 2, and the file's own length.
+    if bytes.starts_with(b"glTF") && word(4) == Some(2) && word(8) == Some(bytes.len() as u32) {
         return Some(("a binary glTF (GLB)".into(), "glb"));
     }
-    if starts(b"ply\n") || starts(b"ply\r\n") {
+    if bytes.starts_with(b"ply\n") || bytes.starts_with(b"ply\r\n") {
         return Some(("a PLY mesh".into(), "ply"));
+    }
+    if let Some(count) = word(80).map(u64::from).filter(|&n| n > 0 && bytes.len() as u64 == 84 + 50 * n) {
+        return Some((format!("a binary STL ({count} triangles)"), "stl"));
     }
     let head = String::from_utf8_lossy(&bytes[..bytes.len().min(1024)]).to_ascii_lowercase();
     (head.trim_start().starts_with("solid") && head.contains("facet")).then(|| ("an ASCII STL".into(), "stl"))

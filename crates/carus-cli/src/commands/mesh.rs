@@ -143,7 +143,7 @@ fn file_names(part: MeshPart) -> Vec<String> {
 /// as it was. A run's or a batch's folder is refused even with `--force`:
 /// its `pelvis.vtu` is the run's own, in the run's anatomy.
 fn refuse_to_overwrite(out: &Path, part: MeshPart, force: bool) -> anyhow::Result<()> {
-    if super::holds_run(out) || super::holds_batch(out) {
+    if super::holds_run(out) || super::holds_batch(out) || super::run::carus_made(out) {
         anyhow::bail!(
             "{} holds carus runs, whose files `carus mesh` would write over; choose another --out",
             out.display()

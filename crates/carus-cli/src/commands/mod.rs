@@ -114,6 +114,14 @@ pub fn create_out_folder(dir: &std::path::Path, flag: &str) -> anyhow::Result<()
     std::fs::create_dir_all(dir).map_err(|e| anyhow::anyhow!("cannot create the folder {}: {e}", dir.display()))
 }
 
+/// Writes a picture as a PNG whole, or leaves none (a full disk would
+/// leave an empty or cut file that reads as a damaged picture); an earlier
+/// file that cannot be opened is left as it was.
+pub fn save_picture(picture: &carus_render::Image, path: &std::path::Path) -> anyhow::Result<()> {
+    carus_io::output::write_whole(path, &picture.encode_png()?)
+        .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", path.display()))
+}
+
 /// The largest test cube `carus validate cube` and `carus bench tled`
 /// build: 20 million elements (an H8 cube of 271 per edge, a T4 one of
 /// 149), several GB of model and state; beyond it the allocation itself

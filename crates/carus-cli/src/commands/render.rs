@@ -129,7 +129,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<Status> {
     if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         super::create_out_folder(dir, "--out")?;
     }
-    picture.save_png(&args.out)?;
+    super::save_picture(&picture, &args.out)?;
     if args.json {
         let views: Vec<&str> = sheet.views.iter().map(|v| v.name()).collect();
         print_json(&serde_json::json!({

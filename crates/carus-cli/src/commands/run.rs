@@ -670,24 +670,33 @@ fn check_replaceable(dir: &Path) -> anyhow::Result<()> {
 }
 
 /// What a folder carus made holds that carus did not write there (a
-/// user's notes, an analysis folder), which `--force` must not delete: a
-/// run's files, the frames folder's VTU series, a sweep's or sanity's
-/// plan and tables, and its run folders, each checked the same way.
+/// user's notes, an analysis folder, another run made inside it), which
+/// `--force` must not delete: a run's files, its ParaView series, a
+/// sweep's or sanity's plan and tables and its run folders, each checked
+/// the same way. The files an operating system leaves in any folder it
+/// shows (`.DS_Store`, `Thumbs.db`, `desktop.ini`) go with it.
 pub(super) fn foreign_entries(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
     use carus_labour::output::*;
     let own = [
         OUT_DIR_MARK, SCENARIO_FILE, CHECKPOINT_FILE, HISTORY_JSON, HISTORY_CSV, CONTACTS_CSV, MOVEMENTS_FILE,
         RUN_FILE, PELVIS_VTU, LIGAMENTS_VTU, HEAD_BODY_VTU, TRUNK_BODY_VTU, LOWER_TRUNK_BODY_VTU, REPORT_FILE,
         super::sweep::PLAN_FILE, super::sweep::CSV_FILE, super::sweep::JSON_FILE, super::sanity::PLAN_FILE,
-        super::sanity::RECORD_FILE,
+        super::sanity::RECORD_FILE, ".DS_Store", "Thumbs.db", "desktop.ini",
     ];
-    // A JSON written whole goes through NAME.partial (write_json_whole).
-    let ours = |name: &str| own.contains(&name.strip_suffix(".partial").unwrap_or(name)) || name.ends_with(".pvd");
-    let frame = |name: &str| {
-        name.strip_suffix(".vtu")
-            .and_then(|stem| stem.rsplit_once('_'))
-            .is_some_and(|(_, k)| k.len() >= 4 && k.bytes().all(|b| b.is_ascii_digit()))
+    let series = |name: &str| name.strip_suffix(".pvd").is_some_and(|stem| SERIES_STEMS.contains(&stem));
+    // A file written whole goes through NAME.partial (write_json_whole, PVDs).
+    let ours = |name: &str| {
+        let name = name.strip_suffix(".partial").unwrap_or(name);
+        own.contains(&name) || series(name)
     };
+    let frame = |name: &str| {
+        name.strip_suffix(".vtu").and_then(|stem| stem.rsplit_once('_')).is_some_and(|(stem, k)| {
+            SERIES_STEMS.contains(&stem) && k.len() >= 4 && k.bytes().all(|b| b.is_ascii_digit())
+        })
+    };
+    // A sweep from before its plan was written has its two tables.
+    let sweep_tables = [super::sweep::CSV_FILE, super::sweep::JSON_FILE];
+    let batch = super::holds_batch(dir) || sweep_tables.iter().all(|f| dir.join(f).is_file());
     let list = |dir: &Path| -> anyhow::Result<Vec<(PathBuf, String, bool)>> {
         let mut entries = Vec::new();
         for entry in std::fs::read_dir(dir).with_context(|| format!("{}", dir.display()))? {
@@ -705,7 +714,7 @@ pub(super) fn foreign_entries(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
             true if name == FRAMES_DIR => {
                 foreign.extend(list(&path)?.into_iter().filter(|(_, n, d)| *d || !frame(n)).map(|(p, ..)| p))
             }
-            true if carus_made(&path) => foreign.extend(foreign_entries(&path)?),
+            true if batch && carus_made(&path) => foreign.extend(foreign_entries(&path)?),
             _ => foreign.push(path),
         }
     }
@@ -1183,12 +1192,29 @@ mod tests {
             output: OutputArgs { out: Some(out.to_path_buf()), json: true, force: true, quiet: true },
             ..args(out.to_path_buf(), &["numerics.end_time_s=0.02"])
         };
-        std::fs::write(out.join("my_notes.txt"), "mine").unwrap();
+        // A user's notes, folder, ParaView state, frame, and a run made
+        // inside this one, each refused; what an OS leaves is not.
+        let nested = out.join("variant");
+        std::fs::create_dir(&nested).unwrap();
+        std::fs::write(nested.join(OUT_DIR_MARK), "").unwrap();
         std::fs::create_dir(out.join("analysis")).unwrap();
+        let frames = out.join(carus_labour::output::FRAMES_DIR);
+        std::fs::create_dir_all(&frames).unwrap();
+        let added = [out.join("my_notes.txt"), out.join("my_state.pvd"), frames.join("mine_0001.vtu")];
+        for file in &added {
+            std::fs::write(file, "mine").unwrap();
+        }
+        std::fs::write(out.join(".DS_Store"), "").unwrap();
         let e = format!("{:#}", run(&forced(&out)).err().unwrap());
-        assert!(e.contains("my_notes.txt") && e.contains("analysis") && e.contains("move them out first"), "{e}");
-        assert!(out.join("my_notes.txt").exists() && out.join(carus_labour::output::RUN_FILE).exists());
-        std::fs::remove_file(out.join("my_notes.txt")).unwrap();
+        for name in ["my_notes.txt", "my_state.pvd", "mine_0001.vtu", "analysis", "variant"] {
+            assert!(e.contains(name), "{name}: {e}");
+        }
+        assert!(!e.contains(".DS_Store") && e.contains("move them out first"), "{e}");
+        assert!(added.iter().all(|f| f.exists()) && nested.exists() && out.join(carus_labour::output::RUN_FILE).exists());
+        for file in &added {
+            std::fs::remove_file(file).unwrap();
+        }
+        std::fs::remove_dir_all(&nested).unwrap();
         std::fs::remove_dir(out.join("analysis")).unwrap();
         run(&forced(&out)).unwrap();
 

@@ -90,7 +90,7 @@ pub fn run(args: &ViewArgs) -> anyhow::Result<Status> {
     }
     let [width, height] = [args.size[0], args.size[1]];
     let picture = replay.picture(at, &replay.standard_camera(args.view.into()), layers, width, height)?;
-    picture.save_png(path)?;
+    super::save_picture(&picture, path)?;
     let k = replay.sample_at(at);
     if args.json {
         print_json(&picture_json(&replay, k, path, args))?;

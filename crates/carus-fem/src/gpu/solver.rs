@@ -13,7 +13,7 @@
 //! Failure handling matches the CPU solver: the kernels flag the first
 //! sub-step with an inverted element or a runaway node in a 16-byte status
 //! buffer, read once per submission. The state at the submission's start is
-//! kept in two backup buffers; on a flag it is restored and the good
+//! kept in three backup buffers; on a flag it is restored and the good
 //! sub-steps are replayed (the kernels are deterministic), so the solver
 //! ends at the last good sub-step and names the element or node.
 
@@ -752,7 +752,7 @@ impl GpuSolver {
                 }
                 return Ok(FemError::Diverged {
                     time_s: t,
-                    last_good_time_s: t,
+                    last_good_time_s: self.time_s,
                     what: format!("element {element} has a non-finite deformation"),
                 }
                 .into());

@@ -40,6 +40,11 @@ fn another_kind_of_file(path: &Path, text: &str) -> Option<JobError> {
             "this is a pelvis's landmarks file (a `mesh` with its [axes] and [landmarks]), not a `carus solve` job".to_string(),
             "a labour scenario imports it (`[pelvis] import = ...`, docs/IMPORT.md); `carus measure pelvis` measures a file that does; a job's [mesh] names a volume mesh (docs/SOLVE.md)".to_string(),
         )
+    } else if !has("name") && !table.is_empty() && table.keys().all(|k| ["pelvis", "head", "floor"].contains(&k.as_str())) {
+        (
+            "this is an anatomy file ([pelvis], [head], [floor]), not a `carus solve` job".to_string(),
+            format!("`carus measure`, `carus mesh` and `carus render` read it (`carus mesh floor {name} --out DIR` writes the pelvic floor's volume mesh); `carus solve` takes a job with [mesh], [[material]] and [solver] (docs/SOLVE.md)"),
+        )
     } else if has("name") || ["pelvis", "head", "expulsion", "trajectory", "start", "numerics"].iter().any(|k| has(k)) {
         (
             "this is a labour scenario (it has a `name` or a scenario's tables), not a `carus solve` job".to_string(),

@@ -427,8 +427,11 @@ impl Recorder {
                 time_s: Some(reported_time_s(solver.time_s())),
             },
         )?;
-        self.pvd.push(reported_time_s(solver.time_s()), name);
-        self.pvd.write(&self.out_dir.join("solution.pvd"))?;
+        // Listed once its frame is written, and the list written whole.
+        let mut listed = self.pvd.clone();
+        listed.push(reported_time_s(solver.time_s()), name);
+        listed.write(&self.out_dir.join("solution.pvd"))?;
+        self.pvd = listed;
         self.last_frame_time_s = Some(solver.time_s());
         Ok(())
     }
@@ -659,8 +662,12 @@ pub fn run_job(
         }
     }
     if output_failed.is_none() {
-        recorder.close(&mut solver, mesh)?;
-        recorder.history.flush()?;
+        let closed = recorder.close(&mut solver, mesh).and_then(|()| Ok(recorder.history.flush()?));
+        if let Err(e) = closed {
+            let stopped = format!("{e}: the last frame or history row was not written, the ones before are kept");
+            failure = Some(failure.map_or(stopped.clone(), |f| format!("{f}; then {stopped}")));
+            output_failed = Some(e);
+        }
     } else {
         // The rows before the failure, whole; the failure itself is the error kept.
         let _ = recorder.history.flush();
