@@ -94,8 +94,16 @@ fn in_words(vtkio: &str) -> String {
         )
     } else if vtkio.contains("Base64Decode") {
         "a base64 data array holds a character that is not base64".to_string()
-    } else if vtkio.contains("Decompress") {
+    } else if vtkio.contains("Decompress") || vtkio.contains("deflate") {
         "a compressed data array cannot be decompressed".to_string()
+    } else if let Some(code) = vtkio.split("InvalidCellType(").nth(1).and_then(|r| r.split(')').next()) {
+        format!("a cell has type {code}, which is no VTK cell type")
+    } else if vtkio.contains("DataSetMismatch") {
+        "the file holds another kind of VTK data set than an unstructured grid (a PolyData or an image)".to_string()
+    } else if vtkio.contains("InvalidDataFormat") {
+        "a data array's values do not fit its declared type or format (a negative index, a format it does not name)".to_string()
+    } else if vtkio.contains("InvalidXml") || vtkio.contains("IllFormed") {
+        "the XML is not well formed (a tag not closed, or closed by another)".to_string()
     } else if vtkio.starts_with("Parse error") {
         "the legacy file stops early or has a line that is not what its header announces".to_string()
     } else {
@@ -781,6 +789,16 @@ mod tests {
         assert!(in_words(points).starts_with("the points' coordinate array holds 24 values where the file's counts call for 27"));
         assert!(in_words("Parse error: Complete").starts_with("the legacy file stops early"));
         assert_eq!(in_words("something new"), "(something new)");
+        for (vtkio, said) in [
+            ("XML error: Validation error: InvalidCellType(99)", "a cell has type 99, which is no VTK cell type"),
+            ("XML error: Validation error: DataSetMismatch", "another kind of VTK data set"),
+            ("XML error: Validation error: InvalidDataFormat", "do not fit its declared type"),
+            ("IO(Custom { kind: InvalidInput, error: \"corrupt deflate stream\" })", "cannot be decompressed"),
+            ("XML error: InvalidXml(IllFormed(MismatchedEndTag { expected: \"Piece\", found: \"Cells\" }))", "not well formed"),
+        ] {
+            assert!(in_words(vtkio).starts_with(said) || in_words(vtkio).contains(said), "{}", in_words(vtkio));
+            assert!(in_words(vtkio).ends_with(&format!("(the VTK reader: {vtkio})")));
+        }
         let spaced = "DataArraySizeMismatch { name: \"tissue id, left\", expected: 2, actual: 1 }";
         assert!(in_words(spaced).starts_with("the data array `tissue id, left` holds 1 values"), "{}", in_words(spaced));
     }
