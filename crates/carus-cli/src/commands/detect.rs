@@ -45,12 +45,21 @@ struct TableAnatomy {
     trunk: bool,
 }
 
+/// Contractions further apart than this are no labour's, s: ten minutes,
+/// twice the five of the slowest second stage (Williams Obstetrics,
+/// chapter "Normal Labor": contractions every 2 to 3 minutes in the second
+/// stage, every 5 or more only in early labour).
+const SLOWEST_CONTRACTIONS_S: f64 = 600.0;
+
 pub fn run(args: &DetectArgs) -> anyhow::Result<Status> {
     let path = history_file(&args.history);
     if let Some(series) = &args.series {
         check_series_target(series, &path)?;
     }
     let (report, anatomy) = detect_file(&path, args.anatomy.as_deref())?;
+    if let Some(note) = time_unit_note(&path, report.contraction_period_s) {
+        eprintln!("note: {note}");
+    }
     if let Some(series) = &args.series {
         write_series(series, &report)?;
     }
@@ -140,6 +149,17 @@ fn check_series_target(series: &Path, history: &Path) -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+/// Second-stage contractions come every 2 to 5 minutes; a period read off
+/// the force as more than ten is most likely times in another unit.
+fn time_unit_note(path: &Path, period_s: Option<f64>) -> Option<String> {
+    let period = period_s.filter(|&p| p > SLOWEST_CONTRACTIONS_S)?;
+    Some(format!(
+        "{}: the expulsion force rises and falls every {period:.0} s, far slower than contractions \
+         (every 2 to 5 minutes); check that `time_s` is in seconds (not ms)",
+        path.display()
+    ))
 }
 
 /// The detector's per-sample series as CSV.
@@ -295,6 +315,17 @@ mod tests {
         std::fs::write(&misnamed, "time_s,head_x_m\n0,0\n").unwrap();
         let text = format!("{:#}", detect_file(&misnamed, None).unwrap_err());
         assert!(text.contains("reads like a CSV table: give it a .csv name"), "{text}");
+    }
+
+    /// A contraction period no labour has is noted as a likely unit slip.
+    #[test]
+    fn a_history_in_milliseconds_is_noted() {
+        let note = time_unit_note(Path::new("h.csv"), Some(8000.0)).expect("8000 s is no contraction");
+        assert!(note.starts_with("h.csv: the expulsion force rises and falls every 8000 s") && note.contains("(not ms)"), "{note}");
+        // The model's own time-compressed 8 s, and a clinical 3 minutes, are not.
+        assert_eq!(time_unit_note(Path::new("h.csv"), Some(8.0)), None);
+        assert_eq!(time_unit_note(Path::new("h.csv"), Some(180.0)), None);
+        assert_eq!(time_unit_note(Path::new("h.csv"), None), None);
     }
 
     /// A run's pose_history.csv, read with the scenario beside it, gives
