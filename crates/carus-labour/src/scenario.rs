@@ -2095,6 +2095,40 @@ fn check_not_solve_job(path: &Path, table: &toml::Table) -> Result<(), ScenarioE
     })
 }
 
+/// The note for a message that names keys of `[table]` as `key = value`
+/// where the file left some out (`left_out`), so that the defaults stood
+/// in: a reader would take those for the file's own values.
+pub fn defaults_note(table: &str, message: &str, left_out: impl Fn(&str) -> bool) -> Option<String> {
+    let mut keys: Vec<&str> = Vec::new();
+    for (at, _) in message.match_indices(" = ") {
+        let before = &message[..at];
+        let start = before.rfind(|c: char| !(c.is_ascii_alphanumeric() || c == '_')).map_or(0, |i| i + 1);
+        let key = &before[start..];
+        if !key.is_empty() && !keys.contains(&key) && left_out(key) {
+            keys.push(key);
+        }
+    }
+    let (last, rest) = keys.split_last()?;
+    let named = match rest {
+        [] => format!("{last} is the default"),
+        _ => format!("{} and {last} are the defaults", rest.join(", ")),
+    };
+    Some(format!("{named}, not in the file's [{table}]: set {} there too", if rest.is_empty() { "it" } else { "them" }))
+}
+
+impl Scenario {
+    /// [`defaults_note`] for this scenario: the keys its file leaves out
+    /// (none for a built-in, nor for a key `--set` changed).
+    pub fn defaults_note(&self, table: &str, message: &str) -> Option<String> {
+        defaults_note(table, message, |key| matches!(self.source.locate(&format!("{table}.{key}")), Some((_, None))))
+    }
+}
+
+/// [`defaults_note`] for the text of an anatomy file.
+pub fn defaults_note_in(text: &str, table: &str, message: &str) -> Option<String> {
+    defaults_note(table, message, |key| line_of_key(text, &format!("{table}.{key}")).is_none())
+}
+
 /// An anatomy file (`[pelvis]`, `[head]`, `[floor]` and no `name`) given
 /// for a scenario: named as one, with what to do instead.
 fn check_not_anatomy_file(path: &Path, table: &toml::Table) -> Result<(), ScenarioError> {
@@ -2655,6 +2689,20 @@ mod tests {
         std::fs::write(dir.path().join(crate::output::SCENARIO_FILE), "").unwrap();
         let e = Scenario::from_file(dir.path()).unwrap_err().to_string();
         assert!(e.contains(&format!("carus run --resume {}", dir.path().display())) && e.contains("--out NEW_FOLDER"), "{e}");
+    }
+
+    /// A refusal that names keys the file left out says they are defaults;
+    /// a key the file sets, or a built-in's, is not named so.
+    #[test]
+    fn keys_left_to_their_defaults_are_named_as_such() {
+        let text = "name = \"x\"\n[pelvis]\ninlet_ap_mm = 132.0\n";
+        let message = "inlet_oblique_mm = 124 is shorter than both inlet_ap_mm = 132 and inlet_transverse_mm = 130";
+        let note = defaults_note_in(text, "pelvis", message).unwrap();
+        assert_eq!(note, "inlet_oblique_mm and inlet_transverse_mm are the defaults, not in the file's [pelvis]: set them there too");
+        let read = Scenario::parse(Path::new("x.toml"), text, PathBuf::new()).unwrap();
+        assert_eq!(read.defaults_note("pelvis", message), Some(note));
+        assert_eq!(defaults_note_in(text, "pelvis", "inlet_ap_mm = 132 is too long"), None);
+        assert_eq!(Scenario::builtin("normal").unwrap().defaults_note("pelvis", message), None);
     }
 
     /// A `carus solve` job given for a scenario is named as one, with the

@@ -145,7 +145,7 @@ impl Scene {
 
         let s = scenario;
         let head_anatomy = FetalHead::with_subdivisions(&s.head, &s.fetus.atlanto_occipital(), s.numerics.head_subdivisions)
-            .map_err(|e| unbuildable("head", e))?;
+            .map_err(|e| unbuildable(s, "head", e))?;
         let spacing = s.contact.sample_spacing_mm * 1e-3;
         let head = FetalBody::new(
             "head",
@@ -732,14 +732,17 @@ fn pelvis_files_digest(s: &Scenario, import: Option<&(MeshReport, PathBuf)>) -> 
 fn build_pelvis(s: &Scenario) -> Result<(Pelvis, Option<(MeshReport, PathBuf)>), LabourError> {
     s.pelvis
         .build_with_report(&s.base_dir)
-        .map_err(|e| unbuildable("pelvis", e))
+        .map_err(|e| unbuildable(s, "pelvis", e))
 }
 
 /// A scenario's `[pelvis]` or `[head]` table that cannot be built, with the
-/// command that builds and measures it without a run.
-fn unbuildable(table: &str, e: impl std::fmt::Display) -> LabourError {
+/// keys it names that the file left to their defaults, and the command
+/// that builds and measures it without a run.
+fn unbuildable(s: &Scenario, table: &str, e: impl std::fmt::Display) -> LabourError {
+    let e = e.to_string();
+    let defaults = s.defaults_note(table, &e).map_or(String::new(), |note| format!("\n  note: {note}"));
     LabourError::anatomy(format!(
-        "[{table}]: {e}\n  hint: `carus measure {table} FILE` builds the {table} of a scenario \
+        "[{table}]: {e}{defaults}\n  hint: `carus measure {table} FILE` builds the {table} of a scenario \
          file and prints every diameter without running; `carus scenarios show normal` gives a \
          set that builds"
     ))

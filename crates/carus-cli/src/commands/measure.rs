@@ -274,7 +274,14 @@ impl AnatomyFile {
         self.note_if_left_out("pelvis");
         let base = self.path.as_deref().and_then(Path::parent).unwrap_or(Path::new("."));
         let where_ = self.path.as_ref().map_or("the default pelvis".to_string(), |p| format!("{}: [pelvis]", p.display()));
-        let (pelvis, report) = self.pelvis.build_with_report(base).with_context(|| where_)?;
+        let (pelvis, report) = self.pelvis.build_with_report(base).map_err(|e| {
+            // The keys the message names that the file leaves to their defaults.
+            let text = self.path.as_deref().and_then(|p| read_text(p).ok());
+            match text.and_then(|t| carus_labour::scenario::defaults_note_in(&t, "pelvis", &e.to_string())) {
+                Some(note) => anyhow::anyhow!("{where_}: {e}\n  note: {note}"),
+                None => anyhow::Error::from(e).context(where_),
+            }
+        })?;
         if let Some(note) = report.and_then(|(r, mesh)| import_note(&r, &mesh)) {
             eprintln!("note: {note}");
         }
