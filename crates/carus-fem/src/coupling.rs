@@ -13,7 +13,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::error::FemError;
-use crate::solver::check_node;
+use crate::loads::check_node;
 
 /// The held nodes, sorted by node.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]

@@ -7,7 +7,6 @@
 use serde::{Deserialize, Serialize};
 
 use crate::error::FemError;
-use crate::solver::check_node;
 
 /// Time history of a load, value(t) in [0, 1].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -97,6 +96,19 @@ pub struct SurfacePressure {
     pub triangles: Vec<[u32; 3]>,
     pub pressure_pa: f64,
     pub shape: LoadShape,
+}
+
+/// A boundary condition's node must exist (the coupling and both backends ask).
+pub(crate) fn check_node(what: &'static str, n: u32, nn: usize) -> Result<(), FemError> {
+    if (n as usize) < nn {
+        Ok(())
+    } else {
+        Err(FemError::BoundaryNodeOutOfRange {
+            what,
+            node: n,
+            node_count: nn,
+        })
+    }
 }
 
 /// All boundary conditions and loads of a run.

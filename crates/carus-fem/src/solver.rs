@@ -22,7 +22,7 @@ use crate::fields::{self, ElementFields, Energies};
 use crate::kernel::blocks::KernelData;
 use crate::kernel::lanes::{Real, LANES};
 use crate::kernel::passes::{self, Integrator};
-use crate::loads::{BoundaryConditions, LoadShape};
+use crate::loads::{check_node, BoundaryConditions, LoadShape};
 use crate::model::{KernelModel, TledModel};
 
 /// What to do with a time step above the critical one.
@@ -172,19 +172,6 @@ pub(crate) fn check_end_time(t_s: f64) -> Result<(), FemError> {
         return Ok(());
     }
     Err(FemError::InvalidOption { option: "advance_to", reason: format!("the end time is {t_s}; give a finite time, s") })
-}
-
-/// A boundary condition's node must exist (shared with the GPU backend).
-pub(crate) fn check_node(what: &'static str, n: u32, nn: usize) -> Result<(), FemError> {
-    if (n as usize) < nn {
-        Ok(())
-    } else {
-        Err(FemError::BoundaryNodeOutOfRange {
-            what,
-            node: n,
-            node_count: nn,
-        })
-    }
 }
 
 impl CompiledLoads {

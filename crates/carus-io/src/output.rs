@@ -15,6 +15,18 @@ pub fn write_whole(path: &Path, bytes: &[u8]) -> io::Result<()> {
     })
 }
 
+/// Writes `bytes` beside `path` (as `NAME.partial`) whole, then renames
+/// it over `path`: an interrupted write or a full disk leaves the earlier
+/// file as it was, and a reader (the viewer following a run, ParaView)
+/// never meets a half-written one.
+pub fn replace_whole(path: &Path, bytes: &[u8]) -> io::Result<()> {
+    let mut partial = path.as_os_str().to_owned();
+    partial.push(".partial");
+    let partial = std::path::PathBuf::from(partial);
+    write_whole(&partial, bytes)?;
+    std::fs::rename(&partial, path)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -52,13 +52,9 @@ impl PvdCollection {
             path: PathBuf::from(path),
             cause,
         };
-        // Written beside and renamed over: a full disk leaves the earlier
-        // list, whose frames ParaView still opens, not a cut one.
-        let mut partial = path.as_os_str().to_owned();
-        partial.push(".partial");
-        let partial = PathBuf::from(partial);
-        crate::output::write_whole(&partial, self.to_xml().as_bytes()).map_err(io_error)?;
-        std::fs::rename(&partial, path).map_err(io_error)
+        // A full disk leaves the earlier list, whose frames ParaView still
+        // opens, not a cut one.
+        crate::output::replace_whole(path, self.to_xml().as_bytes()).map_err(io_error)
     }
 
     /// Reads the frames of a `.pvd` written by [`PvdCollection::write`] (or

@@ -87,15 +87,12 @@ pub fn write_checkpoint(dir: &Path, checkpoint: &Checkpoint) -> Result<(), Labou
     write_json_whole(&dir.join(CHECKPOINT_FILE), checkpoint)
 }
 
-/// Writes `value` as JSON beside `path`, then renames it there, so that an
-/// interrupted write never leaves a broken file and a reader (the viewer
-/// following a run) never meets a half-written one.
+/// Writes `value` as JSON beside `path`, then renames it there
+/// (`carus_io::output::replace_whole`): an interrupted write never leaves a
+/// broken file, and the viewer following a run never meets a half one.
 pub fn write_json_whole<T: Serialize>(path: &Path, value: &T) -> Result<(), LabourError> {
-    let mut partial = path.as_os_str().to_owned();
-    partial.push(".partial");
-    let partial = std::path::PathBuf::from(partial);
-    write_json(&partial, value)?;
-    std::fs::rename(&partial, path).map_err(|e| output_error(path, e))
+    let text = serde_json::to_string(value).map_err(|e| output_error(path, e))?;
+    carus_io::output::replace_whole(path, text.as_bytes()).map_err(|e| output_error(path, e))
 }
 
 /// How a run ended, as its run.json's summary says.

@@ -140,10 +140,11 @@ fn file_names(part: MeshPart) -> Vec<String> {
 }
 
 /// Checked before anything is written, so that a refusal leaves the folder
-/// as it was. A run's or a batch's folder is refused even with `--force`:
-/// its `pelvis.vtu` is the run's own, in the run's anatomy.
+/// as it was. A folder carus made for runs (a run's, a sweep's, sanity's)
+/// is refused even with `--force`: its `pelvis.vtu` is the run's own, in
+/// the run's anatomy.
 fn refuse_to_overwrite(out: &Path, part: MeshPart, force: bool) -> anyhow::Result<()> {
-    if super::holds_run(out) || super::holds_batch(out) || super::run::carus_made(out) {
+    if super::run::carus_made(out) || super::holds_batch(out) {
         anyhow::bail!(
             "{} holds carus runs, whose files `carus mesh` would write over; choose another --out",
             out.display()

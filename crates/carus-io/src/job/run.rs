@@ -189,15 +189,11 @@ fn auxetic_notes(spec: &JobSpec) -> Vec<String> {
         .collect()
 }
 
-/// Notes on imposed displacements larger than the whole mesh: a mesh read
-/// in the wrong `length_unit` (a 0.1 m cube read in mm is 0.1 mm across)
-/// turns a modest pull into a crush, and the run then fails as if the
-/// physics had.
-fn displacement_notes(spec: &JobSpec, mesh: &Mesh) -> Vec<String> {
-    let (lo, hi) = mesh.nodes.iter().fold(([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]), |(lo, hi), p| {
-        (std::array::from_fn(|c| lo[c].min(p[c])), std::array::from_fn(|c| hi[c].max(p[c])))
-    });
-    let size_m = (0..3).map(|c| (hi[c] - lo[c]).powi(2)).sum::<f64>().sqrt();
+/// Notes on imposed displacements larger than the whole mesh (`size_m`,
+/// its bounding box's diagonal): a mesh read in the wrong `length_unit` (a
+/// 0.1 m cube read in mm is 0.1 mm across) turns a modest pull into a
+/// crush, and the run then fails as if the physics had.
+fn displacement_notes(spec: &JobSpec, size_m: f64) -> Vec<String> {
     spec.displacements
         .iter()
         .enumerate()
@@ -692,7 +688,7 @@ pub fn run_job(
         elements: mesh.element_count(),
         nodes: mesh.node_count(),
         failure,
-        notes: file.notes.iter().cloned().chain(auxetic_notes(&spec)).chain(displacement_notes(&spec, mesh)).collect(),
+        notes: file.notes.iter().cloned().chain(auxetic_notes(&spec)).chain(displacement_notes(&spec, solver.model().size_m())).collect(),
     };
     let summary = out_dir.join("summary.json");
     let json = serde_json::to_string_pretty(&report).unwrap_or_default();
