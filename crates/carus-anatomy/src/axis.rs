@@ -63,6 +63,8 @@ pub enum AxisError {
     Backwards { index: usize },
     #[error("pelvic axis: it runs along the mother's transverse direction at sigma = {sigma_m} m, so no anterior axis can be defined")]
     TangentAlongTransverse { sigma_m: f64 },
+    #[error("pelvic axis: the mother's right ({right:?}) is not a finite direction (a zero or non-finite vector); give the pelvis frame's +x, [1, 0, 0]")]
+    NoRight { right: [f64; 3] },
 }
 
 /// Sub-intervals per Hermite segment in the arc-length table.
@@ -144,6 +146,9 @@ impl PelvicAxis {
     /// deeper planes in order), tangent to each plane's caudal normal.
     /// `right` is the mother's right (pelvis +x).
     pub fn new(planes: &[Plane], right: DVec3) -> Result<Self, AxisError> {
+        if !right.is_finite() || right.length_squared() < 1e-24 {
+            return Err(AxisError::NoRight { right: right.to_array() });
+        }
         for (index, plane) in planes.iter().enumerate() {
             if !plane.centre.is_finite() || !plane.normal.is_finite() {
                 return Err(AxisError::NonFinite { index });
@@ -411,6 +416,11 @@ mod tests {
         let mut q = planes();
         q[1].centre = q[0].centre;
         assert!(matches!(PelvicAxis::new(&q, DVec3::X), Err(AxisError::CoincidentCentres { .. })));
+        // No right to project off the tangent: said so, not as an axis along it.
+        for right in [DVec3::ZERO, DVec3::new(f64::NAN, 0.0, 0.0)] {
+            let e = PelvicAxis::new(&planes(), right).unwrap_err();
+            assert!(matches!(e, AxisError::NoRight { .. }) && e.to_string().contains("give the pelvis frame's +x"), "{e}");
+        }
     }
 
     #[test]

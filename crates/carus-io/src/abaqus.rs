@@ -30,6 +30,7 @@ pub fn read_inp(path: &Path) -> Result<MeshFile, ReadError> {
 /// Parses the bytes of an `.inp` file; `path` only names it in errors.
 pub fn parse_inp(path: &Path, bytes: &[u8]) -> Result<MeshFile, ReadError> {
     let text = String::from_utf8_lossy(bytes);
+    let lines: Vec<&str> = text.lines().collect();
     let mut reader = Reader {
         path,
         builder: MeshBuilder::new(path).with_surface_only_fix(
@@ -40,17 +41,13 @@ pub fn parse_inp(path: &Path, bytes: &[u8]) -> Result<MeshFile, ReadError> {
         facets: HashMap::new(),
         surface_faces: Vec::new(),
         line: 0,
+        line_count: lines.len(),
     };
-    let lines: Vec<&str> = text.lines().collect();
     reader.run(&lines)?;
     reader.resolve_surfaces()?;
     reader.facet_surfaces();
     reader.builder.finish()
 }
-
-/// More ids than any mesh Carus can hold in memory: a GENERATE range this
-/// long is a typo, not a set.
-const MAX_GENERATED: u64 = 1 << 32;
 
 /// H8 faces S1..S6 (0-based local nodes), from the Abaqus manual's C3D8 table.
 const HEXAHEDRON_FACES: [&[usize]; 6] = [
@@ -123,6 +120,9 @@ struct Reader<'a> {
     /// (surface, element id or element set, face label, line).
     surface_faces: Vec<(String, String, String, usize)>,
     line: usize,
+    /// Lines in the file: no more nodes or elements than this can be
+    /// defined, so no GENERATE range longer can be a set of them.
+    line_count: usize,
 }
 
 impl Reader<'_> {
@@ -495,9 +495,15 @@ impl Reader<'_> {
                     "use first <= last and a positive increment",
                 ));
             }
-            if (last - first) / step >= MAX_GENERATED {
+            let ids = (last - first) / step + 1;
+            if ids > self.line_count as u64 {
+                let kind = if elements { "elements" } else { "nodes" };
                 return Err(self.error(
-                    format!("GENERATE range {first}..{last} step {step} lists more than {MAX_GENERATED} ids"),
+                    format!(
+                        "GENERATE range {first}..{last} step {step} lists {ids} ids, more {kind} than a file of \
+                         {} lines can define",
+                        self.line_count
+                    ),
                     "check the bounds (a typo can add digits)",
                 ));
             }
@@ -742,7 +748,13 @@ mod tests {
         let err = read("*NSET, NSET=a, GENERATE\n1, 99999999999999, 1\n")
             .unwrap_err()
             .to_string();
-        assert!(err.contains("lists more than"), "{err}");
+        assert!(err.contains("lists 99999999999999 ids, more nodes than a file of 2 lines can define"), "{err}");
+        // A slip of digits within memory but past what the file can define
+        // is refused before its ids are listed.
+        let err = parse_inp(Path::new("g.inp"), b"*NSET, NSET=A, GENERATE\n1, 400000000\n*NODE\n1, 0, 0, 0\n")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("lists 400000000 ids, more nodes than a file of 4 lines"), "{err}");
     }
 
     #[test]

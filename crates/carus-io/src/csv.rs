@@ -237,7 +237,7 @@ impl CsvTable {
                     self.header[column],
                     if parsed.is_ok() { "a finite number" } else { "a number" }
                 ),
-                fix: "write a finite number (a decimal point, not a comma), or leave the cell empty".into(),
+                fix: "write a finite number (a decimal point, not a comma)".into(),
             }),
         }
     }

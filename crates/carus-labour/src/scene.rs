@@ -12,6 +12,7 @@ use carus_analysis::{BirthCanal, ContactSite, HeadGeometry, TrunkGeometry};
 use carus_anatomy::fetus::{FetalHead, HeadLandmarks, Trunk, TrunkDiameters};
 use carus_anatomy::floor::{pelvic_floor, ATTACHED};
 use carus_anatomy::import::MeshReport;
+use carus_anatomy::pelvis::PelvisBuildError;
 use carus_anatomy::{Pelvis, Plane, TriSurface};
 use carus_contact::{
     obstacle_contacts, pair_contacts, BodyContactState, BodyMotion, ContactLaw, HeadAxes, MassProperties, NeckGeometry, RegionTable,
@@ -145,7 +146,7 @@ impl Scene {
 
         let s = scenario;
         let head_anatomy = FetalHead::with_subdivisions(&s.head, &s.fetus.atlanto_occipital(), s.numerics.head_subdivisions)
-            .map_err(|e| unbuildable(s, "head", e))?;
+            .map_err(|e| unbuildable(s, "head", true, e))?;
         let spacing = s.contact.sample_spacing_mm * 1e-3;
         let head = FetalBody::new(
             "head",
@@ -732,15 +733,20 @@ fn pelvis_files_digest(s: &Scenario, import: Option<&(MeshReport, PathBuf)>) -> 
 fn build_pelvis(s: &Scenario) -> Result<(Pelvis, Option<(MeshReport, PathBuf)>), LabourError> {
     s.pelvis
         .build_with_report(&s.base_dir)
-        .map_err(|e| unbuildable(s, "pelvis", e))
+        .map_err(|e| {
+            let from_diameters = matches!(e, PelvisBuildError::Generate(_));
+            unbuildable(s, "pelvis", from_diameters, e)
+        })
 }
 
 /// A scenario's `[pelvis]` or `[head]` table that cannot be built, with the
-/// keys it names that the file left to their defaults, and the command
-/// that builds and measures it without a run.
-fn unbuildable(s: &Scenario, table: &str, e: impl std::fmt::Display) -> LabourError {
+/// keys it names that the file left to their defaults (only for a table of
+/// diameters: an import's errors quote its landmarks file, not the table),
+/// and the command that builds and measures it without a run.
+fn unbuildable(s: &Scenario, table: &str, from_diameters: bool, e: impl std::fmt::Display) -> LabourError {
     let e = e.to_string();
-    let defaults = s.defaults_note(table, &e).map_or(String::new(), |note| format!("\n  note: {note}"));
+    let note = from_diameters.then(|| s.defaults_note(table, &e)).flatten();
+    let defaults = note.map_or(String::new(), |note| format!("\n  note: {note}"));
     LabourError::anatomy(format!(
         "[{table}]: {e}{defaults}\n  hint: `carus measure {table} FILE` builds the {table} of a scenario \
          file and prints every diameter without running; `carus scenarios show normal` gives a \
@@ -983,6 +989,21 @@ mod tests {
         let (file, line) = s.with_setting("floor.mesh.hiatus_width_mm", "90").unwrap().as_read_from("wide.toml", "hiatus_width_mm = 90");
         let e = Scene::build(&file).expect_err("refused").to_string();
         assert!(e.starts_with(&format!("wide.toml:{line}: anatomy: pelvic floor ([floor.mesh] in the scenario): hiatus_width_mm = 90")), "{e}");
+    }
+
+    /// A landmarks file that cannot be read is quoted as its own error: its
+    /// `name = value` lines are not the scenario's keys left to defaults.
+    #[test]
+    fn a_broken_landmarks_file_is_not_taken_for_defaults() {
+        let dir = tempfile::tempdir().unwrap();
+        let shipped = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/anatomy/visible-human-female-pelvis.landmarks.toml");
+        let text = std::fs::read_to_string(shipped).unwrap().replace("units = \"mm\"", "units = mm");
+        std::fs::write(dir.path().join("broken.landmarks.toml"), text).unwrap();
+        let scenario = dir.path().join("scenario.toml");
+        std::fs::write(&scenario, "name = \"broken\"\n[pelvis]\nimport = \"broken.landmarks.toml\"\n").unwrap();
+        let e = Scene::build(&Scenario::from_file(&scenario).unwrap()).expect_err("refused").to_string();
+        assert!(e.contains("broken.landmarks.toml") && e.contains("units = mm"), "{e}");
+        assert!(!e.contains("the default"), "{e}");
     }
 
     /// The floor's hourglass control is the scenario's, not a constant of

@@ -46,9 +46,8 @@ pub struct FloorParameters {
     pub thickness_mm: f64,
     /// How far the back of the hiatus (the levator plate behind it) lies
     /// below the outlet plane, whose antero-posterior line runs from the
-    /// lower symphysis to the coccyx like the pubococcygeal line, mm; the
-    /// sheet between attachment and rim hangs a further half of it (the
-    /// bowl, `bowl_mm`). 20 mm: the M line (descent of the levator plate below the
+    /// lower symphysis to the coccyx like the pubococcygeal line, mm (the
+    /// sheet's curve between attachment and rim is `bowl_mm`'s). 20 mm: the M line (descent of the levator plate below the
     /// pubococcygeal line) averaged 1.9 +- 1.2 cm in the women without
     /// prolapse (pelvic pain group, n = 39) of Comiter et al. 1999,
     /// Urology 54:454 (4.1 cm with prolapse).

@@ -143,7 +143,14 @@ pub fn parse_stl(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
     if !is_text {
         return parse_binary_stl(path, bytes);
     }
+    // A byte-order mark is no part of the text (Windows editors write one).
+    let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
     if !text.trim_start().get(..5).is_some_and(|w| w.eq_ignore_ascii_case("solid")) {
+        // No text has a count of bytes no letter is: a binary header cut short.
+        let binary_count = bytes.get(80..84).is_some_and(|c| c.iter().any(|&b| b >= 0x80 || (b.is_ascii_control() && !b.is_ascii_whitespace())));
+        if binary_count {
+            return parse_binary_stl(path, bytes);
+        }
         return Err(format_error(
             path,
             "STL",
@@ -154,7 +161,7 @@ pub fn parse_stl(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
             ),
         ));
     }
-    parse_ascii_stl(path, &text)
+    parse_ascii_stl(path, text)
 }
 
 /// Binary STL: an 80-byte header, a triangle count, then per triangle a
@@ -438,7 +445,7 @@ fn ply_fault(bytes: &[u8], error: &std::io::Error) -> String {
         .skip(layout.data_line - 1)
         .map(|(i, l)| (i + 1, l))
         .collect();
-    let needed: usize = layout.elements.iter().map(|(_, count, _)| count).sum();
+    let needed = layout.elements.iter().fold(0usize, |sum, (_, count, _)| sum.saturating_add(*count));
     let written = data.iter().filter(|(_, l)| !l.trim().is_empty()).count();
     if written < needed {
         return format!(
@@ -551,6 +558,19 @@ pub fn parse_ply(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
     let fault = |e: std::io::Error| format_error(path, "PLY", ply_fault(bytes, &e));
     let mut ply = ply_rs::ply::Ply::new();
     ply.header = parser.read_header(&mut rest).map_err(fault)?;
+    // An element of no properties reads no data, so the library would make
+    // as many empty items as it announces, however many that is.
+    if let Some(e) = ply.header.elements.values().find(|e| e.count > 0 && e.properties.is_empty()) {
+        return Err(format_error(
+            path,
+            "PLY",
+            format!(
+                "the header's `element {} {}` has no `property` lines, so none of its {} items has any data; \
+                 give it its properties or remove the line",
+                e.name, e.count, e.count
+            ),
+        ));
+    }
     ply.payload = parser.read_payload(&mut rest, &ply.header).map_err(fault)?;
     check_nothing_past_the_counts(path, bytes, rest, &ply.header)?;
     let scalar = |p: &Property| -> Option<f64> {

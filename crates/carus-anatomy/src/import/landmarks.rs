@@ -255,6 +255,7 @@ fn check_orientation(path: &Path, l: &PelvisLandmarks) -> Result<(), ImportError
             message,
         })
     };
+    // The widest pairs first: all three the wrong way is the axes' fault.
     for (left, right, name) in [
         (l.iliopectineal_left, l.iliopectineal_right, "iliopectineal"),
         (l.ischial_spine_left, l.ischial_spine_right, "ischial_spine"),
@@ -270,6 +271,24 @@ fn check_orientation(path: &Path, l: &PelvisLandmarks) -> Result<(), ImportError
             ));
         }
     }
+    // The axes agree with those; a pair the wrong way here is a swap
+    // (which would measure the obliques across the wrong corners).
+    for (left, right, name) in [
+        (l.sacroiliac_left, l.sacroiliac_right, "sacroiliac"),
+        (l.iliopubic_eminence_left, l.iliopubic_eminence_right, "iliopubic_eminence"),
+        (l.sacral_border_left, l.sacral_border_right, "sacral_border"),
+        (l.ischiopubic_left, l.ischiopubic_right, "ischiopubic"),
+    ] {
+        if right.x <= left.x {
+            return Err(ImportError::LandmarksFile {
+                path: path.to_path_buf(),
+                message: format!(
+                    "[landmarks]: {name}_right does not lie to the mother's right of {name}_left, though the \
+                     iliopectineal lines, spines and tuberosities do: the two are swapped; swap them back"
+                ),
+            });
+        }
+    }
     if l.symphysis_upper.y <= l.sacral_promontory.y {
         return contradiction(
             "symphysis_upper does not lie anterior to sacral_promontory; check those landmarks or fix `anterior`/`posterior` in [axes]".into(),
@@ -281,6 +300,39 @@ fn check_orientation(path: &Path, l: &PelvisLandmarks) -> Result<(), ImportError
         );
     }
     Ok(())
+}
+
+/// The closest two landmarks of one pelvis may lie, in metres: they mark
+/// different points of the bone, the closest of the shipped Visible Human
+/// Female pelvis 16 mm apart (sacral apex and S4-S5), so within a
+/// millimetre one is a copy of the other (and a chord between them has no
+/// direction: the sacral depth would measure NaN).
+pub const MIN_LANDMARK_SEPARATION_M: f64 = 1e-3;
+
+/// Checks that no two landmarks coincide, naming the closest such pair.
+fn check_distinct(path: &Path, units: Units, l: &PelvisLandmarks) -> Result<(), ImportError> {
+    let named = l.named();
+    let mut closest: Option<(f64, &str, &str)> = None;
+    for (i, &(a, p)) in named.iter().enumerate() {
+        for &(b, q) in &named[i + 1..] {
+            let d = p.distance(q);
+            if d < MIN_LANDMARK_SEPARATION_M && closest.is_none_or(|(c, _, _)| d < c) {
+                closest = Some((d, a, b));
+            }
+        }
+    }
+    match closest {
+        None => Ok(()),
+        Some((d, a, b)) => Err(ImportError::LandmarksFile {
+            path: path.to_path_buf(),
+            message: format!(
+                "[landmarks]: {a} and {b} lie {} {} apart, one point named twice; each marks a different point of the bone \
+                 (the closest two of a pelvis lie some 15 mm apart): give {b} its own place",
+                d / units.to_metres(),
+                units.name()
+            ),
+        }),
+    }
 }
 
 /// Imports a pelvis: reads the landmarks file and its mesh, converts units,
@@ -382,6 +434,7 @@ pub fn assemble_pelvis(
 
     let anatomical = file.landmarks_through(path, |p| to_anatomical * (p * scale))?;
     check_size(path, file.units, &anatomical)?;
+    check_distinct(path, file.units, &anatomical)?;
     check_orientation(path, &anatomical)?;
     let to_pelvis = anatomical.to_pelvis_frame().map_err(|source| ImportError::Pelvis {
         path: path.to_path_buf(),

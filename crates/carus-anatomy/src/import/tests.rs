@@ -260,6 +260,15 @@ fn broken_meshes_say_what_and_where() {
     latin[at] = 0xF6;
     latin.push(0x1A);
     assert_eq!(read_surface(&write(&dir, "latin.stl", &latin), Units::Metres).unwrap().report.triangles_read, 4);
+    // A byte-order mark before `solid` is no part of the text.
+    let bom = format!("\u{feff}{}", ascii_stl());
+    assert_eq!(read_surface(&write(&dir, "bom.stl", bom.as_bytes()), Units::Metres).unwrap().report.triangles_read, 4);
+    // A binary header whose triangles were cut off is named as cut short,
+    // though its 80 bytes of text would pass for text.
+    let mut header = vec![b' '; 80];
+    header.extend_from_slice(&[0xFF; 4]);
+    let e = read_surface(&write(&dir, "header_only.stl", &header), Units::Metres).unwrap_err().to_string();
+    assert!(e.contains("truncated binary STL: the header announces 4294967295 triangles but the file holds 0"), "{e}");
 
     // ASCII STL in capitals reads; a broken line is named.
     let upper = read_surface(&write(&dir, "upper.stl", ascii_stl().to_uppercase().as_bytes()), Units::Metres).unwrap();
@@ -305,6 +314,15 @@ fn broken_meshes_say_what_and_where() {
     );
     // The same surface is fine where an open one is allowed, with its openings counted.
     assert_eq!(read_surface(&open, Units::Millimetres).unwrap().report.open_edges, 3);
+
+    // A face the exporter flipped is turned back, not taken for a hole.
+    let last = obj().trim_end().rsplit_once('\n').unwrap().1.to_string();
+    let corners: Vec<&str> = last.split_whitespace().collect();
+    let flipped = obj().replace(&last, &format!("f {} {} {}", corners[1], corners[3], corners[2]));
+    let flipped = read_closed_surface(&write(&dir, "flipped.obj", flipped.as_bytes()), Units::Millimetres).unwrap();
+    let r = flipped.report;
+    assert_eq!((r.reoriented, r.closed_parts, r.open_edges, r.non_manifold_edges), (1, 1, 0, 0), "{r:?}");
+    assert!((flipped.surface.signed_volume() - 1e-9 / 6.0).abs() < 1e-18);
 
     // gltf-json's own validation would index the missing accessor and panic.
     let dangling = write(
@@ -441,6 +459,12 @@ element vertex 3
     // A two-corner face would be a hole, not a face skipped unsaid.
     let e = err(ply_ascii().replacen("3 0 1 3", "2 0 1", 1));
     assert!(e.contains("face 1 has 2 corners; a face needs 3 or more"), "{e}");
+    // An element of no properties would read nothing for ever: refused at once.
+    let e = err(ply_ascii().replacen("end_header", "element junk 100000000000\nend_header", 1));
+    assert!(e.contains("`element junk 100000000000` has no `property` lines"), "{e}");
+    // Counts that overflow when added are counts that do not match the data.
+    let e = err(ply_ascii().replacen("element vertex 4", "element vertex 18446744073709551615", 1));
+    assert!(e.contains("announces 18446744073709551615 `vertex` and 4 `face` elements"), "{e}");
 }
 
 #[test]
@@ -523,6 +547,20 @@ fn landmark_file_mistakes_are_named_with_their_fix() {
     let swapped = edited_landmarks(&dir, |t| t.replace("right = \"-x\"", "right = \"+x\""));
     let err = import_pelvis(&swapped).unwrap_err().to_string();
     assert!(err.contains("iliopectineal_right") && err.contains("[axes]"), "{err}");
+    // One pair swapped while the axes hold: the obliques would be measured
+    // across the wrong corners.
+    let borders = edited_landmarks(&dir, |t| {
+        t.replace("sacral_border_left", "sacral_border_LEFT").replace("sacral_border_right", "sacral_border_left").replace("sacral_border_LEFT", "sacral_border_right")
+    });
+    let err = import_pelvis(&borders).unwrap_err().to_string();
+    assert!(err.contains("[landmarks]: sacral_border_right does not lie to the mother's right") && err.contains("swapped"), "{err}");
+    // One point named twice: its chord has no direction.
+    let twice = edited_landmarks(&dir, |t| {
+        let promontory = t.lines().find(|l| l.starts_with("sacral_promontory")).unwrap().replace("sacral_promontory", "sacral_apex");
+        t.lines().map(|l| if l.starts_with("sacral_apex") { promontory.as_str() } else { l }).collect::<Vec<_>>().join("\n")
+    });
+    let err = import_pelvis(&twice).unwrap_err().to_string();
+    assert!(err.contains("sacral_promontory and sacral_apex lie 0 mm apart") && err.contains("give sacral_apex its own place"), "{err}");
 
     let bad_axis = edited_landmarks(&dir, |t| t.replace("cranial = \"+z\"", "cranial = \"+w\""));
     assert!(import_pelvis(&bad_axis)
@@ -694,8 +732,20 @@ fn a_pelvis_facing_into_its_bone_is_turned_outwards() {
     let flipped = write(&dir, "inward.stl", &bytes);
     let as_shipped = import_pelvis(&edited_landmarks(&dir, |t| t)).unwrap();
     assert!(!as_shipped.report.turned_outwards);
+    assert_eq!((as_shipped.report.reoriented, as_shipped.report.open_edges), (0, 0), "{:?}", as_shipped.report);
     let turned = import_pelvis(&edited_landmarks(&dir, |t| t.replace(original.to_str().unwrap(), flipped.to_str().unwrap()))).unwrap();
     assert!(turned.report.turned_outwards);
+    // One face flipped back by the exporter is no hole: it is turned to
+    // agree with its neighbours, and the whole then outwards.
+    inward[0].vertices.swap(1, 2);
+    let mut bytes = Vec::new();
+    stl_io::write_stl(&mut bytes, inward.iter()).unwrap();
+    let one_flipped = write(&dir, "one-flipped.stl", &bytes);
+    let mended = import_pelvis(&edited_landmarks(&dir, |t| t.replace(original.to_str().unwrap(), one_flipped.to_str().unwrap()))).unwrap();
+    let r = mended.report;
+    assert!(r.turned_outwards && r.reoriented == 1 && r.open_edges == 0, "{r:?}");
+    assert_eq!(r.non_manifold_edges, as_shipped.report.non_manifold_edges);
+    assert_eq!(mended.pelvis.surface.triangles, turned.pelvis.surface.triangles);
     let volume = |p: &ImportedPelvis| p.pelvis.surface.signed_volume();
     assert!(volume(&turned) > 0.0 && (volume(&turned) - volume(&as_shipped)).abs() < 1e-9 * volume(&as_shipped).abs().max(1.0), "{} against {}", volume(&turned), volume(&as_shipped));
     assert_eq!(turned.pelvis.landmarks, as_shipped.pelvis.landmarks);

@@ -1,6 +1,7 @@
 //! From triangles as stored to a clean surface: non-finite or absurdly
 //! large coordinates refused with their triangle and vertex, duplicate vertices merged,
-//! degenerate triangles dropped, and the surface's parts and openings counted.
+//! degenerate triangles dropped, flipped faces turned to agree with their
+//! neighbours, and the surface's parts and openings counted.
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -28,8 +29,13 @@ pub struct MeshReport {
     pub closed_parts: usize,
     /// Edges bordering one triangle only (openings).
     pub open_edges: usize,
-    /// Edges bordering more than two triangles.
+    /// Edges bordering more than two triangles, or two that run it the same
+    /// way after [`MeshReport::reoriented`] (a surface with no outside).
     pub non_manifold_edges: usize,
+    /// Triangles turned to run against their neighbours, as the rest of
+    /// their part does (faces an exporter flipped).
+    #[serde(default)]
+    pub reoriented: usize,
     /// Whether the surface, closed but facing into the bone (negative
     /// volume), was turned to face outwards.
     #[serde(default)]
@@ -109,6 +115,7 @@ pub fn weld(path: &Path, raw: &RawMesh, scale: f64) -> Result<(TriSurface, MeshR
             path: path.to_path_buf(),
         });
     }
+    let reoriented = orient_consistently(&mut triangles);
     // Keep only vertices some triangle uses.
     let mut used = vec![u32::MAX; vertices.len()];
     let mut kept = Vec::with_capacity(vertices.len());
@@ -122,8 +129,65 @@ pub fn weld(path: &Path, raw: &RawMesh, scale: f64) -> Result<(TriSurface, MeshR
         }
     }
     let surface = TriSurface::new(kept, triangles);
-    let report = survey(&surface, raw.triangles.len(), degenerate_dropped);
+    let report = MeshReport {
+        reoriented,
+        ..survey(&surface, raw.triangles.len(), degenerate_dropped)
+    };
     Ok((surface, report))
+}
+
+/// Turns triangles that run against their neighbours so that every edge
+/// shared by two triangles is crossed in opposite directions, the
+/// winding a closed surface needs for an inside and an outside (an
+/// exporter that flips a few faces otherwise leaves edges that look like
+/// holes). Each connected part keeps the winding most of its triangles
+/// had; a part that cannot agree (a surface with no outside) keeps the
+/// first winding reached. Returns how many triangles were turned.
+fn orient_consistently(triangles: &mut [[u32; 3]]) -> usize {
+    let edge = |a: u32, b: u32| (a.min(b), a.max(b));
+    let mut sharing: HashMap<(u32, u32), Vec<u32>> = HashMap::with_capacity(triangles.len() * 3 / 2);
+    for (i, t) in triangles.iter().enumerate() {
+        for k in 0..3 {
+            sharing.entry(edge(t[k], t[(k + 1) % 3])).or_default().push(i as u32);
+        }
+    }
+    let runs = |t: &[u32; 3], a: u32, b: u32| (0..3).any(|k| t[k] == a && t[(k + 1) % 3] == b);
+    // turn[i]: whether triangle i runs against the part's first triangle.
+    let mut turn: Vec<Option<bool>> = vec![None; triangles.len()];
+    let mut turned = 0;
+    for seed in 0..triangles.len() {
+        if turn[seed].is_some() {
+            continue;
+        }
+        turn[seed] = Some(false);
+        let (mut part, mut queue) = (vec![seed], vec![seed]);
+        while let Some(i) = queue.pop() {
+            let flipped = turn[i] == Some(true);
+            let t = triangles[i];
+            for k in 0..3 {
+                // The edge as triangle i runs it once turned.
+                let (a, b) = if flipped { (t[(k + 1) % 3], t[k]) } else { (t[k], t[(k + 1) % 3]) };
+                let [p, q] = sharing[&edge(a, b)][..] else { continue };
+                let n = if p as usize == i { q } else { p } as usize;
+                if turn[n].is_none() {
+                    // Agreeing, the neighbour runs the shared edge b to a.
+                    turn[n] = Some(runs(&triangles[n], a, b));
+                    part.push(n);
+                    queue.push(n);
+                }
+            }
+        }
+        // Turn the minority: those against the seed, unless they are most.
+        let against = part.iter().filter(|&&i| turn[i] == Some(true)).count();
+        let seed_side_wins = 2 * against <= part.len();
+        for &i in &part {
+            if (turn[i] == Some(true)) == seed_side_wins {
+                triangles[i].swap(1, 2);
+                turned += 1;
+            }
+        }
+    }
+    turned
 }
 
 /// Counts parts, closed parts, open and non-manifold edges.
@@ -165,10 +229,11 @@ fn survey(surface: &TriSurface, triangles_read: usize, degenerate_dropped: usize
             part_of.insert(r, false);
         }
         // Count each undirected edge once.
-        if back == 0 {
-            open_edges += 1;
-        } else if (a < b) && uses + back > 2 {
-            non_manifold_edges += 1;
+        match (uses, back) {
+            (1, 0) => open_edges += 1,
+            (_, 0) => non_manifold_edges += 1,
+            _ if a < b && uses + back > 2 => non_manifold_edges += 1,
+            _ => {}
         }
     }
     MeshReport {
@@ -179,6 +244,7 @@ fn survey(surface: &TriSurface, triangles_read: usize, degenerate_dropped: usize
         closed_parts: part_of.values().filter(|&&closed| closed).count(),
         open_edges,
         non_manifold_edges,
+        reoriented: 0,
         turned_outwards: false,
     }
 }

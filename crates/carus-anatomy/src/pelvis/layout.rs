@@ -43,7 +43,8 @@ const OUTLET_ANTERIOR_TILT: f64 = 0.35;
 /// The inferior rami do not run straight from the symphysis to the
 /// tuberosities: the arch is round, so the junction lies well out to the side
 /// and bowed forward. On the Visible Human female pelvis (docs/ANATOMY.md)
-/// it lies at 0.52 and 0.57 of the tuberosities' half-width, 1 and 12 mm in
+/// it lies at 0.51 and 0.57 of the tuberosities' distance from the
+/// midsagittal plane (left, right), 1 and 12 mm in
 /// front of the lower symphysis border and 16-22 mm below it (pelvis frame,
 /// a third of the tuberosities' depth below it). The generated junction: at
 /// `ISCHIOPUBIC_WIDTH_SHARE` of the tuberosity's half-width, at

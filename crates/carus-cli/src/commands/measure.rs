@@ -8,7 +8,7 @@ use carus_anatomy::fetus::{
     AtlantoOccipitalPlacement, FetalHead, HeadDiameters, HeadMeasurement, DEFAULT_HEAD_SUBDIVISIONS,
 };
 use carus_anatomy::floor::{pelvic_floor, FloorParameters};
-use carus_anatomy::pelvis::{measure, Pelvis, PelvisMeasurement, PelvisSpec};
+use carus_anatomy::pelvis::{measure, Pelvis, PelvisBuildError, PelvisMeasurement, PelvisSpec};
 use serde::Deserialize;
 
 use super::{print_json, Status};
@@ -276,7 +276,9 @@ impl AnatomyFile {
         let where_ = self.path.as_ref().map_or("the default pelvis".to_string(), |p| format!("{}: [pelvis]", p.display()));
         let (pelvis, report) = self.pelvis.build_with_report(base).map_err(|e| {
             // The keys the message names that the file leaves to their defaults.
-            let text = self.path.as_deref().and_then(|p| read_text(p).ok());
+            // Only a table of diameters: an import's errors quote its landmarks file.
+            let from_diameters = matches!(e, PelvisBuildError::Generate(_));
+            let text = self.path.as_deref().filter(|_| from_diameters).and_then(|p| read_text(p).ok());
             match text.and_then(|t| carus_labour::scenario::defaults_note_in(&t, "pelvis", &e.to_string())) {
                 Some(note) => anyhow::anyhow!("{where_}: {e}\n  note: {note}"),
                 None => anyhow::Error::from(e).context(where_),
@@ -318,37 +320,37 @@ impl AnatomyFile {
 }
 
 /// What an imported pelvis's mesh report means for a run: holes let the
-/// fetus slip through (fix them); dropped degenerate triangles alone leave
-/// the surface whole.
+/// fetus slip through (fix them); flipped faces turned to agree, a surface
+/// turned to face outwards and dropped degenerate triangles leave it whole.
 pub(super) fn import_note(r: &carus_anatomy::import::MeshReport, mesh: &Path) -> Option<String> {
+    let mut said = Vec::new();
+    if r.reoriented > 0 {
+        said.push(format!(
+            "{} of its {} triangles ran against their neighbours (faces flipped in export) and were turned to agree",
+            r.reoriented, r.triangles_read
+        ));
+    }
     if r.turned_outwards {
-        return Some(format!(
-            "{}: its triangles faced into the bone (the closed surface's volume was negative), which would \
+        said.push(
+            "its triangles faced into the bone (the closed surface's volume was negative), which would \
              draw the fetus into it; they were turned to face outwards. Export the mesh with outward \
-             normals (MeshLab: Invert Faces Orientation) to silence this note",
-            mesh.display()
-        ));
-    }
-    if r.open_edges > 0 {
-        return Some(format!(
-            "{}: {} open edges (holes), {} non-manifold edges, {} degenerate triangles dropped of {} read; \
+             normals (MeshLab: Invert Faces Orientation) to silence this note"
+                .to_string(),
+        );
+    } else if r.open_edges > 0 {
+        said.push(format!(
+            "{} open edges (holes), {} non-manifold edges, {} degenerate triangles dropped of {} read; \
              the fetus can slip through a hole: fill the holes (e.g. MeshLab's Close Holes) and export it again",
-            mesh.display(),
-            r.open_edges,
-            r.non_manifold_edges,
-            r.degenerate_dropped,
-            r.triangles_read
+            r.open_edges, r.non_manifold_edges, r.degenerate_dropped, r.triangles_read
+        ));
+    } else if r.degenerate_dropped > 0 {
+        said.push(format!(
+            "{} degenerate (zero-area) triangles dropped of {} read; no hole is left, so the surface \
+             the contact uses is whole",
+            r.degenerate_dropped, r.triangles_read
         ));
     }
-    (r.degenerate_dropped > 0).then(|| {
-        format!(
-            "{}: {} degenerate (zero-area) triangles dropped of {} read; no hole is left, so the surface \
-             the contact uses is whole",
-            mesh.display(),
-            r.degenerate_dropped,
-            r.triangles_read
-        )
-    })
+    (!said.is_empty()).then(|| format!("{}: {}", mesh.display(), said.join("; ")))
 }
 
 #[cfg(test)]
@@ -368,6 +370,7 @@ mod tests {
             closed_parts: usize::from(open_edges == 0),
             open_edges,
             non_manifold_edges: 0,
+            reoriented: 0,
             turned_outwards: false,
         };
         let holes = import_note(&report(6, 1), mesh).unwrap();
@@ -375,6 +378,8 @@ mod tests {
         let dropped = import_note(&report(0, 2), mesh).unwrap();
         assert!(dropped.contains("2 degenerate (zero-area) triangles dropped of 100") && !dropped.contains("fill"), "{dropped}");
         assert_eq!(import_note(&report(0, 0), mesh), None);
+        let flipped = import_note(&carus_anatomy::import::MeshReport { reoriented: 3, ..report(0, 0) }, mesh).unwrap();
+        assert!(flipped.starts_with("pelvis.stl: 3 of its 100 triangles ran against their neighbours"), "{flipped}");
         let turned = import_note(&carus_anatomy::import::MeshReport { turned_outwards: true, ..report(0, 0) }, mesh).unwrap();
         assert!(turned.starts_with("pelvis.stl: its triangles faced into the bone") && turned.contains("turned to face outwards"), "{turned}");
     }
@@ -469,6 +474,21 @@ biparietal_mn = 95.0
         assert!(e.contains(carus_anatomy::pelvis::VISIBLE_HUMAN_FEMALE), "{e}");
         let e = format!("{:#}", load("[pelvis]\nimport = \"\"\n").err().unwrap());
         assert!(e.contains("file.toml:2: `pelvis.import`: is empty: it names no landmarks file"), "{e}");
+    }
+
+    /// A landmarks file's own lines (`units = mm`) are quoted in its error,
+    /// never taken for the anatomy file's keys left to their defaults.
+    #[test]
+    fn a_broken_landmarks_file_is_not_taken_for_defaults() {
+        let dir = tempfile::tempdir().unwrap();
+        let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/anatomy/visible-human-female-pelvis.landmarks.toml");
+        let text = std::fs::read_to_string(shipped).unwrap().replace("units = \"mm\"", "units = mm");
+        std::fs::write(dir.path().join("broken.landmarks.toml"), text).unwrap();
+        let path = dir.path().join("anatomy.toml");
+        std::fs::write(&path, "[pelvis]\nimport = \"broken.landmarks.toml\"\n").unwrap();
+        let e = format!("{:#}", AnatomyFile::load(Some(&path)).unwrap().pelvis().err().unwrap());
+        assert!(e.contains("broken.landmarks.toml") && e.contains("units = mm"), "{e}");
+        assert!(!e.contains("the default"), "{e}");
     }
 
     #[test]
