@@ -27,5 +27,5 @@ pub use history::{
     ContactSite, FetalPart, HeadGeometry, HistoryError, PoseHistory, PoseSample, RigidPose, TrunkGeometry,
 };
 pub use measures::{Series, THETA_ILL_CONDITIONED_TILT_DEG};
-pub use movements::{HeadBorn, Movement, Movements, NotHeldAtBirth, RotationOutsideWindow, Unit};
+pub use movements::{occiput_position, HeadBorn, Movement, Movements, NotHeldAtBirth, RotationOutsideWindow, Unit};
 pub use outcome::{Arrest, ArrestStage, Outcome};

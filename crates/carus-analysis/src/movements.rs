@@ -282,13 +282,18 @@ impl HeadBorn {
         }
     }
 
-    /// The occiput position nearest theta, as a clinician names it: OA at
-    /// 0, ROT at +90, LOT at -90, OP at 180 (CARDINAL_MOVEMENTS.md), in
-    /// eighths of a turn.
+    /// The occiput position nearest the head's theta: [`occiput_position`].
     pub fn occiput_position(&self) -> &'static str {
-        const EIGHTHS: [&str; 8] = ["OA", "ROA", "ROT", "ROP", "OP", "LOP", "LOT", "LOA"];
-        EIGHTHS[((self.theta_deg / 45.0).round() as i64).rem_euclid(8) as usize]
+        occiput_position(self.theta_deg)
     }
+}
+
+/// The occiput position nearest `theta_deg`, as a clinician names it: OA
+/// at 0, ROT at +90, LOT at -90, OP at 180 (CARDINAL_MOVEMENTS.md), in
+/// eighths of a turn; any number of whole turns away reads the same.
+pub fn occiput_position(theta_deg: f64) -> &'static str {
+    const EIGHTHS: [&str; 8] = ["OA", "ROA", "ROT", "ROP", "OP", "LOP", "LOT", "LOA"];
+    EIGHTHS[((theta_deg / 45.0).round() as i64).rem_euclid(8) as usize]
 }
 
 /// "the head was born at 11.4 s, station +90 mm, occiput LOA (theta -31
@@ -369,7 +374,8 @@ pub fn detect_movements(series: &Series, spines_sigma_mm: f64) -> Detected {
         external_rotation: external_rotation(series, engagement.map(|s| s.end)),
         expulsion: expulsion(series),
     };
-    let head_born = delivery(series).map(|i| HeadBorn::at(series, i));
+    // A head out from the first sample was not born in this history.
+    let head_born = delivery(series).filter(|&i| i > 0).map(|i| HeadBorn::at(series, i));
     Detected {
         not_held_at_birth: not_held_at_birth(series, &movements, head_born),
         movements,

@@ -4,7 +4,8 @@
 //! contraction periods long (the period read off the expulsion force) and
 //! at least a quarter of the run: the fetus is arrested when, in that
 //! window, the leading part got less than [`ARREST_PROGRESS_MM`] further
-//! than it had ever been before the window. An undelivered fetus that is
+//! than it had ever been before the window, and at less than
+//! [`ARREST_PACE_SHARE`] of its pace before it. An undelivered fetus that is
 //! still progressing is neither delivered nor arrested (`arrest: null`):
 //! the run ended too soon to tell.
 
@@ -21,6 +22,12 @@ pub const ARREST_PROGRESS_MM: f64 = 3.0;
 pub const ARREST_WINDOW_PERIODS: f64 = 2.0;
 /// The final window spans at least this fraction of the run.
 pub const ARREST_WINDOW_FRACTION: f64 = 0.25;
+/// An arrest is a stop, not a short window: a window whose pace (its gain
+/// over its time) is at least this share of the pace before it is still
+/// progressing, however few mm a short history's window holds (detector
+/// choice, docs/DETECTOR.md; a held fetus gains under 3 mm in a window of
+/// two contractions, a tenth or less of a second stage's pace).
+pub const ARREST_PACE_SHARE: f64 = 0.5;
 
 /// Where the fetus stopped.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -179,7 +186,16 @@ pub fn outcome(history: &PoseHistory, series: &Series, spines_sigma_mm: f64, per
     } else {
         progress[deepest(0..=window_start - 1)]
     };
-    if reached - before >= ARREST_PROGRESS_MM {
+    let t = &series.time_s;
+    let pace = |gain: f64, from: usize, to: usize| (t[to] > t[from]).then(|| gain / (t[to] - t[from]));
+    let still_going = match window_start {
+        0 | 1 => false,
+        _ => pace(before - progress[0], 0, window_start - 1)
+            .filter(|&p| p > 0.0)
+            .zip(pace(reached - before, window_start - 1, last))
+            .is_some_and(|(p_before, p_window)| p_window >= ARREST_PACE_SHARE * p_before),
+    };
+    if reached - before >= ARREST_PROGRESS_MM || still_going {
         return Outcome {
             delivered,
             arrest: None,

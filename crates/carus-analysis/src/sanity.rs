@@ -6,6 +6,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::detector::DetectorReport;
+use crate::history::FetalPart;
 use crate::outcome::ArrestStage;
 
 /// CARDINAL_MOVEMENTS.md: a contracted inlet arrests with "no engagement,
@@ -133,13 +134,16 @@ impl SanityCase {
                 match &outcome.arrest {
                     Some(arrest) => {
                         let at_shoulders = arrest.stage == ArrestStage::Shoulders;
-                        let on_symphysis = arrest.against == "symphysis";
+                        // The shoulders ride on the trunk: a head still
+                        // pressed on the symphysis is no shoulder arrest.
+                        let on_symphysis = arrest.against == "symphysis" && arrest.part == FetalPart::Trunk.name();
                         verdict(
                             head_out && at_shoulders && on_symphysis,
                             format!(
-                                "{}; arrested at the {} stage against the {}",
+                                "{}; arrested at the {} stage, the {} against the {}",
                                 if head_out { "head delivered" } else { "head not delivered" },
                                 stage_name(arrest.stage),
+                                arrest.part,
                                 arrest.against.replace('_', " ")
                             ),
                         )

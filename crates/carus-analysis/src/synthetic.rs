@@ -142,7 +142,8 @@ pub struct Plan {
     pub phi_ramps: Vec<Ramp>,
     /// Shoulders' angle on theta's scale and its ramps; `None`: no trunk.
     pub shoulders: Option<(f64, Vec<Ramp>)>,
-    /// What the contact force presses on, recorded at every sample.
+    /// What the contact force presses on, recorded at every sample (on the
+    /// head, or on the trunk once a plan with shoulders has the head out).
     pub contact: Option<ContactSite>,
 }
 
@@ -239,7 +240,11 @@ impl Plan {
             bone_contact_force_n: -0.6 * pressing * frame.tangent,
             floor_contact_force_n: -0.3 * pressing * frame.tangent,
             dominant_contact: self.contact,
-            dominant_part: self.contact.map(|_| FetalPart::Head),
+            // Once the head is out, what the canal still holds is the trunk.
+            dominant_part: self.contact.map(|_| match self.shoulders.is_some() && sigma > canal.outlet_sigma() {
+                true => FetalPart::Trunk,
+                false => FetalPart::Head,
+            }),
         }
     }
 }

@@ -58,7 +58,13 @@ fn each_case_is_met_by_its_own_outcome_only() {
         assert!(!met(SanityCase::LargeShoulders, other));
     }
     let v = SanityCase::LargeShoulders.judge(&outlet, outlet_station_mm());
-    assert!(v.why.contains("head not delivered") && v.why.contains("outlet stage against the pelvic sidewall"), "{}", v.why);
+    assert!(v.why.contains("head not delivered") && v.why.contains("outlet stage, the head against the pelvic sidewall"), "{}", v.why);
+    // The head born but itself still pressed on the symphysis: not the
+    // shoulders held there.
+    let mut head_held = shoulders.clone();
+    head_held.outcome.arrest.as_mut().unwrap().part = "head".into();
+    let v = SanityCase::LargeShoulders.judge(&head_held, 0.0);
+    assert!(!v.met && v.why.contains("shoulders stage, the head against the symphysis"), "{}", v.why);
 
     assert!(!met(SanityCase::Face, &textbook), "a delivery is not an arrest");
     assert!(!met(SanityCase::Face, &inlet), "an inlet arrest is not near the outlet");

@@ -515,6 +515,29 @@ fn a_run_stopped_in_its_first_contractions_is_not_an_arrest() {
     assert_eq!(detect(&unpushed.history(&canal)).unwrap().outcome.arrest, None);
 }
 
+/// A short history under a steady push (no contractions) that is still
+/// moving at its end is not an arrest, though its final quarter gains
+/// under 3 mm; the same head stopped for most of a longer history is.
+#[test]
+fn a_head_still_moving_under_a_steady_push_is_not_arrested() {
+    let canal = reference_canal();
+    let mut plan = synthetic::textbook_plan(&canal);
+    plan.start_sigma_mm = -80.0;
+    plan.advance_mm_per_s = 5.0;
+    plan.drift_mm = 0.0;
+    plan.force_mean_n = 50.0;
+    plan.force_swing_n = 0.0;
+    plan.sample_interval_s = 0.1;
+    plan.duration_s = 1.9;
+    plan.contact = None;
+    let r = detect(&plan.history(&canal)).unwrap();
+    assert!(!r.outcome.delivered && r.outcome.arrest.is_none(), "{:?}", r.outcome);
+    // Stopped at -75 mm after one second of a ten-second push: held.
+    plan.hold_sigma_mm = -75.0;
+    plan.duration_s = 10.0;
+    assert_eq!(detect(&plan.history(&canal)).unwrap().outcome.arrest.unwrap().stage, ArrestStage::Inlet);
+}
+
 /// The turtle sign: a head born at the height of each contraction that
 /// slips back inside between them is out, whatever phase of the contraction
 /// the run ends in; the stage and the station describe the same moment.
@@ -618,6 +641,11 @@ fn the_head_born_is_read_at_its_first_delivered_sample() {
     }
     let held = detect(&synthetic::inlet_arrest(&reference_canal())).unwrap();
     assert_eq!(held.head_born, None);
+    // A history that begins with the head already out saw no birth.
+    let (history, _) = textbook();
+    let out_from_the_start = PoseHistory { samples: history.samples[first..].to_vec(), ..history.clone() };
+    let r = detect(&out_from_the_start).unwrap();
+    assert!(r.outcome.delivered && r.head_born.is_none(), "{:?}", r.head_born);
 }
 
 /// The rules count a rotation or an extension where it happens; one the

@@ -562,7 +562,7 @@ pub fn read_history_csv(path: &Path, scene: &crate::Scene) -> Result<PoseHistory
                     return Err(at(
                         row.line,
                         format!("the {body}'s pose has {empty} empty cells of 7"),
-                        "give all seven numbers of the pose, or none",
+                        "give all seven numbers of the pose at every sample",
                     ))
                 }
             }

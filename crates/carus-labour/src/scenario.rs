@@ -39,7 +39,9 @@ pub enum ScenarioError {
         /// variant, and every `Result` carrying it small.
         path: Box<Path>,
         /// The key's line in the text read (a file, or the scenario a
-        /// checkpoint or sweep plan keeps); None for a `--set` value.
+        /// checkpoint or sweep plan keeps); None for a key the text does not
+        /// hold (refused through another key a `--set` changed: a value the
+        /// setting itself gave is refused as a [`ScenarioError::Setting`]).
         line: Option<NonZeroUsize>,
         key: std::borrow::Cow<'static, str>,
         value: String,
@@ -1142,6 +1144,11 @@ impl Scenario {
                 problem: format!("{key}{message}"),
                 hint,
             },
+            // A value a setting gave that the checks refuse is that
+            // setting's fault, as an unknown key is (a bad argument).
+            ScenarioError::Value { key, value, problem, hint, .. } if settings.iter().any(|(k, _)| *k == key) => {
+                ScenarioError::Setting { setting: format!("{key} = {value}"), problem, hint }
+            }
             mut other => {
                 if let ScenarioError::Value { path, line, key, .. } = &mut other {
                     match in_file(key) {
@@ -2505,7 +2512,7 @@ mod tests {
         assert!(e.starts_with("test.toml:13: `trajectory.waypoints[1].phi_deg` = 95"), "{e}");
         // From the command line there is no file line to name.
         let e = Scenario::builtin("normal").unwrap().with_setting("floor.shear_modulus_pa", "-3").unwrap_err().to_string();
-        assert!(e.starts_with("normal with floor.shear_modulus_pa = -3: `floor.shear_modulus_pa` = -3"), "{e}");
+        assert!(e.starts_with("`floor.shear_modulus_pa = -3`: must be a positive"), "{e}");
         let e = parse("name = \"x\"\n[expulsion]\nforce_min_n = 200.0\nforce_max_n = 100.0\n")
             .unwrap_err()
             .to_string();

@@ -90,13 +90,14 @@ impl Renderer {
     }
 }
 
-/// The whole words of `text` that fit in `chars` characters: a narrow
-/// tile keeps "from below: front up, her left", not "... her left t".
+/// The whole clauses of `text` that fit in `chars` characters: a narrow
+/// tile keeps "from below: front up", not "... her left to the", whose
+/// last words no longer say which way.
 fn in_width(text: &str, chars: usize) -> &str {
     if text.len() <= chars {
         return text;
     }
-    text[..=chars].rfind(' ').map_or("", |end| text[..end].trim_end_matches([',', ':']))
+    text[..=chars].rfind([',', ':']).map_or("", |end| &text[..end])
 }
 
 /// Dark text on a light background, light text on a dark one.
@@ -148,11 +149,12 @@ mod tests {
     }
 
     #[test]
-    fn a_narrow_tile_keeps_whole_words() {
+    fn a_narrow_tile_keeps_whole_clauses() {
         let text = "from below: front up, her left to the right";
         assert_eq!(in_width(text, 48), text);
-        assert_eq!(in_width(text, 32), "from below: front up, her left");
-        assert_eq!(in_width(text, 20), "from below: front");
+        assert_eq!(in_width(text, 32), "from below: front up");
+        assert_eq!(in_width(text, 20), "from below: front up");
+        assert_eq!(in_width(text, 19), "from below");
         assert_eq!(in_width(text, 12), "from below");
         assert_eq!(in_width(text, 3), "");
     }

@@ -74,7 +74,8 @@ pub fn write_report_with(
         (Some(r), Some(scene)) => {
             check(input)?;
             let (moments, _) = key_moments(input.detector);
-            Some(Ok(pictures::draw(r, scene, input.history, &moments)))
+            let range = floor_stretch_range(input);
+            Some(Ok(pictures::draw(r, scene, input.history, &moments, range)))
         }
     };
     let mut report = compose(input, pictures.clone())?;
@@ -85,6 +86,13 @@ pub fn write_report_with(
         );
     }
     Ok(report)
+}
+
+/// The pictures' floor colour scale: [`pictures::stretch_range`] of the
+/// run's floor, up to its first inverted element.
+fn floor_stretch_range(input: &ReportInput) -> Option<[f64; 2]> {
+    let floor = input.scene.as_ref()?.floor.as_ref()?;
+    pictures::stretch_range(floor, input.floor_untrusted_from_s)
 }
 
 /// Writes the page to `path`; returns the picture warnings.
@@ -134,11 +142,7 @@ fn compose(
             .collect(),
         _ => Vec::new(),
     };
-    let stretch_range = input
-        .scene
-        .as_ref()
-        .and_then(|s| s.floor.as_ref())
-        .and_then(pictures::stretch_range);
+    let stretch_range = floor_stretch_range(input);
     let html = page::page(
         input,
         &page::Parts {

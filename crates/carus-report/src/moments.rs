@@ -81,7 +81,7 @@ pub fn key_moments(detector: &DetectorReport) -> (Vec<KeyMoment>, Vec<MissedMome
         movement
             .end_s
             .filter(|_| movement.observed)
-            .map(|t| at(kind, sample_at(&series.time_s, t)))
+            .map(|t| at(kind, nearest_sample(&series.time_s, t)))
             .ok_or_else(|| MissedMoment {
                 kind,
                 reason: format!("{name} was not observed"),
@@ -127,7 +127,7 @@ pub fn key_moments(detector: &DetectorReport) -> (Vec<KeyMoment>, Vec<MissedMome
 
 /// Index of the sample nearest to `time_s` (movement times are sample
 /// times, so this finds the sample itself).
-pub fn sample_at(times: &[f64], time_s: f64) -> usize {
+pub fn nearest_sample(times: &[f64], time_s: f64) -> usize {
     let after = times.partition_point(|&t| t < time_s);
     match (after.checked_sub(1), times.get(after)) {
         (Some(before), Some(&next)) if time_s - times[before] < next - time_s => before,
@@ -144,16 +144,16 @@ mod tests {
     #[test]
     fn a_sample_time_finds_its_own_sample() {
         let times = [0.0, 0.2, 0.4, 0.6];
-        assert_eq!(sample_at(&times, 0.4), 2);
-        assert_eq!(sample_at(&times, 0.0), 0);
-        assert_eq!(sample_at(&times, 0.6), 3);
+        assert_eq!(nearest_sample(&times, 0.4), 2);
+        assert_eq!(nearest_sample(&times, 0.0), 0);
+        assert_eq!(nearest_sample(&times, 0.6), 3);
     }
 
     #[test]
     fn times_outside_the_run_take_its_ends() {
         let times = [1.0, 2.0];
-        assert_eq!(sample_at(&times, -5.0), 0);
-        assert_eq!(sample_at(&times, 9.0), 1);
+        assert_eq!(nearest_sample(&times, -5.0), 0);
+        assert_eq!(nearest_sample(&times, 9.0), 1);
     }
 
     proptest! {
@@ -163,7 +163,7 @@ mod tests {
             t in -10.0f64..200.0,
         ) {
             let times: Vec<f64> = steps.iter().scan(0.0, |s, d| { *s += d; Some(*s) }).collect();
-            let i = sample_at(&times, t);
+            let i = nearest_sample(&times, t);
             let best = times.iter().map(|x| (x - t).abs()).fold(f64::INFINITY, f64::min);
             prop_assert!(((times[i] - t).abs() - best).abs() < 1e-12);
         }

@@ -48,9 +48,13 @@ pub fn headline(outcome: &Outcome) -> (&'static str, String) {
             } else {
                 format!("the {}", arrest.against.replace('_', " "))
             };
-            let held = match arrest.part.as_str() {
-                "unknown" => String::new(),
-                part => format!("the {part} held "),
+            let held = match (arrest.stage, arrest.part.as_str()) {
+                (_, "unknown") => String::new(),
+                // Born by the rule's measure, yet what is held is the head.
+                (ArrestStage::Shoulders, "head") => {
+                    "the head, counted born (its centre past the outlet plane), still held ".to_string()
+                }
+                (_, part) => format!("the {part} held "),
             };
             let station = match arrest.stage {
                 ArrestStage::Shoulders => "shoulders at",
@@ -498,9 +502,9 @@ fn plots_section(
         "<span style=\"color:#1f5799\">&#9632; theta, the occiput's direction projected on the \
          canal's cross-section</span> <span style=\"color:#c85200\">&#9632; the head's twist about \
          the canal axis, well conditioned however steeply the occiput tilts (docs/DETECTOR.md)</span>; \
-         0 = OA, +90 = ROT, -90 = LOT, \u{b1}180 = OP"
+         0 = OA, +90 = ROT, -90 = LOT, \u{b1}180 = OP, on past it -270 = ROT"
     } else {
-        "occiput position: 0 = OA, +90 = ROT, -90 = LOT, \u{b1}180 = OP"
+        "occiput position: 0 = OA, +90 = ROT, -90 = LOT, \u{b1}180 = OP, on past it -270 = ROT"
     };
     let phi = vec![Curve {
         values: &s.phi_deg,
@@ -726,7 +730,7 @@ fn axial_moment_plot(
     if m.is_empty() {
         return Ok(());
     }
-    let column = |f: fn(&AxialMomentSample) -> f64| m.iter().map(f).collect::<Vec<f64>>();
+    let column = |f: fn(&AxialMomentSample) -> f64| column_of(m, f);
     let (time_s, bone, floor, neck, push, trunk, guide) = (
         column(|s| s.time_s),
         column(|s| s.bone_nm),
@@ -816,7 +820,7 @@ fn canal_force_plot(w: &mut String, input: &ReportInput, axis: &TimeAxis) -> Res
     if f.is_empty() {
         return Ok(());
     }
-    let column = |g: fn(&CanalForceSample) -> f64| f.iter().map(g).collect::<Vec<f64>>();
+    let column = |g: fn(&CanalForceSample) -> f64| column_of(f, g);
     let (time_s, push, trunk, bone, floor, guide) = (
         column(|s| s.time_s),
         column(|s| s.push_n),
@@ -911,6 +915,11 @@ fn reading_guide(w: &mut String) {
     );
 }
 
+/// One figure of every sample, for a plot.
+fn column_of<T>(samples: &[T], figure: fn(&T) -> f64) -> Vec<f64> {
+    samples.iter().map(figure).collect()
+}
+
 /// Inline style: readable on screen and on paper, no web fonts.
 const STYLE: &str = "
 body{margin:0;background:#f4f3ef;color:#1d1d1b;font:15px/1.45 system-ui,-apple-system,'Segoe UI',Roboto,Helvetica,Arial,sans-serif}
@@ -941,7 +950,7 @@ h1{margin:0 0 8px;font-size:28px}h2{font-size:19px;margin:28px 0 10px;border-bot
 .view{text-align:center;color:#888}
 .view img{width:100%;max-width:440px;height:auto;display:block;margin:0 auto}
 @media (max-width:900px){.moment{grid-template-columns:1fr 1fr}.moment figcaption,.moment>.note{grid-column:1/-1}}
-.plots{display:grid;grid-template-columns:repeat(auto-fill,minmax(540px,1fr));gap:12px}
+.plots{display:grid;grid-template-columns:repeat(auto-fill,minmax(min(540px,100%),1fr));gap:12px}
 .plot{margin:0}.plot svg{width:100%;height:auto;display:block}
 figcaption small,.legend,.note,.missed{color:#666;font-size:13px}
 .note{background:#f6f6f6;border-left:3px solid #bbb;padding:6px 10px}
@@ -949,6 +958,7 @@ figcaption small,.legend,.note,.missed{color:#666;font-size:13px}
 table.figures{border-collapse:collapse}table.figures th{text-align:left;font-weight:500;color:#555;padding:2px 16px 2px 0}
 table.figures td{font-variant-numeric:tabular-nums}
 details{margin-top:12px}pre{background:#f6f6f6;padding:10px;overflow:auto;font-size:12px}
+@media (max-width:700px){main{padding:16px 12px 32px}.row{grid-template-columns:minmax(0,1fr) auto auto auto}.row .track{grid-column:1/-1;grid-row:2}}
 @media print{body{background:#fff}main{padding:0}details{display:none}}
 ";
 
@@ -988,6 +998,14 @@ mod tests {
         assert_eq!(
             text,
             "Arrested at the pelvic inlet (not engaged: the parietal eminences stayed above the inlet plane), station -42 mm, the trunk held against the sacral promontory, its shoulders at station -95 mm"
+        );
+        // A head counted born whose own contact holds the fetus (the
+        // occiput-posterior run) is said as such, not as held shoulders.
+        let mut born = arrest("head");
+        born.arrest.as_mut().unwrap().stage = ArrestStage::Shoulders;
+        assert_eq!(
+            headline(&born).1,
+            "Arrested at the shoulders (head born, trunk not), shoulders at -42 mm, the head, counted born (its centre past the outlet plane), still held against the sacral promontory"
         );
         let open = Outcome { delivered: false, arrest: None };
         assert!(headline(&open).1.contains("still progressing"));

@@ -84,9 +84,21 @@ pub struct MomentPictures {
     pub pictures: Result<Vec<Picture>, String>,
 }
 
-/// The stretch range of the colour scale, shared by every picture.
-pub fn stretch_range(floor: &FloorSurface) -> Option<[f64; 2]> {
-    stretch_range_of(&floor.frames)
+/// The stretch range of the colour scale, shared by every picture (and
+/// the viewer): of the frames before `untrusted_from_s`, when an element
+/// had turned inside out (the stretches after it are no tissue's, and
+/// would wash out the colours before: docs/LABOUR.md), or of them all
+/// when none comes before.
+pub fn stretch_range(floor: &FloorSurface, untrusted_from_s: Option<f64>) -> Option<[f64; 2]> {
+    untrusted_from_s
+        .and_then(|t| stretch_range_of(floor.frames.iter().filter(|f| f.time_s < t)))
+        .or_else(|| stretch_range_of(&floor.frames))
+}
+
+/// The floor frame recorded nearest `time_s`, which a picture of that
+/// moment draws; none when no frame was recorded.
+pub fn nearest_frame(floor: &FloorSurface, time_s: f64) -> Option<&FloorFrame> {
+    floor.frames.iter().min_by(|a, b| (a.time_s - time_s).abs().total_cmp(&(b.time_s - time_s).abs()))
 }
 
 /// The colour scale's stretch range over `frames`: from 1 (rest) to the
@@ -107,8 +119,8 @@ pub fn draw(
     scene: &ReportScene,
     history: &PoseHistory,
     moments: &[KeyMoment],
+    range: Option<[f64; 2]>,
 ) -> Vec<MomentPictures> {
-    let range = scene.floor.as_ref().and_then(stretch_range);
     let posed: Vec<(Vec<RenderMesh>, Option<f64>)> = moments
         .iter()
         .map(|m| meshes_at(scene, history, m, range))
@@ -250,11 +262,7 @@ fn floor_mesh(
     time_s: f64,
     range: Option<[f64; 2]>,
 ) -> (RenderMesh, Option<f64>) {
-    let nearest: Option<&FloorFrame> = floor.frames.iter().min_by(|a, b| {
-        (a.time_s - time_s)
-            .abs()
-            .total_cmp(&(b.time_s - time_s).abs())
-    });
+    let nearest = nearest_frame(floor, time_s);
     let triangles = indices(&floor.triangles);
     match (nearest, range) {
         (Some(frame), Some(range)) => (
@@ -307,14 +315,16 @@ mod tests {
             rest_positions_m: vec![DVec3::ZERO; 2],
             frames,
         };
-        assert_eq!(stretch_range(&floor(vec![])), None);
+        assert_eq!(stretch_range(&floor(vec![]), None), None);
         assert_eq!(
-            stretch_range(&floor(vec![frame(vec![1.0, 1.0])])),
+            stretch_range(&floor(vec![frame(vec![1.0, 1.0])]), None),
             Some([1.0, MIN_STRETCH_TOP])
         );
-        assert_eq!(
-            stretch_range(&floor(vec![frame(vec![1.0, 1.3]), frame(vec![1.6, 1.1])])),
-            Some([1.0, 1.6])
-        );
+        let two = floor(vec![frame(vec![1.0, 1.3]), FloorFrame { time_s: 1.0, ..frame(vec![1.6, 1.1]) }]);
+        assert_eq!(stretch_range(&two, None), Some([1.0, 1.6]));
+        // From an element turned inside out at 1 s, the later frames are
+        // left out of the scale; with none before, all count.
+        assert_eq!(stretch_range(&two, Some(1.0)), Some([1.0, 1.3]));
+        assert_eq!(stretch_range(&two, Some(0.0)), Some([1.0, 1.6]));
     }
 }

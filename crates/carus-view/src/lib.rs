@@ -18,10 +18,11 @@
 pub mod forces;
 mod window;
 
-use carus_analysis::{DetectorReport, PoseHistory, Series};
+use carus_analysis::measures::wrap_deg;
+use carus_analysis::{occiput_position, DetectorReport, PoseHistory, Series};
 use carus_render::{Bounds, Camera, Image, Projection, RenderError, RenderMesh, Renderer, Scene, View};
 use forces::Forces;
-use carus_report::pictures::{fitting_bounds, meshes_at_sample, see_through_under_forces, stretch_range, stretch_range_of};
+use carus_report::pictures::{fitting_bounds, meshes_at_sample, nearest_frame, see_through_under_forces, stretch_range};
 use carus_report::ReportScene;
 use glam::Vec3;
 
@@ -42,6 +43,33 @@ pub enum ViewError {
     Window(String),
     #[error("the screenshot {path} was not saved: {problem}")]
     Screenshot { path: std::path::PathBuf, problem: String },
+    #[error("the detector's record is not this pose history's ({problem}): the run's record is damaged; run the scenario again, or `carus detect` its pose_history.csv")]
+    SeriesMismatch { problem: String },
+}
+
+/// Theta as the history keeps it, continuous (a turn on past OP goes on
+/// past 180 deg), with its value within -180 to 180 when that differs and
+/// the occiput position it names.
+fn theta_words(theta_deg: f64) -> String {
+    match wrap_deg(theta_deg) {
+        w if w == theta_deg => format!("theta {theta_deg:.1} deg, occiput {}", occiput_position(w)),
+        w => format!("theta {theta_deg:.1} deg (= {w:+.1}), occiput {}", occiput_position(w)),
+    }
+}
+
+/// A detector's series read beside a history must be that history's, sample
+/// for sample: the readout indexes both alike.
+fn check_series(series: &Series, history: &PoseHistory) -> Result<(), ViewError> {
+    let (n, m) = (series.len(), history.samples.len());
+    if n != m {
+        return Err(ViewError::SeriesMismatch { problem: format!("{n} samples against the history's {m}") });
+    }
+    match series.time_s.iter().zip(&history.samples).position(|(t, s)| *t != s.time_s) {
+        Some(k) => Err(ViewError::SeriesMismatch {
+            problem: format!("its sample {k} is at {} s, the history's at {} s", series.time_s[k], history.samples[k].time_s),
+        }),
+        None => Ok(()),
+    }
 }
 
 /// A recorded run, ready to be shown at any of its samples.
@@ -109,6 +137,9 @@ impl Replay {
         if history.samples.is_empty() {
             return Err(ViewError::NoSamples);
         }
+        if let Some(d) = detector {
+            check_series(&d.series, &history)?;
+        }
         let series = detector.map_or_else(|| Series::from_history(&history), |d| d.series.clone());
         let movements = detector.map_or_else(Vec::new, |d| {
             d.movements
@@ -118,7 +149,7 @@ impl Replay {
                 .filter_map(|(key, m)| Some((*key, m.start_s?, m.end_s?)))
                 .collect()
         });
-        let stretch_range = scene.floor.as_ref().and_then(stretch_range);
+        let stretch_range = scene.floor.as_ref().and_then(|f| stretch_range(f, None));
         // The head's path to its birth stays in view: the canal and the head
         // at the start, and the head as it is born (or at its deepest, if it
         // never is); after birth it may swing out of the canal's picture.
@@ -252,7 +283,7 @@ impl Replay {
         vec![
             format!("t = {:.2} s", s.time_s),
             format!("station {:+.1} mm", s.station_mm),
-            format!("theta {:.1} deg", s.theta_deg),
+            theta_words(s.theta_deg),
             format!("phi {:.1} deg (flexion positive)", s.phi_deg),
             match (s.head_delivered, s.head_engaged) {
                 (true, _) => "head delivered".into(),
@@ -273,11 +304,8 @@ impl Replay {
         let Some(floor) = &self.scene.floor else {
             return "no pelvic floor".into();
         };
-        floor
-            .frames
-            .iter()
+        nearest_frame(floor, t)
             .map(|f| f.time_s)
-            .min_by(|a, b| (a - t).abs().total_cmp(&(b - t).abs()))
             .map_or("floor at rest (no state recorded)".into(), |at| match self.stretch_range {
                 Some([low, high]) => format!("floor as at t = {at:.2} s; colour: stretch {low:.2} (dark) to {high:.2} (bright)"),
                 None => format!("floor as at t = {at:.2} s"),
@@ -285,7 +313,7 @@ impl Replay {
     }
 
     /// The floor's colour scale from its frames before `t_s` only, as the
-    /// report's floor plot reads it: the run's floor had an element turned
+    /// report reads it ([`stretch_range`]): the run's floor had an element turned
     /// inside out then (docs/LABOUR.md), and the stretches after it, not to
     /// be trusted, would stretch the scale until the floor before looked at
     /// rest. Kept as it was when no frame comes that early.
@@ -293,9 +321,7 @@ impl Replay {
         let Some(floor) = &self.scene.floor else {
             return self;
         };
-        if let Some(range) = stretch_range_of(floor.frames.iter().filter(|f| f.time_s < t_s)) {
-            self.stretch_range = Some(range);
-        }
+        self.stretch_range = stretch_range(floor, Some(t_s));
         self
     }
 

@@ -102,6 +102,34 @@ fn an_empty_history_is_refused() {
     assert!(matches!(Replay::new("x", scene, empty, None), Err(ViewError::NoSamples)));
 }
 
+/// Theta past OP reads as the history keeps it, with where it points.
+#[test]
+fn theta_beyond_a_half_turn_names_where_the_occiput_points() {
+    assert_eq!(theta_words(-31.0), "theta -31.0 deg, occiput LOA");
+    assert_eq!(theta_words(-300.0), "theta -300.0 deg (= +60.0), occiput ROA");
+}
+
+/// A detector's record cut short (or of another history) is named, not
+/// read past its end.
+#[test]
+fn a_detector_record_of_another_history_is_refused() {
+    let (_, demo) = textbook();
+    let scene = || demo.input("x").scene.unwrap();
+    let mut cut = demo.detector.clone();
+    cut.series = carus_analysis::Series::from_history(&carus_analysis::PoseHistory {
+        samples: demo.history.samples[..400].to_vec(),
+        ..demo.history.clone()
+    });
+    let e = Replay::new("x", scene(), demo.history.clone(), Some(&cut)).err().unwrap().to_string();
+    assert!(e.contains(&format!("400 samples against the history's {}", demo.history.samples.len())), "{e}");
+    let mut later = demo.history.clone();
+    for s in &mut later.samples {
+        s.time_s += 1.0;
+    }
+    let e = Replay::new("x", scene(), later, Some(&demo.detector)).err().unwrap().to_string();
+    assert!(e.contains("its sample 0 is at 0 s, the history's at 1 s"), "{e}");
+}
+
 #[test]
 fn the_orbit_starts_from_the_standard_views_and_keeps_up_up() {
     let (replay, _) = textbook();

@@ -44,6 +44,10 @@ pub struct LabourBenchArgs {
     /// Print one JSON object on standard output and nothing else there.
     #[arg(long)]
     pub json: bool,
+    /// Accepted as every long command accepts it: the labour bench shows
+    /// no progress, and writes only warnings on standard error.
+    #[arg(long)]
+    pub quiet: bool,
 }
 
 /// Issue 4: the normal scenario runs to its end in under 2 minutes on a
@@ -78,6 +82,10 @@ pub struct TledBenchArgs {
     /// Print one JSON object on standard output and nothing else there.
     #[arg(long)]
     pub json: bool,
+    /// No progress or notes on standard error (no progress either when it
+    /// is not a terminal).
+    #[arg(long)]
+    pub quiet: bool,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -297,8 +305,14 @@ fn tled(args: &TledBenchArgs) -> anyhow::Result<Status> {
     if args.backend != BackendArg::Cpu {
         match gpu_bench(args, kind, steps)? {
             Some(status) => return Ok(status),
+            None if args.quiet => {}
             None => eprintln!("notice: no real GPU adapter found; `--backend auto` runs on the CPU"),
         }
+    }
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    if let Some(threads) = args.threads.filter(|t| *t > cores && !args.quiet) {
+        // Allowed (it measures oversubscription), but rarely meant.
+        eprintln!("notice: --threads {threads} on {cores} cores: the threads take turns, so the figures time their contention as well as the solver");
     }
     let report = match args.threads {
         Some(threads) => rayon::ThreadPoolBuilder::new()
@@ -380,7 +394,9 @@ fn cpu_bench(args: &TledBenchArgs, kind: ElementKind, steps: u64) -> anyhow::Res
     let model_bytes_per_element = model.memory_bytes() as f64 / model.element_count() as f64;
     let bcs = setup.boundary_conditions(&mesh);
     let (elements, nodes) = (model.element_count(), model.node_count());
-    eprintln!("timing the solver: {steps} steps of {elements} elements ...");
+    if super::shows_progress(args.quiet) {
+        eprintln!("timing the solver: {steps} steps of {elements} elements ...");
+    }
     let mut solver = TledSolver::new(model, &bcs, dt, StepControl::Refuse)?;
     // Warm-up: first touches of the state arrays and the thread pool.
     solver.step()?;
@@ -392,7 +408,9 @@ fn cpu_bench(args: &TledBenchArgs, kind: ElementKind, steps: u64) -> anyhow::Res
     let peak_rss_bytes = peak_rss_bytes();
     drop(solver);
 
-    eprintln!("timing the single-threaded baseline: {steps} steps ...");
+    if super::shows_progress(args.quiet) {
+        eprintln!("timing the single-threaded baseline: {steps} steps ...");
+    }
     let mut baseline = baseline_solver(&setup, &mesh, dt)?;
     let shape = LoadShape::RampHold { ramp_s: RAMP_S };
     baseline.step(shape.value(dt))?;

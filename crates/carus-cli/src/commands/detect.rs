@@ -144,7 +144,7 @@ fn check_series_target(series: &Path, history: &Path) -> anyhow::Result<()> {
     if super::run::carus_made(folder) {
         crate::bad_argument!(
             "--series {}: that file is in a folder carus wrote (a run's or a sweep's), and is not replaced; \
-             write the series outside it",
+             write the series to a new name, or outside it",
             series.display()
         );
     }

@@ -44,6 +44,14 @@ macro_rules! bad_argument {
     };
 }
 
+/// Whether a long command shows its progress on standard error: not with
+/// `--quiet`, nor when standard error is not a terminal (a log file or a
+/// pipe), as CONVENTIONS.md asks.
+pub fn shows_progress(quiet: bool) -> bool {
+    use std::io::IsTerminal;
+    !quiet && std::io::stderr().is_terminal()
+}
+
 /// The progress bar of long commands: permille done, elapsed, time left.
 pub fn progress_bar() -> indicatif::ProgressBar {
     let bar = indicatif::ProgressBar::new(1000);

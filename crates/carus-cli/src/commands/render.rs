@@ -32,7 +32,7 @@ pub enum RenderPart {
     Fetus,
     /// The pelvic floor in the pelvis it is shaped to, attached nodes marked.
     Floor,
-    /// Pelvis, floor and fetus at the scenario's start (FILE is a scenario file).
+    /// Pelvis, floor and fetus at the scenario's start (FILE is a built-in scenario's name or a scenario file).
     Scene,
 }
 

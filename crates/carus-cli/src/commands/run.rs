@@ -4,7 +4,6 @@
 //! never overwrites an existing run unless `--force`. Ctrl-C stops cleanly
 //! with everything so far written; `--resume DIR` continues from the last checkpoint.
 
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
@@ -73,7 +72,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
         stop: Some(stop.clone()),
         stop_at_s: None,
     };
-    let show = !args.output.quiet && std::io::stderr().is_terminal();
+    let show = super::shows_progress(args.output.quiet);
     let bar = show.then(super::progress_bar);
     let mut observer = Bar(bar);
 

@@ -3,7 +3,6 @@
 //! PVD series, a CSV history and a summary. The work is done by
 //! `carus_io::job`; this module parses flags and prints.
 
-use std::io::IsTerminal;
 use std::path::PathBuf;
 
 use carus_io::job::{run_job, JobReport, Progress, RunOptions};
@@ -30,7 +29,7 @@ pub struct SolveArgs {
 }
 
 pub fn run(args: &SolveArgs) -> anyhow::Result<Status> {
-    let show = !args.quiet && std::io::stderr().is_terminal();
+    let show = super::shows_progress(args.quiet);
     if !args.quiet {
         eprintln!("solving {} into {}", args.job.display(), args.out.display());
     }

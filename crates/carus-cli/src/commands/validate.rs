@@ -41,6 +41,9 @@ pub struct ValidateArgs {
     /// Print one JSON object on standard output and nothing else there.
     #[arg(long)]
     pub json: bool,
+    /// No progress on standard error (none either when it is not a terminal).
+    #[arg(long)]
+    pub quiet: bool,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -88,7 +91,9 @@ pub fn run(args: &ValidateArgs) -> anyhow::Result<Status> {
     };
     let mut outcomes = Vec::new();
     for id in ids {
-        eprintln!("running {} ({}) ...", label(id), title(id));
+        if super::shows_progress(args.quiet) {
+            eprintln!("running {} ({}) ...", label(id), title(id));
+        }
         let outcome = run_case(id);
         if !args.json {
             println!("{}", outcome.line());
@@ -131,7 +136,9 @@ fn run_cube(args: &ValidateArgs) -> anyhow::Result<Status> {
         for &element in &elements {
             for &variant in &variants {
                 let key = format!("{}_{}_n{}", element.name(), variant.name(), n);
-                eprintln!("running cube {key} ...");
+                if super::shows_progress(args.quiet) {
+                    eprintln!("running cube {key} ...");
+                }
                 let hourglass_modulus = match args.hourglass_modulus {
                     None | Some(HourglassArg::Dilatational) => HourglassModulus::Dilatational,
                     Some(HourglassArg::Shear) => HourglassModulus::Shear,

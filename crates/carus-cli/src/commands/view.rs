@@ -115,6 +115,7 @@ fn picture_json(replay: &Replay, k: usize, path: &Path, args: &ViewArgs) -> serd
         "time_s": state.time_s,
         "station_mm": state.station_mm,
         "theta_deg": state.theta_deg,
+        "occiput_position": carus_analysis::occiput_position(state.theta_deg),
         "phi_deg": state.phi_deg,
         "head_engaged": state.head_engaged,
         "head_delivered": state.head_delivered,
