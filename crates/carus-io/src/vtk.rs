@@ -348,14 +348,15 @@ fn cell_points(path: &Path, cells: &Cells) -> Result<Vec<Vec<u64>>, ReadError> {
             for &end in offsets {
                 let end = end as usize;
                 let Some(points) = connectivity.get(start..end) else {
-                    return Err(content_error(
-                        path,
-                        format!(
-                            "cell {} has offset {end}, outside the connectivity array",
-                            out.len()
+                    let problem = match end < start {
+                        true => format!("cell {} has offset {end}, before the previous cell's end ({start}): the offsets must not decrease", out.len()),
+                        false => format!(
+                            "cell {} has offset {end}, outside the connectivity array ({} entries)",
+                            out.len(),
+                            connectivity.len()
                         ),
-                        RESAVE_FIX,
-                    ));
+                    };
+                    return Err(content_error(path, problem, RESAVE_FIX));
                 };
                 out.push(points.to_vec());
                 start = end;
@@ -752,6 +753,10 @@ mod tests {
             ("3 0 1 2\n", "3 0 -1 2\n", "bad.vtk:12: \"-1\" in CELLS (line 10) is not a whole number of 0 or more"),
             ("POINTS 4 double", "POINTS 1000000000 double", "bad.vtk:10: POINTS (line 5) declares 3000000000 values, but 12 come before this line"),
             ("CELL_TYPES 3\n10\n5\n3\n", "CELL_TYPES 3\n10\n5\nx\n", "bad.vtk:17: \"x\" in CELL_TYPES (line 14) is not a whole number"),
+            ("CELL_TYPES 3\n10\n5\n3\n", "CELL_TYPES 3\n10\n999\n3\n", "bad.vtk:16: \"999\" in CELL_TYPES (line 14) is not a VTK cell type"),
+            ("CELLS 3 12", "CELLS 3 10", "bad.vtk:14: CELLS (line 10) declares 10 values, but 12 come before this line"),
+            ("0 1 -1", "0 1 99999999999", "bad.vtk:21: \"99999999999\" in SCALARS (line 19) is not a value int holds"),
+            ("0 1 -1", "0 nan -1", "bad.vtk:21: \"nan\" in SCALARS (line 19) is not a whole number, as int is"),
         ] {
             assert!(LEGACY_VTK.contains(from), "{from}");
             std::fs::write(&path, LEGACY_VTK.replace(from, to)).unwrap();

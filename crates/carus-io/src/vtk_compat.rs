@@ -425,25 +425,54 @@ pub(crate) fn legacy_type_names(bytes: &[u8]) -> Cow<'_, [u8]> {
     }
 }
 
-/// Where an ASCII legacy file's geometry first goes wrong, for vtkio's
-/// parse errors, which name no line: a value in `POINTS` that is not a
-/// finite number, one in `CELLS`, `CELL_TYPES` (or version 5's `OFFSETS`,
-/// `CONNECTIVITY`) that is not a whole number of 0 or more, or a section
-/// that ends before the values its header declares. (line, problem), or
-/// `None` for a binary file or one whose geometry reads well (the fault is
-/// elsewhere, in the data arrays).
+/// Where an ASCII legacy file first goes wrong, for vtkio's parse errors,
+/// which name no line: a value in `POINTS` (or a float data array) that is
+/// not a finite number, one in `CELLS`, `CELL_TYPES` (or version 5's
+/// `OFFSETS`, `CONNECTIVITY`) that is not a whole number of 0 or more, a
+/// cell type VTK does not have, an integer data array's value that its
+/// type cannot hold, or a section with fewer or more values than its
+/// header declares. (line, problem), or `None` for a binary file, one that
+/// reads well, or a fault in a section not checked here (`FIELD`,
+/// `TENSORS`, a colour table...), which vtkio's own message has to name.
 pub(crate) fn legacy_ascii_fault(bytes: &[u8]) -> Option<(usize, String)> {
+    /// What the values of a section must be.
+    #[derive(Clone, Copy)]
+    enum Values {
+        Real,
+        Count,
+        CellType,
+        Integer { least: i128, most: i128, of: &'static str },
+    }
     struct Section<'a> {
         name: &'a str,
         line: usize,
-        declared: usize,
+        /// None where the header gives no count (version 5's sections).
+        declared: Option<usize>,
         found: usize,
-        real: bool,
+        values: Values,
     }
-    let short = |s: &Section, at: usize| {
-        (s.found < s.declared).then(|| {
-            (at, format!("{} (line {}) declares {} values, but {} come before this line", s.name, s.line, s.declared, s.found))
+    let miscounted = |s: &Section, at: usize| {
+        let declared = s.declared?;
+        (s.found != declared).then(|| {
+            (at, format!("{} (line {}) declares {declared} values, but {} come before this line", s.name, s.line, s.found))
         })
+    };
+    let integer = |of: &str| -> Option<Values> {
+        let (of, least, most): (&'static str, i128, i128) = match of {
+            "bit" => ("bit", 0, 1),
+            "char" => ("char", i8::MIN.into(), i8::MAX.into()),
+            "unsigned_char" => ("unsigned_char", 0, u8::MAX.into()),
+            "short" => ("short", i16::MIN.into(), i16::MAX.into()),
+            "unsigned_short" => ("unsigned_short", 0, u16::MAX.into()),
+            "int" => ("int", i32::MIN.into(), i32::MAX.into()),
+            "unsigned_int" => ("unsigned_int", 0, u32::MAX.into()),
+            "long" => ("long", i64::MIN.into(), i64::MAX.into()),
+            "vtktypeint64" => ("vtktypeint64", i64::MIN.into(), i64::MAX.into()),
+            "unsigned_long" => ("unsigned_long", 0, u64::MAX.into()),
+            "vtktypeuint64" => ("vtktypeuint64", 0, u64::MAX.into()),
+            _ => return None,
+        };
+        Some(Values::Integer { least, most, of })
     };
     let text = std::str::from_utf8(bytes).ok()?;
     if !text.lines().nth(2)?.trim().eq_ignore_ascii_case("ascii") {
@@ -451,48 +480,90 @@ pub(crate) fn legacy_ascii_fault(bytes: &[u8]) -> Option<(usize, String)> {
     }
     let is_keyword = |w: &str| w.chars().all(|c| c.is_ascii_uppercase() || c == '_') && !matches!(w, "NAN" | "INF" | "INFINITY");
     let mut section: Option<Section> = None;
+    // The count of the POINT_DATA or CELL_DATA the arrays belong to.
+    let mut data_count: Option<usize> = None;
     let mut last = 0;
     for (i, line) in text.lines().enumerate().skip(3) {
         last = i + 1;
         let words: Vec<&str> = line.split_whitespace().collect();
         let Some(&first) = words.first() else { continue };
         if is_keyword(first) {
-            if let Some(fault) = section.as_ref().and_then(|s| short(s, i + 1)) {
+            // A scalar array's table line belongs to its header.
+            if first == "LOOKUP_TABLE" && words.len() == 2 && section.as_ref().is_some_and(|s| s.name == "SCALARS" && s.found == 0) {
+                continue;
+            }
+            if let Some(fault) = section.as_ref().and_then(|s| miscounted(s, i + 1)) {
                 return Some(fault);
             }
             let count = |k: usize| words.get(k).and_then(|w| w.parse::<usize>().ok());
-            let (declared, real) = match first {
+            let array = |components: Option<usize>| -> Option<(Option<usize>, Values)> {
+                let of = words.get(2)?.to_ascii_lowercase();
+                let values = match of.as_str() {
+                    "float" | "double" => Values::Real,
+                    other => integer(other)?,
+                };
+                Some((data_count?.checked_mul(components?), values))
+            };
+            let (declared, values) = match first {
                 "DATASET" => continue,
-                "POINTS" => (count(1).and_then(|n| n.checked_mul(3)), true),
+                "POINT_DATA" | "CELL_DATA" => {
+                    data_count = count(1);
+                    section = None;
+                    continue;
+                }
+                "POINTS" => (count(1).and_then(|n| n.checked_mul(3)), Values::Real),
                 // Version 2's `CELLS n size`: size values follow; version 5's
                 // `CELLS offsets connectivity` heads two sections of their own.
-                "CELLS" if words.len() == 3 && text.lines().nth(i + 1).is_some_and(|l| l.trim_start().starts_with("OFFSETS")) => (Some(0), false),
-                "CELLS" => (count(2), false),
-                "CELL_TYPES" => (count(1), false),
-                "OFFSETS" | "CONNECTIVITY" => (Some(0), false),
-                // The data arrays: vtkio's own message has to do there.
+                "CELLS" if words.len() == 3 && text.lines().nth(i + 1).is_some_and(|l| l.trim_start().starts_with("OFFSETS")) => {
+                    section = None;
+                    continue;
+                }
+                "CELLS" => (count(2), Values::Count),
+                "CELL_TYPES" => (count(1), Values::CellType),
+                "OFFSETS" | "CONNECTIVITY" => {
+                    section = Some(Section { name: first, line: i + 1, declared: None, found: 0, values: Values::Count });
+                    continue;
+                }
+                "SCALARS" => match array(words.get(3).map_or(Some(1), |w| w.parse().ok())) {
+                    Some((declared, values)) => (declared, values),
+                    None => return None,
+                },
+                "VECTORS" | "NORMALS" => match array(Some(3)) {
+                    Some((declared, values)) => (declared, values),
+                    None => return None,
+                },
+                // FIELD arrays, tensors, colour tables: vtkio's own message.
                 _ => return None,
             };
             let Some(declared) = declared else {
-                return Some((i + 1, format!("{first} needs its count{}: {line:?}", if real { " and type" } else { "s" })));
+                return Some((i + 1, format!("{first} needs its count{}: {line:?}", if matches!(values, Values::Real) { " and type" } else { "s" })));
             };
-            section = Some(Section { name: first, line: i + 1, declared, found: 0, real });
+            section = Some(Section { name: first, line: i + 1, declared: Some(declared), found: 0, values });
             continue;
         }
         let Some(s) = section.as_mut() else { continue };
         for word in words {
-            let fits = match s.real {
-                true => word.parse::<f64>().is_ok_and(f64::is_finite),
-                false => word.parse::<u64>().is_ok(),
+            let wanted = match s.values {
+                Values::Real => (!word.parse::<f64>().is_ok_and(f64::is_finite)).then(|| "a finite number".to_string()),
+                Values::Count => word.parse::<u64>().is_err().then(|| "a whole number of 0 or more".to_string()),
+                Values::CellType => match word.parse::<u64>() {
+                    Err(_) => Some("a whole number".to_string()),
+                    Ok(t) => (!matches!(t, 1..=16 | 21..=37 | 41 | 42 | 51 | 60..=83))
+                        .then(|| "a VTK cell type (10 is a tetrahedron, 12 a hexahedron, 5 a triangle)".to_string()),
+                },
+                Values::Integer { least, most, of } => match word.parse::<i128>() {
+                    Ok(v) if (least..=most).contains(&v) => None,
+                    Ok(_) => Some(format!("a value {of} holds ({least} to {most})")),
+                    Err(_) => Some(format!("a whole number, as {of} is")),
+                },
             };
-            if !fits {
-                let wanted = if s.real { "a finite number" } else { "a whole number of 0 or more" };
+            if let Some(wanted) = wanted {
                 return Some((i + 1, format!("{word:?} in {} (line {}) is not {wanted}", s.name, s.line)));
             }
             s.found += 1;
         }
     }
-    section.as_ref().and_then(|s| short(s, last + 1))
+    section.as_ref().and_then(|s| miscounted(s, last + 1))
 }
 
 fn find(haystack: &[u8], needle: &[u8], from: usize) -> Option<usize> {

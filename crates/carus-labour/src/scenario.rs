@@ -1468,7 +1468,8 @@ impl Scenario {
         // Plausibility bands: values that would run but are in another unit.
         let in_band = |values: &[(&'static str, f64)], (least, most): (f64, f64), problem: &str, hint: &str| {
             match values.iter().find(|(_, v)| !(least..=most).contains(v)) {
-                Some(&(key, value)) => Err(err(key, value, problem, hint)),
+                // The band itself, so that a value just outside is told where.
+                Some(&(key, value)) => Err(err(key, value, &format!("{problem} (the band taken is {least} to {most})"), hint)),
                 None => Ok(()),
             }
         };
@@ -1476,7 +1477,7 @@ impl Scenario {
             &[("contact.trunk_cover_depth_mm", self.contact.trunk_cover_depth_mm)],
             (0.1, 30.0),
             "is not a plausible depth of soft tissue over a neonate's shoulders and chest",
-            "millimetres, 0.1 to 30: the default is 6.0 (docs/CONTACT.md, \"The trunk's cover\")",
+            "millimetres: the default is 6.0 (docs/CONTACT.md, \"The trunk's cover\")",
         )?;
         let h = &self.head;
         in_band(

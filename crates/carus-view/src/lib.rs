@@ -316,7 +316,7 @@ impl Replay {
     /// report reads it ([`stretch_range`]): the run's floor had an element turned
     /// inside out then (docs/LABOUR.md), and the stretches after it, not to
     /// be trusted, would stretch the scale until the floor before looked at
-    /// rest. Kept as it was when no frame comes that early.
+    /// rest. All frames set it when none comes that early.
     pub fn with_stretch_scale_before(mut self, t_s: f64) -> Replay {
         let Some(floor) = &self.scene.floor else {
             return self;
