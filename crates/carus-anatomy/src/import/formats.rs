@@ -273,15 +273,43 @@ fn parse_ascii_stl(path: &Path, text: &str) -> Result<RawMesh, ImportError> {
 /// counting back); and a face of fewer than 3 corners, which tobj drops
 /// unsaid, leaving a hole where a face was.
 fn obj_line_at_fault(bytes: &[u8]) -> Option<String> {
-    let mut vertices: i64 = 0;
+    let (mut vertices, mut texture, mut normals): (i64, i64, i64) = (0, 0, 0);
+    // tobj reads 32-bit floats: a larger number would become infinite.
+    let number_in = |w: &str| w.parse::<f64>().is_ok_and(|x| x.is_finite() && x.abs() <= f32::MAX as f64);
+    let in_range = |i: i64, count: i64| (1..=count).contains(&i) || (-count..0).contains(&i);
     for (number, line) in String::from_utf8_lossy(bytes).lines().enumerate() {
         let mut words = line.split_whitespace();
+        // The first three words after the keyword (what follows, a vertex's
+        // weight or colour, tobj reads or skips).
+        let needs = |what: &str, at_least: usize, words: std::str::SplitWhitespace| {
+            let read: Vec<&str> = words.take(3).collect();
+            match read.iter().find(|w| !number_in(w)) {
+                Some(w) => Some(format!(
+                    "line {}: `{w}` in `{}` is not a number a 32-bit float holds (finite, within 3.4e38)",
+                    number + 1,
+                    line.trim()
+                )),
+                None => (read.len() < at_least).then(|| format!("line {}: {what}: `{}`", number + 1, line.trim())),
+            }
+        };
         match words.next() {
             Some("v") => {
-                if words.by_ref().take(3).filter(|w| w.parse::<f64>().is_ok()).count() < 3 {
-                    return Some(format!("line {}: a vertex needs three numbers: `{}`", number + 1, line.trim()));
+                if let Some(fault) = needs("a vertex needs three numbers", 3, words) {
+                    return Some(fault);
                 }
                 vertices += 1;
+            }
+            Some("vt") => {
+                if let Some(fault) = needs("a texture coordinate needs one to three numbers", 1, words) {
+                    return Some(fault);
+                }
+                texture += 1;
+            }
+            Some("vn") => {
+                if let Some(fault) = needs("a normal needs three numbers", 3, words) {
+                    return Some(fault);
+                }
+                normals += 1;
             }
             Some("f") => {
                 let corners: Vec<&str> = words.collect();
@@ -293,13 +321,22 @@ fn obj_line_at_fault(bytes: &[u8]) -> Option<String> {
                     ));
                 }
                 for corner in corners {
-                    let index = corner.split('/').next().and_then(|i| i.parse::<i64>().ok());
-                    let valid = index.is_some_and(|i| (1..=vertices).contains(&i) || (-vertices..0).contains(&i));
-                    if !valid {
+                    let mut parts = corner.split('/');
+                    let index = parts.next().and_then(|i| i.parse::<i64>().ok());
+                    if !index.is_some_and(|i| in_range(i, vertices)) {
                         return Some(format!(
                             "line {}: face corner `{corner}` names no vertex; {vertices} are defined above it",
                             number + 1
                         ));
+                    }
+                    // `v/vt/vn`, either of the last two may be left empty.
+                    for (part, (what, count)) in parts.zip([("texture coordinate", texture), ("normal", normals)]) {
+                        if !part.is_empty() && !part.parse::<i64>().is_ok_and(|i| in_range(i, count)) {
+                            return Some(format!(
+                                "line {}: face corner `{corner}` names no {what}; {count} are defined above it",
+                                number + 1
+                            ));
+                        }
                     }
                 }
             }

@@ -287,20 +287,16 @@ fn broken_meshes_say_what_and_where() {
         assert!(e.contains(name) && e.contains(said), "{e}");
     }
 
-    let nan = write(&dir, "nan.obj", obj().replacen("v 0 1 0", "v nan 1 0", 1).as_bytes());
-    let err = read_surface(&nan, Units::Millimetres).unwrap_err();
-    // The third vertex is the second corner of the first face.
-    assert!(
-        matches!(
-            err,
-            ImportError::NonFinite {
-                triangle: 0,
-                corner: 1,
-                ..
-            }
-        ),
-        "{err}"
-    );
+    // A number an OBJ's 32-bit floats cannot hold is named at its line.
+    for (name, from, to, said) in [
+        ("nan.obj", "v 0 1 0", "v nan 1 0", "line 5: `nan` in `v nan 1 0` is not a number a 32-bit float holds"),
+        ("huge.obj", "v 0 1 0", "v 0 1e39 0", "line 5: `1e39` in `v 0 1e39 0` is not a number a 32-bit float holds"),
+        ("texture.obj", "f 1 3 2", "vt 0.5 x\nf 1/1 3/1 2/1", "`x` in `vt 0.5 x`"),
+        ("normal.obj", "f 1 3 2", "vn 0 0 1\nf 1//2 3//1 2//1", "face corner `1//2` names no normal; 1 are defined above it"),
+    ] {
+        let e = read_surface(&write(&dir, name, obj().replacen(from, to, 1).as_bytes()), Units::Metres).unwrap_err().to_string();
+        assert!(e.contains(name) && e.contains(said), "{e}");
+    }
 
     let open = write(
         &dir,
@@ -342,7 +338,10 @@ fn broken_meshes_say_what_and_where() {
     assert!(err.contains("beyond.obj") && err.contains("face corner `9` names no vertex"), "{err}");
     let word = write(&dir, "word.obj", obj().replacen("v 0 1 0", "v 0 one 0", 1).as_bytes());
     let err = read_surface(&word, Units::Metres).unwrap_err().to_string();
-    assert!(err.contains("a vertex needs three numbers: `v 0 one 0`"), "{err}");
+    assert!(err.contains("`one` in `v 0 one 0` is not a number"), "{err}");
+    let short = write(&dir, "short.obj", obj().replacen("v 0 1 0", "v 0 1", 1).as_bytes());
+    let err = read_surface(&short, Units::Metres).unwrap_err().to_string();
+    assert!(err.contains("a vertex needs three numbers: `v 0 1`"), "{err}");
     // A face of two corners is refused, not dropped with a hole left, as in PLY.
     let edge = write(&dir, "edge.obj", obj().replacen("f 1 3 2", "f 1 3", 1).as_bytes());
     let err = read_surface(&edge, Units::Metres).unwrap_err().to_string();
@@ -480,6 +479,11 @@ fn absurdly_far_vertices_are_refused_with_their_place() {
     // A CT mesh's offsets, in mm, are fine.
     raw.positions[1] = DVec3::new(-1500.0, 0.0, 0.0);
     assert!(weld(Path::new("ct.stl"), &raw, 1e-3).is_ok());
+    // A NaN (a binary STL's, say) is named by its triangle, counting from 1.
+    raw.positions[2] = DVec3::new(0.0, f64::NAN, 0.0);
+    let e = weld(Path::new("nan.stl"), &raw, 1e-3).unwrap_err();
+    assert!(matches!(e, ImportError::NonFinite { triangle: 0, corner: 2, vertex: 2, .. }), "{e}");
+    assert!(e.to_string().contains("nan.stl: triangle 1 of the file (counting from 1), its corner 3,"), "{e}");
 }
 
 /// The shipped Visible Human landmarks file, edited by `edit`.
