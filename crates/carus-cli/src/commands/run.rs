@@ -953,12 +953,22 @@ pub(super) fn outcome_line(outcome: &Outcome) -> String {
 pub(super) fn print_movements(movements: &[(&'static str, Movement)], detector: Option<&DetectorReport>) {
     let rotation_outside_window = detector.and_then(|d| d.internal_rotation_outside_window);
     let not_held = detector.map_or(&[][..], |d| &d.not_held_at_birth);
+    // Times keep their column however long they run (a history in ms).
+    let posterior = detector.map(|d| d.posterior_rotation);
+    let width = movements
+        .iter()
+        .map(|(_, m)| m)
+        .chain(posterior.as_ref())
+        .flat_map(|m| [m.start_s, m.end_s])
+        .flatten()
+        .map(|t| format!("{t:.1}").len())
+        .fold(6, usize::max);
     for (key, m) in movements {
         let unit = serde_name(&m.unit);
         match (m.observed, m.start_s, m.end_s, m.size) {
             (true, Some(a), Some(b), Some(size)) => {
                 let lost = if not_held.iter().any(|n| n.movement == *key) { "  (not held at birth)" } else { "" };
-                println!("{}{lost}", observed_line(key, a, b, size, &unit))
+                println!("{}{lost}", observed_line(key, [a, b], width, size, &unit))
             }
             _ => match rotation_outside_window.filter(|_| *key == "internal_rotation") {
                 Some(r) => println!("  {key:18} not observed: {r}"),
@@ -967,10 +977,8 @@ pub(super) fn print_movements(movements: &[(&'static str, Movement)], detector: 
         }
     }
     // Not one of the seven, but what a head that turned to OP did instead.
-    if let Some(Movement { observed: true, start_s: Some(a), end_s: Some(b), size: Some(size), .. }) =
-        detector.map(|d| d.posterior_rotation)
-    {
-        println!("{}  (to occiput posterior)", observed_line("posterior_rotation", a, b, size, "deg"));
+    if let Some(Movement { observed: true, start_s: Some(a), end_s: Some(b), size: Some(size), .. }) = posterior {
+        println!("{}  (to occiput posterior)", observed_line("posterior_rotation", [a, b], width, size, "deg"));
     }
     if let Some(born) = detector.and_then(|d| d.head_born) {
         println!("  {born}");
@@ -980,9 +988,9 @@ pub(super) fn print_movements(movements: &[(&'static str, Movement)], detector: 
     }
 }
 
-/// An observed movement's line: key, span and size.
-fn observed_line(key: &str, start_s: f64, end_s: f64, size: f64, unit: &str) -> String {
-    format!("  {key:18} observed  {start_s:6.1}-{end_s:6.1} s  {size:6.1} {unit}")
+/// An observed movement's line: key, span (its times `width` wide) and size.
+fn observed_line(key: &str, [start_s, end_s]: [f64; 2], width: usize, size: f64, unit: &str) -> String {
+    format!("  {key:18} observed  {start_s:width$.1}-{end_s:width$.1} s  {size:6.1} {unit}")
 }
 
 /// The name an enum value has in the JSON output (e.g. `mid-pelvis`), so
@@ -997,6 +1005,13 @@ pub(super) fn serde_name<T: serde::Serialize>(value: &T) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Long times widen the column for every line alike.
+    #[test]
+    fn a_movement_line_keeps_its_columns_for_long_times() {
+        assert_eq!(observed_line("descent", [1.08, 11.39], 6, 142.6, "mm"), "  descent            observed     1.1-  11.4 s   142.6 mm");
+        assert_eq!(observed_line("descent", [1080.0, 11390.0], 7, 142.6, "mm"), "  descent            observed   1080.0-11390.0 s   142.6 mm");
+    }
 
     /// The coarse normal scenario run for `end_s`, its folder gone.
     fn coarse_record(end_s: f64) -> RunRecord {
