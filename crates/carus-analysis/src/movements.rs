@@ -374,8 +374,7 @@ pub fn detect_movements(series: &Series, spines_sigma_mm: f64) -> Detected {
         external_rotation: external_rotation(series, engagement.map(|s| s.end)),
         expulsion: expulsion(series),
     };
-    // A head out from the first sample was not born in this history.
-    let head_born = delivery(series).filter(|&i| i > 0).map(|i| HeadBorn::at(series, i));
+    let head_born = birth(series).map(|i| HeadBorn::at(series, i));
     Detected {
         not_held_at_birth: not_held_at_birth(series, &movements, head_born),
         movements,
@@ -405,6 +404,13 @@ fn engagement(series: &Series, spines_sigma_mm: f64) -> Option<Span> {
 /// Index of the first sample at which the head is delivered, if any.
 fn delivery(series: &Series) -> Option<usize> {
     series.head_delivered.iter().position(|&d| d)
+}
+
+/// Index of the head's birth: the first sample delivered after one that
+/// was not (a head out from the first sample was not born there; if it
+/// slips back in, its birth is when it comes out again).
+fn birth(series: &Series) -> Option<usize> {
+    (1..series.len()).find(|&i| series.head_delivered[i] && !series.head_delivered[i - 1])
 }
 
 /// Descent: the station's upper envelope (running maximum) over the samples

@@ -4,8 +4,8 @@
 //! contraction periods long (the period read off the expulsion force) and
 //! at least a quarter of the run: the fetus is arrested when, in that
 //! window, the leading part got less than [`ARREST_PROGRESS_MM`] further
-//! than it had ever been before the window, and at less than
-//! [`ARREST_PACE_SHARE`] of its pace before it. An undelivered fetus that is
+//! than it had ever been before the window (and, under a steady push, at
+//! less than [`ARREST_PACE_SHARE`] of its pace before). An undelivered fetus that is
 //! still progressing is neither delivered nor arrested (`arrest: null`):
 //! the run ended too soon to tell.
 
@@ -22,11 +22,12 @@ pub const ARREST_PROGRESS_MM: f64 = 3.0;
 pub const ARREST_WINDOW_PERIODS: f64 = 2.0;
 /// The final window spans at least this fraction of the run.
 pub const ARREST_WINDOW_FRACTION: f64 = 0.25;
-/// An arrest is a stop, not a short window: a window whose pace (its gain
-/// over its time) is at least this share of the pace before it is still
-/// progressing, however few mm a short history's window holds (detector
-/// choice, docs/DETECTOR.md; a held fetus gains under 3 mm in a window of
-/// two contractions, a tenth or less of a second stage's pace).
+/// Under a steady push (a history without contractions), an arrest is a
+/// stop, not a short window: a fetus whose pace since its deepest point
+/// before the window (its gain over that time) is at least this share of
+/// its pace up to that point is still progressing, however few mm a short
+/// history's final quarter holds (detector choice, docs/DETECTOR.md). With
+/// contractions the window spans two of them and needs no such test.
 pub const ARREST_PACE_SHARE: f64 = 0.5;
 
 /// Where the fetus stopped.
@@ -181,20 +182,18 @@ pub fn outcome(history: &PoseHistory, series: &Series, spines_sigma_mm: f64, per
     // station and the stage describe.
     let stuck_at = deepest(window_start..=last);
     let reached = progress[stuck_at];
-    let before = if window_start == 0 {
-        progress[0]
-    } else {
-        progress[deepest(0..=window_start - 1)]
-    };
+    let deepest_before = if window_start == 0 { 0 } else { deepest(0..=window_start - 1) };
+    let before = progress[deepest_before];
+    // Under a steady push (no contractions to time a window by), a short
+    // window is no stop while the fetus keeps the pace it had; with
+    // contractions, two of them are window enough.
     let t = &series.time_s;
     let pace = |gain: f64, from: usize, to: usize| (t[to] > t[from]).then(|| gain / (t[to] - t[from]));
-    let still_going = match window_start {
-        0 | 1 => false,
-        _ => pace(before - progress[0], 0, window_start - 1)
+    let still_going = period_s.is_none()
+        && pace(before - progress[0], 0, deepest_before)
             .filter(|&p| p > 0.0)
-            .zip(pace(reached - before, window_start - 1, last))
-            .is_some_and(|(p_before, p_window)| p_window >= ARREST_PACE_SHARE * p_before),
-    };
+            .zip(pace(reached - before, deepest_before, last))
+            .is_some_and(|(p_before, p_window)| p_window >= ARREST_PACE_SHARE * p_before);
     if reached - before >= ARREST_PROGRESS_MM || still_going {
         return Outcome {
             delivered,

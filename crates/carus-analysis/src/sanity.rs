@@ -140,10 +140,13 @@ impl SanityCase {
                         verdict(
                             head_out && at_shoulders && on_symphysis,
                             format!(
-                                "{}; arrested at the {} stage, the {} against the {}",
+                                "{}; arrested at the {} stage, {} the {}",
                                 if head_out { "head delivered" } else { "head not delivered" },
                                 stage_name(arrest.stage),
-                                arrest.part,
+                                match arrest.part.as_str() {
+                                    "unknown" => "against".to_string(),
+                                    part => format!("the {part} against"),
+                                },
                                 arrest.against.replace('_', " ")
                             ),
                         )

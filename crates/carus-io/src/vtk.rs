@@ -765,6 +765,26 @@ mod tests {
         }
     }
 
+    /// Offsets that run back, or past the connectivity, are named as such.
+    #[test]
+    fn offsets_out_of_order_or_range_are_named() {
+        let (_dir, path) = temp("offsets.vtu");
+        // A third cell, an edge, so that an offset can fall back mid-array.
+        let three = ASCII_VTU
+            .replace("NumberOfCells=\"2\"", "NumberOfCells=\"3\"")
+            .replace(">3 5<", ">3 5 5<")
+            .replace(">0 1 2 3 0 1 3<", ">0 1 2 3 0 1 3 0 1<")
+            .replace(">10 5<", ">10 5 3<");
+        for (offsets, said) in [
+            ("4 2 9", "cell 1 has offset 2, before the previous cell's end (4): the offsets must not decrease"),
+            ("4 12 9", "cell 1 has offset 12, outside the connectivity array (9 entries)"),
+        ] {
+            std::fs::write(&path, three.replace(">4 7<", &format!(">{offsets}<"))).unwrap();
+            let e = read_vtk(&path).expect_err("refused").to_string();
+            assert!(e.contains(said), "{e}");
+        }
+    }
+
     /// vtkio drops a data array of the wrong length without a word; the
     /// reader names it instead of reporting a set the mesh lacks.
     #[test]

@@ -548,8 +548,9 @@ pub(crate) fn legacy_ascii_fault(bytes: &[u8]) -> Option<(usize, String)> {
                 Values::Count => word.parse::<u64>().is_err().then(|| "a whole number of 0 or more".to_string()),
                 Values::CellType => match word.parse::<u64>() {
                     Err(_) => Some("a whole number".to_string()),
-                    Ok(t) => (!matches!(t, 1..=16 | 21..=37 | 41 | 42 | 51 | 60..=83))
-                        .then(|| "a VTK cell type (10 is a tetrahedron, 12 a hexahedron, 5 a triangle)".to_string()),
+                    // The cell types vtkio 0.7 reads (its CellType).
+                    Ok(t) => (!matches!(t, 1..=14 | 21..=35 | 41 | 42 | 51..=56 | 60..=81))
+                        .then(|| "a VTK cell type this reader knows (10 is a tetrahedron, 12 a hexahedron, 5 a triangle)".to_string()),
                 },
                 Values::Integer { least, most, of } => match word.parse::<i128>() {
                     Ok(v) if (least..=most).contains(&v) => None,

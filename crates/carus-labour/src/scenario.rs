@@ -974,7 +974,7 @@ impl Scenario {
         let table = text.parse::<toml::Table>().map_err(|e| toml_syntax(path, &text, &e))?;
         let source = ReadFrom::file(path, text);
         let name = table.get("name").and_then(toml::Value::as_str).unwrap_or("the scenario").to_string();
-        Scenario::changed_table(table, settings, &name, base, source)
+        Scenario::changed_table(table, settings, &name, base, source, false)
     }
 
     /// A scenario file's text, and the absolute folder it lies in.
@@ -1114,18 +1114,20 @@ impl Scenario {
             }
         }
         let table = toml::Table::try_from(self)?;
-        Scenario::changed_table(table, settings, &self.name, self.base_dir.clone(), self.source.clone())
+        Scenario::changed_table(table, settings, &self.name, self.base_dir.clone(), self.source.clone(), true)
     }
 
     /// `table` with the settings made, checked as a file would be; `source`
     /// is the file it was read from, which later checks point into, not at
-    /// a changed key.
+    /// a changed key. `checked_before`: the table is of a scenario that
+    /// passed its checks, so whatever they now refuse the settings did.
     fn changed_table(
         mut table: toml::Table,
         settings: &[(String, String)],
         name: &str,
         base_dir: PathBuf,
         source: ReadFrom,
+        checked_before: bool,
     ) -> Result<Scenario, ScenarioError> {
         for (key, value) in settings {
             set_key(&mut table, key, value)?;
@@ -1145,10 +1147,16 @@ impl Scenario {
                 hint,
             },
             // A value a setting gave that the checks refuse is that
-            // setting's fault, as an unknown key is (a bad argument).
+            // setting's fault, as an unknown key is (a bad argument); so is
+            // another key's, refused through it, in a scenario that passed.
             ScenarioError::Value { key, value, problem, hint, .. } if settings.iter().any(|(k, _)| *k == key) => {
                 ScenarioError::Setting { setting: format!("{key} = {value}"), problem, hint }
             }
+            ScenarioError::Value { key, value, problem, hint, .. } if checked_before => ScenarioError::Setting {
+                setting: written.join(", "),
+                problem: format!("then `{key}` = {value}: {problem}"),
+                hint,
+            },
             mut other => {
                 if let ScenarioError::Value { path, line, key, .. } = &mut other {
                     match in_file(key) {
@@ -2514,6 +2522,10 @@ mod tests {
         // From the command line there is no file line to name.
         let e = Scenario::builtin("normal").unwrap().with_setting("floor.shear_modulus_pa", "-3").unwrap_err().to_string();
         assert!(e.starts_with("`floor.shear_modulus_pa = -3`: must be a positive"), "{e}");
+        // Another key refused through a setting is the setting's fault too.
+        let e = Scenario::builtin("textbook").unwrap().with_setting("trajectory.waypoints", "[]").unwrap_err();
+        assert!(matches!(e, ScenarioError::Setting { .. }), "{e}");
+        assert!(e.to_string().starts_with("`trajectory.waypoints = []`: then `trajectory.mode` = "), "{e}");
         let e = parse("name = \"x\"\n[expulsion]\nforce_min_n = 200.0\nforce_max_n = 100.0\n")
             .unwrap_err()
             .to_string();

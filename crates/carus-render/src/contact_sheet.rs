@@ -92,12 +92,14 @@ impl Renderer {
 
 /// The whole clauses of `text` that fit in `chars` characters: a narrow
 /// tile keeps "from below: front up", not "... her left to the", whose
-/// last words no longer say which way.
+/// last words no longer say which way; the viewpoint before the colon
+/// ("from her front right, above") is whole or not shown.
 fn in_width(text: &str, chars: usize) -> &str {
     if text.len() <= chars {
         return text;
     }
-    text[..=chars].rfind([',', ':']).map_or("", |end| &text[..end])
+    let viewpoint = text.find(':').unwrap_or(text.len());
+    text[..=chars].rfind([',', ':']).filter(|&end| end >= viewpoint).map_or("", |end| &text[..end])
 }
 
 /// Dark text on a light background, light text on a dark one.
@@ -155,6 +157,9 @@ mod tests {
         assert_eq!(in_width(text, 32), "from below: front up");
         assert_eq!(in_width(text, 20), "from below: front up");
         assert_eq!(in_width(text, 19), "from below");
+        let oblique = "from her front right, above: cranial up";
+        assert_eq!(in_width(oblique, 30), "from her front right, above");
+        assert_eq!(in_width(oblique, 26), "");
         assert_eq!(in_width(text, 12), "from below");
         assert_eq!(in_width(text, 3), "");
     }

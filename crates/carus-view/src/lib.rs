@@ -52,7 +52,7 @@ pub enum ViewError {
 /// the occiput position it names.
 fn theta_words(theta_deg: f64) -> String {
     match wrap_deg(theta_deg) {
-        w if w == theta_deg => format!("theta {theta_deg:.1} deg, occiput {}", occiput_position(w)),
+        w if theta_deg.abs() <= 180.0 => format!("theta {theta_deg:.1} deg, occiput {}", occiput_position(w)),
         w => format!("theta {theta_deg:.1} deg (= {w:+.1}), occiput {}", occiput_position(w)),
     }
 }

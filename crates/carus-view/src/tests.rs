@@ -107,6 +107,7 @@ fn an_empty_history_is_refused() {
 fn theta_beyond_a_half_turn_names_where_the_occiput_points() {
     assert_eq!(theta_words(-31.0), "theta -31.0 deg, occiput LOA");
     assert_eq!(theta_words(-300.0), "theta -300.0 deg (= +60.0), occiput ROA");
+    assert_eq!(theta_words(-180.0), "theta -180.0 deg, occiput OP");
 }
 
 /// A detector's record cut short (or of another history) is named, not

@@ -326,7 +326,7 @@ fn check_distinct(path: &Path, units: Units, l: &PelvisLandmarks) -> Result<(), 
         Some((d, a, b)) => Err(ImportError::LandmarksFile {
             path: path.to_path_buf(),
             message: format!(
-                "[landmarks]: {a} and {b} lie {} {} apart, one point named twice; each marks a different point of the bone \
+                "[landmarks]: {a} and {b} lie {:.2} {} apart, one point named twice; each marks a different point of the bone \
                  (the closest two of a pelvis lie some 15 mm apart): give {b} its own place",
                 d / units.to_metres(),
                 units.name()
@@ -447,7 +447,7 @@ pub fn assemble_pelvis(
     surface.transform(&mesh_to_pelvis_metres);
     // Bone facing into itself would draw the fetus into the bone; without
     // holes, which way is out is certain, so it is turned (and noted).
-    if report.open_edges == 0 && surface.signed_volume() < 0.0 {
+    if report.open_edges == 0 && report.unorientable_edges == 0 && surface.signed_volume() < 0.0 {
         surface.turn_inside_out();
         report.turned_outwards = true;
     }

@@ -79,14 +79,14 @@ pub enum ImportError {
         format: &'static str,
         message: String,
     },
-    #[error("{path}: triangle {} of the file (counting from 1), its corner {}, has a NaN or infinite coordinate, or a number past the 3.4e38 that the 32-bit floats of STL, OBJ and PLY hold; export the mesh again", .triangle + 1, .corner + 1)]
+    #[error("{path}: triangle {} of the file (counting from 1, a polygon as its triangles), its corner {}, has a NaN or infinite coordinate, or a number past the 3.4e38 that the 32-bit floats of STL, OBJ and PLY hold; export the mesh again", .triangle + 1, .corner + 1)]
     NonFinite {
         path: PathBuf,
         triangle: usize,
         corner: usize,
         vertex: usize,
     },
-    #[error("{path}: triangle {} of the file (counting from 1), its corner {}, has a coordinate {coordinate_m:.1e} m from the origin, beyond the {} m within which any anatomy lies; check `units` (mm or m) and export the mesh again", .triangle + 1, .corner + 1, weld::MAX_COORDINATE_M)]
+    #[error("{path}: triangle {} of the file (counting from 1, a polygon as its triangles), its corner {}, has a coordinate {coordinate_m:.1e} m from the origin, beyond the {} m within which any anatomy lies; check `units` (mm or m) and export the mesh again", .triangle + 1, .corner + 1, weld::MAX_COORDINATE_M)]
     TooFar {
         path: PathBuf,
         triangle: usize,

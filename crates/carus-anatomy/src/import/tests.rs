@@ -483,7 +483,28 @@ fn absurdly_far_vertices_are_refused_with_their_place() {
     raw.positions[2] = DVec3::new(0.0, f64::NAN, 0.0);
     let e = weld(Path::new("nan.stl"), &raw, 1e-3).unwrap_err();
     assert!(matches!(e, ImportError::NonFinite { triangle: 0, corner: 2, vertex: 2, .. }), "{e}");
-    assert!(e.to_string().contains("nan.stl: triangle 1 of the file (counting from 1), its corner 3,"), "{e}");
+    assert!(e.to_string().contains("nan.stl: triangle 1 of the file (counting from 1, a polygon as its triangles), its corner 3,"), "{e}");
+}
+
+/// A band with a half twist (a Moebius band) has no outside: the turning
+/// meets itself, and the edge where it does is counted, not taken for a
+/// hole or left unsaid.
+#[test]
+fn a_surface_with_no_outside_is_counted_as_such() {
+    let [a0, a1, a2, b0, b1, b2] = [0u32, 1, 2, 3, 4, 5];
+    let raw = RawMesh {
+        positions: vec![
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(2.0, 0.0, 0.0),
+            DVec3::new(0.0, 1.0, 0.0),
+            DVec3::new(1.0, 1.0, 0.0),
+            DVec3::new(2.0, 1.0, 0.0),
+        ],
+        triangles: vec![[a0, a1, b1], [a0, b1, b0], [a1, a2, b2], [a1, b2, b1], [a2, b0, a0], [a2, a0, b2]],
+    };
+    let (_, r) = weld(Path::new("band.obj"), &raw, 1.0).unwrap();
+    assert_eq!((r.unorientable_edges, r.non_manifold_edges, r.closed_parts), (1, 0, 0), "{r:?}");
 }
 
 /// The shipped Visible Human landmarks file, edited by `edit`.
@@ -564,7 +585,7 @@ fn landmark_file_mistakes_are_named_with_their_fix() {
         t.lines().map(|l| if l.starts_with("sacral_apex") { promontory.as_str() } else { l }).collect::<Vec<_>>().join("\n")
     });
     let err = import_pelvis(&twice).unwrap_err().to_string();
-    assert!(err.contains("sacral_promontory and sacral_apex lie 0 mm apart") && err.contains("give sacral_apex its own place"), "{err}");
+    assert!(err.contains("sacral_promontory and sacral_apex lie 0.00 mm apart") && err.contains("give sacral_apex its own place"), "{err}");
 
     let bad_axis = edited_landmarks(&dir, |t| t.replace("cranial = \"+z\"", "cranial = \"+w\""));
     assert!(import_pelvis(&bad_axis)

@@ -29,9 +29,13 @@ pub struct MeshReport {
     pub closed_parts: usize,
     /// Edges bordering one triangle only (openings).
     pub open_edges: usize,
-    /// Edges bordering more than two triangles, or two that run it the same
-    /// way after [`MeshReport::reoriented`] (a surface with no outside).
+    /// Edges bordering more than two triangles.
     pub non_manifold_edges: usize,
+    /// Edges two triangles still run the same way after
+    /// [`MeshReport::reoriented`]: a part that cannot be turned to agree (a
+    /// surface with no outside, such as a Moebius band).
+    #[serde(default)]
+    pub unorientable_edges: usize,
     /// Triangles turned to run against their neighbours, as the rest of
     /// their part does (faces an exporter flipped).
     #[serde(default)]
@@ -141,8 +145,10 @@ pub fn weld(path: &Path, raw: &RawMesh, scale: f64) -> Result<(TriSurface, MeshR
 /// winding a closed surface needs for an inside and an outside (an
 /// exporter that flips a few faces otherwise leaves edges that look like
 /// holes). Each connected part keeps the winding most of its triangles
-/// had; a part that cannot agree (a surface with no outside) keeps the
-/// first winding reached. Returns how many triangles were turned.
+/// had (on a tie, its first triangle's); in a part that cannot agree (a
+/// surface with no outside) the edges where the turning met itself still
+/// run the same way, and are counted by [`survey`]. Returns how many
+/// triangles were turned.
 fn orient_consistently(triangles: &mut [[u32; 3]]) -> usize {
     let edge = |a: u32, b: u32| (a.min(b), a.max(b));
     let mut sharing: HashMap<(u32, u32), Vec<u32>> = HashMap::with_capacity(triangles.len() * 3 / 2);
@@ -220,7 +226,7 @@ fn survey(surface: &TriSurface, triangles_read: usize, degenerate_dropped: usize
         let r = root(&mut parent, t[0]);
         part_of.entry(r).or_insert(true);
     }
-    let (mut open_edges, mut non_manifold_edges) = (0, 0);
+    let (mut open_edges, mut non_manifold_edges, mut unorientable_edges) = (0, 0, 0);
     for (&(a, b), &uses) in &directed {
         let back = directed.get(&(b, a)).copied().unwrap_or(0);
         let closed_here = uses == 1 && back == 1;
@@ -231,6 +237,7 @@ fn survey(surface: &TriSurface, triangles_read: usize, degenerate_dropped: usize
         // Count each undirected edge once.
         match (uses, back) {
             (1, 0) => open_edges += 1,
+            (2, 0) => unorientable_edges += 1,
             (_, 0) => non_manifold_edges += 1,
             _ if a < b && uses + back > 2 => non_manifold_edges += 1,
             _ => {}
@@ -244,6 +251,7 @@ fn survey(surface: &TriSurface, triangles_read: usize, degenerate_dropped: usize
         closed_parts: part_of.values().filter(|&&closed| closed).count(),
         open_edges,
         non_manifold_edges,
+        unorientable_edges,
         reoriented: 0,
         turned_outwards: false,
     }

@@ -337,6 +337,13 @@ pub(super) fn import_note(r: &carus_anatomy::import::MeshReport, mesh: &Path) ->
              normals (MeshLab: Invert Faces Orientation) to silence this note"
                 .to_string(),
         );
+    } else if r.unorientable_edges > 0 {
+        said.push(format!(
+            "{} edges are run the same way by two triangles that could not be turned to agree (a surface \
+             with no outside, such as a Moebius band), so which way is out is unknown there: mend the mesh \
+             (e.g. MeshLab's Re-Orient all faces coherently) and export it again",
+            r.unorientable_edges
+        ));
     } else if r.open_edges > 0 {
         said.push(format!(
             "{} open edges (holes), {} non-manifold edges, {} degenerate triangles dropped of {} read; \
@@ -370,6 +377,7 @@ mod tests {
             closed_parts: usize::from(open_edges == 0),
             open_edges,
             non_manifold_edges: 0,
+            unorientable_edges: 0,
             reoriented: 0,
             turned_outwards: false,
         };

@@ -83,8 +83,11 @@ pub fn run(args: &SanityArgs) -> anyhow::Result<Status> {
     // Every case is built before any runs, so a misspelt key costs nothing.
     let scenarios = SanityCase::ALL
         .iter()
-        .map(|case| Scenario::builtin(case.scenario())?.with_settings(&changes))
-        .collect::<Result<Vec<Scenario>, _>>()?;
+        .map(|case| {
+            let scenario = Scenario::builtin(case.scenario())?;
+            scenario.with_settings(&changes).with_context(|| format!("the {} case", case.scenario()))
+        })
+        .collect::<anyhow::Result<Vec<Scenario>>>()?;
     // The pool is made first: a bad --jobs leaves no out dir behind.
     let (pool, jobs) = labour_pool(args.jobs, scenarios.len())?;
     let out_dir = match &args.resume {
