@@ -2452,7 +2452,7 @@ mod tests {
         // Keys that must agree change together: the settings are checked once, after all of them.
         let textbook = Scenario::builtin("textbook").unwrap();
         let e = textbook.with_setting("trajectory.mode", "forward").unwrap_err().to_string();
-        assert!(e.contains("textbook with trajectory.mode = forward") && e.contains("reads no way-point"), "{e}");
+        assert!(e.starts_with("`trajectory.mode = forward`: then `trajectory.waypoints` = 10 way-points:") && e.contains("reads no way-point"), "{e}");
         let setting = |k: &str, v: &str| (k.to_string(), v.to_string());
         let forward = textbook
             .with_settings(&[setting("trajectory.mode", "forward"), setting("trajectory.waypoints", "[]")])
