@@ -445,12 +445,9 @@ pub fn assemble_pelvis(
     let (mut surface, mut report) = weld(&mesh_path, raw, scale)?;
     let mesh_to_pelvis_metres = to_pelvis * DAffine3::from_mat3(to_anatomical);
     surface.transform(&mesh_to_pelvis_metres);
-    // Bone facing into itself would draw the fetus into the bone; without
-    // holes, which way is out is certain, so it is turned (and noted).
-    if report.open_edges == 0 && report.unorientable_edges == 0 && surface.signed_volume() < 0.0 {
-        surface.turn_inside_out();
-        report.turned_outwards = true;
-    }
+    // Bone facing into itself would draw the fetus into the bone; a part
+    // without holes has a certain outside, so it is turned (and noted).
+    report.turned_outwards = super::weld::turn_parts_outwards(&mut surface) > 0;
     check_landmarks_on_bone(path, &mesh_path, file.units, &landmarks, &surface)?;
     let pelvis = Pelvis::from_landmarks(landmarks, surface).map_err(|source| ImportError::Pelvis {
         path: path.to_path_buf(),

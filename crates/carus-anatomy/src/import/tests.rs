@@ -771,6 +771,17 @@ fn a_pelvis_facing_into_its_bone_is_turned_outwards() {
     assert!(r.turned_outwards && r.reoriented == 1 && r.open_edges == 0, "{r:?}");
     assert_eq!(r.non_manifold_edges, as_shipped.report.non_manifold_edges);
     assert_eq!(mended.pelvis.surface.triangles, turned.pelvis.surface.triangles);
+    // One bone of the four facing in (the sacrum, say, exported apart) is
+    // turned alone, though the whole still encloses a positive volume.
+    let mut one_bone = as_shipped.pelvis.surface.clone();
+    let part = super::weld::vertex_parts(&one_bone);
+    let bone = part[one_bone.triangles[0][0] as usize];
+    for t in one_bone.triangles.iter_mut().filter(|t| part[t[0] as usize] == bone) {
+        t.swap(1, 2);
+    }
+    assert!(one_bone.signed_volume() > 0.0);
+    assert_eq!(super::weld::turn_parts_outwards(&mut one_bone), 1);
+    assert_eq!(one_bone.triangles, as_shipped.pelvis.surface.triangles);
     let volume = |p: &ImportedPelvis| p.pelvis.surface.signed_volume();
     assert!(volume(&turned) > 0.0 && (volume(&turned) - volume(&as_shipped)).abs() < 1e-9 * volume(&as_shipped).abs().max(1.0), "{} against {}", volume(&turned), volume(&as_shipped));
     assert_eq!(turned.pelvis.landmarks, as_shipped.pelvis.landmarks);

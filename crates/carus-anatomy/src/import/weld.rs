@@ -40,8 +40,8 @@ pub struct MeshReport {
     /// their part does (faces an exporter flipped).
     #[serde(default)]
     pub reoriented: usize,
-    /// Whether the surface, closed but facing into the bone (negative
-    /// volume), was turned to face outwards.
+    /// Whether a part facing into the bone (negative volume) was turned
+    /// to face outwards ([`turn_parts_outwards`]).
     #[serde(default)]
     pub turned_outwards: bool,
 }
@@ -196,9 +196,9 @@ fn orient_consistently(triangles: &mut [[u32; 3]]) -> usize {
     turned
 }
 
-/// Counts parts, closed parts, open and non-manifold edges.
-fn survey(surface: &TriSurface, triangles_read: usize, degenerate_dropped: usize) -> MeshReport {
-    // Union-find over vertices joined by triangles.
+/// The connected part of each vertex (a representative vertex; triangles
+/// sharing a vertex are one part).
+pub(super) fn vertex_parts(surface: &TriSurface) -> Vec<u32> {
     let mut parent: Vec<u32> = (0..surface.vertices.len() as u32).collect();
     fn root(parent: &mut [u32], mut v: u32) -> u32 {
         while parent[v as usize] != v {
@@ -214,25 +214,31 @@ fn survey(surface: &TriSurface, triangles_read: usize, degenerate_dropped: usize
             parent[b as usize] = a;
         }
     }
-    // Directed edge uses.
+    (0..parent.len() as u32).map(|v| root(&mut parent, v)).collect()
+}
+
+/// How many triangles run each directed edge.
+fn directed_uses(surface: &TriSurface) -> HashMap<(u32, u32), u32> {
     let mut directed: HashMap<(u32, u32), u32> = HashMap::with_capacity(surface.triangles.len() * 3);
     for t in &surface.triangles {
         for k in 0..3 {
             *directed.entry((t[k], t[(k + 1) % 3])).or_default() += 1;
         }
     }
-    let mut part_of: HashMap<u32, bool> = HashMap::new();
-    for t in &surface.triangles {
-        let r = root(&mut parent, t[0]);
-        part_of.entry(r).or_insert(true);
-    }
+    directed
+}
+
+/// Counts parts, closed parts, open and non-manifold edges.
+fn survey(surface: &TriSurface, triangles_read: usize, degenerate_dropped: usize) -> MeshReport {
+    let part = vertex_parts(surface);
+    let directed = directed_uses(surface);
+    let mut part_of: HashMap<u32, bool> = surface.triangles.iter().map(|t| (part[t[0] as usize], true)).collect();
     let (mut open_edges, mut non_manifold_edges, mut unorientable_edges) = (0, 0, 0);
     for (&(a, b), &uses) in &directed {
         let back = directed.get(&(b, a)).copied().unwrap_or(0);
         let closed_here = uses == 1 && back == 1;
         if !closed_here {
-            let r = root(&mut parent, a);
-            part_of.insert(r, false);
+            part_of.insert(part[a as usize], false);
         }
         // Count each undirected edge once.
         match (uses, back) {
@@ -255,4 +261,31 @@ fn survey(surface: &TriSurface, triangles_read: usize, degenerate_dropped: usize
         reoriented: 0,
         turned_outwards: false,
     }
+}
+
+/// Turns each part of `surface` that faces into the volume it encloses
+/// (its signed volume negative) to face outwards, and says how many: a
+/// bone facing into itself would draw the fetus into it. Only a part whose
+/// every edge some triangle crosses back has an inside for certain (bones
+/// glued along shared edges count); one with an opening, or an edge no
+/// turning made agree, is left as it faces.
+pub fn turn_parts_outwards(surface: &mut TriSurface) -> usize {
+    let part = vertex_parts(surface);
+    let directed = directed_uses(surface);
+    let mut enclosing: HashMap<u32, bool> = HashMap::new();
+    let mut volume: HashMap<u32, f64> = HashMap::new();
+    for (t, corners) in surface.triangles.iter().enumerate() {
+        let p = part[corners[0] as usize];
+        let sound = (0..3).all(|k| directed.contains_key(&(corners[(k + 1) % 3], corners[k])));
+        *enclosing.entry(p).or_insert(true) &= sound;
+        let [a, b, c] = surface.corners(t);
+        *volume.entry(p).or_default() += a.dot(b.cross(c)) / 6.0;
+    }
+    let inward: Vec<u32> = volume.iter().filter(|&(p, &v)| v < 0.0 && enclosing[p]).map(|(&p, _)| p).collect();
+    for t in surface.triangles.iter_mut() {
+        if inward.contains(&part[t[0] as usize]) {
+            t.swap(1, 2);
+        }
+    }
+    inward.len()
 }

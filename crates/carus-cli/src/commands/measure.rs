@@ -332,9 +332,9 @@ pub(super) fn import_note(r: &carus_anatomy::import::MeshReport, mesh: &Path) ->
     }
     if r.turned_outwards {
         said.push(
-            "its triangles faced into the bone (the closed surface's volume was negative), which would \
-             draw the fetus into it; they were turned to face outwards. Export the mesh with outward \
-             normals (MeshLab: Invert Faces Orientation) to silence this note"
+            "its triangles faced into the bone (the volume a part of it encloses was negative), which \
+             would draw the fetus into it; they were turned to face outwards. Export the mesh with \
+             outward normals (MeshLab: Invert Faces Orientation) to silence this note"
                 .to_string(),
         );
     } else if r.unorientable_edges > 0 {
