@@ -69,12 +69,14 @@ impl TriSurface {
     /// Signed enclosed volume (divergence theorem), m^3: positive when closed
     /// and outward-facing.
     pub fn signed_volume(&self) -> f64 {
-        (0..self.triangles.len())
-            .map(|t| {
-                let [a, b, c] = self.corners(t);
-                a.dot(b.cross(c)) / 6.0
-            })
-            .sum()
+        (0..self.triangles.len()).map(|t| self.volume_share(t)).sum()
+    }
+
+    /// Triangle `t`'s share of [`TriSurface::signed_volume`] (the signed
+    /// volume of the tetrahedron it spans with the origin), m^3.
+    pub fn volume_share(&self, t: usize) -> f64 {
+        let [a, b, c] = self.corners(t);
+        a.dot(b.cross(c)) / 6.0
     }
 
     /// Axis-aligned bounds `(min, max)`; `None` when there are no vertices.

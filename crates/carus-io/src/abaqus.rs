@@ -495,7 +495,7 @@ impl Reader<'_> {
                     "use first <= last and a positive increment",
                 ));
             }
-            let ids = (last - first) / step + 1;
+            let ids = ((last - first) / step).saturating_add(1);
             if ids > self.line_count as u64 {
                 let kind = if elements { "elements" } else { "nodes" };
                 return Err(self.error(

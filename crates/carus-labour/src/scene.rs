@@ -12,7 +12,6 @@ use carus_analysis::{BirthCanal, ContactSite, HeadGeometry, TrunkGeometry};
 use carus_anatomy::fetus::{FetalHead, HeadLandmarks, Trunk, TrunkDiameters};
 use carus_anatomy::floor::{pelvic_floor, ATTACHED};
 use carus_anatomy::import::MeshReport;
-use carus_anatomy::pelvis::PelvisBuildError;
 use carus_anatomy::{Pelvis, Plane, TriSurface};
 use carus_contact::{
     obstacle_contacts, pair_contacts, BodyContactState, BodyMotion, ContactLaw, HeadAxes, MassProperties, NeckGeometry, RegionTable,
@@ -733,10 +732,7 @@ fn pelvis_files_digest(s: &Scenario, import: Option<&(MeshReport, PathBuf)>) -> 
 fn build_pelvis(s: &Scenario) -> Result<(Pelvis, Option<(MeshReport, PathBuf)>), LabourError> {
     s.pelvis
         .build_with_report(&s.base_dir)
-        .map_err(|e| {
-            let from_diameters = matches!(e, PelvisBuildError::Generate(_));
-            unbuildable(s, "pelvis", from_diameters, e)
-        })
+        .map_err(|e| unbuildable(s, "pelvis", e.of_diameters(), e))
 }
 
 /// A scenario's `[pelvis]` or `[head]` table that cannot be built, with the

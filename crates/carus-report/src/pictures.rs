@@ -103,7 +103,7 @@ pub fn nearest_frame(floor: &FloorSurface, time_s: f64) -> Option<&FloorFrame> {
 
 /// The colour scale's stretch range over `frames`: from 1 (rest) to the
 /// largest stretch, at least [`MIN_STRETCH_TOP`]; none without a number.
-pub fn stretch_range_of<'a>(frames: impl IntoIterator<Item = &'a FloorFrame>) -> Option<[f64; 2]> {
+fn stretch_range_of<'a>(frames: impl IntoIterator<Item = &'a FloorFrame>) -> Option<[f64; 2]> {
     let top = frames
         .into_iter()
         .flat_map(|f| f.stretch.iter().copied())

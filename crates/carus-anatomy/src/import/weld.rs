@@ -278,8 +278,7 @@ pub fn turn_parts_outwards(surface: &mut TriSurface) -> usize {
         let p = part[corners[0] as usize];
         let sound = (0..3).all(|k| directed.contains_key(&(corners[(k + 1) % 3], corners[k])));
         *enclosing.entry(p).or_insert(true) &= sound;
-        let [a, b, c] = surface.corners(t);
-        *volume.entry(p).or_default() += a.dot(b.cross(c)) / 6.0;
+        *volume.entry(p).or_default() += surface.volume_share(t);
     }
     let inward: Vec<u32> = volume.iter().filter(|&(p, &v)| v < 0.0 && enclosing[p]).map(|(&p, _)| p).collect();
     for t in surface.triangles.iter_mut() {

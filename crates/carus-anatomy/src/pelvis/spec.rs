@@ -37,6 +37,14 @@ pub enum PelvisBuildError {
     Import(#[from] ImportError),
 }
 
+impl PelvisBuildError {
+    /// Whether the error is about the table's own diameters, not about an
+    /// import's files (whose messages quote the landmarks file, not the table).
+    pub fn of_diameters(&self) -> bool {
+        matches!(self, PelvisBuildError::Generate(_))
+    }
+}
+
 impl PelvisSpec {
     /// Builds the pelvis; an imported one's path is taken relative to `base_dir`
     /// (the folder of the file the spec came from), except the name

@@ -394,7 +394,8 @@ fn cpu_bench(args: &TledBenchArgs, kind: ElementKind, steps: u64) -> anyhow::Res
     let model_bytes_per_element = model.memory_bytes() as f64 / model.element_count() as f64;
     let bcs = setup.boundary_conditions(&mesh);
     let (elements, nodes) = (model.element_count(), model.node_count());
-    if super::shows_progress(args.quiet) {
+    let show = super::shows_progress(args.quiet);
+    if show {
         eprintln!("timing the solver: {steps} steps of {elements} elements ...");
     }
     let mut solver = TledSolver::new(model, &bcs, dt, StepControl::Refuse)?;
@@ -408,7 +409,7 @@ fn cpu_bench(args: &TledBenchArgs, kind: ElementKind, steps: u64) -> anyhow::Res
     let peak_rss_bytes = peak_rss_bytes();
     drop(solver);
 
-    if super::shows_progress(args.quiet) {
+    if show {
         eprintln!("timing the single-threaded baseline: {steps} steps ...");
     }
     let mut baseline = baseline_solver(&setup, &mesh, dt)?;

@@ -8,7 +8,7 @@ use carus_anatomy::fetus::{
     AtlantoOccipitalPlacement, FetalHead, HeadDiameters, HeadMeasurement, DEFAULT_HEAD_SUBDIVISIONS,
 };
 use carus_anatomy::floor::{pelvic_floor, FloorParameters};
-use carus_anatomy::pelvis::{measure, Pelvis, PelvisBuildError, PelvisMeasurement, PelvisSpec};
+use carus_anatomy::pelvis::{measure, Pelvis, PelvisMeasurement, PelvisSpec};
 use serde::Deserialize;
 
 use super::{print_json, Status};
@@ -276,9 +276,7 @@ impl AnatomyFile {
         let where_ = self.path.as_ref().map_or("the default pelvis".to_string(), |p| format!("{}: [pelvis]", p.display()));
         let (pelvis, report) = self.pelvis.build_with_report(base).map_err(|e| {
             // The keys the message names that the file leaves to their defaults.
-            // Only a table of diameters: an import's errors quote its landmarks file.
-            let from_diameters = matches!(e, PelvisBuildError::Generate(_));
-            let text = self.path.as_deref().filter(|_| from_diameters).and_then(|p| read_text(p).ok());
+            let text = self.path.as_deref().filter(|_| e.of_diameters()).and_then(|p| read_text(p).ok());
             match text.and_then(|t| carus_labour::scenario::defaults_note_in(&t, "pelvis", &e.to_string())) {
                 Some(note) => anyhow::anyhow!("{where_}: {e}\n  note: {note}"),
                 None => anyhow::Error::from(e).context(where_),

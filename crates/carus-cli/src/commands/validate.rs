@@ -89,9 +89,10 @@ pub fn run(args: &ValidateArgs) -> anyhow::Result<Status> {
         CaseArg::All => vec![CaseArg::V1, CaseArg::V2, CaseArg::V3, CaseArg::V4, CaseArg::V5, CaseArg::V6, CaseArg::V7],
         one => vec![one],
     };
+    let show = super::shows_progress(args.quiet);
     let mut outcomes = Vec::new();
     for id in ids {
-        if super::shows_progress(args.quiet) {
+        if show {
             eprintln!("running {} ({}) ...", label(id), title(id));
         }
         let outcome = run_case(id);
@@ -131,12 +132,13 @@ fn run_cube(args: &ValidateArgs) -> anyhow::Result<Status> {
         let per_cell = if elements.iter().all(|&e| e == CubeElement::H8) { 1 } else { 6 };
         super::check_cube_size(n, per_cell, true)?;
     }
+    let show = super::shows_progress(args.quiet);
     let mut results: Vec<(String, CubeResult)> = Vec::new();
     for &n in &sizes {
         for &element in &elements {
             for &variant in &variants {
                 let key = format!("{}_{}_n{}", element.name(), variant.name(), n);
-                if super::shows_progress(args.quiet) {
+                if show {
                     eprintln!("running cube {key} ...");
                 }
                 let hourglass_modulus = match args.hourglass_modulus {

@@ -485,9 +485,11 @@ mod tests {
         assert!(more().is_none());
         assert!(!checkpoint_is_newer(dir.path()));
         // A copy that dates its checkpoint after its record shows the
-        // record, which holds as much.
-        let checkpoint = std::fs::read(dir.path().join(CHECKPOINT_FILE)).unwrap();
-        std::fs::write(dir.path().join(CHECKPOINT_FILE), checkpoint).unwrap();
+        // record, which holds as much. (Dated a second on: a rewrite within
+        // the file system's clock tick would keep the same time.)
+        let record_time = modified(&dir.path().join(RUN_FILE)).unwrap();
+        let checkpoint = std::fs::File::options().write(true).open(dir.path().join(CHECKPOINT_FILE)).unwrap();
+        checkpoint.set_modified(record_time + std::time::Duration::from_secs(1)).unwrap();
         assert!(checkpoint_is_newer(dir.path()) && !RunShown::read(dir.path()).unwrap().in_progress);
         // Run to its end, it is over.
         carus_labour::resume(dir.path(), &carus_labour::RunOptions::default(), &mut carus_labour::SilentObserver).unwrap();
