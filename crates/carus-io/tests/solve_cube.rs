@@ -367,3 +367,32 @@ fn job_errors_name_the_key_the_line_and_the_fix() {
     assert!(err.contains("did you mean `damping_per_s`?"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// An output interval shorter than the step writes at every step, and the
+/// summary says so, with how many it wrote.
+#[test]
+fn an_interval_shorter_than_the_step_is_noted() {
+    let dir = fresh_dir("interval-below-step");
+    let body = format!(
+        "{BASE}\n[solver]\nend_time_s = 1e-4\ntime_step_s = \"auto\"\n\n[output]\nframe_interval_s = 1e-12\nhistory_interval_s = 1e-12\n"
+    );
+    let job = write_job(&dir, &body);
+    let out = dir.join("out");
+    let report = run_job(&job, &out, &RunOptions::default(), &mut |_| {}).unwrap();
+    assert!(report.failure.is_none(), "{:?}", report.failure);
+    assert_eq!(report.frames as u64, report.steps + 1, "the start and every step");
+    let steps = format!("{} in all", report.steps);
+    for key in ["output.frame_interval_s = 1.000e-12 s", "output.history_interval_s = 1.000e-12 s"] {
+        assert!(
+            report.notes.iter().any(|n| n.starts_with(key) && n.contains("shorter than the time step") && n.contains(&steps)),
+            "{key}: {:?}",
+            report.notes
+        );
+    }
+    // A spacing of whole steps is not noted.
+    let body = format!("{BASE}\n[solver]\nend_time_s = 1e-4\ntime_step_s = \"auto\"\n");
+    let job = write_job(&dir, &body);
+    let report = run_job(&job, &dir.join("out-default"), &RunOptions::default(), &mut |_| {}).unwrap();
+    assert!(!report.notes.iter().any(|n| n.contains("shorter than the time step")), "{:?}", report.notes);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

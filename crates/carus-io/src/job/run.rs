@@ -16,7 +16,7 @@ use serde::Serialize;
 
 use super::load::{load_job, mesh_path};
 use super::spec::{
-    JobSpec, Law, LoadSpec, PrecisionSpec, TetSpec, TimeStep, AUTO_TIME_STEP_FRACTION,
+    JobSpec, Law, LoadSpec, OutputSpec, PrecisionSpec, TetSpec, TimeStep, AUTO_TIME_STEP_FRACTION,
 };
 use super::JobError;
 use crate::builder::MeshFile;
@@ -210,6 +210,29 @@ fn displacement_notes(spec: &JobSpec, size_m: f64) -> Vec<String> {
             })
         })
         .collect()
+}
+
+/// Notes on output intervals set shorter than the time step: each step
+/// then writes a frame (or a history row), which for a long run is far
+/// more files than asked for, and the spacing set is not kept. Defaults
+/// (fractions of the run) are not noted: a short run may well fall below
+/// them.
+fn interval_notes(output: &OutputSpec, dt_s: f64, end_s: f64) -> Vec<String> {
+    let steps = (end_s / dt_s).round();
+    [
+        ("frame_interval_s", output.frame_interval_s, "frame"),
+        ("history_interval_s", output.history_interval_s, "history row"),
+    ]
+    .into_iter()
+    .filter_map(|(key, interval_s, what)| Some((key, interval_s?, what)))
+    .filter(|&(_, interval_s, _)| interval_s < dt_s)
+    .map(|(key, interval_s, what)| {
+        format!(
+            "output.{key} = {interval_s:.3e} s is shorter than the time step ({dt_s:.3e} s): a {what} was written \
+             at every step, {steps:.0} in all; set it to a multiple of the step to keep the spacing asked for"
+        )
+    })
+    .collect()
 }
 
 fn materials(spec: &JobSpec, sets: &Sets) -> Result<Vec<MaterialRegion>, JobError> {
@@ -688,7 +711,14 @@ pub fn run_job(
         elements: mesh.element_count(),
         nodes: mesh.node_count(),
         failure,
-        notes: file.notes.iter().cloned().chain(auxetic_notes(&spec)).chain(displacement_notes(&spec, solver.model().size_m())).collect(),
+        notes: file
+            .notes
+            .iter()
+            .cloned()
+            .chain(auxetic_notes(&spec))
+            .chain(displacement_notes(&spec, solver.model().size_m()))
+            .chain(interval_notes(&spec.output, dt_s, end_s))
+            .collect(),
     };
     let summary = out_dir.join("summary.json");
     let json = serde_json::to_string_pretty(&report).unwrap_or_default();
