@@ -22,7 +22,7 @@ use carus_labour::StageTimes;
 use serde::Serialize;
 
 use super::run::{load_changed, run_into};
-use super::sweep::one_setting_arg;
+use super::settings::one_setting_arg;
 use super::{ctrl_c_flag, print_json, Status};
 
 #[derive(clap::Subcommand)]
@@ -73,7 +73,8 @@ pub struct TledBenchArgs {
     /// the edge of f64, tolerance 1e-2) and the GPU backend runs.
     #[arg(long, value_enum, default_value = "f32")]
     pub precision: PrecisionArg,
-    /// Where the step loop runs: cpu, gpu, or auto (a real GPU if present).
+    /// Where the step loop runs: cpu, gpu (f32, its own threads), or auto
+    /// (a real GPU if present, the CPU when --threads or --precision f64 is given).
     #[arg(long, value_enum, default_value = "cpu")]
     pub backend: BackendArg,
     /// GPU: the device's peak memory bandwidth, GB/s, for the fraction of peak.
@@ -294,6 +295,14 @@ fn tled(args: &TledBenchArgs) -> anyhow::Result<Status> {
     if let Some(peak) = args.peak_gbs.filter(|p| !(p.is_finite() && *p > 0.0)) {
         crate::bad_argument!("--peak-gbs {peak}: the device's peak memory bandwidth, a positive number of GB/s (e.g. 3350 for an H100)");
     }
+    // The GPU's kernels are f32 and its threads its own: flags it would ignore are refused.
+    if args.backend == BackendArg::Gpu && args.threads.is_some() {
+        crate::bad_argument!("--threads sets the CPU solver's worker threads; --backend gpu has none (drop --threads, or use --backend cpu)");
+    }
+    let cpu_only = args.threads.is_some() || matches!(args.precision, PrecisionArg::F64);
+    if args.backend == BackendArg::Gpu && cpu_only {
+        crate::bad_argument!("--precision f64: the GPU kernels are f32; f64 runs with --backend cpu");
+    }
     let kind = match args.element {
         ElementArg::H8 => ElementKind::H8,
         ElementArg::T4 => ElementKind::T4,
@@ -302,7 +311,8 @@ fn tled(args: &TledBenchArgs) -> anyhow::Result<Status> {
     super::check_cube_size(args.n, per_cell, false)?;
     let elements = args.n.pow(3) * per_cell;
     let steps = args.steps.unwrap_or((2e7 as u64 / elements as u64).clamp(10, 5000));
-    if args.backend != BackendArg::Cpu {
+    // `auto` with a CPU-only flag times the CPU, as asked.
+    if args.backend == BackendArg::Gpu || (args.backend == BackendArg::Auto && !cpu_only) {
         match gpu_bench(args, kind, steps)? {
             Some(status) => return Ok(status),
             None if args.quiet => {}

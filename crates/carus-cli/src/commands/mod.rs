@@ -1,5 +1,6 @@
 //! One module per subcommand; each owns its clap arguments and its `run`.
 
+mod batch;
 pub mod bench;
 pub mod detect;
 pub mod measure;
@@ -8,6 +9,7 @@ pub mod render;
 pub mod run;
 pub mod sanity;
 pub mod scenarios;
+mod settings;
 pub mod solve;
 pub mod sweep;
 pub mod validate;
@@ -161,6 +163,24 @@ pub fn folder_kind(dir: &std::path::Path) -> Option<String> {
         return Some(format!("{d} is the folder of `carus sanity`: `carus sanity --resume {d}` goes on with it"));
     }
     holds_run(dir).then(|| format!("{d} is a run's folder: `carus run --resume {d}` goes on with a stopped run, `carus view {d}` replays it"))
+}
+
+/// A `--resume` folder that is not there, or a file given for it, named
+/// with what `carus {command} --resume` takes (a folder holding `kept`),
+/// and for a file in such a folder, the folder.
+pub fn check_resume_dir(dir: &std::path::Path, command: &str, kept: &str) -> anyhow::Result<()> {
+    let d = dir.display();
+    if dir.is_file() {
+        let folder = dir.parent().filter(|f| !f.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
+        if folder.join(kept).is_file() {
+            anyhow::bail!("{d} is a file; --resume takes its folder: `carus {command} --resume {}`", folder.display());
+        }
+        anyhow::bail!("{d} is a file; --resume takes the folder that `carus {command}` wrote ({kept} in it)");
+    }
+    if !dir.exists() {
+        anyhow::bail!("{d} does not exist; --resume takes the folder that `carus {command}` wrote ({kept} in it)");
+    }
+    Ok(())
 }
 
 /// Refuses a cube of `n` elements per edge, `per_cell` elements in each of

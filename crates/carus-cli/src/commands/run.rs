@@ -16,7 +16,7 @@ use carus_labour::loads::GuideSummary;
 use carus_labour::{LabourError, Mode, Observer, RunOptions, RunRecord, Scenario, Scene, Simulation, BUILTINS};
 use serde_json::json;
 
-use super::sweep::{one_setting, one_setting_arg};
+use super::settings::{one_setting, one_setting_arg};
 use super::{print_json, Status};
 
 /// Where a labour command writes and what it prints (`carus run`, `carus sweep`, `carus sanity`).
@@ -98,6 +98,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
                     ),
                 }
             }
+            super::check_resume_dir(dir, "run", carus_labour::output::SCENARIO_FILE)?;
             // A folder the run cannot write in is found now, not after
             // simulating to the next checkpoint (the mark is rewritten).
             if super::holds_run(dir) && !run_ended(dir) {
@@ -118,7 +119,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
         None => {
             let scenario = load_changed(args.scenario.as_deref(), &args.settings)?;
             // Before the build, which angles in radians often fail.
-            if let Some(note) = scenario.trajectory.radians_note() {
+            if let Some(note) = scenario.trajectory.radians_note().filter(|_| !args.output.quiet) {
                 eprintln!("note: {note}");
             }
             let named = args.scenario.as_deref().unwrap_or(DEFAULT_SCENARIO);
@@ -128,7 +129,8 @@ pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
             let building = Instant::now();
             let scene = in_scenario(Scene::build(&scenario), named)?;
             // Holes in an imported pelvis let the fetus through: said before it runs.
-            if let Some(note) = scene.pelvis_import.as_ref().and_then(|(report, mesh)| super::measure::import_note(report, mesh)) {
+            let import_note = scene.pelvis_import.as_ref().and_then(|(report, mesh)| super::measure::import_note(report, mesh));
+            if let Some(note) = import_note.filter(|_| !args.output.quiet) {
                 eprintln!("note: {note}");
             }
             let sim = in_scenario(Simulation::new(&scene), named)?;
@@ -331,7 +333,7 @@ fn report_scene_with_forces(
         return Ok(pictured);
     }
     let forces = carus_view::forces::Forces::new(record.loads.clone(), scene.pivot_in_head, scene.expulsion_at_pivot(), &pictured)?;
-    let (moments, _) = carus_report::moments::key_moments(detector);
+    let (moments, _) = carus_analysis::moments::key_moments(detector);
     pictured.forces = moments
         .iter()
         .map(|m| {
@@ -484,18 +486,23 @@ pub(super) fn load(name: Option<&str>) -> anyhow::Result<Scenario> {
 /// the settings made first, so that `--set` can mend it.
 pub(crate) fn load_changed(name: Option<&str>, settings: &[String]) -> anyhow::Result<Scenario> {
     let changes = settings.iter().map(|text| one_setting(text)).collect::<anyhow::Result<Vec<_>>>()?;
-    match load(name) {
-        Ok(scenario) => Ok(scenario.with_settings(&changes)?),
-        Err(e) => {
-            let mended = e.downcast_ref::<carus_labour::ScenarioError>().is_some_and(|e| match e {
-                carus_labour::ScenarioError::Value { key, .. } => changes.iter().any(|(k, _)| k == key),
-                _ => false,
-            });
-            match (mended, name) {
-                (true, Some(file)) => Ok(Scenario::from_file_with_settings(Path::new(file), &changes)?),
-                _ => Err(e),
-            }
-        }
+    Ok(load_mended(name, &changes)?.with_settings(&changes)?)
+}
+
+/// A scenario as loaded; a file refused for a value one of `changes`
+/// sets is read with the changes made first (and returned so).
+pub(super) fn load_mended(name: Option<&str>, changes: &[(String, String)]) -> anyhow::Result<Scenario> {
+    let e = match load(name) {
+        Ok(scenario) => return Ok(scenario),
+        Err(e) => e,
+    };
+    let mended = e.downcast_ref::<carus_labour::ScenarioError>().is_some_and(|e| match e {
+        carus_labour::ScenarioError::Value { key, .. } => changes.iter().any(|(k, _)| k == key),
+        _ => false,
+    });
+    match (mended, name) {
+        (true, Some(file)) => Ok(Scenario::from_file_with_settings(Path::new(file), changes)?),
+        _ => Err(e),
     }
 }
 
@@ -1073,7 +1080,7 @@ mod tests {
     fn the_report_draws_the_forces_at_each_key_moment() {
         let mut record = coarse_record(4.0);
         let detector = record.detector.clone().unwrap();
-        let (moments, _) = carus_report::moments::key_moments(&detector);
+        let (moments, _) = carus_analysis::moments::key_moments(&detector);
         assert!(!moments.is_empty(), "the run reached no key moment");
         let built = Scene::build(&record.scenario).unwrap();
         let scene = report_scene_with_forces(&record, &built, &detector).unwrap();

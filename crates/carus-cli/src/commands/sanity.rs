@@ -19,8 +19,9 @@ use carus_labour::Scenario;
 use rayon::prelude::*;
 use serde_json::json;
 
+use super::batch::{check_runs_match_plan, check_runs_start};
 use super::run::{go_on_into, make_batch_dir, outcome_line, OutputArgs};
-use super::sweep::{one_setting, one_setting_arg};
+use super::settings::{one_setting, one_setting_arg};
 use super::{ctrl_c_flag, labour_pool, print_json, Status};
 
 #[derive(clap::Args)]
@@ -68,6 +69,7 @@ struct SanityPlan {
 pub fn run(args: &SanityArgs) -> anyhow::Result<Status> {
     let plan = match &args.resume {
         Some(dir) => {
+            super::check_resume_dir(dir, "sanity", PLAN_FILE)?;
             let path = dir.join(PLAN_FILE);
             if let Some(kind) = super::folder_kind(dir).filter(|_| !path.exists()) {
                 anyhow::bail!("{} holds no sanity cases: {kind}", dir.display());
@@ -80,7 +82,9 @@ pub fn run(args: &SanityArgs) -> anyhow::Result<Status> {
         None => SanityPlan { set: args.settings.clone() },
     };
     let changes = plan.set.iter().map(|text| one_setting(text)).collect::<anyhow::Result<Vec<_>>>()?;
-    // Every case is built before any runs, so a misspelt key costs nothing.
+    // Every case's settings are made, and its anatomy and model built,
+    // before any runs, so a misspelt key costs nothing and a case that
+    // cannot start is judged so without ending the others.
     let scenarios = SanityCase::ALL
         .iter()
         .map(|case| {
@@ -88,12 +92,18 @@ pub fn run(args: &SanityArgs) -> anyhow::Result<Status> {
             scenario.with_settings(&changes).with_context(|| format!("the {} case", case.scenario()))
         })
         .collect::<anyhow::Result<Vec<Scenario>>>()?;
+    let names: Vec<String> = SanityCase::ALL.iter().map(|case| case.scenario().to_string()).collect();
+    let cannot_start = check_runs_start(&scenarios, &names, "sanity cases", "its verdict gives the reason")?;
     // The pool is made first: a bad --jobs leaves no out dir behind.
     let (pool, jobs) = labour_pool(args.jobs, scenarios.len())?;
     let out_dir = match &args.resume {
         Some(dir) => dir.clone(),
         None => make_batch_dir(&args.output, "sanity", PLAN_FILE, &plan)?,
     };
+    let dirs: Vec<PathBuf> = names.iter().map(|name| out_dir.join(name)).collect();
+    if args.resume.is_some() {
+        check_runs_match_plan(&out_dir.join(PLAN_FILE), &scenarios, &dirs)?;
+    }
     let stop = ctrl_c_flag();
     if !args.output.quiet {
         eprintln!(
@@ -102,18 +112,23 @@ pub fn run(args: &SanityArgs) -> anyhow::Result<Status> {
             out_dir.display()
         );
     }
-    let judged = pool.install(|| {
-        SanityCase::ALL
-            .par_iter()
-            .zip(scenarios.par_iter())
-            .map(|(&case, scenario)| {
-                if stop.load(Ordering::Relaxed) {
-                    return Ok(not_run(case));
+    let judged: Vec<Judged> = pool.install(|| {
+        (0..scenarios.len())
+            .into_par_iter()
+            .map(|i| {
+                let case = SanityCase::ALL[i];
+                if let Some(reason) = &cannot_start[i] {
+                    return not_run(case, &format!("the run cannot start: {reason}"));
                 }
-                judge_case(case, scenario, &out_dir.join(case.scenario()), &stop)
+                if stop.load(Ordering::Relaxed) {
+                    return not_run(case, "stopped before it started");
+                }
+                // A case that cannot be run is judged so; the others' verdicts are kept.
+                judge_case(case, &scenarios[i], &dirs[i], &stop)
+                    .unwrap_or_else(|e| not_run(case, &format!("the run failed: {e:#}")))
             })
-            .collect::<anyhow::Result<Vec<Judged>>>()
-    })?;
+            .collect()
+    });
     let met = judged.iter().filter(|j| j.verdict.met).count();
     let verdicts = json!({
         "cases": judged.iter().map(|j| json!({
@@ -158,10 +173,12 @@ pub fn run(args: &SanityArgs) -> anyhow::Result<Status> {
         };
         println!("{met} of {} cases met{with}; runs in {}", judged.len(), out_dir.display());
     }
-    if stop.load(Ordering::Relaxed) {
+    // A Ctrl-C after the last case ended stops nothing.
+    let stopped = stop.load(Ordering::Relaxed) && judged.iter().any(|j| !j.completed);
+    if stopped {
         eprintln!("stopped before every case ended; go on with: carus sanity --resume {}", out_dir.display());
     }
-    Ok(if met == judged.len() && !stop.load(Ordering::Relaxed) {
+    Ok(if met == judged.len() && !stopped {
         Status::Success
     } else {
         Status::Failed
@@ -209,13 +226,13 @@ fn judge_case(case: SanityCase, scenario: &Scenario, dir: &Path, stop: &Arc<Atom
     })
 }
 
-/// A case not started because the cases were stopped.
-fn not_run(case: SanityCase) -> Judged {
+/// A case that was not run, or whose run could not be made, and why.
+fn not_run(case: SanityCase, why: &str) -> Judged {
     Judged {
         case,
         verdict: Verdict {
             met: false,
-            why: "not run: stopped before it started".into(),
+            why: format!("not run: {why}"),
         },
         outcome: None,
         outcome_line: "not run".into(),
@@ -284,10 +301,8 @@ mod tests {
         std::fs::remove_dir_all(&face).unwrap();
         std::fs::remove_dir_all(out.join("large-shoulders")).unwrap();
         std::fs::create_dir(&face).unwrap();
-        let scenario = args.settings.iter().fold(Scenario::builtin("face").unwrap(), |s, text| {
-            let (key, value) = one_setting(text).unwrap();
-            s.with_setting(&key, &value).unwrap()
-        });
+        let changes: Vec<(String, String)> = args.settings.iter().map(|text| one_setting(text).unwrap()).collect();
+        let scenario = Scenario::builtin("face").unwrap().with_settings(&changes).unwrap();
         let stop = carus_labour::RunOptions { stop_at_s: Some(0.1), ..Default::default() };
         carus_labour::run(&scenario, &face, &stop, &mut carus_labour::SilentObserver).unwrap();
         let resume = SanityArgs {
@@ -315,5 +330,41 @@ mod tests {
         let e = run(&several).expect_err("refused").to_string();
         assert!(e.contains("one value per key") && e.contains("carus sweep"), "{e}");
         assert!(!dir.path().join("several").exists());
+    }
+
+    /// A change that leaves some cases without an anatomy judges those "not
+    /// run" and still runs the others; the verdicts are all written.
+    #[test]
+    fn a_case_that_cannot_start_is_judged_so_and_the_others_run() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("sanity");
+        let args = SanityArgs {
+            settings: [
+                "numerics.end_time_s=0.05",
+                "numerics.head_subdivisions=3",
+                "contact.sample_spacing_mm=8.0",
+                "floor.mesh.elements_around=16",
+                "floor.mesh.elements_across=3",
+                "output.vtu=false",
+                // Below the default inlet's antero-posterior 110 mm: only the contracted inlet, whose own is shorter, keeps a pelvis.
+                "pelvis.inlet_oblique_mm=106",
+            ]
+            .map(String::from)
+            .to_vec(),
+            resume: None,
+            jobs: Some(2),
+            output: OutputArgs { out: Some(out.clone()), json: true, force: false, quiet: true },
+        };
+        assert!(matches!(run(&args).unwrap(), Status::Failed));
+        let verdicts: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("sanity.json")).unwrap()).unwrap();
+        for case in verdicts["cases"].as_array().unwrap() {
+            let why = case["why"].as_str().unwrap();
+            match case["scenario"].as_str().unwrap() {
+                "contracted-inlet" => assert!(case["completed"] == json!(true) && !why.starts_with("not run"), "{case}"),
+                _ => assert!(why.starts_with("not run: the run cannot start") && why.contains("inlet_oblique_mm"), "{case}"),
+            }
+        }
+        assert!(out.join("contracted-inlet").join("movements.json").is_file());
+        assert!(!out.join("normal").exists());
     }
 }

@@ -47,6 +47,10 @@ pub fn run(args: &ScenariosArgs) -> anyhow::Result<Status> {
             }
         }
         Some(ScenariosCommand::Show { name }) => {
+            if !BUILTINS.iter().any(|(n, _)| n == name) {
+                let names: Vec<&str> = BUILTINS.iter().map(|(n, _)| *n).collect();
+                crate::bad_argument!("`{name}` is no built-in scenario; `carus scenarios show` takes one of {}", names.join(", "));
+            }
             let s = Scenario::builtin(name)?;
             let text = s.to_toml()?;
             if args.json {

@@ -14,18 +14,20 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
-use anyhow::{bail, Context};
+use anyhow::Context;
 use carus_analysis::movements::ROTATION_STATION_MAX_MM;
 use carus_analysis::{Movements, Outcome};
 use carus_labour::record::RunSummary;
-use carus_labour::{RunRecord, Scenario, Scene, Simulation};
+use carus_labour::{RunRecord, Scenario};
 use rayon::prelude::*;
 use serde_json::json;
 
+use super::batch::{check_runs_match_plan, check_runs_start};
 use super::run::{
-    go_on_into, json_summary, json_summary_not_run, load, make_batch_dir, movements, outcome_line, read_record, run_ended, serde_name,
+    go_on_into, json_summary, json_summary_not_run, load_mended, make_batch_dir, movements, outcome_line, read_record, run_ended, serde_name,
     OutputArgs,
 };
+use super::settings::{parse_setting, setting_arg, Setting};
 use super::{ctrl_c_flag, labour_pool, print_json, Status};
 
 #[derive(clap::Args)]
@@ -61,87 +63,27 @@ pub struct SweepArgs {
     pub output: OutputArgs,
 }
 
-/// One key and the values it takes.
-#[derive(Debug, Clone, PartialEq)]
-pub(super) struct Setting {
-    pub(super) key: String,
-    pub(super) values: Vec<String>,
+/// The first key that two `--set`s name.
+fn key_given_twice(settings: &[Setting]) -> Option<&str> {
+    settings
+        .iter()
+        .enumerate()
+        .find(|&(i, s)| settings[..i].iter().any(|earlier| earlier.key == s.key))
+        .map(|(_, s)| s.key.as_str())
 }
 
-/// clap's check of a `--set` argument's form: a malformed one is a bad
-/// argument (exit status 2), named before anything runs.
-fn setting_arg(text: &str) -> Result<String, String> {
-    parse_setting(text).map(|_| text.to_string()).map_err(|e| e.to_string())
-}
-
-/// A key and its one value, for commands that run once with it (`carus
-/// run`, `carus sanity`).
-pub(super) fn one_setting(text: &str) -> anyhow::Result<(String, String)> {
-    match text.split_once('=') {
-        Some((key, value)) if !key.trim().is_empty() && !value.trim().is_empty() => {}
-        _ => bail!("--set {text}: write KEY=VALUE, e.g. --set contact.friction=0.1"),
-    }
-    let setting = parse_setting(text)?;
-    let [value] = setting.values.as_slice() else {
-        bail!("--set {text}: one value per key here; `carus sweep` runs several");
+/// The scenario a new sweep varies. A file refused for a value that every
+/// run sets (a full sweep of that key) is read again with the key's first
+/// value, so that `--set` mends it as for `carus run`; each run then sets
+/// its own value. A one-at-a-time sweep runs the file as it is first, so
+/// nothing mends it.
+fn load_base(args: &SweepArgs) -> anyhow::Result<Scenario> {
+    let settings = args.settings.iter().map(|s| parse_setting(s)).collect::<anyhow::Result<Vec<_>>>()?;
+    let firsts: Vec<(String, String)> = match args.one_at_a_time {
+        true => Vec::new(),
+        false => settings.iter().map(|s| (s.key.clone(), s.values[0].clone())).collect(),
     };
-    Ok((setting.key, value.clone()))
-}
-
-/// clap's check of a one-value `--set` argument: a malformed one is a bad
-/// argument (exit status 2).
-pub(super) fn one_setting_arg(text: &str) -> Result<String, String> {
-    one_setting(text).map(|_| text.to_string()).map_err(|e| e.to_string())
-}
-
-pub(super) fn parse_setting(text: &str) -> anyhow::Result<Setting> {
-    let Some((key, values)) = text.split_once('=') else {
-        bail!("--set {text}: write KEY=V1,V2,..., e.g. --set expulsion.period_s=8,16,32");
-    };
-    let values: Vec<String> = split_outside_brackets(values).map(|v| v.trim().to_string()).collect();
-    if key.trim().is_empty() || values.iter().any(String::is_empty) {
-        bail!("--set {text}: a key and at least one value, none empty, e.g. --set contact.friction=0.1,0.35");
-    }
-    if let Some(twice) = values.iter().enumerate().find_map(|(i, v)| values[..i].iter().any(|u| same_value(u, v)).then_some(v)) {
-        bail!("--set {text}: the value {twice} is given twice; each value runs once");
-    }
-    Ok(Setting {
-        key: key.trim().to_string(),
-        values,
-    })
-}
-
-/// Whether two values as written are the same value for a key: equal as
-/// TOML (so `1`, `1.0` and `1e0` are one number), or, where either is not
-/// TOML (an enum's bare name), equal as written.
-fn same_value(a: &str, b: &str) -> bool {
-    let parsed = |v: &str| v.parse::<toml::Value>().ok();
-    match (parsed(a), parsed(b)) {
-        (Some(x), Some(y)) => match (number(&x), number(&y)) {
-            (Some(x), Some(y)) => x == y,
-            _ => x == y,
-        },
-        _ => a == b,
-    }
-}
-
-/// A TOML integer or float as a number.
-fn number(value: &toml::Value) -> Option<f64> {
-    value.as_float().or_else(|| value.as_integer().map(|i| i as f64))
-}
-
-/// The values of a list split at its commas, but not at those inside a
-/// TOML array (`fetal_spine,[0.0,0.2,-1.0]` is two values).
-fn split_outside_brackets(list: &str) -> impl Iterator<Item = &str> {
-    let mut depth = 0i32;
-    list.split(move |c| {
-        match c {
-            '[' => depth += 1,
-            ']' => depth -= 1,
-            _ => {}
-        }
-        c == ',' && depth == 0
-    })
+    load_mended(args.scenario.as_deref(), &firsts)
 }
 
 /// Every combination of the settings' values, the first setting varying slowest.
@@ -172,19 +114,31 @@ fn one_at_a_time(settings: &[Setting]) -> Vec<Vec<(String, String)>> {
 }
 
 /// A variant's folder name: its number and settings (`base` for none), in
-/// characters any file system takes.
+/// characters any file system takes. Settings too long to spell out (a
+/// list of way-points, many keys) are cut to [`FOLDER_SETTINGS_MAX`]
+/// characters and tagged with a checksum of the whole, under the 255
+/// bytes a file name may have; the run's scenario.toml and the tables
+/// give them whole.
 fn folder_name(index: usize, combination: &[(String, String)]) -> String {
     if combination.is_empty() {
         return format!("{:02}-base", index + 1);
     }
     let settings: Vec<String> = combination.iter().map(|(k, v)| format!("{k}={v}")).collect();
-    let name: String = settings
-        .join("_")
+    let whole = settings.join("_");
+    let name: String = whole
         .chars()
         .map(|c| if c.is_ascii_alphanumeric() || "._=+-".contains(c) { c } else { '-' })
         .collect();
-    format!("{:02}-{name}", index + 1)
+    if name.len() <= FOLDER_SETTINGS_MAX {
+        return format!("{:02}-{name}", index + 1);
+    }
+    // Every character of `name` is ASCII, so any cut is on a boundary.
+    let tag = crc32fast::hash(whole.as_bytes());
+    format!("{:02}-{}-{tag:08x}", index + 1, &name[..FOLDER_SETTINGS_MAX - 9])
 }
+
+/// The most characters of settings a run's folder name spells out.
+const FOLDER_SETTINGS_MAX: usize = 120;
 
 /// The finished run of one variant, as the table reports it.
 struct Finished {
@@ -219,7 +173,7 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
             (plan, base, Some(dir.clone()))
         }
         None => {
-            let base = load(args.scenario.as_deref())?;
+            let base = load_base(args)?;
             let plan = SweepPlan {
                 scenario_toml: base.to_toml()?,
                 base_dir: base.base_dir.clone(),
@@ -240,13 +194,11 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
         .map(|s| parse_setting(s))
         .collect::<anyhow::Result<Vec<_>>>()
         .map_err(from_plan)?;
-    for (i, setting) in settings.iter().enumerate() {
-        if settings[..i].iter().any(|earlier| earlier.key == setting.key) {
-            return Err(from_plan(anyhow::anyhow!(
-                "--set {} is given twice; list all its values in one --set, e.g. --set {}=1,2",
-                setting.key,
-                setting.key
-            )));
+    if let Some(key) = key_given_twice(&settings) {
+        let twice = format!("--set {key} is given twice; list all its values in one --set, e.g. --set {key}=1,2");
+        match &args.resume {
+            Some(_) => return Err(from_plan(anyhow::anyhow!(twice))),
+            None => crate::bad_argument!("{twice}"),
         }
     }
     let combinations = if plan.one_at_a_time {
@@ -264,7 +216,8 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
         .map(|c| base.with_settings(c))
         .collect::<Result<Vec<Scenario>, _>>()
         .map_err(|e| from_plan(e.into()))?;
-    check_variants_start(&scenarios, &combinations)?;
+    let names: Vec<String> = combinations.iter().enumerate().map(|(i, c)| folder_name(i, c)).collect();
+    check_runs_start(&scenarios, &names, "sweep", "its row in the table gives the reason")?;
     // The pool is made first: a bad --jobs leaves no out dir behind.
     let (pool, jobs) = labour_pool(args.jobs, scenarios.len())?;
     let out_dir = match out_dir {
@@ -282,9 +235,9 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
         );
     }
     let keys: Vec<&str> = settings.iter().map(|s| s.key.as_str()).collect();
-    let dirs: Vec<PathBuf> = combinations.iter().enumerate().map(|(i, c)| out_dir.join(folder_name(i, c))).collect();
+    let dirs: Vec<PathBuf> = names.iter().map(|name| out_dir.join(name)).collect();
     if args.resume.is_some() {
-        check_runs_match_plan(&out_dir, &scenarios, &dirs)?;
+        check_runs_match_plan(&out_dir.join(PLAN_FILE), &scenarios, &dirs)?;
     }
     let variant = |i: usize| Variant { scenario: &scenarios[i], dir: &dirs[i], keys: &keys, combination: &combinations[i] };
     // A resumed sweep's ended runs are rows from the start, so the tables
@@ -346,32 +299,6 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
     })
 }
 
-/// Builds every variant's anatomy and model before any runs, so one that
-/// cannot start (diameters that make no pelvis, say) is named now rather
-/// than when its turn comes, hours into a long sweep. It stays a row of the
-/// table with its reason; a sweep in which none can start is refused.
-fn check_variants_start(scenarios: &[Scenario], combinations: &[Vec<(String, String)>]) -> anyhow::Result<()> {
-    let failures: Vec<String> = scenarios
-        .iter()
-        .zip(combinations)
-        .enumerate()
-        .filter_map(|(i, (scenario, combination))| {
-            let started = Scene::build(scenario).and_then(|scene| Simulation::new(&scene).map(drop));
-            started.err().map(|e| format!("{}: {e}", folder_name(i, combination)))
-        })
-        .collect();
-    if failures.is_empty() {
-        return Ok(());
-    }
-    if failures.len() == scenarios.len() {
-        bail!("no run of the sweep can start:\n  {}", failures.join("\n  "));
-    }
-    for failure in &failures {
-        eprintln!("warning: {failure}\n  this run will not start; its row in the table gives the reason");
-    }
-    Ok(())
-}
-
 /// What to do when the plan a sweep kept no longer reads.
 fn damaged_plan(dir: &Path) -> String {
     format!(
@@ -383,6 +310,7 @@ fn damaged_plan(dir: &Path) -> String {
 
 /// The sweep's plan in `dir`, with what to do when it is not there.
 fn read_plan(dir: &Path) -> anyhow::Result<SweepPlan> {
+    super::check_resume_dir(dir, "sweep", PLAN_FILE)?;
     let path = dir.join(PLAN_FILE);
     if let Some(kind) = super::folder_kind(dir).filter(|_| !path.exists()) {
         anyhow::bail!("{} holds no sweep: {kind}", dir.display());
@@ -395,38 +323,6 @@ fn read_plan(dir: &Path) -> anyhow::Result<SweepPlan> {
         )
     })?;
     serde_json::from_str(&text).with_context(|| format!("{} is damaged; run the sweep again", path.display()))
-}
-
-/// A resumed sweep keeps its finished runs and goes on with its stopped
-/// ones, each as it started; a plan edited since would label them with
-/// settings they did not run with, so it is refused, naming the run.
-fn check_runs_match_plan(out_dir: &Path, scenarios: &[Scenario], dirs: &[PathBuf]) -> anyhow::Result<()> {
-    let plan = out_dir.join(PLAN_FILE);
-    let edited = |what: String| {
-        anyhow::anyhow!(
-            "{what}: {} was changed since the sweep started, and --resume goes on with the sweep as it \
-             was planned; undo the change, or run the changed sweep from the start with a new --out",
-            plan.display()
-        )
-    };
-    for (scenario, dir) in scenarios.iter().zip(dirs) {
-        let path = dir.join(carus_labour::output::SCENARIO_FILE);
-        let Ok(text) = carus_io::input::read_text(&path) else {
-            continue;
-        };
-        let ran = Scenario::parse(&path, &text, scenario.base_dir.clone())?;
-        if ran.to_toml()? != scenario.to_toml()? {
-            return Err(edited(format!("{} ran another scenario than the plan now makes", dir.display())));
-        }
-    }
-    let entries = std::fs::read_dir(out_dir).with_context(|| format!("cannot list {}", out_dir.display()))?;
-    for entry in entries.flatten() {
-        let path = entry.path();
-        if path.join(carus_labour::output::SCENARIO_FILE).is_file() && !dirs.contains(&path) {
-            return Err(edited(format!("{} is a run the plan no longer makes", path.display())));
-        }
-    }
-    Ok(())
 }
 
 /// One variant of the sweep and the folder it runs in.
@@ -705,31 +601,6 @@ mod tests {
     use carus_labour::{RunOptions, SilentObserver};
 
     #[test]
-    fn settings_parse_into_keys_and_values() {
-        assert_eq!(
-            parse_setting("expulsion.period_s=8, 16,32").unwrap(),
-            Setting {
-                key: "expulsion.period_s".into(),
-                values: vec!["8".into(), "16".into(), "32".into()]
-            }
-        );
-        assert_eq!(
-            parse_setting("expulsion.direction=fetal_spine,[0.0, 0.2,-1.0]").unwrap().values,
-            vec!["fetal_spine".to_string(), "[0.0, 0.2,-1.0]".to_string()]
-        );
-        for bad in ["expulsion.period_s", "=8", "contact.friction=0.1,", "x=", "contact.friction=0.1,0.1"] {
-            assert!(parse_setting(bad).is_err(), "{bad}");
-        }
-        // The same value written two ways runs once too.
-        for twice in ["numerics.end_time_s=0.3,0.30", "expulsion.force_max_n=1,1.0", "contact.friction=1e-1,0.1", "floor.coupling=\"held\",\"held\""] {
-            let e = parse_setting(twice).err().unwrap_or_else(|| panic!("{twice} ran twice")).to_string();
-            assert!(e.contains("is given twice"), "{e}");
-        }
-        assert!(parse_setting("expulsion.direction=fetal_spine,pivot").is_ok());
-        assert!(parse_setting("expulsion.force_max_n=1,1.5").is_ok());
-    }
-
-    #[test]
     fn every_combination_runs_once_the_first_key_slowest() {
         let settings = [
             parse_setting("a=1,2").unwrap(),
@@ -741,6 +612,13 @@ mod tests {
         assert_eq!(c[5], vec![("a".into(), "2".into()), ("b".into(), "z".into())]);
         assert_eq!(folder_name(4, &c[4]), "05-a=2_b=y");
         assert_eq!(folder_name(0, &[("start.position".into(), "\"LOT\"".into())]), "01-start.position=-LOT-");
+        // Settings too long for a file name are cut and told apart by a checksum.
+        let waypoints = |last: f64| (0..8).map(|i| format!("{{time_s={i}.0, station_mm={last}}}")).collect::<Vec<_>>().join(",");
+        let long = [("trajectory.waypoints".to_string(), format!("[{}]", waypoints(1.0)))];
+        let other = [("trajectory.waypoints".to_string(), format!("[{}]", waypoints(2.0)))];
+        let (a, b) = (folder_name(11, &long), folder_name(11, &other));
+        assert!(a.len() <= 3 + FOLDER_SETTINGS_MAX && a.starts_with("12-trajectory.waypoints=-") && a != b, "{a} {b}");
+        assert_eq!(a, folder_name(11, &long), "the same settings, the same folder");
     }
 
     /// One at a time: the scenario as it is, then each value alone, with
@@ -810,6 +688,38 @@ mod tests {
             },
         };
         (args, out)
+    }
+
+    /// A file refused for a value every run sets is mended by the sweep's
+    /// values, as `carus run --set` mends it; a one-at-a-time sweep, whose
+    /// first run is the file as it is, is refused. The same key twice is a
+    /// bad argument.
+    #[test]
+    fn a_swept_key_mends_the_file_that_has_it_wrong() {
+        let s = crate::commands::coarse_normal(0.05);
+        let dir = tempfile::tempdir().unwrap();
+        let (args, out) = coarse_sweep(&s, dir.path(), &["contact.friction=0.1,0.2"]);
+        let file = dir.path().join("coarse.toml");
+        let text = std::fs::read_to_string(&file).unwrap();
+        let wrong = text.replacen(&format!("friction = {:?}", s.contact.friction), "friction = -0.1", 1);
+        assert_ne!(wrong, text, "the friction line is found");
+        std::fs::write(&file, wrong).unwrap();
+        let once = SweepArgs { one_at_a_time: true, output: OutputArgs { out: Some(dir.path().join("once")), ..args.output }, ..args };
+        let e = run(&once).expect_err("the base run is the file as it is").to_string();
+        assert!(e.contains("contact.friction") && e.contains("-0.1"), "{e}");
+        let args = SweepArgs { one_at_a_time: false, output: OutputArgs { out: Some(out.clone()), ..once.output }, ..once };
+        assert!(matches!(run(&args).unwrap(), Status::Success));
+        for (folder, friction) in [("01-contact.friction=0.1", "friction = 0.1\n"), ("02-contact.friction=0.2", "friction = 0.2\n")] {
+            let toml = std::fs::read_to_string(out.join(folder).join("scenario.toml")).unwrap();
+            assert!(toml.contains(friction), "{folder}");
+        }
+        let twice = SweepArgs {
+            settings: vec!["contact.friction=0.1".into(), "contact.friction=0.2".into()],
+            output: OutputArgs { out: Some(dir.path().join("twice")), ..args.output },
+            ..args
+        };
+        let e = run(&twice).expect_err("refused");
+        assert!(e.downcast_ref::<crate::commands::BadArgument>().is_some() && e.to_string().contains("given twice"), "{e}");
     }
 
     /// One at a time through the command: the base run and each value

@@ -111,12 +111,24 @@ pub fn run(args: &ValidateArgs) -> anyhow::Result<Status> {
             "passed": passed,
             "failed": failed,
             "not_run": not_run,
-            "status": if failed == 0 { "pass" } else { "fail" },
+            "status": status(passed, failed, not_run),
         }))?;
     } else {
         println!("{passed} passed, {failed} failed, {not_run} not run");
     }
-    Ok(if failed == 0 { Status::Success } else { Status::Failed })
+    // Nothing run is no validation: `carus validate v5 && ...` must not go on.
+    Ok(if failed == 0 && passed > 0 { Status::Success } else { Status::Failed })
+}
+
+/// The cases' verdict as a whole: a case that could not run (V5 without a
+/// GPU adapter) leaves it incomplete, not passed.
+fn status(passed: usize, failed: usize, not_run: usize) -> &'static str {
+    match (passed, failed, not_run) {
+        (_, 1.., _) => "fail",
+        (_, 0, 0) => "pass",
+        (0, 0, _) => "not_run",
+        (_, 0, _) => "incomplete",
+    }
 }
 
 /// `carus validate cube`: the named combinations, or all of them.
@@ -378,4 +390,20 @@ fn run_case(id: CaseArg) -> CaseOutcome {
         summary: format!("error: {error}"),
         report: json!({ "error": error.to_string() }),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A case that could not run is neither a pass nor a failure; the
+    /// whole is "pass" only when every case asked for ran and passed.
+    #[test]
+    fn cases_not_run_leave_the_validation_incomplete() {
+        assert_eq!(status(7, 0, 0), "pass");
+        assert_eq!(status(6, 0, 1), "incomplete");
+        assert_eq!(status(0, 0, 1), "not_run");
+        assert_eq!(status(5, 1, 1), "fail");
+        assert_eq!(status(0, 1, 0), "fail");
+    }
 }

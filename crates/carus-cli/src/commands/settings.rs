@@ -1,0 +1,156 @@
+//! `--set KEY=VALUE[,VALUE...]`: a scenario key changed from the command
+//! line. `carus run`, `sanity` and `bench labour` take one value per key,
+//! `carus sweep` several. A value is a TOML value (a bare word is a
+//! string), so the commas between values are only those outside its
+//! arrays, inline tables and strings.
+
+use anyhow::bail;
+
+/// One key and the values it takes.
+#[derive(Debug, Clone, PartialEq)]
+pub(super) struct Setting {
+    pub(super) key: String,
+    pub(super) values: Vec<String>,
+}
+
+/// clap's check of a `--set` argument's form: a malformed one is a bad
+/// argument (exit status 2), named before anything runs.
+pub(super) fn setting_arg(text: &str) -> Result<String, String> {
+    parse_setting(text).map(|_| text.to_string()).map_err(|e| e.to_string())
+}
+
+/// A key and its one value, for commands that run once with it (`carus
+/// run`, `carus sanity`, `carus bench labour`).
+pub(super) fn one_setting(text: &str) -> anyhow::Result<(String, String)> {
+    match text.split_once('=') {
+        Some((key, value)) if !key.trim().is_empty() && !value.trim().is_empty() => {}
+        _ => bail!("--set {text}: write KEY=VALUE, e.g. --set contact.friction=0.1"),
+    }
+    let setting = parse_setting(text)?;
+    let [value] = setting.values.as_slice() else {
+        bail!("--set {text}: one value per key here; `carus sweep` runs several");
+    };
+    Ok((setting.key, value.clone()))
+}
+
+/// clap's check of a one-value `--set` argument: a malformed one is a bad
+/// argument (exit status 2).
+pub(super) fn one_setting_arg(text: &str) -> Result<String, String> {
+    one_setting(text).map(|_| text.to_string()).map_err(|e| e.to_string())
+}
+
+pub(super) fn parse_setting(text: &str) -> anyhow::Result<Setting> {
+    let Some((key, values)) = text.split_once('=') else {
+        bail!("--set {text}: write KEY=V1,V2,..., e.g. --set expulsion.period_s=8,16,32");
+    };
+    let values: Vec<String> = split_values(values).into_iter().map(|v| v.trim().to_string()).collect();
+    if key.trim().is_empty() || values.iter().any(String::is_empty) {
+        bail!("--set {text}: a key and at least one value, none empty, e.g. --set contact.friction=0.1,0.35");
+    }
+    if let Some(twice) = values.iter().enumerate().find_map(|(i, v)| values[..i].iter().any(|u| same_value(u, v)).then_some(v)) {
+        bail!("--set {text}: the value {twice} is given twice; each value runs once");
+    }
+    Ok(Setting {
+        key: key.trim().to_string(),
+        values,
+    })
+}
+
+/// Whether two values as written are the same value for a key: equal as
+/// TOML, numbers by value (so `1`, `1.0` and `1e0` are one number, in an
+/// array too), and a bare word the string it stands for (`LOT` is `"LOT"`).
+fn same_value(a: &str, b: &str) -> bool {
+    let read = |v: &str| normalised(v.parse::<toml::Value>().unwrap_or_else(|_| toml::Value::String(v.to_string())));
+    read(a) == read(b)
+}
+
+/// A TOML value with its integers made floats, at any depth.
+fn normalised(value: toml::Value) -> toml::Value {
+    match value {
+        toml::Value::Integer(i) => toml::Value::Float(i as f64),
+        toml::Value::Array(items) => toml::Value::Array(items.into_iter().map(normalised).collect()),
+        toml::Value::Table(table) => toml::Value::Table(table.into_iter().map(|(k, v)| (k, normalised(v))).collect()),
+        other => other,
+    }
+}
+
+/// The values of a list split at its commas, but not at those inside a
+/// TOML array, inline table or string (`fetal_spine,[0.0,0.2,-1.0]` is
+/// two values; `{time_s=1.0, station_mm=0.0}` and `"slow, steady"` one).
+fn split_values(list: &str) -> Vec<&str> {
+    let mut values = Vec::new();
+    let (mut depth, mut quote, mut escaped, mut start) = (0i32, None::<char>, false, 0);
+    for (i, c) in list.char_indices() {
+        match quote {
+            Some(_) if escaped => escaped = false,
+            Some('"') if c == '\\' => escaped = true,
+            Some(q) if c == q => quote = None,
+            Some(_) => {}
+            None => match c {
+                '"' | '\'' => quote = Some(c),
+                '[' | '{' => depth += 1,
+                ']' | '}' => depth -= 1,
+                ',' if depth == 0 => {
+                    values.push(&list[start..i]);
+                    start = i + 1;
+                }
+                _ => {}
+            },
+        }
+    }
+    values.push(&list[start..]);
+    values
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn settings_parse_into_keys_and_values() {
+        assert_eq!(
+            parse_setting("expulsion.period_s=8, 16,32").unwrap(),
+            Setting {
+                key: "expulsion.period_s".into(),
+                values: vec!["8".into(), "16".into(), "32".into()]
+            }
+        );
+        assert_eq!(
+            parse_setting("expulsion.direction=fetal_spine,[0.0, 0.2,-1.0]").unwrap().values,
+            vec!["fetal_spine".to_string(), "[0.0, 0.2,-1.0]".to_string()]
+        );
+        for bad in ["expulsion.period_s", "=8", "contact.friction=0.1,", "x=", "contact.friction=0.1,0.1"] {
+            assert!(parse_setting(bad).is_err(), "{bad}");
+        }
+        // The same value written two ways runs once too.
+        for twice in [
+            "numerics.end_time_s=0.3,0.30",
+            "expulsion.force_max_n=1,1.0",
+            "contact.friction=1e-1,0.1",
+            "floor.coupling=\"held\",\"held\"",
+            "start.position=LOT,\"LOT\"",
+            "expulsion.direction=[0,0,-1],[0.0,0.0,-1.0]",
+        ] {
+            let e = parse_setting(twice).err().unwrap_or_else(|| panic!("{twice} ran twice")).to_string();
+            assert!(e.contains("is given twice"), "{e}");
+        }
+        assert!(parse_setting("expulsion.direction=fetal_spine,pivot").is_ok());
+        assert!(parse_setting("expulsion.force_max_n=1,1.5").is_ok());
+    }
+
+    /// Commas inside an inline table or a string belong to the one value.
+    #[test]
+    fn commas_inside_a_value_do_not_split_it() {
+        let waypoint = "{time_s=0.1, station_mm=-55.0, theta_deg=-1.5, phi_deg=0.1}";
+        assert_eq!(one_setting(&format!("trajectory.waypoints[0]={waypoint}")).unwrap().1, waypoint);
+        assert_eq!(one_setting("description=\"labour, slow\"").unwrap().1, "\"labour, slow\"");
+        assert_eq!(one_setting("description='a, b'").unwrap().1, "'a, b'");
+        assert_eq!(one_setting(r#"description="say \"a, b\"""#).unwrap().1, r#""say \"a, b\"""#);
+        assert_eq!(
+            parse_setting("trajectory.waypoints=[{time_s=1.0, station_mm=0.0}],[{time_s=2.0, station_mm=1.0}]").unwrap().values.len(),
+            2
+        );
+        assert_eq!(parse_setting("description=\"a, b\",\"c\"").unwrap().values, ["\"a, b\"", "\"c\""]);
+        assert!(one_setting("contact.friction=0.1,0.35").unwrap_err().to_string().contains("carus sweep"));
+    }
+}
