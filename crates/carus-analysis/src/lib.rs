@@ -9,6 +9,7 @@
 //! - [`movements`]: the rules of "When a movement counts as observed";
 //! - [`outcome`]: delivered, or arrested where and against what;
 //! - [`detector`]: the entry point [`detect`] and [`DetectorReport`];
+//! - [`moments`]: the key moments a report pictures, chosen from a detector's report;
 //! - [`sanity`]: the clinical sanity cases and whether a report meets each;
 //! - [`synthetic`]: pose histories built by hand, for tests and demonstrations.
 
@@ -16,6 +17,7 @@ pub mod canal;
 pub mod detector;
 pub mod history;
 pub mod measures;
+pub mod moments;
 pub mod movements;
 pub mod outcome;
 pub mod sanity;

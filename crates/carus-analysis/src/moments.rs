@@ -1,7 +1,9 @@
 //! The key moments of a labour, chosen from the detector's report alone,
-//! so that the pictures show what the detector saw.
+//! so that the pictures show what the detector saw: the run's record keeps
+//! the floor as it was at each, and the report pictures them, by this one
+//! rule.
 
-use carus_analysis::{DetectorReport, Movement};
+use crate::{DetectorReport, Movement};
 
 /// Which instant a picture shows.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -20,6 +22,17 @@ pub enum MomentKind {
 }
 
 impl MomentKind {
+    /// The moment's name in a run's record (run.json's `key_moments`).
+    pub fn name(self) -> &'static str {
+        match self {
+            MomentKind::Engagement => "engagement",
+            MomentKind::InternalRotation => "internal_rotation",
+            MomentKind::Crowning => "crowning",
+            MomentKind::Restitution => "restitution",
+            MomentKind::Arrest => "arrest",
+        }
+    }
+
     /// Heading shown over the pictures.
     pub fn label(self) -> &'static str {
         match self {

@@ -49,8 +49,10 @@ pub struct SiteLoad {
     pub points: usize,
     /// Total force on the body, N.
     pub force_n: DVec3,
-    /// The part of it that is Coulomb friction (zero for the floor, whose
-    /// held nodes do not slip on the fetus), N.
+    /// The part of it that is Coulomb friction, N. Zero for the floor:
+    /// with the default `coupling = "sliding"` its nodes slide on the
+    /// fetal surface without friction, and with `"held"` they do not slip,
+    /// so the floor's tangential force is not split out (docs/CONTACT.md).
     pub friction_force_n: DVec3,
     /// Moment of the force about the atlanto-occipital pivot, N m.
     pub moment_about_pivot_nm: DVec3,

@@ -30,6 +30,12 @@ pub const TRUNK_BODY_VTU: &str = "trunk_body.vtu";
 pub const LOWER_TRUNK_BODY_VTU: &str = "lower_trunk_body.vtu";
 pub const FRAMES_DIR: &str = "frames";
 
+/// The folder of a run's VTU frames, made if it is not there.
+pub fn make_frames_dir(out_dir: &Path) -> Result<(), LabourError> {
+    let dir = out_dir.join(FRAMES_DIR);
+    std::fs::create_dir_all(&dir).map_err(|e| output_error(&dir, e))
+}
+
 fn output_error(path: &Path, e: impl std::fmt::Display) -> LabourError {
     LabourError::Output {
         path: path.to_path_buf(),
@@ -108,10 +114,12 @@ pub struct RunEnding {
 }
 
 impl RunEnding {
-    /// Over for good: it reached its end, or it failed (its checkpoint
-    /// holds the state it failed in, so going on would fail alike).
+    /// Over for good: it reached its end, or its physics failed (its
+    /// checkpoint holds the state it failed in, so going on would fail
+    /// alike). A run stopped by its output (a full disk) is not: it goes
+    /// on from its checkpoint once there is room.
     pub fn is_over(&self) -> bool {
-        self.completed || self.failure.is_some()
+        self.completed || self.failure.as_deref().is_some_and(|f| !f.starts_with(crate::run::OUTPUT_FAILURE))
     }
 }
 

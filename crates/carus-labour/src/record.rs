@@ -127,36 +127,18 @@ pub struct Files {
     pub checkpoint: String,
 }
 
-/// The key moments the detector's report marks.
+/// The key moments the report pictures (`carus_analysis::moments`, the
+/// one rule), each with the sample and the VTU frame nearest it.
 pub fn key_moments(
     history: &PoseHistory,
     report: &DetectorReport,
     frame_times: &[f64],
 ) -> Vec<KeyMoment> {
-    let m = &report.movements;
-    let crowning = report
-        .series
-        .head_delivered
+    let (moments, _) = carus_analysis::moments::key_moments(report);
+    moments
         .iter()
-        .position(|&d| d)
-        .map(|i| report.series.time_s[i]);
-    // The report pictures an arrested run at its last sample, as here.
-    let arrest = report
-        .outcome
-        .arrest
-        .as_ref()
-        .and_then(|_| report.series.time_s.last().copied());
-    let candidates = [
-        ("engagement", m.engagement.end_s),
-        ("internal_rotation", m.internal_rotation.end_s),
-        ("crowning", crowning),
-        ("restitution", m.external_rotation.end_s),
-        ("arrest", arrest),
-    ];
-    candidates
-        .iter()
-        .filter_map(|(name, t)| {
-            let t = (*t)?;
+        .filter_map(|moment| {
+            let (name, t) = (moment.kind.name(), moment.time_s);
             let sample = history
                 .samples
                 .iter()

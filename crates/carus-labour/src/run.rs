@@ -187,14 +187,15 @@ pub fn resume(
     // Stepping on would rewrite a finished run's record with one leg of
     // it, and a failed run's checkpoint holds the state it failed in.
     let scenario = out_dir.join(output::SCENARIO_FILE);
+    // A run that could not write (a full disk) failed in its output, not
+    // its physics: its checkpoint goes on (`RunEnding::is_over`).
     match output::run_ending(out_dir) {
         Some(output::RunEnding { completed: true, simulated_s, .. }) => {
             return Err(LabourError::AlreadyEnded { end_s: simulated_s, scenario })
         }
-        // A run that could not write (a full disk) failed in its output,
-        // not its physics: its checkpoint goes on.
-        Some(output::RunEnding { failure: Some(failure), simulated_s, .. }) if !failure.starts_with(OUTPUT_FAILURE) => {
-            return Err(LabourError::AlreadyFailed { failed_s: simulated_s, failure, scenario })
+        Some(ending) if ending.is_over() => {
+            let failure = ending.failure.unwrap_or_default();
+            return Err(LabourError::AlreadyFailed { failed_s: ending.simulated_s, failure, scenario });
         }
         _ => {}
     }
@@ -314,7 +315,6 @@ fn drive(
     let stop_step = options.stop_at_s.map(|t| (t / dt).round() as u64);
     let snapshot_every = ((FLOOR_SNAPSHOT_EVERY_S / dt).round() as u64).max(1);
     let mut floor_snapshots: Vec<FloorSnapshot> = FloorSnapshot::take(&sim).into_iter().collect();
-    let frames_dir = out_dir.join(output::FRAMES_DIR);
     // Wall time spent writing frames, checkpoints and the final files.
     let mut output_s = 0.0;
     let mut timed = |write: &mut dyn FnMut() -> Result<(), LabourError>| {
@@ -324,10 +324,7 @@ fn drive(
         result
     };
     if s.output.vtu {
-        std::fs::create_dir_all(&frames_dir).map_err(|e| LabourError::Output {
-            path: frames_dir.clone(),
-            message: e.to_string(),
-        })?;
+        output::make_frames_dir(out_dir)?;
         if sim.state.step == 0 && frame_times.is_empty() {
             timed(&mut || write_frame(&sim, out_dir, &mut frame_times))?;
         }
@@ -376,7 +373,8 @@ fn drive(
         if k.is_multiple_of(POLL_STEPS) {
             observer.progress(sim.time_s(), s.numerics.end_time_s);
         }
-        if s.numerics.stop_when_delivered && k.is_multiple_of(20) && delivered(&sim) {
+        // Looked for at pose samples, so the history ends on the state the run stops in.
+        if s.numerics.stop_when_delivered && sim.sampled_last_step() && delivered(&sim) {
             break;
         }
     }
@@ -461,20 +459,23 @@ fn detect_or_say_why(history: &PoseHistory, failure: Option<String>) -> (Option<
     }
 }
 
+/// How far past the outlet plane the trunk's centre is when the fetus
+/// counts as born, m: its shoulders are then out, and nothing of the
+/// birth is left to simulate (a stopping rule, not physics).
+const DELIVERED_TRUNK_PAST_OUTLET_M: f64 = 0.03;
+/// Without a trunk, how far past the outlet plane the head's centre is
+/// when it counts as born, m: its whole skull (about 100 mm long) is
+/// then past the plane.
+const DELIVERED_HEAD_PAST_OUTLET_M: f64 = 0.08;
+
 /// The trunk's centre (or, without a trunk, the head's) is well past the outlet.
 fn delivered(sim: &Simulation<'_>) -> bool {
     let scene = sim.scene;
     let outlet = scene.canal.outlet();
     let bodies = &sim.state.bodies;
     match &scene.trunk_geometry {
-        Some(g) => outlet.signed_distance(bodies.pose(TRUNK).point(g.centre_m)) > 0.03,
-        None => {
-            outlet.signed_distance(
-                bodies
-                    .pose(HEAD)
-                    .point(scene.head_geometry.centre_m),
-            ) > 0.08
-        }
+        Some(g) => outlet.signed_distance(bodies.pose(TRUNK).point(g.centre_m)) > DELIVERED_TRUNK_PAST_OUTLET_M,
+        None => outlet.signed_distance(bodies.pose(HEAD).point(scene.head_geometry.centre_m)) > DELIVERED_HEAD_PAST_OUTLET_M,
     }
 }
 
@@ -1302,6 +1303,13 @@ mod tests {
         std::fs::write(&path, edited.to_string()).unwrap();
         let e = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).expect_err("refused").to_string();
         assert!(e.contains("saved pose history") && e.contains("quaternion"), "{e}");
+        // Samples cut without their loads would pair each row with another time's loads.
+        let mut edited: serde_json::Value = serde_json::from_str(&text).unwrap();
+        let samples = edited["state"]["samples"].as_array_mut().unwrap();
+        samples.truncate(3);
+        std::fs::write(&path, edited.to_string()).unwrap();
+        let e = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).expect_err("refused").to_string();
+        assert!(e.contains("load samples are not taken at the times of the 3 pose samples") && e.contains("edited"), "{e}");
         std::fs::write(&path, &text).unwrap();
         // A scenario.toml deleted since is written again, as the run started.
         std::fs::remove_file(&scenario).unwrap();
@@ -1460,6 +1468,8 @@ mod tests {
         assert!(failure.starts_with(OUTPUT_FAILURE) && failure.contains("at t = 0.200 s"), "{failure}");
         assert!(dir.path().join(output::HISTORY_CSV).is_file());
         assert!(record.history.samples.last().is_some_and(|p| p.time_s > 0.19));
+        // Not over: a sweep or sanity goes on with it, as `carus run --resume` does.
+        assert!(output::run_ending(dir.path()).is_some_and(|e| !e.is_over()));
         std::fs::remove_dir(&blocked).unwrap();
         let resumed = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).unwrap();
         assert!(resumed.summary.completed && resumed.summary.failure.is_none());

@@ -396,6 +396,12 @@ pub struct ContactSection {
 /// amniotic fluid, whose surfactant lubricates at 0.009 (Hills 1995, Aust N Z
 /// J Obstet Gynaecol, "Remarkable lubricating capabilities of amniotic
 /// surfactant"; fluid-lubricated soft tissues 0.007-0.054, docs/LABOUR.md).
+/// Hills measured the surfactant extracted from amniotic fluid as a
+/// boundary lubricant between test surfaces, not the scalp on the vaginal
+/// wall, which no source found has measured; damp skin without such a
+/// film grips far harder (above 1: Derler & Gerhardt 2012), and the
+/// outcome turns on this value (docs/LABOUR.md, twentieth and
+/// twenty-first sessions).
 /// The contact default stays the seed's 0.35 (muscle on bone,
 /// REFERENCE_DATA.md), which `normal-dry` runs.
 pub const WETTED_CANAL_FRICTION: f64 = 0.009;
@@ -483,15 +489,25 @@ pub struct FetusSection {
     /// from the head and trunk surfaces.
     pub density_kg_per_m3: f64,
     /// Viscous resistance to the trunk's translation, N s/m: the uterus
-    /// and amniotic fluid around the trunk. Numerical (time compression):
-    /// it sets the descent speed at a given net force, a quasi-static
-    /// surrogate for the hours of real labour.
+    /// and amniotic fluid around the trunk. No measured value was found:
+    /// it compresses the hours of labour into a minute (the descent speed
+    /// at a given net force), and with the head's drag it sets how the
+    /// push divides between head and trunk while they move, so it is a
+    /// model parameter, not a numerical one. The normal outcome depends on
+    /// it: all seven movements at 2250 and 3000, no internal rotation or
+    /// extension at 1500 and below, the head pushed into the canal at 4000
+    /// and above (docs/LABOUR.md, "Parameters", forty-second session).
     pub trunk_linear_drag_n_s_per_m: f64,
-    /// Viscous resistance to the trunk's rotation, N m s/rad (numerical, as above).
+    /// Viscous resistance to the trunk's rotation, N m s/rad (as above, no
+    /// measured value; 1.5 to 6 leave the normal outcome as it is).
     pub trunk_angular_drag_nm_s_per_rad: f64,
-    /// Viscous resistance to the head's translation, N s/m (numerical).
+    /// Viscous resistance to the head's translation, N s/m (as the trunk's,
+    /// no measured value; the normal outcome keeps all seven from 1000 to
+    /// 4000 and loses internal rotation and extension at 500 and below).
     pub head_linear_drag_n_s_per_m: f64,
-    /// Viscous resistance to the head's rotation, N m s/rad (numerical).
+    /// Viscous resistance to the head's rotation, N m s/rad (no measured
+    /// value; 0.125 keeps the normal outcome, 2 loses internal rotation
+    /// and extension).
     pub head_angular_drag_nm_s_per_rad: f64,
     /// Where the atlanto-occipital pivot lies in the head: degrees behind
     /// straight down from the head centre, towards the occiput. It sets the
@@ -661,7 +677,9 @@ pub struct NumericsSection {
     /// Simulated time at which the run ends, s.
     pub end_time_s: f64,
     /// Stop early once the fetus is born: the trunk's centre 30 mm past the
-    /// outlet plane (without a trunk, the head's centre 80 mm past it).
+    /// outlet plane (without a trunk, the head's centre 80 mm past it),
+    /// seen at a pose sample, so that the history ends on the state the
+    /// run stops in.
     pub stop_when_delivered: bool,
     /// Geodesic subdivisions of the head surface (3-6).
     pub head_subdivisions: u32,
@@ -1223,7 +1241,7 @@ impl Scenario {
             problem: problem.into(),
             hint: hint.into(),
         };
-        let positive: [(&'static str, f64, &str); 23] = [
+        let positive: [(&'static str, f64, &str); 21] = [
             (
                 "trunk.bisacromial_mm",
                 self.trunk.bisacromial_mm,
@@ -1262,7 +1280,7 @@ impl Scenario {
             (
                 "contact.trunk_penalty_stiffness_pa_per_m",
                 self.contact.trunk_penalty_stiffness_pa_per_m,
-                "Pa/m, e.g. 9.4e7",
+                "Pa/m, e.g. 1.0e7 (the default)",
             ),
             (
                 "contact.trunk_cover_depth_mm",
@@ -1325,19 +1343,9 @@ impl Scenario {
                 "seconds between VTU frames, e.g. 1.0",
             ),
             (
-                "contact.damping_time_s",
-                self.contact.damping_time_s + f64::MIN_POSITIVE,
-                "seconds, 0 or more, e.g. 1e-3",
-            ),
-            (
                 "expulsion.force_max_n",
                 self.expulsion.force_max_n,
                 "newtons, e.g. 120.0 (REFERENCE_DATA.md: 70-140 N)",
-            ),
-            (
-                "fetus.trunk_linear_drag_n_s_per_m",
-                self.fetus.trunk_linear_drag_n_s_per_m + f64::MIN_POSITIVE,
-                "N s/m, 0 or more",
             ),
         ];
         for (key, value, hint) in positive {
@@ -1357,6 +1365,8 @@ impl Scenario {
         ];
         for (key, value) in [
             ("contact.friction", self.contact.friction),
+            ("contact.damping_time_s", self.contact.damping_time_s),
+            ("fetus.trunk_linear_drag_n_s_per_m", self.fetus.trunk_linear_drag_n_s_per_m),
             (
                 "fetus.trunk_angular_drag_nm_s_per_rad",
                 self.fetus.trunk_angular_drag_nm_s_per_rad,
@@ -1632,8 +1642,17 @@ impl Scenario {
                 "1e-4 to 1e-3 s; the default is 5e-4",
             ));
         }
+        if self.numerics.end_time_s < self.numerics.rigid_dt_s * (1.0 - 1e-9) {
+            return Err(err(
+                "numerics.end_time_s",
+                self.numerics.end_time_s,
+                &format!("is shorter than one rigid step (numerics.rigid_dt_s = {} s): the run would simulate nothing", self.numerics.rigid_dt_s),
+                "seconds of simulated time, at least the rigid step; 60.0 is the default",
+            ));
+        }
         // Finer than a step records nothing new; frames far finer than the
-        // motion fill a disk (each is a few hundred kB).
+        // motion fill a disk (each is a few hundred kB). Each interval is
+        // kept to whole rigid steps (docs/SCENARIOS.md).
         for (key, every_s, finest_s, hint) in [
             ("output.every_s", self.output.every_s, self.numerics.rigid_dt_s, "at least the rigid step; 0.01 is the default"),
             ("numerics.checkpoint_every_s", self.numerics.checkpoint_every_s, self.numerics.rigid_dt_s, "at least the rigid step; 5.0 is the default"),

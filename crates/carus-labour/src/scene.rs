@@ -15,7 +15,7 @@ use carus_anatomy::import::MeshReport;
 use carus_anatomy::{Pelvis, Plane, TriSurface};
 use carus_contact::{
     obstacle_contacts, pair_contacts, BodyContactState, BodyMotion, ContactLaw, HeadAxes, MassProperties, NeckGeometry, RegionTable,
-    RigidBodyModel, RigidObstacle, RigidPose, SoftCover, SurfaceSamples, TriangleCollider, DESIGN_PENETRATION_M,
+    NeckRest, RigidBodyModel, RigidObstacle, RigidPose, SoftCover, SurfaceSamples, TriangleCollider, DESIGN_PENETRATION_M,
 };
 use carus_fem::{BoundaryConditions, Material, MaterialRegion, Mesh, ModelOptions, TledModel};
 use glam::{DMat3, DQuat, DVec3};
@@ -117,6 +117,9 @@ pub struct Scene {
     /// Spine axis k in the trunk's centre-of-mass frame (and the lower
     /// trunk's: both are the anatomy's trunk frame, moved).
     pub spine_in_trunk: DVec3,
+    /// Without a trunk, the spine axis k in the head's centre-of-mass
+    /// frame: the neck held at its rest attitude (`Scene::rest_spine_in_head`).
+    pub spine_in_head: DVec3,
     pub bodies: RigidBodyModel,
     pub law: ContactLaw,
     /// The trunk's law on bone (softer: the shoulders are soft tissue),
@@ -249,6 +252,7 @@ impl Scene {
             neck_joint: None,
             spine_joint: None,
             spine_in_trunk,
+            spine_in_head: DVec3::ZERO,
             bodies,
             law,
             trunk_law,
@@ -262,6 +266,7 @@ impl Scene {
                 Trajectory::new(scene.start_coordinates(), &scenario.trajectory.waypoints, |c| scene.centre_sigma_at(c))
             });
         scene.start = scene.start_poses();
+        scene.spine_in_head = scene.rest_spine_in_head();
         scene.check_head_not_born()?;
         scene.check_head_clear_of_bone()?;
         scene.check_waypoints_clear_of_bone()?;
@@ -299,20 +304,8 @@ impl Scene {
     /// so that the head does not jump at the first step.
     fn start_poses(&self) -> Vec<RigidPose> {
         let start = &self.scenario.start;
-        let axis = self.canal.axis();
         let path_start = self.trajectory.as_ref().map(|path| path.at(0.0));
-        let frame = axis.frame(path_start.map_or(0.0, |p| p.centre_sigma_m));
-        let occiput_theta = self.start_occiput_theta_deg();
-        let orient = |phi: f64| {
-            carus_analysis::synthetic::head_orientation(
-                frame.tangent,
-                frame.anterior,
-                frame.transverse,
-                occiput_theta,
-                phi,
-            )
-        };
-        let (q_head, q_trunk) = (orient(start.attitude_deg), orient(0.0));
+        let (q_head, q_trunk) = self.start_orientations();
         let head = match path_start {
             Some(p) => self.head_on_trajectory(p),
             None => self.head_at_station(start.station_mm, |_| (q_head, DVec3::ZERO)).0,
@@ -324,6 +317,34 @@ impl Scene {
         std::iter::once(head)
             .chain(self.trunk.iter().chain(&self.lower_trunk).map(segment))
             .collect()
+    }
+
+    /// The head's orientation at the scenario's start, and the trunk's (the
+    /// head's at attitude 0, in line with the spine), pelvis frame.
+    fn start_orientations(&self) -> (DQuat, DQuat) {
+        let path_start = self.trajectory.as_ref().map(|path| path.at(0.0));
+        let frame = self.canal.axis().frame(path_start.map_or(0.0, |p| p.centre_sigma_m));
+        let occiput_theta = self.start_occiput_theta_deg();
+        let orient = |phi: f64| {
+            carus_analysis::synthetic::head_orientation(frame.tangent, frame.anterior, frame.transverse, occiput_theta, phi)
+        };
+        (orient(self.scenario.start.attitude_deg), orient(0.0))
+    }
+
+    /// Without a trunk, the spine's direction k in the head frame: the neck
+    /// held at its rest attitude (`[neck] rest_attitude`). At the start's
+    /// attitude, k is the trunk's spine as it would be joined, so the
+    /// head presents as the scenario starts it (phi = the start attitude);
+    /// at neutral, k = -vertex (phi = 0).
+    fn rest_spine_in_head(&self) -> DVec3 {
+        let neutral = -self.head_axes.vertex;
+        match self.scenario.neck.rest_attitude {
+            NeckRest::Neutral => neutral,
+            NeckRest::Start => {
+                let (_, q_trunk) = self.start_orientations();
+                (self.start[HEAD].orientation.inverse() * (q_trunk * neutral)).normalize()
+            }
+        }
     }
 
     /// The head with its leading point at `station_mm`, turned and its
@@ -902,6 +923,30 @@ mod tests {
         assert!(about_pivot.dot(axis) < -0.2, "{about_pivot} about {axis}");
         assert!(r.on_sampled.force.dot(r.on_obstacle.force) < 0.0);
         assert!(contact_at(-80.0).0.deepest_m < DESIGN_PENETRATION_M);
+    }
+
+    /// Without a trunk, the push leaves the head where the trunk's spine
+    /// would at the start (the neck at rest in the start's attitude, the
+    /// default), so the head presents at its start attitude; with the neck
+    /// at rest in neutral, along its vertex.
+    #[test]
+    fn a_trunkless_head_is_pushed_at_the_necks_rest_attitude() {
+        for name in ["normal", "face"] {
+            let mut s = Scenario::builtin(name).unwrap();
+            s.numerics.head_subdivisions = 3;
+            s.floor.enabled = false;
+            let with_trunk = Scene::build(&s).unwrap();
+            let trunk_spine = with_trunk.start[TRUNK].orientation * with_trunk.spine_in_trunk;
+            s.trunk.enabled = false;
+            let scene = Scene::build(&s).unwrap();
+            let head = scene.start[HEAD].orientation;
+            let spine = head * scene.spine_in_head;
+            assert!(spine.angle_between(trunk_spine) < 1e-9, "{name}: {spine} against the trunk's {trunk_spine}");
+            let attitude = (head * scene.head_axes.vertex).angle_between(-spine).to_degrees();
+            assert!((attitude - s.start.attitude_deg.abs()).abs() < 1e-6, "{name}: {attitude} deg");
+            s.neck.rest_attitude = NeckRest::Neutral;
+            assert_eq!(Scene::build(&s).unwrap().spine_in_head, -scene.head_axes.vertex, "{name}");
+        }
     }
 
     /// Every built-in scenario starts with its head clear of its trunk

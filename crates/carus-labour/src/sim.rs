@@ -101,7 +101,9 @@ pub struct SimState {
     /// Pose history samples so far.
     pub samples: Vec<PoseSample>,
     pub floor_samples: Vec<FloorSample>,
-    /// The contact loads at the same instants as `samples`.
+    /// The contact loads of the steps that ended at `samples`' instants
+    /// (as `samples`' forces: each from the pose its step began in, one
+    /// rigid step before the pose recorded with it).
     #[serde(default)]
     pub loads: Vec<LoadSample>,
 }
@@ -392,7 +394,8 @@ impl<'a> Simulation<'a> {
                 (last_s > reached_s + 0.5 * dt).then(|| format!("its last sample, at t = {last_s} s, lies after its step's t = {reached_s} s"))
             }
             Err(e) => Some(e.to_string()),
-        };
+        }
+        .or_else(|| unpaired_records(&state));
         if let Some(fault) = fault {
             return Err(LabourError::Checkpoint(format!(
                 "the saved pose history is not one a run writes ({fault}): the checkpoint was edited \
@@ -457,6 +460,11 @@ impl<'a> Simulation<'a> {
         step.is_multiple_of(self.sample_every) || step == self.end_step
     }
 
+    /// Whether the last step's state was recorded as a pose sample.
+    pub fn sampled_last_step(&self) -> bool {
+        self.state.step > 0 && self.samples_at(self.state.step)
+    }
+
     pub fn dt_s(&self) -> f64 {
         self.dt
     }
@@ -485,8 +493,8 @@ impl<'a> Simulation<'a> {
             Some(_) => {
                 self.state.bodies.orientation[self.scene.breech_body()] * self.scene.spine_in_trunk
             }
-            // No trunk: the spine leaves the head at its rest direction in the head frame.
-            None => self.state.bodies.orientation[HEAD] * -self.scene.head_axes.vertex,
+            // No trunk: the spine leaves the head at the neck's rest attitude.
+            None => self.state.bodies.orientation[HEAD] * self.scene.spine_in_head,
         }
     }
 
@@ -511,14 +519,10 @@ impl<'a> Simulation<'a> {
         let spine = self.spine();
         let expulsion = self.expulsion.force(t, spine);
         let pivot = self.pivot();
-        match (scene.trunk.is_some(), scene.scenario.expulsion.acts_on) {
-            (true, crate::scenario::ActsOn::Trunk) => {
-                wrenches[scene.breech_body()].force += expulsion
-            }
-            _ => {
-                wrenches[HEAD] +=
-                    Wrench::at_point(expulsion, pivot, self.state.bodies.position[HEAD])
-            }
+        if scene.expulsion_at_pivot() {
+            wrenches[HEAD] += Wrench::at_point(expulsion, pivot, self.state.bodies.position[HEAD]);
+        } else {
+            wrenches[scene.breech_body()].force += expulsion;
         }
 
         // Contacts with the bony pelvis.
@@ -996,6 +1000,22 @@ impl<'a> Simulation<'a> {
             });
         }
     }
+}
+
+/// Why a saved state's loads or floor samples do not pair with its pose
+/// samples one to one, at the same times (the output writes them side by
+/// side, row by row), if they do not.
+fn unpaired_records(state: &SimState) -> Option<String> {
+    let poses: Vec<f64> = state.samples.iter().map(|s| s.time_s).collect();
+    let loads: Vec<f64> = state.loads.iter().map(|s| s.time_s).collect();
+    let floor: Vec<f64> = state.floor_samples.iter().map(|s| s.time_s).collect();
+    let floor_expected: &[f64] = if state.floor.is_some() { &poses } else { &[] };
+    let unpaired = |what: &str, got: &[f64], expected: &[f64]| {
+        (got != expected).then(|| {
+            format!("its {} {what} are not taken at the times of the {} pose samples they go with", got.len(), expected.len())
+        })
+    };
+    unpaired("load samples", &loads, &poses).or_else(|| unpaired("floor samples", &floor, floor_expected))
 }
 
 /// Refuses a hybrid guide too stiff for the rigid step. A critically

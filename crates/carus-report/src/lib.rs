@@ -3,7 +3,9 @@
 //!
 //! - [`input`]: what a run hands over ([`ReportInput`]): history, detector
 //!   report, floor stretch, meshes, figures, scenario;
-//! - [`moments`]: the key moments, chosen from the detector's report;
+//! - the key moments it pictures are chosen from the detector's report by
+//!   `carus_analysis::moments` (the run's record keeps the floor at each
+//!   by the same rule);
 //! - [`movements`]: names and colours of the movements;
 //! - [`plots`]: SVG plots against time (plotters);
 //! - [`pictures`]: renders of the key moments (carus-render);
@@ -18,7 +20,6 @@
 pub mod demo;
 pub mod error;
 pub mod input;
-pub mod moments;
 pub mod movements;
 pub mod page;
 pub mod pictures;
@@ -33,7 +34,7 @@ mod tests;
 
 pub use error::ReportError;
 pub use input::{AxialMomentSample, CanalForceSample, FloorFrame, FloorSurface, Fontanelles, ReportInput, ReportScene, RunFigures, SampleForces};
-pub use moments::{key_moments, KeyMoment, MomentKind};
+pub use carus_analysis::moments::{key_moments, KeyMoment, MomentKind};
 
 /// A written page and what went wrong with its pictures.
 #[derive(Debug, Clone, PartialEq)]

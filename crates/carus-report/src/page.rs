@@ -9,7 +9,7 @@ use plotters::style::RGBColor;
 
 use crate::error::ReportError;
 use crate::input::{AxialMomentSample, CanalForceSample, ReportInput};
-use crate::moments::{KeyMoment, MissedMoment};
+use carus_analysis::moments::{KeyMoment, MissedMoment};
 use crate::movements::{css, ill_conditioned_rotations, label_of, shown, size_text, Shown};
 use crate::pictures::{MomentPictures, PICTURE_SIZE};
 use crate::plots::{self, Band, Curve, Mark, PlotSpec};

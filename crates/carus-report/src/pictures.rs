@@ -11,7 +11,7 @@ use carus_render::{Bounds, Camera, ColourMap, RenderError, RenderMesh, Renderer,
 use glam::DVec3;
 
 use crate::input::{FloorFrame, FloorSurface, ReportScene};
-use crate::moments::KeyMoment;
+use carus_analysis::moments::KeyMoment;
 
 /// The views of every key moment: from the mother's right (the curve of
 /// Carus in profile) and from below (the outlet, as the accoucheur sees it).

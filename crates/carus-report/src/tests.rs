@@ -383,7 +383,7 @@ fn the_forces_at_a_key_moment_are_drawn_and_listed() {
     assert!(!plain.contains("Arrows:") && !plain.contains("class=\"forces\""));
 
     let mut input = demo.input("forces");
-    let (moments, _) = crate::moments::key_moments(&demo.detector);
+    let (moments, _) = carus_analysis::moments::key_moments(&demo.detector);
     let sample = moments[1].sample;
     let head = demo.history.samples[sample].head.position_m.as_vec3().to_array();
     let arrow = carus_render::RenderMesh::arrow("force: sacrum", [head[0], head[1] - 0.1, head[2]], [head[0], head[1] - 0.05, head[2]], 0.0015, [0.15, 0.35, 0.9]);
@@ -414,7 +414,7 @@ fn the_fontanelles_mark_the_head_in_the_pictures() {
     let demo = Demo::textbook().unwrap();
     let input = demo.input("fontanelles");
     let scene = input.scene.as_ref().unwrap();
-    let (moments, _) = crate::moments::key_moments(&demo.detector);
+    let (moments, _) = carus_analysis::moments::key_moments(&demo.detector);
     let sample = moments[1].sample;
     let (meshes, _) = crate::pictures::meshes_at_sample(scene, &demo.history, sample, None);
     let centre = |name: &str| {

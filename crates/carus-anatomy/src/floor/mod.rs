@@ -112,7 +112,7 @@ pub enum FloorError {
     NotPositive { key: &'static str, value: f64 },
     #[error("{key} = {value} must be a finite length in mm (negative arches the sheet into a dome, positive hangs it as a basin; the default is -10)")]
     NotFinite { key: &'static str, value: f64 },
-    #[error("{key} = {value} is too coarse: at least {min} elements are needed")]
+    #[error("{key} = {value} is too coarse: the floor needs {min} or more")]
     TooFewElements {
         key: &'static str,
         value: usize,
