@@ -81,6 +81,20 @@ pub struct FloorParameters {
     /// Engineering choice (the perineal body is a fibromuscular node about
     /// as tall as the levator sheet is thick, several times over).
     pub perineal_body_mm: f64,
+    /// Where the hiatus rim leaves the pubis, as a share of the hiatus's
+    /// half-width from the midline: 0.5, the puborectalis inserting on the
+    /// pubis beside the symphysis (engineering choice: no measured
+    /// insertion width was found). With the next two it shapes the front of
+    /// the gutter the head meets (CARDINAL_MOVEMENTS.md, internal rotation).
+    pub hiatus_front_share: f64,
+    /// How far behind the lower border of the symphysis the hiatus rim
+    /// leaves the pubis, along its back, mm: 5 mm, the insertion's
+    /// thickness (engineering choice).
+    pub hiatus_front_gap_mm: f64,
+    /// Where the hiatus is widest, as a share of its length from the
+    /// symphysis: 0.5, an oval widest about its middle (engineering choice;
+    /// the hiatus is drawn as an oval on axial MRI and ultrasound).
+    pub hiatus_widest_share: f64,
     /// Elements round the U from one pubic insertion to the other (even).
     pub elements_around: usize,
     /// Elements across the sheet, from the attachment to the hiatus rim.
@@ -98,6 +112,9 @@ impl Default for FloorParameters {
             hiatus_length_mm: 50.0,
             hiatus_width_mm: 38.0,
             perineal_body_mm: 8.0,
+            hiatus_front_share: 0.5,
+            hiatus_front_gap_mm: 5.0,
+            hiatus_widest_share: 0.5,
             elements_around: 48,
             elements_across: 8,
             elements_through: 2,
@@ -122,8 +139,10 @@ pub enum FloorError {
         "elements_around = {0} must be even, so the posterior midline (coccyx) is a row of nodes; give an even number, such as {next}", next = .0 + 1
     )]
     OddAround(usize),
-    #[error("{key} = {value:?} is outside {least} to {most}, the sizes a pelvic floor takes (mm, not m or cm; the default is {default})")]
-    OutOfRange { key: &'static str, value: f64, least: f64, most: f64, default: f64 },
+    #[error("{key} = {value:?} is outside {least} to {most}, the values a pelvic floor takes ({unit}; the default is {default})")]
+    OutOfRange { key: &'static str, value: f64, least: f64, most: f64, default: f64, unit: &'static str },
+    #[error("hiatus_front_gap_mm = {gap} lies behind where the hiatus is widest ({widest_mm:.1} mm behind the symphysis: hiatus_widest_share x hiatus_length_mm); make it shorter")]
+    FrontGapPastWidest { gap: f64, widest_mm: f64 },
     #[error("elements_around x elements_across x elements_through = {count} elements, more than {MAX_FLOOR_ELEMENTS}: a run's time and memory grow with them (the built-in scenarios' floor has 192, this crate's default 768); use fewer")]
     TooManyElements { count: usize },
     #[error("hiatus_width_mm = {width} does not fit between the ischial spines ({interspinous:.1} mm apart); make it narrower than 0.6 x the interspinous diameter")]
@@ -153,6 +172,7 @@ impl FloorError {
             FloorError::OddAround(_) => Some("elements_around"),
             FloorError::HiatusTooWide { .. } => Some("hiatus_width_mm"),
             FloorError::HiatusTooLong { .. } => Some("hiatus_length_mm"),
+            FloorError::FrontGapPastWidest { .. } => Some("hiatus_front_gap_mm"),
             FloorError::SagTooDeep { .. } => Some("sag_mm"),
             FloorError::TooManyElements { .. } | FloorError::Distorted { .. } => None,
         }
@@ -191,16 +211,6 @@ pub const PERINEAL_BODY: &str = "perineal_body";
 /// along the back of the pubic body (engineering choice; further out, the
 /// corner elements between the insertion and the wider hiatus shear).
 const PUBIC_ORIGIN_TURN: f64 = 5.0;
-/// The hiatus rim leaves the pubis this share of the hiatus half-width from
-/// the midline (the puborectalis inserts on the pubis beside the symphysis;
-/// engineering choice).
-const HIATUS_FRONT_SHARE: f64 = 0.5;
-/// ... and this far (m) behind the lower border of the symphysis, along the
-/// back of the pubis (engineering choice: the insertion's thickness).
-const HIATUS_FRONT_GAP: f64 = 0.005;
-/// Share of the hiatus length (from the symphysis) where it is widest: the
-/// levator hiatus is an oval widest about its middle (engineering choice).
-const HIATUS_WIDEST_SHARE: f64 = 0.5;
 /// The back of the hiatus may lie at most this share of the hiatus length
 /// below the outlet plane (beyond it the rim would turn almost vertical).
 const HIATUS_SAG_MAX_SHARE: f64 = 0.8;
@@ -260,10 +270,18 @@ impl FloorParameters {
             ("hiatus_length_mm", self.hiatus_length_mm, d.hiatus_length_mm, 20.0, 100.0),
             ("hiatus_width_mm", self.hiatus_width_mm, d.hiatus_width_mm, 10.0, 80.0),
             ("perineal_body_mm", self.perineal_body_mm, d.perineal_body_mm, 0.0, 40.0),
+            ("hiatus_front_share", self.hiatus_front_share, d.hiatus_front_share, 0.1, 0.9),
+            ("hiatus_front_gap_mm", self.hiatus_front_gap_mm, d.hiatus_front_gap_mm, 0.0, 20.0),
+            ("hiatus_widest_share", self.hiatus_widest_share, d.hiatus_widest_share, 0.2, 0.8),
         ] {
             if !(least..=most).contains(&value) {
-                return Err(FloorError::OutOfRange { key, value, least, most, default });
+                let unit = if key.ends_with("_mm") { "mm, not m or cm" } else { "a share, not a percentage" };
+                return Err(FloorError::OutOfRange { key, value, least, most, default, unit });
             }
+        }
+        let widest_mm = self.hiatus_widest_share * self.hiatus_length_mm;
+        if self.hiatus_front_gap_mm >= widest_mm {
+            return Err(FloorError::FrontGapPastWidest { gap: self.hiatus_front_gap_mm, widest_mm });
         }
         Ok(())
     }
@@ -273,15 +291,22 @@ impl FloorParameters {
 /// from the lower border of the symphysis along the hiatus' sagittal line,
 /// and `lateral`, the share of the half-width. Two pieces meet at the widest
 /// point, which is a node, so the width measured on the mesh is the one set:
-/// - from the pubis (`HIATUS_FRONT_SHARE` of the half-width beside the
-///   midline, heading backwards and outwards) to the widest point (heading
-///   straight back), at `HIATUS_WIDEST_SHARE` of the length;
+/// - from the pubis (`hiatus_front_share` of the half-width beside the
+///   midline, `hiatus_front_gap_mm` behind the symphysis, heading backwards
+///   and outwards) to the widest point (heading straight back), at
+///   `hiatus_widest_share` of the length;
 /// - from there round a quarter ellipse to the perineal body on the midline
 ///   behind, arriving square to it (no cusp), `hiatus_length_mm` from the
 ///   lower border of the symphysis.
 struct Rim {
     length: f64,
     half_width: f64,
+    /// Where the rim leaves the pubis: behind the symphysis, m, and beside
+    /// the midline, as a share of the half-width; where it is widest, as a
+    /// share of the length.
+    front_gap: f64,
+    front_share: f64,
+    widest_share: f64,
     /// Segments per half rim, and how many of them the front piece takes.
     segments: usize,
     front_segments: usize,
@@ -294,6 +319,9 @@ impl Rim {
         let mut rim = Rim {
             length: 1e-3 * parameters.hiatus_length_mm,
             half_width: 0.5e-3 * parameters.hiatus_width_mm,
+            front_gap: 1e-3 * parameters.hiatus_front_gap_mm,
+            front_share: parameters.hiatus_front_share,
+            widest_share: parameters.hiatus_widest_share,
             segments: parameters.elements_around / 2,
             front_segments: 0,
             tables: [Vec::new(), Vec::new()],
@@ -319,11 +347,11 @@ impl Rim {
     /// (back, lateral) in metres.
     fn local(&self, piece: usize, s: f64) -> glam::DVec2 {
         let quarter = std::f64::consts::FRAC_PI_2 * s;
-        let widest = HIATUS_WIDEST_SHARE * self.length;
+        let widest = self.widest_share * self.length;
         let (back, lateral) = if piece == 0 {
             (
-                HIATUS_FRONT_GAP + (widest - HIATUS_FRONT_GAP) * s,
-                HIATUS_FRONT_SHARE + (1.0 - HIATUS_FRONT_SHARE) * quarter.sin(),
+                self.front_gap + (widest - self.front_gap) * s,
+                self.front_share + (1.0 - self.front_share) * quarter.sin(),
             )
         } else {
             (
@@ -974,6 +1002,35 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The front of the hiatus (where the rim leaves the pubis, where it
+    /// is widest) moves the sheet, and the hiatus still measures as set;
+    /// shares outside their band, or a rim leaving the pubis behind its
+    /// widest point, are named.
+    #[test]
+    fn the_front_of_the_hiatus_follows_its_keys() {
+        let pelvis = Pelvis::generate(&PelvisDiameters::default()).unwrap();
+        let base = FloorParameters { elements_around: 32, elements_across: 6, elements_through: 1, ..Default::default() };
+        let default_mesh = check(&pelvis, &base, ANY_MIN_SCALED_JACOBIAN);
+        for (front_share, gap_mm, widest_share) in [(0.3, 2.0, 0.4), (0.7, 10.0, 0.6), (0.5, 5.0, 0.35)] {
+            let parameters = FloorParameters {
+                hiatus_front_share: front_share,
+                hiatus_front_gap_mm: gap_mm,
+                hiatus_widest_share: widest_share,
+                ..base
+            };
+            let mesh = check(&pelvis, &parameters, ANY_MIN_SCALED_JACOBIAN);
+            assert_ne!(mesh.nodes, default_mesh.nodes, "{parameters:?}");
+            let m = measure_hiatus(&mesh, &pelvis, &parameters);
+            assert!((m.length_mm - 50.0).abs() < 0.1 && (m.width_mm - 38.0).abs() < 0.1, "{m:?}");
+        }
+        let e = pelvic_floor(&pelvis, &FloorParameters { hiatus_front_share: 50.0, ..base }).unwrap_err().to_string();
+        assert!(e.contains("hiatus_front_share = 50.0 is outside 0.1 to 0.9") && e.contains("a share, not a percentage"), "{e}");
+        let past = FloorParameters { hiatus_front_gap_mm: 12.0, hiatus_widest_share: 0.2, ..base };
+        let e = pelvic_floor(&pelvis, &past).unwrap_err();
+        assert_eq!(e.key(), Some("hiatus_front_gap_mm"));
+        assert!(e.to_string().contains("10.0 mm behind the symphysis"), "{e}");
     }
 
     #[test]
