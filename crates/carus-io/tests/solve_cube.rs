@@ -381,7 +381,7 @@ fn an_interval_shorter_than_the_step_is_noted() {
     let report = run_job(&job, &out, &RunOptions::default(), &mut |_| {}).unwrap();
     assert!(report.failure.is_none(), "{:?}", report.failure);
     assert_eq!(report.frames as u64, report.steps + 1, "the start and every step");
-    let steps = format!("{} in all", report.steps);
+    let steps = format!("at every step ({} steps)", report.steps);
     for key in ["output.frame_interval_s = 1.000e-12 s", "output.history_interval_s = 1.000e-12 s"] {
         assert!(
             report.notes.iter().any(|n| n.starts_with(key) && n.contains("shorter than the time step") && n.contains(&steps)),

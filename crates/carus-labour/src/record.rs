@@ -128,7 +128,8 @@ pub struct Files {
 }
 
 /// The key moments the report pictures (`carus_analysis::moments`, the
-/// one rule), each with the sample and the VTU frame nearest it.
+/// one rule), each with its sample of `history` (the one `report` was
+/// detected in: a sample per series entry) and the VTU frame nearest it.
 pub fn key_moments(
     history: &PoseHistory,
     report: &DetectorReport,
@@ -139,10 +140,7 @@ pub fn key_moments(
         .iter()
         .filter_map(|moment| {
             let (name, t) = (moment.kind.name(), moment.time_s);
-            let sample = history
-                .samples
-                .iter()
-                .min_by(|a, b| (a.time_s - t).abs().total_cmp(&(b.time_s - t).abs()))?;
+            let sample = history.samples.get(moment.sample)?;
             let frame = (0..frame_times.len()).min_by(|&a, &b| {
                 (frame_times[a] - t)
                     .abs()

@@ -851,6 +851,9 @@ mod tests {
         for record in &runs {
             let report = record.detector.as_ref().expect("detected");
             assert!(report.outcome.delivered, "{:?}", report.outcome);
+            // Stopped on delivery at a pose sample: the history ends on the state it stopped in.
+            let last_s = record.history.samples.last().unwrap().time_s;
+            assert!((last_s - record.summary.simulated_s).abs() < 1e-9, "{last_s} against {}", record.summary.simulated_s);
             for (key, m) in report.movements.by_key() {
                 assert!(m.observed, "{key} not observed: {:?}", report.movements);
             }

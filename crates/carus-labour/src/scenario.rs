@@ -2620,6 +2620,15 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("spine.bending_nm_per_deg") && e.contains("zero or more"), "{e}");
+        // A run shorter than one rigid step would simulate nothing; drags
+        // and the contact's damping time may be zero, not negative.
+        let e = parse("name = \"x\"\n[numerics]\nend_time_s = 1e-4\n").unwrap_err().to_string();
+        assert!(e.contains("numerics.end_time_s") && e.contains("shorter than one rigid step"), "{e}");
+        for key in ["[contact]\ndamping_time_s", "[fetus]\ntrunk_linear_drag_n_s_per_m"] {
+            assert!(parse(&format!("name = \"x\"\n{key} = 0.0\n")).is_ok(), "{key}");
+            let e = parse(&format!("name = \"x\"\n{key} = -1.0\n")).unwrap_err().to_string();
+            assert!(e.contains("must be zero or more"), "{e}");
+        }
         let e = parse("name = \"x\"\n[start]\nposition = \"XYZ\"\n")
             .unwrap_err()
             .to_string();

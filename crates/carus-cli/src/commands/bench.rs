@@ -299,10 +299,10 @@ fn tled(args: &TledBenchArgs) -> anyhow::Result<Status> {
     if args.backend == BackendArg::Gpu && args.threads.is_some() {
         crate::bad_argument!("--threads sets the CPU solver's worker threads; --backend gpu has none (drop --threads, or use --backend cpu)");
     }
-    let cpu_only = args.threads.is_some() || matches!(args.precision, PrecisionArg::F64);
-    if args.backend == BackendArg::Gpu && cpu_only {
+    if args.backend == BackendArg::Gpu && matches!(args.precision, PrecisionArg::F64) {
         crate::bad_argument!("--precision f64: the GPU kernels are f32; f64 runs with --backend cpu");
     }
+    let cpu_only = args.threads.is_some() || matches!(args.precision, PrecisionArg::F64);
     let kind = match args.element {
         ElementArg::H8 => ElementKind::H8,
         ElementArg::T4 => ElementKind::T4,
@@ -472,6 +472,26 @@ fn peak_rss_bytes() -> Option<u64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Flags only the CPU has are bad arguments with the GPU backend.
+    #[test]
+    fn the_gpu_backend_refuses_cpu_only_flags() {
+        let args = |threads: Option<usize>, precision: PrecisionArg| TledBenchArgs {
+            element: ElementArg::H8,
+            n: 2,
+            steps: Some(1),
+            threads,
+            precision,
+            backend: BackendArg::Gpu,
+            peak_gbs: None,
+            json: true,
+            quiet: true,
+        };
+        for (threads, precision, flag) in [(Some(2), PrecisionArg::F32, "--threads"), (None, PrecisionArg::F64, "--precision f64")] {
+            let e = tled(&args(threads, precision)).expect_err(flag);
+            assert!(e.downcast_ref::<crate::commands::BadArgument>().is_some() && e.to_string().starts_with(flag), "{e}");
+        }
+    }
 
     /// The labour bench runs the scenario as `carus run` would and accounts
     /// for its wall time stage by stage, with its `--set` changes; the

@@ -245,6 +245,25 @@ mod tests {
         assert!(super::labour_pool(Some(0), 2).err().unwrap().to_string().contains("at least 1"));
     }
 
+    /// A `--resume` folder that is not there, or a file given for it, is
+    /// named with what the command takes; a file in a batch's folder gets
+    /// that folder.
+    #[test]
+    fn a_resume_folder_that_is_missing_or_a_file_is_named() {
+        let dir = tempfile::tempdir().unwrap();
+        let missing = dir.path().join("gone");
+        let e = super::check_resume_dir(&missing, "sweep", super::sweep::PLAN_FILE).unwrap_err().to_string();
+        assert!(e.contains("does not exist") && e.contains("`carus sweep` wrote (sweep_plan.json in it)"), "{e}");
+        std::fs::write(dir.path().join(super::sweep::PLAN_FILE), "{}").unwrap();
+        let table = dir.path().join("sweep.csv");
+        std::fs::write(&table, "").unwrap();
+        let e = super::check_resume_dir(&table, "sweep", super::sweep::PLAN_FILE).unwrap_err().to_string();
+        assert!(e.contains(&format!("takes its folder: `carus sweep --resume {}`", dir.path().display())), "{e}");
+        let e = super::check_resume_dir(&table, "sanity", super::sanity::PLAN_FILE).unwrap_err().to_string();
+        assert!(e.contains("is a file; --resume takes the folder that `carus sanity` wrote"), "{e}");
+        assert!(super::check_resume_dir(dir.path(), "sweep", super::sweep::PLAN_FILE).is_ok());
+    }
+
     /// A folder given to the wrong command is named for what it is, with
     /// the command that takes it.
     #[test]

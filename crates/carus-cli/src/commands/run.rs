@@ -67,11 +67,7 @@ impl Observer for Bar {
 }
 
 pub fn run(args: &RunArgs) -> anyhow::Result<Status> {
-    let stop = super::ctrl_c_flag();
-    let options = RunOptions {
-        stop: Some(stop.clone()),
-        stop_at_s: None,
-    };
+    let options = stopped_by(&super::ctrl_c_flag());
     let show = super::shows_progress(args.output.quiet);
     let bar = show.then(super::progress_bar);
     let mut observer = Bar(bar);
@@ -740,15 +736,25 @@ fn holds_files(dir: &Path) -> anyhow::Result<bool> {
 /// command that runs several (`carus sweep`, `carus sanity`).
 pub(super) fn run_into(scenario: &Scenario, dir: &Path, stop: &Arc<AtomicBool>) -> anyhow::Result<RunRecord> {
     make_marked(dir)?;
-    let options = RunOptions {
+    let record = carus_labour::run(scenario, dir, &stopped_by(stop), &mut carus_labour::SilentObserver)?;
+    report_beside(&record, dir);
+    Ok(record)
+}
+
+/// Run options that stop a run cleanly when `stop` is set (Ctrl-C).
+fn stopped_by(stop: &Arc<AtomicBool>) -> RunOptions {
+    RunOptions {
         stop: Some(stop.clone()),
         stop_at_s: None,
-    };
-    let record = carus_labour::run(scenario, dir, &options, &mut carus_labour::SilentObserver)?;
-    if let Err(error) = write_report(&record, dir) {
+    }
+}
+
+/// A batch run's report.html; one that cannot be written is a warning,
+/// never the run's loss.
+fn report_beside(record: &RunRecord, dir: &Path) {
+    if let Err(error) = write_report(record, dir) {
         eprintln!("warning: {}: report.html was not written: {}", dir.display(), crate::error_text(&error));
     }
-    Ok(record)
 }
 
 /// The record of the run in `dir`, read from its run.json.
@@ -781,14 +787,8 @@ pub(super) fn go_on_into(scenario: &Scenario, dir: &Path, stop: &Arc<AtomicBool>
     if !dir.join(carus_labour::output::CHECKPOINT_FILE).exists() {
         return run_into(scenario, dir, stop);
     }
-    let options = RunOptions {
-        stop: Some(stop.clone()),
-        stop_at_s: None,
-    };
-    let record = carus_labour::resume(dir, &options, &mut carus_labour::SilentObserver)?;
-    if let Err(error) = write_report(&record, dir) {
-        eprintln!("warning: {}: report.html was not written: {}", dir.display(), crate::error_text(&error));
-    }
+    let record = carus_labour::resume(dir, &stopped_by(stop), &mut carus_labour::SilentObserver)?;
+    report_beside(&record, dir);
     Ok(record)
 }
 

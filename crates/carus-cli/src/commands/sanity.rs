@@ -123,9 +123,13 @@ pub fn run(args: &SanityArgs) -> anyhow::Result<Status> {
                 if stop.load(Ordering::Relaxed) {
                     return not_run(case, "stopped before it started");
                 }
-                // A case that cannot be run is judged so; the others' verdicts are kept.
-                judge_case(case, &scenarios[i], &dirs[i], &stop)
-                    .unwrap_or_else(|e| not_run(case, &format!("the run failed: {e:#}")))
+                // A run that fails outright is judged so; the others' verdicts are kept.
+                judge_case(case, &scenarios[i], &dirs[i], &stop).unwrap_or_else(|e| Judged {
+                    out_dir: dirs[i].display().to_string(),
+                    outcome_line: "the run failed".into(),
+                    verdict: Verdict { met: false, why: format!("the run failed: {e:#}") },
+                    ..not_run(case, "")
+                })
             })
             .collect()
     });
@@ -173,8 +177,9 @@ pub fn run(args: &SanityArgs) -> anyhow::Result<Status> {
         };
         println!("{met} of {} cases met{with}; runs in {}", judged.len(), out_dir.display());
     }
-    // A Ctrl-C after the last case ended stops nothing.
-    let stopped = stop.load(Ordering::Relaxed) && judged.iter().any(|j| !j.completed);
+    // A Ctrl-C after the last case that could start ended stops nothing.
+    let stopped = stop.load(Ordering::Relaxed)
+        && judged.iter().zip(&cannot_start).any(|(j, cannot)| cannot.is_none() && !j.completed);
     if stopped {
         eprintln!("stopped before every case ended; go on with: carus sanity --resume {}", out_dir.display());
     }

@@ -47,11 +47,8 @@ pub fn run(args: &ScenariosArgs) -> anyhow::Result<Status> {
             }
         }
         Some(ScenariosCommand::Show { name }) => {
-            if !BUILTINS.iter().any(|(n, _)| n == name) {
-                let names: Vec<&str> = BUILTINS.iter().map(|(n, _)| *n).collect();
-                crate::bad_argument!("`{name}` is no built-in scenario; `carus scenarios show` takes one of {}", names.join(", "));
-            }
-            let s = Scenario::builtin(name)?;
+            // `show` takes only a built-in's name: another is a bad argument.
+            let s = Scenario::builtin(name).map_err(|e| super::BadArgument(e.to_string()))?;
             let text = s.to_toml()?;
             if args.json {
                 print_json(&json!({ "name": name, "toml": text }))?;
@@ -61,4 +58,17 @@ pub fn run(args: &ScenariosArgs) -> anyhow::Result<Status> {
         }
     }
     Ok(Status::Success)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `show` takes a built-in's name; another is a bad argument (exit 2).
+    #[test]
+    fn an_unknown_name_is_a_bad_argument() {
+        let args = ScenariosArgs { command: Some(ScenariosCommand::Show { name: "nope".into() }), json: true };
+        let e = run(&args).expect_err("refused");
+        assert!(e.downcast_ref::<crate::commands::BadArgument>().is_some() && e.to_string().contains("`nope`"), "{e}");
+    }
 }

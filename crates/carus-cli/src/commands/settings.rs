@@ -43,7 +43,8 @@ pub(super) fn parse_setting(text: &str) -> anyhow::Result<Setting> {
     let Some((key, values)) = text.split_once('=') else {
         bail!("--set {text}: write KEY=V1,V2,..., e.g. --set expulsion.period_s=8,16,32");
     };
-    let values: Vec<String> = split_values(values).into_iter().map(|v| v.trim().to_string()).collect();
+    let values = split_values(values).map_err(|why| anyhow::anyhow!("--set {text}: {why}; a value is TOML (quote a string with commas, e.g. description=\"a, b\")"))?;
+    let values: Vec<String> = values.into_iter().map(|v| v.trim().to_string()).collect();
     if key.trim().is_empty() || values.iter().any(String::is_empty) {
         bail!("--set {text}: a key and at least one value, none empty, e.g. --set contact.friction=0.1,0.35");
     }
@@ -77,29 +78,50 @@ fn normalised(value: toml::Value) -> toml::Value {
 /// The values of a list split at its commas, but not at those inside a
 /// TOML array, inline table or string (`fetal_spine,[0.0,0.2,-1.0]` is
 /// two values; `{time_s=1.0, station_mm=0.0}` and `"slow, steady"` one).
-fn split_values(list: &str) -> Vec<&str> {
+/// A quote opens a string only where a value starts (so `o'brien.stl` is
+/// a bare word); brackets must pair and strings close.
+fn split_values(list: &str) -> Result<Vec<&str>, String> {
     let mut values = Vec::new();
-    let (mut depth, mut quote, mut escaped, mut start) = (0i32, None::<char>, false, 0);
+    let mut open: Vec<char> = Vec::new();
+    let (mut quote, mut escaped, mut start, mut prev) = (None::<char>, false, 0, None::<char>);
+    // Only blanks since the last `,`, `[`, `{` or `=` (or the start).
+    let mut value_starts = true;
     for (i, c) in list.char_indices() {
         match quote {
             Some(_) if escaped => escaped = false,
             Some('"') if c == '\\' => escaped = true,
             Some(q) if c == q => quote = None,
             Some(_) => {}
-            None => match c {
-                '"' | '\'' => quote = Some(c),
-                '[' | '{' => depth += 1,
-                ']' | '}' => depth -= 1,
-                ',' if depth == 0 => {
-                    values.push(&list[start..i]);
-                    start = i + 1;
+            None => {
+                match c {
+                    // A quote right after a closing one goes on a """ or ''' string.
+                    '"' | '\'' if value_starts || prev == Some(c) => quote = Some(c),
+                    '[' | '{' => open.push(c),
+                    ']' | '}' => {
+                        let opener = if c == ']' { '[' } else { '{' };
+                        if open.pop() != Some(opener) {
+                            return Err(format!("`{c}` closes no `{opener}`"));
+                        }
+                    }
+                    ',' if open.is_empty() => {
+                        values.push(&list[start..i]);
+                        start = i + 1;
+                    }
+                    _ => {}
                 }
-                _ => {}
-            },
+                value_starts = matches!(c, ',' | '[' | '{' | '=') || (value_starts && c.is_whitespace());
+            }
         }
+        prev = Some(c);
+    }
+    if let Some(q) = quote {
+        return Err(format!("a string opened with {q} is never closed"));
+    }
+    if let Some(b) = open.last() {
+        return Err(format!("`{b}` is never closed"));
     }
     values.push(&list[start..]);
-    values
+    Ok(values)
 }
 
 #[cfg(test)]
@@ -152,5 +174,24 @@ mod tests {
         );
         assert_eq!(parse_setting("description=\"a, b\",\"c\"").unwrap().values, ["\"a, b\"", "\"c\""]);
         assert!(one_setting("contact.friction=0.1,0.35").unwrap_err().to_string().contains("carus sweep"));
+        // Triple-quoted strings, and a quote inside a bare word.
+        assert_eq!(one_setting(r#"description="""a, b""""#).unwrap().1, r#""""a, b""""#);
+        assert_eq!(parse_setting("pelvis.import=o'brien.toml,b.toml").unwrap().values, ["o'brien.toml", "b.toml"]);
+    }
+
+    /// Values that are not whole (a string left open, brackets that do not
+    /// pair) are refused with what is wrong, not taken as one value.
+    #[test]
+    fn unbalanced_values_are_refused() {
+        for (bad, why) in [
+            ("description=\"abc,def", "never closed"),
+            ("x=a],b", "`]` closes no `[`"),
+            ("expulsion.direction=[0,0,-1]],pivot", "`]` closes no `[`"),
+            ("x=[1,2},3", "`}` closes no `{`"),
+            ("x=[1,2", "`[` is never closed"),
+        ] {
+            let e = parse_setting(bad).expect_err(bad).to_string();
+            assert!(e.contains(why) && e.contains("a value is TOML"), "{bad}: {e}");
+        }
     }
 }

@@ -113,32 +113,53 @@ fn one_at_a_time(settings: &[Setting]) -> Vec<Vec<(String, String)>> {
         .collect()
 }
 
-/// A variant's folder name: its number and settings (`base` for none), in
-/// characters any file system takes. Settings too long to spell out (a
-/// list of way-points, many keys) are cut to [`FOLDER_SETTINGS_MAX`]
-/// characters and tagged with a checksum of the whole, under the 255
-/// bytes a file name may have; the run's scenario.toml and the tables
-/// give them whole.
-fn folder_name(index: usize, combination: &[(String, String)]) -> String {
+/// A variant's folder name spelled out: its number and every setting
+/// (`base` for none), in characters any file system takes. Sweeps made
+/// before the plan kept its folders' names were named so, whole.
+fn spelled_name(index: usize, combination: &[(String, String)]) -> String {
     if combination.is_empty() {
         return format!("{:02}-base", index + 1);
     }
     let settings: Vec<String> = combination.iter().map(|(k, v)| format!("{k}={v}")).collect();
-    let whole = settings.join("_");
-    let name: String = whole
-        .chars()
-        .map(|c| if c.is_ascii_alphanumeric() || "._=+-".contains(c) { c } else { '-' })
-        .collect();
-    if name.len() <= FOLDER_SETTINGS_MAX {
-        return format!("{:02}-{name}", index + 1);
-    }
-    // Every character of `name` is ASCII, so any cut is on a boundary.
-    let tag = crc32fast::hash(whole.as_bytes());
-    format!("{:02}-{}-{tag:08x}", index + 1, &name[..FOLDER_SETTINGS_MAX - 9])
+    format!("{:02}-{}", index + 1, file_characters(&settings.join("_")))
 }
 
-/// The most characters of settings a run's folder name spells out.
-const FOLDER_SETTINGS_MAX: usize = 120;
+/// `text` with every character a file name may not hold made `-`.
+fn file_characters(text: &str) -> String {
+    text.chars().map(|c| if c.is_ascii_alphanumeric() || "._=+-".contains(c) { c } else { '-' }).collect()
+}
+
+/// A variant's folder name: [`spelled_name`] where it fits in
+/// [`FOLDER_NAME_MAX`] characters (a file name may have 255 bytes);
+/// otherwise the settings that differ between runs (`varying`) first,
+/// as many whole ones as fit (or the first cut short), tagged with a
+/// checksum of the whole name. The run's scenario.toml and the tables give
+/// the settings whole.
+fn folder_name(index: usize, combination: &[(String, String)], varying: &[&str]) -> String {
+    let spelled = spelled_name(index, combination);
+    if spelled.len() <= FOLDER_NAME_MAX {
+        return spelled;
+    }
+    let tag = crc32fast::hash(spelled.as_bytes());
+    let (first, rest): (Vec<_>, Vec<_>) = combination.iter().partition(|(k, _)| varying.contains(&k.as_str()));
+    let room = FOLDER_NAME_MAX - 9;
+    let mut name = format!("{:02}", index + 1);
+    for (i, (key, value)) in first.into_iter().chain(rest).enumerate() {
+        let part = file_characters(&format!("{}{key}={value}", if i == 0 { "-" } else { "_" }));
+        if name.len() + part.len() > room {
+            // Every character is ASCII, so any cut is on a boundary.
+            if i == 0 {
+                name.push_str(&part[..room - name.len()]);
+            }
+            break;
+        }
+        name.push_str(&part);
+    }
+    format!("{name}-{tag:08x}")
+}
+
+/// The most characters of a run's folder name.
+const FOLDER_NAME_MAX: usize = 120;
 
 /// The finished run of one variant, as the table reports it.
 struct Finished {
@@ -157,6 +178,10 @@ struct SweepPlan {
     /// The `--set` arguments as given.
     set: Vec<String>,
     one_at_a_time: bool,
+    /// Each run's folder, in the order of the runs (empty in the plans of
+    /// sweeps made before it was kept: their folders are spelled out whole).
+    #[serde(default)]
+    folders: Vec<String>,
 }
 
 pub(super) const PLAN_FILE: &str = "sweep_plan.json";
@@ -165,7 +190,7 @@ pub(super) const CSV_FILE: &str = "sweep.csv";
 pub(super) const JSON_FILE: &str = "sweep.json";
 
 pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
-    let (plan, base, out_dir) = match &args.resume {
+    let (mut plan, base, out_dir) = match &args.resume {
         Some(dir) => {
             let plan = read_plan(dir)?;
             let base = Scenario::parse_kept(&dir.join(PLAN_FILE), &plan.scenario_toml, plan.base_dir.clone())
@@ -179,6 +204,7 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
                 base_dir: base.base_dir.clone(),
                 set: args.settings.clone(),
                 one_at_a_time: args.one_at_a_time,
+                folders: Vec::new(),
             };
             (plan, base, None)
         }
@@ -216,7 +242,14 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
         .map(|c| base.with_settings(c))
         .collect::<Result<Vec<Scenario>, _>>()
         .map_err(|e| from_plan(e.into()))?;
-    let names: Vec<String> = combinations.iter().enumerate().map(|(i, c)| folder_name(i, c)).collect();
+    let varying: Vec<&str> = settings.iter().filter(|s| s.values.len() > 1).map(|s| s.key.as_str()).collect();
+    let names: Vec<String> = match (&args.resume, plan.folders.is_empty()) {
+        (None, _) => combinations.iter().enumerate().map(|(i, c)| folder_name(i, c, &varying)).collect(),
+        (Some(_), true) => combinations.iter().enumerate().map(|(i, c)| spelled_name(i, c)).collect(),
+        (Some(_), false) if plan.folders.len() == combinations.len() => plan.folders.clone(),
+        (Some(_), false) => return Err(from_plan(anyhow::anyhow!("it names {} folders for {} runs", plan.folders.len(), combinations.len()))),
+    };
+    plan.folders.clone_from(&names);
     check_runs_start(&scenarios, &names, "sweep", "its row in the table gives the reason")?;
     // The pool is made first: a bad --jobs leaves no out dir behind.
     let (pool, jobs) = labour_pool(args.jobs, scenarios.len())?;
@@ -610,15 +643,25 @@ mod tests {
         assert_eq!(c.len(), 6);
         assert_eq!(c[0], vec![("a".into(), "1".into()), ("b".into(), "x".into())]);
         assert_eq!(c[5], vec![("a".into(), "2".into()), ("b".into(), "z".into())]);
-        assert_eq!(folder_name(4, &c[4]), "05-a=2_b=y");
-        assert_eq!(folder_name(0, &[("start.position".into(), "\"LOT\"".into())]), "01-start.position=-LOT-");
+        assert_eq!(folder_name(4, &c[4], &["a", "b"]), "05-a=2_b=y");
+        assert_eq!(folder_name(0, &[("start.position".into(), "\"LOT\"".into())], &[]), "01-start.position=-LOT-");
         // Settings too long for a file name are cut and told apart by a checksum.
         let waypoints = |last: f64| (0..8).map(|i| format!("{{time_s={i}.0, station_mm={last}}}")).collect::<Vec<_>>().join(",");
         let long = [("trajectory.waypoints".to_string(), format!("[{}]", waypoints(1.0)))];
         let other = [("trajectory.waypoints".to_string(), format!("[{}]", waypoints(2.0)))];
-        let (a, b) = (folder_name(11, &long), folder_name(11, &other));
-        assert!(a.len() <= 3 + FOLDER_SETTINGS_MAX && a.starts_with("12-trajectory.waypoints=-") && a != b, "{a} {b}");
-        assert_eq!(a, folder_name(11, &long), "the same settings, the same folder");
+        let varying = ["trajectory.waypoints"];
+        let (a, b) = (folder_name(11, &long, &varying), folder_name(11, &other, &varying));
+        assert!(a.len() <= FOLDER_NAME_MAX && a.starts_with("12-trajectory.waypoints=-") && a != b, "{a} {b}");
+        assert_eq!(a, folder_name(11, &long, &varying), "the same settings, the same folder");
+        // Many keys: the one that varies comes first, and only whole settings are kept.
+        let mut many: Vec<(String, String)> = (0..8).map(|i| (format!("numerics.setting_number_{i}"), "0.25".to_string())).collect();
+        many.push(("contact.friction".into(), "0.1".into()));
+        let name = folder_name(0, &many, &["contact.friction"]);
+        assert!(name.len() <= FOLDER_NAME_MAX && name.starts_with("01-contact.friction=0.1_numerics.setting_number_0=0.25_"), "{name}");
+        let settings = name[3..name.len() - 9].split('_').filter(|p| p.contains('=')).count();
+        assert!(name[3..name.len() - 9].ends_with("=0.25") && settings >= 3, "whole settings only: {name}");
+        // Short names are those earlier sweeps made.
+        assert_eq!(folder_name(2, &c[2], &["a", "b"]), spelled_name(2, &c[2]));
     }
 
     /// One at a time: the scenario as it is, then each value alone, with
@@ -634,8 +677,8 @@ mod tests {
         assert!(c[0].is_empty());
         assert_eq!(c[2], vec![("a".into(), "2".into())]);
         assert_eq!(c[5], vec![("b".into(), "z".into())]);
-        assert_eq!(folder_name(0, &c[0]), "01-base");
-        assert_eq!(folder_name(3, &c[3]), "04-b=x");
+        assert_eq!(folder_name(0, &c[0], &[]), "01-base");
+        assert_eq!(folder_name(3, &c[3], &[]), "04-b=x");
         assert_eq!(set_values(&["a", "b"], &c[3]), ["", "x"]);
         assert_eq!(set_values(&["a", "b"], &c[0]), ["", ""]);
         let r = unmade(Path::new("runs/x/04-b=x"), &c[3], &["a", "b"], &anyhow::anyhow!("no"));
@@ -792,7 +835,17 @@ mod tests {
         plan["set"] = json!(["expulsion.force_max_n=60,90"]);
         std::fs::write(&plan_path, plan.to_string()).unwrap();
         let e = format!("{:#}", run(&resume).err().unwrap());
+        assert!(e.contains("02-expulsion.force_max_n=120 ran another scenario"), "{e}");
+        // A plan from before the folders were kept names them spelled out.
+        assert_eq!(plan["folders"], json!(["01-expulsion.force_max_n=60", "02-expulsion.force_max_n=120"]));
+        plan.as_object_mut().unwrap().remove("folders");
+        std::fs::write(&plan_path, plan.to_string()).unwrap();
+        let e = format!("{:#}", run(&resume).err().unwrap());
         assert!(e.contains("02-expulsion.force_max_n=120 is a run the plan no longer makes"), "{e}");
+        let mut older: serde_json::Value = serde_json::from_str(&original).unwrap();
+        older.as_object_mut().unwrap().remove("folders");
+        std::fs::write(&plan_path, older.to_string()).unwrap();
+        assert!(matches!(run(&resume).unwrap(), Status::Success));
         // A plan whose kept values no longer read is said to be damaged, not a command line.
         let mut plan: serde_json::Value = serde_json::from_str(&original).unwrap();
         plan["set"] = json!(["expulsion.force_max_n"]);

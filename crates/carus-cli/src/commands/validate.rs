@@ -79,16 +79,20 @@ pub enum VariantArg {
 }
 
 pub fn run(args: &ValidateArgs) -> anyhow::Result<Status> {
-    if args.case == CaseArg::Cube {
-        return run_cube(args);
-    }
+    let ids: Vec<Case> = match args.case {
+        CaseArg::Cube => return run_cube(args),
+        CaseArg::All => Case::ALL.to_vec(),
+        CaseArg::V1 => vec![Case::V1],
+        CaseArg::V2 => vec![Case::V2],
+        CaseArg::V3 => vec![Case::V3],
+        CaseArg::V4 => vec![Case::V4],
+        CaseArg::V5 => vec![Case::V5],
+        CaseArg::V6 => vec![Case::V6],
+        CaseArg::V7 => vec![Case::V7],
+    };
     if args.n.is_some() || args.element.is_some() || args.variant.is_some() || args.hourglass_modulus.is_some() {
         crate::bad_argument!("--n, --element, --variant and --hourglass-modulus apply to `carus validate cube` only");
     }
-    let ids: Vec<CaseArg> = match args.case {
-        CaseArg::All => vec![CaseArg::V1, CaseArg::V2, CaseArg::V3, CaseArg::V4, CaseArg::V5, CaseArg::V6, CaseArg::V7],
-        one => vec![one],
-    };
     let show = super::shows_progress(args.quiet);
     let mut outcomes = Vec::new();
     for id in ids {
@@ -202,27 +206,43 @@ fn variant(v: VariantArg) -> CubeVariant {
     }
 }
 
-fn label(id: CaseArg) -> &'static str {
+/// One verification case of VALIDATION.md's TLED table.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Case {
+    V1,
+    V2,
+    V3,
+    V4,
+    V5,
+    V6,
+    V7,
+}
+
+impl Case {
+    const ALL: [Case; 7] = [Case::V1, Case::V2, Case::V3, Case::V4, Case::V5, Case::V6, Case::V7];
+}
+
+fn label(id: Case) -> &'static str {
     match id {
-        CaseArg::V1 => "V1",
-        CaseArg::V2 => "V2",
-        CaseArg::V3 | CaseArg::Cube => "V3",
-        CaseArg::V4 => "V4",
-        CaseArg::V5 => "V5",
-        CaseArg::V6 => "V6",
-        CaseArg::V7 | CaseArg::All => "V7",
+        Case::V1 => "V1",
+        Case::V2 => "V2",
+        Case::V3 => "V3",
+        Case::V4 => "V4",
+        Case::V5 => "V5",
+        Case::V6 => "V6",
+        Case::V7 => "V7",
     }
 }
 
-fn title(id: CaseArg) -> &'static str {
+fn title(id: Case) -> &'static str {
     match id {
-        CaseArg::V1 => "uniaxial stretch of a neo-Hookean block",
-        CaseArg::V2 => "patch test on a distorted mesh",
-        CaseArg::V3 | CaseArg::Cube => "Miller et al. 2007 cube",
-        CaseArg::V4 => "undamped free vibration, energy",
-        CaseArg::V5 => "CPU against GPU backend",
-        CaseArg::V6 => "time step above the critical one",
-        CaseArg::V7 | CaseArg::All => "mesh refinement of the cube",
+        Case::V1 => "uniaxial stretch of a neo-Hookean block",
+        Case::V2 => "patch test on a distorted mesh",
+        Case::V3 => "Miller et al. 2007 cube",
+        Case::V4 => "undamped free vibration, energy",
+        Case::V5 => "CPU against GPU backend",
+        Case::V6 => "time step above the critical one",
+        Case::V7 => "mesh refinement of the cube",
     }
 }
 
@@ -255,7 +275,7 @@ impl CaseOutcome {
     }
 }
 
-fn outcome<T: Serialize>(id: CaseArg, pass: bool, summary: String, report: &T) -> CaseOutcome {
+fn outcome<T: Serialize>(id: Case, pass: bool, summary: String, report: &T) -> CaseOutcome {
     CaseOutcome {
         id: label(id),
         title: title(id),
@@ -266,11 +286,11 @@ fn outcome<T: Serialize>(id: CaseArg, pass: bool, summary: String, report: &T) -
 }
 
 /// Runs one case at full size; an error while running is a failure.
-fn run_case(id: CaseArg) -> CaseOutcome {
+fn run_case(id: Case) -> CaseOutcome {
     let size = CaseSize::Full;
     let result: Result<CaseOutcome, carus_fem::validation::ValidationError> = (|| {
         Ok(match id {
-            CaseArg::V1 => {
+            Case::V1 => {
                 let r = uniaxial::run(size)?;
                 let summary = format!(
                     "{} stretches 1.05-1.3, H8/T4/T4ANP: largest reaction error {:.4} % (tolerance {} %)",
@@ -280,7 +300,7 @@ fn run_case(id: CaseArg) -> CaseOutcome {
                 );
                 outcome(id, r.pass, summary, &r)
             }
-            CaseArg::V2 => {
+            Case::V2 => {
                 let r = patch::run(size)?;
                 let figures: Vec<String> = r
                     .results
@@ -290,7 +310,7 @@ fn run_case(id: CaseArg) -> CaseOutcome {
                 let summary = format!("interior error, {}^3 distorted mesh: {}", r.elements_per_edge, figures.join(", "));
                 outcome(id, r.pass, summary, &r)
             }
-            CaseArg::V3 | CaseArg::Cube => {
+            Case::V3 => {
                 let r = cube::run(size)?;
                 let worst_baseline = r
                     .cases
@@ -320,7 +340,7 @@ fn run_case(id: CaseArg) -> CaseOutcome {
                 );
                 outcome(id, r.pass, summary, &r)
             }
-            CaseArg::V4 => {
+            Case::V4 => {
                 let r = free_vibration::run(size)?;
                 let figures: Vec<String> = r
                     .results
@@ -334,7 +354,7 @@ fn run_case(id: CaseArg) -> CaseOutcome {
                 let summary = format!("{} steps at 0.9 dt_crit, {}^3 cube: {} (limit 1 %)", free_vibration::STEPS, r.elements_per_edge, figures.join(", "));
                 outcome(id, r.pass, summary, &r)
             }
-            CaseArg::V5 => {
+            Case::V5 => {
                 let comparison = backend_comparison(size);
                 match comparison.verdict() {
                     Some(pass) => outcome(id, pass, comparison.summary(), &comparison),
@@ -347,7 +367,7 @@ fn run_case(id: CaseArg) -> CaseOutcome {
                     },
                 }
             }
-            CaseArg::V6 => {
+            Case::V6 => {
                 let r = critical_step::run(size)?;
                 let figures: Vec<String> = r
                     .results
@@ -365,7 +385,7 @@ fn run_case(id: CaseArg) -> CaseOutcome {
                     .collect();
                 outcome(id, r.pass, figures.join("; "), &r)
             }
-            CaseArg::V7 | CaseArg::All => {
+            Case::V7 => {
                 let r = refinement::run(size)?;
                 let figures: Vec<String> = r
                     .series

@@ -217,8 +217,7 @@ fn displacement_notes(spec: &JobSpec, size_m: f64) -> Vec<String> {
 /// more files than asked for, and the spacing set is not kept. Defaults
 /// (fractions of the run) are not noted: a short run may well fall below
 /// them.
-fn interval_notes(output: &OutputSpec, dt_s: f64, end_s: f64) -> Vec<String> {
-    let steps = (end_s / dt_s).round();
+fn interval_notes(output: &OutputSpec, dt_s: f64, steps: u64) -> Vec<String> {
     [
         ("frame_interval_s", output.frame_interval_s, "frame"),
         ("history_interval_s", output.history_interval_s, "history row"),
@@ -229,7 +228,7 @@ fn interval_notes(output: &OutputSpec, dt_s: f64, end_s: f64) -> Vec<String> {
     .map(|(key, interval_s, what)| {
         format!(
             "output.{key} = {interval_s:.3e} s is shorter than the time step ({dt_s:.3e} s): a {what} was written \
-             at every step, {steps:.0} in all; set it to a multiple of the step to keep the spacing asked for"
+             at every step ({steps} steps); set it to a multiple of the step to keep the spacing asked for"
         )
     })
     .collect()
@@ -717,7 +716,7 @@ pub fn run_job(
             .cloned()
             .chain(auxetic_notes(&spec))
             .chain(displacement_notes(&spec, solver.model().size_m()))
-            .chain(interval_notes(&spec.output, dt_s, end_s))
+            .chain(interval_notes(&spec.output, dt_s, solver.steps()))
             .collect(),
     };
     let summary = out_dir.join("summary.json");
