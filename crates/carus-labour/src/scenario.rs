@@ -561,7 +561,10 @@ pub struct FloorSection {
     pub shear_modulus_pa: f64,
     /// Bulk modulus, Pa: 20 x shear (nearly incompressible, nu about 0.475; numerical).
     pub bulk_modulus_pa: f64,
-    /// Muscle density, kg/m^3 (about 1060).
+    /// Density of the floor, kg/m^3: skeletal muscle, 1060 (the top of
+    /// ICRP 23 reference man's 1040-1060 for muscle, as the fetus's
+    /// density cites). It sets the floor's mass and so its critical
+    /// step; under the quasi-static push its inertia is small.
     pub density_kg_per_m3: f64,
     /// Mass-proportional damping, 1/s (numerical, quasi-static time compression).
     pub damping_per_s: f64,
