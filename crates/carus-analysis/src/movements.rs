@@ -188,29 +188,45 @@ fn not_held_at_birth(series: &Series, movements: &Movements, born: Option<HeadBo
         });
     }
     let extension = &movements.extension;
-    let extended_from = extension
+    let began = extension
         .start_s
         .filter(|_| before_birth(extension))
-        .and_then(|start| series.time_s.iter().position(|&t| t == start))
-        .map(|i| series.phi_deg[i]);
-    if let Some(from) = extended_from.filter(|from| from - born.phi_deg < EXTENSION_MIN_DEG) {
+        .and_then(|start| series.time_s.iter().position(|&t| t == start));
+    if let Some(began) = began.filter(|&i| series.phi_deg[i] - born.phi_deg < EXTENSION_MIN_DEG) {
+        let from = series.phi_deg[began];
         let fall = from - born.phi_deg;
         let kept = match fall {
             f if f <= -0.5 => format!("{:.0} deg more flexed than", -f),
             f if f < 0.5 => "back at".to_string(),
             f => format!("only {f:.0} deg less flexed than"),
         };
+        // The most it had extended by the birth (the counted size, for an
+        // extension over by then): what was undone is the part of that it
+        // no longer showed, and an extension still going on at the birth
+        // had been undone by nothing.
         let size = extension.size.unwrap_or(0.0);
-        // A head still somewhat extended had part of it undone, not all.
-        let undone = if fall >= 0.5 && size - fall >= 0.5 {
-            format!("{:.0} of the {size:.0} deg of extension were", size - fall)
+        let reached = match extension.end_s {
+            Some(end) if end <= born.time_s => size.max(fall),
+            _ => series.time_s[began..]
+                .iter()
+                .zip(&series.phi_deg[began..])
+                .take_while(|&(&t, _)| t <= born.time_s)
+                .map(|(_, &phi)| from - phi)
+                .fold(fall, f64::max),
+        };
+        let undone = reached - fall;
+        let what = if undone < 0.5 {
+            format!("only {fall:.0} of the {size:.0} deg of extension had happened by the birth, the rest after it")
+        } else if fall >= 0.5 {
+            // A head still somewhat extended had part of it undone, not all.
+            format!("{undone:.0} of the {reached:.0} deg of extension were undone before the birth")
         } else {
-            format!("the {size:.0} deg of extension were")
+            format!("the {reached:.0} deg of extension were undone before the birth")
         };
         lost.push(NotHeldAtBirth {
             movement: "extension".into(),
             reason: format!(
-                "{undone} undone before the birth: the head was born at phi {:+.1} deg, \
+                "{what}: the head was born at phi {:+.1} deg, \
                  {kept} the {from:+.1} deg it began to extend from, where the rule asks {EXTENSION_MIN_DEG:.0} \
                  deg less{}",
                 born.phi_deg,

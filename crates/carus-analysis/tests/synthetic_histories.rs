@@ -691,6 +691,21 @@ fn movements_lost_before_the_birth_are_reported_as_not_held() {
         "{lost}"
     );
 
+    // Still extending when born, short of the rule's 30 deg: nothing was
+    // undone; the rest of the extension came after the birth.
+    let mut going_on = synthetic::textbook_plan(&canal);
+    going_on.phi_ramps[1] = synthetic::Ramp { from_mm: outlet - 10.0, to_mm: outlet + 30.0, by: -70.0 };
+    let going_on = detect(&going_on.history(&canal)).unwrap();
+    let born = going_on.head_born.expect("delivered");
+    let extension = going_on.movements.extension;
+    assert!(extension.observed && extension.end_s.unwrap() > born.time_s, "{extension:?}");
+    let lost = going_on.not_held_at_birth.iter().find(|n| n.movement == "extension").expect("under 30 deg by the birth");
+    assert!(
+        lost.reason.starts_with("only ") && lost.reason.contains("deg of extension had happened by the birth, the rest after it")
+            && !lost.reason.contains("undone"),
+        "{lost}"
+    );
+
     // An extension that begins only once the head is out was not lost by
     // the birth: it had not happened.
     let mut late = synthetic::textbook_plan(&canal);

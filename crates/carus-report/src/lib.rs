@@ -90,10 +90,20 @@ pub fn write_report_with(
 }
 
 /// The pictures' floor colour scale: [`pictures::stretch_range`] of the
-/// run's floor, up to its first inverted element.
+/// key moments' floor states, up to the first inverted element, reaching
+/// up to the floor's peak stretch before then (`floor_peak_stretch`), so
+/// that a moment between two pictured ones (a crowning just after the
+/// first inversion) is not all past the top.
 fn floor_stretch_range(input: &ReportInput) -> Option<[f64; 2]> {
     let floor = input.scene.as_ref()?.floor.as_ref()?;
-    pictures::stretch_range(floor, input.floor_untrusted_from_s)
+    let [low, high] = pictures::stretch_range(floor, input.floor_untrusted_from_s)?;
+    let trusted = |t: f64| input.floor_untrusted_from_s.is_none_or(|from| t < from);
+    let peak = input
+        .floor_peak_stretch
+        .iter()
+        .filter(|&&(t, s)| trusted(t) && s.is_finite())
+        .fold(high, |top, &(_, s)| top.max(s));
+    Some([low, peak])
 }
 
 /// Writes the page to `path`; returns the picture warnings.

@@ -216,7 +216,7 @@ fn timeline(
                 let width = (percent(end, range) - left).max(0.6);
                 let size = size_text(size, m.unit);
                 let flag = match d.not_held_at_birth.iter().any(|n| n.movement == row.key) {
-                    true => "<span class=\"flag lost\" title=\"counted where it happened, but lost by the birth: see below\">observed, not held</span>",
+                    true => "<span class=\"flag lost\" title=\"counted where it happened, but not shown by the head at its birth: see below\">observed, not held</span>",
                     false => "<span class=\"flag yes\">observed</span>",
                 };
                 let _ = write!(

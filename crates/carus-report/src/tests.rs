@@ -294,6 +294,13 @@ fn a_recorded_floor_is_coloured_by_stretch_and_a_bad_frame_costs_only_its_pictur
         report.html.matches("src=\"data:image/png;base64,").count(),
         8
     );
+    // The scale reaches the floor's peak stretch before its first inverted
+    // element, between the pictured states; not the untrusted ones after.
+    let mut peaked = input.clone();
+    peaked.floor_peak_stretch = vec![(0.0, 1.0), (30.0, top + 1.0), (50.0, 9.0)];
+    peaked.floor_untrusted_from_s = Some(40.0);
+    let html = write_report(&peaked).unwrap().html;
+    assert!(html.contains(&format!("<span class=\"ramp\"></span> 1.00 &ndash; {:.2}", top + 1.0)), "{html}");
 
     // A frame with too few stretch values: those pictures fail, the page does not.
     let floor = input.scene.as_mut().unwrap().floor.as_mut().unwrap();

@@ -182,7 +182,7 @@ const VISIBLE_HUMAN_LANDMARKS: &str =
     include_str!("../../../../assets/anatomy/visible-human-female-pelvis.landmarks.toml");
 const VISIBLE_HUMAN_STL: &[u8] = include_bytes!("../../../../assets/anatomy/visible-human-female-pelvis.stl");
 
-/// Axes of the shipped Visible Human Female GLB (/work/shared/meshes/README.md:
+/// Axes of the shipped Visible Human Female GLB (the source meshes' README:
 /// metres, x to the body's left, y up, z forward).
 pub fn visible_human_glb_axes() -> AxesDeclaration {
     AxesDeclaration {

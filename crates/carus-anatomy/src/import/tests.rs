@@ -677,7 +677,7 @@ fn the_visible_human_pelvis_imports_into_the_pelvis_frame() {
         );
     }
     assert!(m.landmark_surface_gap_mm < 0.01, "{}", m.landmark_surface_gap_mm);
-    // The rough figures of /work/shared/meshes/README.md where our picks
+    // The rough figures of the source meshes' README (shared/meshes, not shipped) where our picks
     // agree with them (docs/IMPORT.md discusses the others).
     assert!((m.diameters.inlet_ap_mm - 118.0).abs() < 6.0);
     assert!((m.diameters.inlet_transverse_mm - 150.0).abs() < 2.0);

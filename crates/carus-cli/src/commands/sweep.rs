@@ -600,14 +600,11 @@ fn print_table(keys: &[&str], rows: &[Option<Finished>]) {
         let set = if set.is_empty() { "as the scenario is".to_string() } else { set.join(" ") };
         let outcome = serde_json::from_value::<Outcome>(r["outcome"].clone())
             .map_or("not run".to_string(), |o| outcome_line(&o));
-        let observed: Vec<&str> = r["movements"]
-            .as_object()
-            .map(|m| {
-                m.iter()
-                    .filter(|(_, v)| v["observed"] == json!(true))
-                    .map(|(k, _)| k.as_str())
-                    .collect()
-            })
+        // In the textbook's order, as `carus run` lists them.
+        let movements = serde_json::from_value::<Movements>(r["movements"].clone()).ok();
+        let observed: Vec<&str> = movements
+            .as_ref()
+            .map(|m| m.by_key().into_iter().filter(|(_, m)| m.observed).map(|(key, _)| key).collect())
             .unwrap_or_default();
         let failure = match (r["failure"].as_str(), r["completed"].as_bool()) {
             // A run never made read no scenario.
