@@ -243,14 +243,16 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
         .collect::<Result<Vec<Scenario>, _>>()
         .map_err(|e| from_plan(e.into()))?;
     let varying: Vec<&str> = settings.iter().filter(|s| s.values.len() > 1).map(|s| s.key.as_str()).collect();
-    let names: Vec<String> = match (&args.resume, plan.folders.is_empty()) {
-        (None, _) => combinations.iter().enumerate().map(|(i, c)| folder_name(i, c, &varying)).collect(),
-        (Some(_), true) => combinations.iter().enumerate().map(|(i, c)| spelled_name(i, c)).collect(),
-        (Some(_), false) if plan.folders.len() == combinations.len() => plan.folders.clone(),
+    // A new sweep names its folders in its plan; an older plan kept none,
+    // and its folders were spelled out whole.
+    match (&args.resume, plan.folders.is_empty()) {
+        (None, _) => plan.folders = combinations.iter().enumerate().map(|(i, c)| folder_name(i, c, &varying)).collect(),
+        (Some(_), true) => plan.folders = combinations.iter().enumerate().map(|(i, c)| spelled_name(i, c)).collect(),
+        (Some(_), false) if plan.folders.len() == combinations.len() => {}
         (Some(_), false) => return Err(from_plan(anyhow::anyhow!("it names {} folders for {} runs", plan.folders.len(), combinations.len()))),
-    };
-    plan.folders.clone_from(&names);
-    check_runs_start(&scenarios, &names, "sweep", "its row in the table gives the reason")?;
+    }
+    let names = &plan.folders;
+    check_runs_start(&scenarios, names, "sweep", "its row in the table gives the reason")?;
     // The pool is made first: a bad --jobs leaves no out dir behind.
     let (pool, jobs) = labour_pool(args.jobs, scenarios.len())?;
     let out_dir = match out_dir {
