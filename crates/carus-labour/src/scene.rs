@@ -140,7 +140,7 @@ impl Scene {
         let (pelvis, pelvis_import) = build_pelvis(scenario)?;
         let canal = BirthCanal::from_pelvis(&pelvis)
             .map_err(|e| LabourError::anatomy(format!("pelvic axis: {e}")))?;
-        let ligaments = carus_anatomy::floor::sacrospinous_ligaments(&pelvis);
+        let ligaments = carus_anatomy::floor::sacrospinous_ligaments(&pelvis, scenario.floor.mesh.sacrospinous_bow);
         let CanalWall { surface: wall, labels, sites } = canal_wall(&pelvis, &ligaments);
         let names = sites.iter().map(|s| s.name().to_string()).collect();
         let pelvis_collider =
@@ -958,7 +958,15 @@ mod tests {
             s.numerics.head_subdivisions = 3;
             s.floor.enabled = false;
             let scene = Scene::build(&s).unwrap_or_else(|e| panic!("{name}: {e}"));
-            assert!(scene.head_trunk.is_some(), "{name}");
+            let pair = scene.head_trunk.as_ref().unwrap_or_else(|| panic!("{name}: no head-trunk contact"));
+            let mut memory = BodyContactState::new(&pair.trunk_samples);
+            let (trunk, head) = (BodyMotion::at_rest(scene.start[TRUNK]), BodyMotion::at_rest(scene.start[HEAD]));
+            let found = pair_contacts(&pair.head, &scene.trunk_law, &pair.trunk_samples, &trunk, &head, &mut memory).unwrap();
+            if s.start.attitude_deg < -45.0 {
+                assert!(found.too_deep == 0 && found.deepest_m < DESIGN_PENETRATION_M, "{name}: {found:?}");
+            } else {
+                assert_eq!(found.active, 0, "{name}: {found:?}");
+            }
         }
     }
 

@@ -95,6 +95,25 @@ pub struct FloorParameters {
     /// symphysis: 0.5, an oval widest about its middle (engineering choice;
     /// the hiatus is drawn as an oval on axial MRI and ultrasound).
     pub hiatus_widest_share: f64,
+    /// Where the levator ani rises from the pubis, as a share of the way
+    /// round the mid-pelvis ring from the symphysis (0) to the ischial spine
+    /// (1): 0.3125, about 25 mm lateral to the symphysis in the default
+    /// pelvis, where the levator's origin runs along the back of the pubic
+    /// body (engineering choice; further out, the corner elements between
+    /// the origin and the wider hiatus shear). It sets how much of the
+    /// pubic arch's back the gutter's front hangs from.
+    pub levator_origin_share: f64,
+    /// How far the sacrospinous line (the ligament's lower border, from the
+    /// ischial spine to the coccyx tip, where the levator's back part
+    /// hangs) bows outwards: the share of the spine's lateral offset at
+    /// which its curve's control point lies beside the coccyx tip. 0.6
+    /// (engineering choice); towards 0 it runs straight from the spine to
+    /// the tip (at 0 the two sides meet in a cusp behind, so the band
+    /// starts at 0.1), at 1 it swings out level with the spine before it
+    /// turns in, square to the midline. It shapes the back of the gutter
+    /// and the ligaments ([`sacrospinous_ligaments`]), and the normal
+    /// run's outcome turns on it (docs/LABOUR.md, forty-third session).
+    pub sacrospinous_bow: f64,
     /// Elements round the U from one pubic insertion to the other (even).
     pub elements_around: usize,
     /// Elements across the sheet, from the attachment to the hiatus rim.
@@ -115,6 +134,8 @@ impl Default for FloorParameters {
             hiatus_front_share: 0.5,
             hiatus_front_gap_mm: 5.0,
             hiatus_widest_share: 0.5,
+            levator_origin_share: 0.3125,
+            sacrospinous_bow: 0.6,
             elements_around: 48,
             elements_across: 8,
             elements_through: 2,
@@ -205,18 +226,13 @@ pub const LOWER_SURFACE: &str = "lower";
 pub const LEVATOR_ANI: &str = "levator_ani";
 pub const PERINEAL_BODY: &str = "perineal_body";
 
-/// Where the levator rises from the pubis, as a turn position (1/64 turns
-/// from the front midline) on the mid-pelvis ring: about 25 mm lateral to
-/// the symphysis in the default pelvis, where the levator's origin runs
-/// along the back of the pubic body (engineering choice; further out, the
-/// corner elements between the insertion and the wider hiatus shear).
-const PUBIC_ORIGIN_TURN: f64 = 5.0;
+/// The ischial spine's turn position (1/64 turns from the front midline)
+/// on the mid-pelvis ring, which runs through the symphysis, the spines
+/// and S4-S5.
+const SPINE_TURN: f64 = 16.0;
 /// The back of the hiatus may lie at most this share of the hiatus length
 /// below the outlet plane (beyond it the rim would turn almost vertical).
 const HIATUS_SAG_MAX_SHARE: f64 = 0.8;
-/// How far out (share of the spine's lateral offset) the tail's Bezier
-/// control point lies beside the coccyx tip.
-const COCCYX_APPROACH: f64 = 0.6;
 /// Segments of the table that spaces the hiatus rim's nodes evenly.
 const RIM_TABLE: usize = 256;
 /// Passes of neighbour averaging of the sheet normals.
@@ -273,6 +289,8 @@ impl FloorParameters {
             ("hiatus_front_share", self.hiatus_front_share, d.hiatus_front_share, 0.1, 0.9),
             ("hiatus_front_gap_mm", self.hiatus_front_gap_mm, d.hiatus_front_gap_mm, 0.0, 20.0),
             ("hiatus_widest_share", self.hiatus_widest_share, d.hiatus_widest_share, 0.2, 0.8),
+            ("levator_origin_share", self.levator_origin_share, d.levator_origin_share, 0.1, 0.6),
+            ("sacrospinous_bow", self.sacrospinous_bow, d.sacrospinous_bow, 0.1, 1.0),
         ] {
             if !(least..=most).contains(&value) {
                 let unit = if key.ends_with("_mm") { "mm, not m or cm" } else { "a share, not a percentage" };
@@ -401,6 +419,9 @@ struct Outline<'a> {
     ring: crate::pelvis::MidRing,
     rim: Rim,
     frame: HiatusFrame,
+    /// The levator's pubic origin, turn position on `ring`.
+    origin_turn: f64,
+    sacrospinous_bow: f64,
 }
 
 /// Directions the hiatus is laid out (and measured) in.
@@ -440,11 +461,11 @@ fn ischial_spine(pelvis: &Pelvis, left: bool) -> DVec3 {
 /// ischial spine to the coccyx tip, where the levator's back part hangs
 /// from the ligament: it arrives square to the midline, so the two sides
 /// meet smoothly (a quadratic Bezier).
-fn sacrospinous_line(pelvis: &Pelvis, right: DVec3, left: bool, t: f64) -> DVec3 {
+fn sacrospinous_line(pelvis: &Pelvis, right: DVec3, bow: f64, left: bool, t: f64) -> DVec3 {
     let l = &pelvis.landmarks;
     let spine = ischial_spine(pelvis, left);
     let across = (spine - l.coccyx_tip).dot(right) * right;
-    let control = l.coccyx_tip + COCCYX_APPROACH * across;
+    let control = l.coccyx_tip + bow * across;
     (1.0 - t) * (1.0 - t) * spine + 2.0 * t * (1.0 - t) * control + t * t * l.coccyx_tip
 }
 
@@ -471,8 +492,10 @@ const SACRAL_WIDTH_SHARE: f64 = 0.6;
 /// to nothing at the coccyx tip, the ligament's triangle. Built from
 /// landmarks and the bone surface alone, so it fits generated and imported
 /// pelvises (a pelvis of landmarks without a surface gets the S4-S5
-/// landmark as the sacral end).
-pub fn sacrospinous_ligaments(pelvis: &Pelvis) -> TriSurface {
+/// landmark as the sacral end). `sacrospinous_bow` is the floor's
+/// ([`FloorParameters::sacrospinous_bow`]), so the levator hangs from the
+/// ligaments' lower border.
+pub fn sacrospinous_ligaments(pelvis: &Pelvis, sacrospinous_bow: f64) -> TriSurface {
     let l = &pelvis.landmarks;
     let right = HiatusFrame::new(pelvis).right;
     let middle = 0.5 * (l.ischial_spine_left + l.ischial_spine_right);
@@ -503,7 +526,7 @@ pub fn sacrospinous_ligaments(pelvis: &Pelvis) -> TriSurface {
         let first = surface.vertices.len() as u32;
         for k in 0..LIGAMENT_SEGMENTS {
             let t = k as f64 / LIGAMENT_SEGMENTS as f64;
-            surface.vertices.extend([sacrospinous_line(pelvis, right, left, t), margin.lerp(l.coccyx_tip, t)]);
+            surface.vertices.extend([sacrospinous_line(pelvis, right, sacrospinous_bow, left, t), margin.lerp(l.coccyx_tip, t)]);
         }
         surface.vertices.push(l.coccyx_tip);
         let n = LIGAMENT_SEGMENTS as u32;
@@ -537,19 +560,23 @@ impl Outline<'_> {
         let tail_length = (l.coccyx_tip - spine).length();
         let split = arch_length / (arch_length + tail_length);
         if f <= split {
-            let turn = PUBIC_ORIGIN_TURN + (16.0 - PUBIC_ORIGIN_TURN) * f / split;
-            self.ring.at(sign * turn)
+            self.ring.at(sign * self.arch_turn(f, split))
         } else {
-            sacrospinous_line(self.pelvis, self.frame.right, left, (f - split) / (1.0 - split))
+            sacrospinous_line(self.pelvis, self.frame.right, self.sacrospinous_bow, left, (f - split) / (1.0 - split))
         }
+    }
+
+    /// Turn position on the mid-pelvis ring `part / whole` of the way from
+    /// the levator's pubic origin to the ischial spine.
+    fn arch_turn(&self, part: f64, whole: f64) -> f64 {
+        self.origin_turn + (SPINE_TURN - self.origin_turn) * part / whole
     }
 
     fn arch_length(&self, sign: f64) -> f64 {
         let n = 32;
         (0..n)
             .map(|k| {
-                let t =
-                    |k: usize| PUBIC_ORIGIN_TURN + (16.0 - PUBIC_ORIGIN_TURN) * k as f64 / n as f64;
+                let t = |k: usize| self.arch_turn(k as f64, n as f64);
                 (self.ring.at(sign * t(k + 1)) - self.ring.at(sign * t(k))).length()
             })
             .sum()
@@ -666,6 +693,8 @@ pub fn pelvic_floor(pelvis: &Pelvis, parameters: &FloorParameters) -> Result<Mes
         ring: crate::pelvis::mid_ring(l),
         rim: Rim::new(parameters),
         frame: HiatusFrame::new(pelvis),
+        origin_turn: SPINE_TURN * parameters.levator_origin_share,
+        sacrospinous_bow: parameters.sacrospinous_bow,
     };
 
     let (na, nc, nt) = (
@@ -1033,6 +1062,60 @@ mod tests {
         assert!(e.to_string().contains("10.0 mm behind the symphysis"), "{e}");
     }
 
+    /// The levator's pubic origin moves out along the mid-pelvis ring with
+    /// its share (about 25 mm beside the symphysis at the default), and the
+    /// sheet's back hangs from the ligaments' lower border at any bow, which
+    /// swings that border outwards as it grows; shares outside their bands
+    /// are named.
+    #[test]
+    fn the_gutter_hangs_from_its_pubic_origin_and_the_ligaments_lower_border() {
+        let pelvis = Pelvis::generate(&PelvisDiameters::default()).unwrap();
+        let base = FloorParameters { elements_around: 32, elements_across: 6, elements_through: 1, ..Default::default() };
+        let l = &pelvis.landmarks;
+        let frame = HiatusFrame::new(&pelvis);
+        let beside_symphysis = |share: f64| {
+            let mesh = check(&pelvis, &FloorParameters { levator_origin_share: share, ..base }, ANY_MIN_SCALED_JACOBIAN);
+            (middle(&mesh, &base, 0, 0) - l.symphysis_lower).dot(frame.right).abs() * 1e3
+        };
+        let origins = [0.2, base.levator_origin_share, 0.5].map(beside_symphysis);
+        assert!(origins[0] < origins[1] && origins[1] < origins[2], "{origins:?}");
+        assert!((20.0..30.0).contains(&origins[1]), "{origins:?}");
+
+        let distance_to = |line: &[DVec3], p: DVec3| {
+            line.windows(2)
+                .map(|w| {
+                    let along = (p - w[0]).dot(w[1] - w[0]) / (w[1] - w[0]).length_squared();
+                    p.distance(w[0].lerp(w[1], along.clamp(0.0, 1.0)))
+                })
+                .fold(f64::INFINITY, f64::min)
+        };
+        let mut spread = Vec::new();
+        for bow in [0.2, base.sacrospinous_bow, 1.0] {
+            let parameters = FloorParameters { sacrospinous_bow: bow, ..base };
+            let mesh = check(&pelvis, &parameters, ANY_MIN_SCALED_JACOBIAN);
+            let ligaments = sacrospinous_ligaments(&pelvis, bow);
+            // The left ligament's lower border: every other vertex from the spine, then the coccyx tip.
+            let per_side = 2 * LIGAMENT_SEGMENTS + 1;
+            let border: Vec<DVec3> = ligaments.vertices[..per_side].iter().step_by(2).copied().collect();
+            assert_eq!((border[0], border[LIGAMENT_SEGMENTS]), (l.ischial_spine_left, l.coccyx_tip));
+            let behind_spine = |p: DVec3| (p - l.ischial_spine_left).dot(frame.backwards) > 1e-3;
+            let hung: Vec<DVec3> = (0..=base.elements_around / 2).map(|i| middle(&mesh, &base, i, 0)).filter(|&p| behind_spine(p)).collect();
+            assert!(hung.len() >= 4, "{bow}: {} nodes behind the spine", hung.len());
+            for p in &hung {
+                assert!(distance_to(&border, *p) < 5e-4, "{bow}: {p} is {} mm off the border", distance_to(&border, *p) * 1e3);
+            }
+            spread.push(border.iter().map(|p| (*p - l.coccyx_tip).dot(frame.right).abs()).sum::<f64>());
+        }
+        assert!(spread[0] < spread[1] && spread[1] < spread[2], "{spread:?}");
+        for (parameters, says) in [
+            (FloorParameters { levator_origin_share: 0.7, ..base }, "levator_origin_share = 0.7 is outside 0.1 to 0.6"),
+            (FloorParameters { sacrospinous_bow: 0.0, ..base }, "sacrospinous_bow = 0.0 is outside 0.1 to 1"),
+        ] {
+            let e = pelvic_floor(&pelvis, &parameters).unwrap_err().to_string();
+            assert!(e.contains(says) && e.contains("a share, not a percentage"), "{e}");
+        }
+    }
+
     #[test]
     fn a_positive_bowl_hangs_the_sheet_below_its_chords() {
         let pelvis = Pelvis::generate(&PelvisDiameters::default()).unwrap();
@@ -1165,7 +1248,7 @@ mod tests {
         let imported = crate::import::import_pelvis(&path).unwrap().pelvis;
         let generated = Pelvis::generate(&PelvisDiameters::default()).unwrap();
         for pelvis in [generated, imported] {
-            let ligaments = sacrospinous_ligaments(&pelvis);
+            let ligaments = sacrospinous_ligaments(&pelvis, FloorParameters::default().sacrospinous_bow);
             // Most of each ligament spans an opening of the bony canal.
             let share = share_over_open_bone(&pelvis, &ligaments);
             assert!(share > 0.6, "only {share:.2} of the ligaments lie over open bone");
