@@ -185,8 +185,9 @@ mod tests {
         assert_eq!(super::error_status(&anyhow::Error::from(carus_view::ViewError::from(size())).context("picture")), 2);
     }
 
-    /// A malformed `--set` is a bad argument (clap's exit status 2), named
-    /// with the form to write, for every command that takes one.
+    /// A malformed `--set` (or sweep's `--with`) is a bad argument (clap's
+    /// exit status 2), named with the form to write, for every command that
+    /// takes one.
     #[test]
     fn a_malformed_setting_is_a_bad_argument() {
         use clap::Parser;
@@ -196,10 +197,13 @@ mod tests {
             &["carus", "sanity", "--set", "contact.friction=0.1,0.2"],
             &["carus", "run", "--set", "contact.friction=0.1,0.2"],
             &["carus", "bench", "labour", "--set", "contact.friction"],
+            &["carus", "sweep", "--set", "contact.friction=0.1,0.2", "--with", "output.vtu"],
+            &["carus", "sweep", "--set", "contact.friction=0.1,0.2", "--with", "output.vtu=true,false"],
         ] {
             let e = super::Cli::try_parse_from(args).err().expect("refused");
             assert_eq!(e.exit_code(), 2, "{args:?}");
-            assert!(e.to_string().contains("--set"), "{e}");
+            let flag = if args.contains(&"--with") { "--with output.vtu" } else { "--set" };
+            assert!(e.to_string().contains(flag), "{e}");
         }
         assert!(super::Cli::try_parse_from(["carus", "sweep", "--set", "contact.friction=0.1,0.2"]).is_ok());
     }

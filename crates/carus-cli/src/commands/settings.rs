@@ -22,34 +22,55 @@ pub(super) fn setting_arg(text: &str) -> Result<String, String> {
 /// A key and its one value, for commands that run once with it (`carus
 /// run`, `carus sanity`, `carus bench labour`).
 pub(super) fn one_setting(text: &str) -> anyhow::Result<(String, String)> {
-    match text.split_once('=') {
-        Some((key, value)) if !key.trim().is_empty() && !value.trim().is_empty() => {}
-        _ => bail!("--set {text}: write KEY=VALUE, e.g. --set contact.friction=0.1"),
-    }
-    let setting = parse_setting(text)?;
-    let [value] = setting.values.as_slice() else {
-        bail!("--set {text}: one value per key here; `carus sweep` runs several");
-    };
-    Ok((setting.key, value.clone()))
+    one_setting_of("--set", "`carus sweep` runs several", text)
 }
 
 /// clap's check of a one-value `--set` argument: a malformed one is a bad
-/// argument (exit status 2).
+/// argument (exit status 2), named before anything runs.
 pub(super) fn one_setting_arg(text: &str) -> Result<String, String> {
     one_setting(text).map(|_| text.to_string()).map_err(|e| e.to_string())
 }
 
-pub(super) fn parse_setting(text: &str) -> anyhow::Result<Setting> {
-    let Some((key, values)) = text.split_once('=') else {
-        bail!("--set {text}: write KEY=V1,V2,..., e.g. --set expulsion.period_s=8,16,32");
+/// A key and its one value set in every run of a sweep (`carus sweep
+/// --with`), the first run's included.
+pub(super) fn fixed_setting(text: &str) -> anyhow::Result<(String, String)> {
+    one_setting_of("--with", "sweep a key's values with --set", text)
+}
+
+/// clap's check of a `--with` argument.
+pub(super) fn fixed_setting_arg(text: &str) -> Result<String, String> {
+    fixed_setting(text).map(|_| text.to_string()).map_err(|e| e.to_string())
+}
+
+/// One value for a key given to `flag`; `several` says where more go.
+fn one_setting_of(flag: &str, several: &str, text: &str) -> anyhow::Result<(String, String)> {
+    match text.split_once('=') {
+        Some((key, value)) if !key.trim().is_empty() && !value.trim().is_empty() => {}
+        _ => bail!("{flag} {text}: write KEY=VALUE, e.g. {flag} contact.friction=0.1"),
+    }
+    let setting = parse_setting_of(flag, text)?;
+    let [value] = setting.values.as_slice() else {
+        bail!("{flag} {text}: one value per key here; {several}");
     };
-    let values = split_values(values).map_err(|why| anyhow::anyhow!("--set {text}: {why}; a value is TOML (quote a string with commas, e.g. description=\"a, b\")"))?;
+    Ok((setting.key, value.clone()))
+}
+
+pub(super) fn parse_setting(text: &str) -> anyhow::Result<Setting> {
+    parse_setting_of("--set", text)
+}
+
+/// A key and its values as given to `flag`.
+fn parse_setting_of(flag: &str, text: &str) -> anyhow::Result<Setting> {
+    let Some((key, values)) = text.split_once('=') else {
+        bail!("{flag} {text}: write KEY=V1,V2,..., e.g. {flag} expulsion.period_s=8,16,32");
+    };
+    let values = split_values(values).map_err(|why| anyhow::anyhow!("{flag} {text}: {why}; a value is TOML (quote a string with commas, e.g. description=\"a, b\")"))?;
     let values: Vec<String> = values.into_iter().map(|v| v.trim().to_string()).collect();
     if key.trim().is_empty() || values.iter().any(String::is_empty) {
-        bail!("--set {text}: a key and at least one value, none empty, e.g. --set contact.friction=0.1,0.35");
+        bail!("{flag} {text}: a key and at least one value, none empty, e.g. {flag} contact.friction=0.1,0.35");
     }
     if let Some(twice) = values.iter().enumerate().find_map(|(i, v)| values[..i].iter().any(|u| same_value(u, v)).then_some(v)) {
-        bail!("--set {text}: the value {twice} is given twice; each value runs once");
+        bail!("{flag} {text}: the value {twice} is given twice; each value runs once");
     }
     Ok(Setting {
         key: key.trim().to_string(),

@@ -1,8 +1,9 @@
-//! `carus sweep [NAME|FILE] --set KEY=V1,V2,... [--set ...] [--one-at-a-time]
-//! [--out DIR] [--jobs N] [--json] [--force] [--quiet]`: one labour run per
-//! combination of the values given (every combination of every `--set`, or
-//! with `--one-at-a-time` the scenario as it is and then each value of each
-//! key alone), each a whole run in its own folder, and a table of their outcomes and movements
+//! `carus sweep [NAME|FILE] --set KEY=V1,V2,... [--set ...] [--with KEY=VALUE
+//! ...] [--one-at-a-time] [--out DIR] [--jobs N] [--json] [--force]
+//! [--quiet]`: one labour run per combination of the values given (every
+//! combination of every `--set`, or with `--one-at-a-time` the scenario as
+//! it is and then each value of each key alone; `--with` sets a key in
+//! every run), each a whole run in its own folder, and a table of their outcomes and movements
 //! (sweep.csv, sweep.json) rewritten as each run ends, so Ctrl-C or a
 //! failed run loses none that finished. `carus sweep --resume DIR` goes on
 //! with a stopped sweep from its plan (sweep_plan.json): runs stopped part
@@ -27,7 +28,7 @@ use super::run::{
     go_on_into, json_summary, json_summary_not_run, load_mended, make_batch_dir, movements, outcome_line, read_record, run_ended, serde_name,
     OutputArgs,
 };
-use super::settings::{parse_setting, setting_arg, Setting};
+use super::settings::{fixed_setting, fixed_setting_arg, parse_setting, setting_arg, Setting};
 use super::{ctrl_c_flag, labour_pool, print_json, Status};
 
 #[derive(clap::Args)]
@@ -46,6 +47,10 @@ pub struct SweepArgs {
         value_parser = setting_arg
     )]
     pub settings: Vec<String>,
+    /// KEY=VALUE set in every run, the first (unchanged) run of
+    /// --one-at-a-time included (e.g. output.vtu=false); repeat for more keys.
+    #[arg(long = "with", value_name = "KEY=VALUE", conflicts_with = "resume", value_parser = fixed_setting_arg)]
+    pub with: Vec<String>,
     /// Go on with the stopped sweep in DIR, as it was planned: runs
     /// stopped part way continue from their checkpoints, runs not started
     /// start, finished ones are kept; the tables are written whole again.
@@ -72,18 +77,26 @@ fn key_given_twice(settings: &[Setting]) -> Option<&str> {
         .map(|(_, s)| s.key.as_str())
 }
 
-/// The scenario a new sweep varies. A file refused for a value that every
-/// run sets (a full sweep of that key) is read again with the key's first
-/// value, so that `--set` mends it as for `carus run`; each run then sets
+/// The scenario a new sweep varies, with its `--with` settings. A file
+/// refused for a value that every run sets (a `--with` key, or a full
+/// sweep of that key) is read again with that value (a swept key's first),
+/// so that it mends the file as `carus run --set` does; each run then sets
 /// its own value. A one-at-a-time sweep runs the file as it is first, so
-/// nothing mends it.
+/// its swept keys mend nothing.
 fn load_base(args: &SweepArgs) -> anyhow::Result<Scenario> {
     let settings = args.settings.iter().map(|s| parse_setting(s)).collect::<anyhow::Result<Vec<_>>>()?;
-    let firsts: Vec<(String, String)> = match args.one_at_a_time {
-        true => Vec::new(),
-        false => settings.iter().map(|s| (s.key.clone(), s.values[0].clone())).collect(),
-    };
-    load_mended(args.scenario.as_deref(), &firsts)
+    let with = args.with.iter().map(|s| fixed_setting(s)).collect::<anyhow::Result<Vec<_>>>()?;
+    if let Some((key, _)) = with.iter().enumerate().find_map(|(i, (key, _))| with[..i].iter().any(|(k, _)| k == key).then_some(&with[i])) {
+        crate::bad_argument!("--with {key} is given twice; a key set in every run takes one value");
+    }
+    if let Some((key, _)) = with.iter().find(|(key, _)| settings.iter().any(|s| &s.key == key)) {
+        crate::bad_argument!("{key} is given to both --with and --set; --with sets it in every run, --set sweeps it: keep one");
+    }
+    let mut every_run = with.clone();
+    if !args.one_at_a_time {
+        every_run.extend(settings.iter().map(|s| (s.key.clone(), s.values[0].clone())));
+    }
+    Ok(load_mended(args.scenario.as_deref(), &every_run)?.with_settings(&with)?)
 }
 
 /// Every combination of the settings' values, the first setting varying slowest.
@@ -719,6 +732,7 @@ mod tests {
         let args = SweepArgs {
             scenario: Some(file.display().to_string()),
             settings: settings.iter().map(|s| s.to_string()).collect(),
+            with: Vec::new(),
             one_at_a_time: false,
             resume: None,
             jobs: Some(2),
@@ -762,6 +776,46 @@ mod tests {
         };
         let e = run(&twice).expect_err("refused");
         assert!(e.downcast_ref::<crate::commands::BadArgument>().is_some() && e.to_string().contains("given twice"), "{e}");
+    }
+
+    /// `--with` sets a key in every run, the unchanged first run of a
+    /// one-at-a-time sweep included, and mends a file that has it wrong; a
+    /// key both set in every run and swept, or set twice, is a bad argument.
+    #[test]
+    fn a_with_setting_is_in_every_run() {
+        let s = crate::commands::coarse_normal(0.05);
+        let dir = tempfile::tempdir().unwrap();
+        let (args, out) = coarse_sweep(&s, dir.path(), &["contact.friction=0.1"]);
+        let file = dir.path().join("coarse.toml");
+        let text = std::fs::read_to_string(&file).unwrap();
+        let wrong = text.replacen(&format!("damping_time_s = {:?}", s.contact.damping_time_s), "damping_time_s = -1.0", 1);
+        assert_ne!(wrong, text, "the damping line is found");
+        std::fs::write(&file, wrong).unwrap();
+        let args = SweepArgs { one_at_a_time: true, with: vec!["contact.damping_time_s=0.001".into(), "output.vtu=false".into()], ..args };
+        assert!(matches!(run(&args).unwrap(), Status::Success));
+        for folder in ["01-base", "02-contact.friction=0.1"] {
+            let toml = std::fs::read_to_string(out.join(folder).join("scenario.toml")).unwrap();
+            assert!(toml.contains("damping_time_s = 0.001\n") && toml.contains("vtu = false\n"), "{folder}");
+        }
+        // Only the swept key has a column.
+        let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
+        assert!(csv.starts_with("run,contact.friction,delivered"), "{csv}");
+        for (with, says) in [
+            (vec!["contact.friction=0.2"], "contact.friction is given to both --with and --set"),
+            (vec!["output.vtu=false", "output.vtu=true"], "--with output.vtu is given twice"),
+        ] {
+            let (fresh, _) = coarse_sweep(&s, dir.path(), &["contact.friction=0.1"]);
+            let bad = SweepArgs {
+                with: with.into_iter().map(String::from).collect(),
+                output: OutputArgs { out: Some(dir.path().join("bad")), ..fresh.output },
+                ..fresh
+            };
+            let e = run(&bad).expect_err("refused");
+            assert!(e.downcast_ref::<crate::commands::BadArgument>().is_some() && e.to_string().contains(says), "{e}");
+            assert!(!dir.path().join("bad").exists());
+        }
+        let e = super::super::settings::fixed_setting_arg("output.every_s=0.01,0.02").unwrap_err();
+        assert!(e.contains("--with output.every_s=0.01,0.02: one value per key here; sweep a key's values with --set"), "{e}");
     }
 
     /// One at a time through the command: the base run and each value
