@@ -209,23 +209,37 @@ pub(crate) fn semi_implicit_step_limit(omega: f64, zeta: f64) -> f64 {
 mod tests {
     use super::*;
 
-    /// The design penetration inverts the default stiffness's sizing.
+    /// The default stiffness is sized right: a head-sized sphere, sampled
+    /// on equal areas and pressed the design depth into a flat wall, gets
+    /// the design load from [`ContactLaw::evaluate`] summed over its
+    /// samples, and the design stiffness is that sum's slope.
     #[test]
-    fn the_default_law_sinks_its_design_penetration_at_the_design_load() {
-        let d = ContactLaw::default().design_penetration(DESIGN_HEAD_RADIUS_M, DESIGN_EXPULSION_FORCE_N);
-        assert!((d - DESIGN_PENETRATION_M).abs() < 1e-12, "{d}");
-    }
-
-    #[test]
-    fn default_penetrates_one_millimetre_at_the_design_force() {
+    fn a_head_sized_sphere_carries_the_design_load_at_the_design_depth() {
         let law = ContactLaw::default();
-        let d = DESIGN_PENETRATION_M;
-        let force = law.penalty_stiffness_pa_per_m * std::f64::consts::PI * DESIGN_HEAD_RADIUS_M * d * d;
-        assert!((force - DESIGN_EXPULSION_FORCE_N).abs() < 1e-9);
-        // The design stiffness is the slope 2 F / d of that relation.
-        let k = law.design_normal_stiffness(DESIGN_HEAD_RADIUS_M, DESIGN_EXPULSION_FORCE_N);
-        assert!((k - 2.0 * DESIGN_EXPULSION_FORCE_N / d).abs() < 1e-6 * k);
         law.validate().unwrap();
+        let radius = DESIGN_HEAD_RADIUS_M;
+        // A Fibonacci sphere: equal areas, heights evenly spaced.
+        let n = 200_000;
+        let area = 4.0 * std::f64::consts::PI * radius * radius / n as f64;
+        let pressed = |depth: f64| {
+            (0..n)
+                .map(|i| {
+                    let z = -1.0 + (2 * i + 1) as f64 / n as f64;
+                    // The wall is z = 0, the sphere's lowest point at -depth.
+                    let under = -(radius - depth + radius * z);
+                    match under > 0.0 {
+                        true => law.evaluate(area, under, DVec3::Z, DVec3::ZERO, DVec3::ZERO).normal.z,
+                        false => 0.0,
+                    }
+                })
+                .sum::<f64>()
+        };
+        let d = DESIGN_PENETRATION_M;
+        let force = pressed(d);
+        assert!((force / DESIGN_EXPULSION_FORCE_N - 1.0).abs() < 2e-3, "{force} N at {d} m");
+        let slope = (pressed(1.01 * d) - pressed(0.99 * d)) / (0.02 * d);
+        let k = law.design_normal_stiffness(radius, DESIGN_EXPULSION_FORCE_N);
+        assert!((slope / k - 1.0).abs() < 5e-3, "{slope} N/m against {k} N/m");
     }
 
     #[test]

@@ -1138,15 +1138,21 @@ mod run_tests {
         bc
     }
 
+    /// Big enough for several element tasks and node tasks, so the
+    /// combining of chunks done on different threads is exercised.
     #[test]
     fn results_do_not_depend_on_the_thread_count() {
+        use crate::kernel::lanes::LANES;
+        use crate::kernel::passes::{BLOCKS_PER_TASK, NODES_PER_TASK};
         let (mesh, m) = model(
-            4,
+            12,
             ModelOptions {
                 damping_per_s: 5.0,
                 ..ModelOptions::default()
             },
         );
+        assert!(mesh.element_count() > 2 * BLOCKS_PER_TASK * LANES, "{} elements fit in two element tasks", mesh.element_count());
+        assert!(mesh.nodes.len() > 2 * NODES_PER_TASK, "{} nodes fit in two node tasks", mesh.nodes.len());
         let run = |threads| {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
@@ -1160,13 +1166,13 @@ mod run_tests {
                     StepControl::Refuse,
                 )
                 .unwrap();
-                for _ in 0..200 {
+                for _ in 0..120 {
                     s.step().unwrap();
                 }
                 s.displacements()
             })
         };
-        let (a, b) = (run(1), run(2));
+        let (a, b) = (run(1), run(3));
         assert!(a
             .iter()
             .flatten()

@@ -35,6 +35,35 @@ pub fn written_twice(text: &str, error: &toml::de::Error) -> Option<WrittenTwice
     Some(WrittenTwice { name: name.to_string(), table })
 }
 
+/// The line of the value of a dotted key as a check names it
+/// (`solver.end_time_s`, `displacement[0].node_set`: the key in the first
+/// `[[displacement]]` table); None where the text does not write it (a
+/// default taken). Job files and labour scenarios point their value errors
+/// at it.
+pub fn line_of_key(text: &str, key: &str) -> Option<std::num::NonZeroUsize> {
+    use toml::de::{DeTable, DeValue};
+    let root = DeTable::parse(text).ok()?;
+    let mut table = root.get_ref();
+    let parts: Vec<&str> = key.split('.').collect();
+    for (n, part) in parts.iter().enumerate() {
+        let (name, index) = match part.split_once('[') {
+            Some((name, rest)) => (name, Some(rest.strip_suffix(']')?.parse::<usize>().ok()?)),
+            None => (*part, None),
+        };
+        let mut value = table.get(name)?;
+        if let Some(i) = index {
+            let DeValue::Array(items) = value.get_ref() else { return None };
+            value = items.get(i)?;
+        }
+        if n + 1 == parts.len() {
+            return std::num::NonZeroUsize::new(crate::input::line_at(text.as_bytes(), value.span().start));
+        }
+        let DeValue::Table(inner) = value.get_ref() else { return None };
+        table = inner;
+    }
+    None
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -51,5 +80,18 @@ mod tests {
         assert_eq!(twice("x = \n"), None);
         let (message, fix) = twice("[solver]\nend_time_s = 1\nend_time_s = 2\n").unwrap().message_and_fix();
         assert_eq!((message.as_str(), fix), ("duplicate key `end_time_s`: given a second time in its table", "keep one of the two lines"));
+    }
+
+    #[test]
+    fn a_key_is_found_on_its_own_line() {
+        let text = "[solver]\nend_time_s = 1.0\n\n[[fixed]]\nnode_set = \"a\"\n\n[[fixed]]\n\nnode_set = \"b\"\nload = { shape = \"ramp\", duration_s = -1 }\n";
+        let line = |key| line_of_key(text, key).map(std::num::NonZeroUsize::get);
+        assert_eq!(line("solver.end_time_s"), Some(2));
+        assert_eq!(line("fixed[0].node_set"), Some(5));
+        assert_eq!(line("fixed[1].node_set"), Some(9));
+        assert_eq!(line("fixed[1].load.duration_s"), Some(10));
+        assert_eq!(line("fixed[1]"), Some(7));
+        assert_eq!(line("fixed[2].node_set"), None);
+        assert_eq!(line("solver.time_step_s"), None);
     }
 }

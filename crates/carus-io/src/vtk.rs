@@ -175,10 +175,14 @@ fn load_unstructured(path: &Path) -> Result<UnstructuredGridPiece, ReadError> {
         return Err(content_error(
             path,
             format!(
-                "the data set is a {}, not an unstructured grid",
+                "the data set is {}, not an unstructured grid",
                 data_set_name(&vtk.data)
             ),
-            "convert it to an unstructured grid (ParaView: Append Datasets, then save as .vtu)",
+            // Converted, a surface would be triangles, which hold no volume to simulate.
+            match vtk.data {
+                DataSet::PolyData { .. } => "mesh the volume the surface encloses with tetrahedra (Gmsh, TetGen) and save that as .vtu",
+                _ => "convert it to an unstructured grid (ParaView: Append Datasets, then save as .vtu)",
+            },
         ));
     };
     let piece_count = pieces.len();
@@ -244,11 +248,11 @@ fn check_nothing_dropped(
 fn data_set_name(data: &DataSet) -> &'static str {
     match data {
         DataSet::ImageData { .. } => "image data",
-        DataSet::StructuredGrid { .. } => "structured grid",
-        DataSet::RectilinearGrid { .. } => "rectilinear grid",
-        DataSet::UnstructuredGrid { .. } => "unstructured grid",
+        DataSet::StructuredGrid { .. } => "a structured grid",
+        DataSet::RectilinearGrid { .. } => "a rectilinear grid",
+        DataSet::UnstructuredGrid { .. } => "an unstructured grid",
         DataSet::PolyData { .. } => "poly data (a surface)",
-        DataSet::Field { .. } => "field",
+        DataSet::Field { .. } => "a field",
     }
 }
 
@@ -978,15 +982,28 @@ mod tests {
         }
     }
 
+    /// Cut anywhere, the file is named with the fix; cut in its raw data,
+    /// the message says it is the appended data that ends short.
     #[test]
     fn truncated_raw_appended_data_is_an_error() {
         let bytes = appended_raw_vtu(true);
+        let raw = bytes.windows(4).position(|w| w == b"   _").unwrap() + 4;
         let (_dir, path) = temp("appended_cut.vtu");
         let stride = (bytes.len() / 60).max(1);
+        let mut in_raw = 0;
         for cut in (0..bytes.len() - 30).step_by(stride) {
             std::fs::write(&path, &bytes[..cut]).unwrap();
-            assert!(read_vtk(&path).is_err(), "cut at {cut} accepted");
+            let err = read_vtk(&path).map(|_| ()).unwrap_err().to_string();
+            let problem = err
+                .strip_prefix(&format!("{}: ", path.display()))
+                .and_then(|e| e.strip_suffix(&format!("; fix: {RESAVE_FIX}")))
+                .unwrap_or_else(|| panic!("cut at {cut}: {err}"));
+            if cut > raw {
+                in_raw += 1;
+                assert!(problem.to_lowercase().contains("appended"), "cut at {cut}: {err}");
+            }
         }
+        assert!(in_raw >= 10, "{in_raw} cuts in the raw data");
     }
 
     /// An offset or a byte count out by one byte is the damaged file named,
@@ -1172,9 +1189,15 @@ mod tests {
         let (_dir, path) = temp("poly.vtk");
         std::fs::write(&path, "# vtk DataFile Version 2.0\nt\nASCII\nDATASET POLYDATA\nPOINTS 3 float\n0 0 0 1 0 0 0 1 0\nPOLYGONS 1 4\n3 0 1 2\n").unwrap();
         let err = read_vtk(&path).unwrap_err().to_string();
-        assert!(
-            err.contains("poly data (a surface), not an unstructured grid"),
-            "{err}"
+        let expected = format!(
+            "{}: the data set is poly data (a surface), not an unstructured grid; fix: mesh the volume the surface encloses with tetrahedra (Gmsh, TetGen) and save that as .vtu",
+            path.display()
         );
+        assert_eq!(err, expected);
+        // A volume of another kind is converted.
+        let (_dir, path) = temp("image.vtk");
+        std::fs::write(&path, "# vtk DataFile Version 2.0\nt\nASCII\nDATASET STRUCTURED_POINTS\nDIMENSIONS 2 2 2\nORIGIN 0 0 0\nSPACING 1 1 1\n").unwrap();
+        let err = read_vtk(&path).unwrap_err().to_string();
+        assert!(err.starts_with(&format!("{}: the data set is image data, not an unstructured grid; fix: convert it to an unstructured grid (ParaView", path.display())), "{err}");
     }
 }

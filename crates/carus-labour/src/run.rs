@@ -833,44 +833,67 @@ mod tests {
         (dir, record)
     }
 
-    /// The main job's bar (issue 4): the normal scenario at its own
-    /// resolution is delivered with all seven cardinal movements observed,
-    /// and at half its rigid step (so with half the TLED sub-steps per
-    /// step) the same, each movement within a few millimetres or degrees.
-    /// About 50 s of a release build. The coarse scenario cannot stand in:
-    /// with contact samples 8 mm apart it is delivered without internal
-    /// rotation or extension (docs/LABOUR.md, twenty-first session, where
-    /// finer samples, head and floor keep the seven too).
-    #[test]
-    fn the_normal_scenario_is_delivered_with_all_seven_movements_at_either_step() {
+    /// The normal run's movement sizes (mm or deg) at its own rigid step,
+    /// as README and docs/LABOUR.md give them: a model change that moves
+    /// them shows here, and the figures are then updated with the docs.
+    const NORMAL_MOVEMENTS: [(&str, f64); 7] = [
+        ("engagement", 38.1),
+        ("descent", 142.6),
+        ("flexion", 13.6),
+        ("internal_rotation", 86.5),
+        ("extension", 46.5),
+        ("external_rotation", 49.6),
+        ("expulsion", 58.2),
+    ];
+
+    /// Runs the normal scenario at `rigid_dt_s` and checks the main job's
+    /// bar (issue 4): delivered, with all seven cardinal movements observed,
+    /// each within `share` of its size in [`NORMAL_MOVEMENTS`] (of 10 mm or
+    /// deg at least), the history ending on the sample it stopped at and
+    /// the four key moments pictured with the floor as it was then.
+    fn assert_normal_delivery(rigid_dt_s: f64, share: f64) {
         let mut s = Scenario::builtin("normal").unwrap();
         s.output.vtu = false;
-        let mut half = s.clone();
-        half.numerics.rigid_dt_s *= 0.5;
-        let runs = [&s, &half].map(|s| run_in(s, &RunOptions::default()).1);
-        for record in &runs {
-            let report = record.detector.as_ref().expect("detected");
-            assert!(report.outcome.delivered, "{:?}", report.outcome);
-            // Stopped on delivery at a pose sample: the history ends on the state it stopped in.
-            let last_s = record.history.samples.last().unwrap().time_s;
-            assert!((last_s - record.summary.simulated_s).abs() < 1e-9, "{last_s} against {}", record.summary.simulated_s);
-            for (key, m) in report.movements.by_key() {
-                assert!(m.observed, "{key} not observed: {:?}", report.movements);
-            }
-            // All four key moments, each pictured with the floor as it was
-            // then (no VTU frames in this run: the snapshots alone).
-            assert_eq!(record.key_moments.len(), 4, "{:?}", record.key_moments.iter().map(|m| &m.name).collect::<Vec<_>>());
-            for m in &record.key_moments {
-                let floor = m.floor.as_ref().unwrap_or_else(|| panic!("{} has no floor", m.name));
-                assert!((floor.time_s - m.time_s).abs() <= FLOOR_SNAPSHOT_EVERY_S, "{}", m.name);
-                assert!(floor.element_stretch.iter().all(|&l| l > 0.5 && l.is_finite()), "{}", m.name);
-            }
+        s.numerics.rigid_dt_s = rigid_dt_s;
+        let (_dir, record) = run_in(&s, &RunOptions::default());
+        let report = record.detector.as_ref().expect("detected");
+        assert!(report.outcome.delivered, "{:?}", report.outcome);
+        // Stopped on delivery at a pose sample: the history ends on the state it stopped in.
+        let last_s = record.history.samples.last().unwrap().time_s;
+        assert!((last_s - record.summary.simulated_s).abs() < 1e-9, "{last_s} against {}", record.summary.simulated_s);
+        let movements = report.movements.by_key();
+        assert_eq!(movements.map(|(key, _)| key), NORMAL_MOVEMENTS.map(|(key, _)| key));
+        for ((key, m), (_, expected)) in movements.iter().zip(NORMAL_MOVEMENTS) {
+            assert!(m.observed, "{key} not observed: {:?}", report.movements);
+            let size = m.size.unwrap();
+            assert!((size - expected).abs() < share * expected.max(10.0), "{key}: {size} at a rigid step of {rigid_dt_s} s, {expected} expected");
         }
-        let [a, b] = runs.each_ref().map(|r| r.detector.as_ref().unwrap().movements.by_key());
-        for ((key, m), (_, n)) in a.iter().zip(&b) {
-            let (x, y) = (m.size.unwrap(), n.size.unwrap());
-            assert!((x - y).abs() < 0.1 * x.abs().max(10.0), "{key}: {x} at the step, {y} at half of it");
+        // No VTU frames in this run: the key moments' floors are the snapshots alone.
+        assert_eq!(record.key_moments.len(), 4, "{:?}", record.key_moments.iter().map(|m| &m.name).collect::<Vec<_>>());
+        for m in &record.key_moments {
+            let floor = m.floor.as_ref().unwrap_or_else(|| panic!("{} has no floor", m.name));
+            assert!((floor.time_s - m.time_s).abs() <= FLOOR_SNAPSHOT_EVERY_S, "{}", m.name);
+            assert!(floor.element_stretch.iter().all(|&l| l > 0.5 && l.is_finite()), "{}", m.name);
         }
+    }
+
+    /// The main job's bar at the scenario's own resolution, to the figures
+    /// the docs give. About 20 s of a release build. The coarse scenario
+    /// cannot stand in: with contact samples 8 mm apart it is delivered
+    /// without internal rotation or extension (docs/LABOUR.md, twenty-first
+    /// session, where finer samples, head and floor keep the seven too).
+    #[test]
+    fn the_normal_scenario_is_delivered_with_all_seven_movements() {
+        assert_normal_delivery(Scenario::builtin("normal").unwrap().numerics.rigid_dt_s, 0.02);
+    }
+
+    /// At half the rigid step (so half the TLED sub-steps per step) the
+    /// same, each movement within a tenth (issue 4: the result does not
+    /// depend on the ratio of the step sizes). About 40 s, apart from the
+    /// test above so the two can run side by side.
+    #[test]
+    fn at_half_the_rigid_step_the_normal_scenario_gives_the_same_movements() {
+        assert_normal_delivery(0.5 * Scenario::builtin("normal").unwrap().numerics.rigid_dt_s, 0.1);
     }
 
     /// The same forces arrest the head above a contracted inlet (issue 4;

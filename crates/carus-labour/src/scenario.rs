@@ -11,6 +11,7 @@ use std::path::{Path, PathBuf};
 use carus_anatomy::fetus::{AtlantoOccipitalPlacement, HeadDiameters, TrunkDiameters};
 use carus_anatomy::floor::FloorParameters;
 use carus_anatomy::pelvis::{PelvisDiameters, PelvisSpec, PELVIC_CANAL_DIAMETER_MM, VISIBLE_HUMAN_FEMALE};
+use carus_io::toml_text::line_of_key;
 use serde::de::value::MapAccessDeserializer;
 use serde::de::{DeserializeSeed, Deserializer, Error as _, IntoDeserializer, MapAccess, Visitor};
 use serde::{Deserialize, Serialize};
@@ -1991,33 +1992,6 @@ fn located(path: &Path, line: Option<NonZeroUsize>) -> String {
         Some(line) => format!("{}:{line}", path.display()),
         None => path.display().to_string(),
     }
-}
-
-/// The line of the value of a dotted key as `check` names it
-/// (`floor.shear_modulus_pa`, `trajectory.waypoints[2].phi_deg`); None
-/// where the text does not write it (a default taken).
-fn line_of_key(text: &str, key: &str) -> Option<NonZeroUsize> {
-    use toml::de::{DeTable, DeValue};
-    let root = DeTable::parse(text).ok()?;
-    let mut table = root.get_ref();
-    let parts: Vec<&str> = key.split('.').collect();
-    for (n, part) in parts.iter().enumerate() {
-        let (name, index) = match part.split_once('[') {
-            Some((name, rest)) => (name, Some(rest.strip_suffix(']')?.parse::<usize>().ok()?)),
-            None => (*part, None),
-        };
-        let mut value = table.get(name)?;
-        if let Some(i) = index {
-            let DeValue::Array(items) = value.get_ref() else { return None };
-            value = items.get(i)?;
-        }
-        if n + 1 == parts.len() {
-            return NonZeroUsize::new(carus_io::input::line_at(text.as_bytes(), value.span().start));
-        }
-        let DeValue::Table(inner) = value.get_ref() else { return None };
-        table = inner;
-    }
-    None
 }
 
 /// The unit a key's name ends with, the longer endings first.

@@ -5,11 +5,13 @@
 use crate::demo::Demo;
 use crate::{write_report, write_report_with, AxialMomentSample, CanalForceSample, FloorFrame, ReportError, ReportInput, SampleForces};
 
+/// The timeline row of a movement, to its closing tag.
 fn movement_row(html: &str, key: &str) -> String {
     let start = html
         .find(&format!("data-movement=\"{key}\""))
         .unwrap_or_else(|| panic!("no row for {key}"));
-    html[start..start + 60].to_string()
+    let end = start + html[start..].find("</div>").unwrap();
+    html[start..end].to_string()
 }
 
 fn assert_self_contained(html: &str) {
@@ -39,14 +41,21 @@ fn the_textbook_report_shows_everything_on_one_page() {
         ("flexion", "Flexion"),
         ("internal_rotation", "Internal rotation"),
         ("extension", "Extension"),
-        ("external_rotation", "External rotation"),
+        ("external_rotation", "External rotation (restitution)"),
         ("expulsion", "Expulsion"),
     ] {
-        assert!(
-            movement_row(html, key).contains("data-observed=\"true\""),
-            "{key}"
-        );
-        assert!(html.contains(label), "{label}");
+        let row = movement_row(html, key);
+        assert!(row.contains("data-observed=\"true\""), "{key}");
+        assert!(row.contains(&format!("</i>{label}</span>")), "{row}");
+        // The detector's own start, end and size, as the page writes them.
+        let m = demo.detector.movements.by_key().into_iter().find(|(k, _)| *k == key).unwrap().1;
+        let (Some(start), Some(end), Some(size)) = (m.start_s, m.end_s, m.size) else { panic!("{key}: {m:?}") };
+        let size = match m.unit {
+            carus_analysis::Unit::Mm => format!("{size:.1} mm"),
+            carus_analysis::Unit::Deg => format!("{size:.0}\u{b0}"),
+        };
+        let expected = format!("<span class=\"when\">{start:.1} &ndash; {end:.1} s</span><span class=\"size\">{size}</span>");
+        assert!(row.ends_with(&expected), "{row}\n  expected: {expected}");
     }
     for plot in ["station", "theta", "phi", "force"] {
         let at = html.find(&format!("id=\"plot-{plot}\"")).unwrap();

@@ -599,7 +599,14 @@ fn landmark_file_mistakes_are_named_with_their_fix() {
         .contains("three different mesh axes"));
 
     let units = edited_landmarks(&dir, |t| t.replace("units = \"mm\"", "units = \"cm\""));
-    assert!(import_pelvis(&units).unwrap_err().to_string().contains("units"));
+    let e = import_pelvis(&units).unwrap_err().to_string();
+    // The file and line, the value as written, and the units it may take.
+    assert!(
+        e.starts_with(&format!("{}: TOML parse error at line 3", units.display()))
+            && e.contains("units = \"cm\"")
+            && e.contains("unknown variant `cm`, expected `mm` or `m`"),
+        "{e}"
+    );
     // A landmark a slip of exponent away is named, not read as a degenerate plane.
     let far = edited_landmarks(&dir, |t| t.replacen("sacral_promontory = [-6.074813660234213,", "sacral_promontory = [1e300,", 1));
     let e = import_pelvis(&far).unwrap_err().to_string();

@@ -489,26 +489,6 @@ fn scene_meshes(scene: &LabourScene) -> Vec<RenderMesh> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use carus_fem::generate::box_h8;
-
-    #[test]
-    fn the_boundary_of_a_box_is_its_outside_wound_outwards() {
-        let mesh = box_h8([2.0, 1.0, 1.0], [2, 1, 1]);
-        let triangles: Vec<u32> = mesh.boundary_triangles(&[0, 1]).concat();
-        // 10 outer quads of two cubes, the shared face left out.
-        assert_eq!(triangles.len(), 10 * 2 * 3);
-        let nodes: Vec<DVec3> = mesh.nodes.iter().map(|&p| p.into()).collect();
-        let centre = DVec3::new(1.0, 0.5, 0.5);
-        for t in triangles.chunks_exact(3) {
-            let [a, b, c] = [
-                nodes[t[0] as usize],
-                nodes[t[1] as usize],
-                nodes[t[2] as usize],
-            ];
-            let outward = (b - a).cross(c - a).dot((a + b + c) / 3.0 - centre);
-            assert!(outward > 0.0, "triangle {t:?} faces inwards");
-        }
-    }
 
     #[test]
     fn plane_outlines_pass_through_the_ends_of_their_diameters() {

@@ -251,6 +251,35 @@ fn not_run(case: SanityCase, why: &str) -> Judged {
 mod tests {
     use super::*;
 
+    /// A case whose expected outcome emerges is judged met through the run
+    /// it makes: the contracted inlet, coarse, arrests its head at the
+    /// inlet (as the labour crate's own coarse test finds). About 6 s.
+    #[test]
+    fn a_case_whose_outcome_emerges_is_met() {
+        let dir = tempfile::tempdir().unwrap();
+        let changes: Vec<(String, String)> = [
+            "numerics.end_time_s=60.0",
+            "numerics.rigid_dt_s=0.001",
+            "numerics.head_subdivisions=3",
+            "contact.sample_spacing_mm=8.0",
+            "floor.mesh.elements_around=16",
+            "floor.mesh.elements_across=3",
+            "output.vtu=false",
+        ]
+        .iter()
+        .map(|text| one_setting(text).unwrap())
+        .collect();
+        let case = SanityCase::ContractedInlet;
+        let scenario = Scenario::builtin(case.scenario()).unwrap().with_settings(&changes).unwrap();
+        let judged = judge_case(case, &scenario, dir.path(), &Arc::new(AtomicBool::new(false))).unwrap();
+        assert!(judged.verdict.met, "{}", judged.verdict.why);
+        assert!(judged.completed && judged.failure.is_none());
+        let arrest = judged.outcome.as_ref().and_then(|o| o.arrest.as_ref()).expect("arrested");
+        assert_eq!(arrest.stage, carus_analysis::ArrestStage::Inlet);
+        assert!(judged.outcome_line.contains("inlet"), "{}", judged.outcome_line);
+        assert!(dir.path().join("report.html").is_file());
+    }
+
     /// The four cases run (cut to a fifth of a second and made coarse
     /// through --set, so nothing can deliver) into their own folders, and
     /// none is met: the command reports failure rather than success.

@@ -14,10 +14,10 @@ use super::element::{internal_forces, Coefficients};
 use super::lanes::{block_view, block_view_mut, Lanes, Real, LANES};
 
 /// Blocks per parallel task (512 elements).
-const BLOCKS_PER_TASK: usize = 64;
+pub(crate) const BLOCKS_PER_TASK: usize = 64;
 /// Nodes per parallel task: small enough that the tasks of a 10^4-node
 /// mesh split evenly over the threads.
-const NODES_PER_TASK: usize = 512;
+pub(crate) const NODES_PER_TASK: usize = 512;
 
 /// Whether the AVX2 versions can run on this CPU (cached by std): they
 /// are built with FMA too, which a few CPUs and VMs offer AVX2 without.

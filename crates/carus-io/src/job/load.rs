@@ -8,11 +8,15 @@ use super::JobError;
 
 /// Reads and checks a job file.
 pub fn load_job(path: &Path) -> Result<JobSpec, JobError> {
-    let text = crate::input::read_text(path).map_err(|cause| JobError::Io {
+    parse_job(path, &read_job_text(path)?)
+}
+
+/// A job file's text.
+pub(crate) fn read_job_text(path: &Path) -> Result<String, JobError> {
+    crate::input::read_text(path).map_err(|cause| JobError::Io {
         path: path.to_path_buf(),
         cause,
-    })?;
-    parse_job(path, &text)
+    })
 }
 
 /// Parses and checks job-file text; `path` names it in errors and is
@@ -24,7 +28,7 @@ pub fn parse_job(path: &Path, text: &str) -> Result<JobSpec, JobError> {
         let key = e.path().to_string();
         another_kind_of_file(path, text).unwrap_or_else(|| toml_error(path, text, key, e.inner()))
     })?;
-    check_values(path, &spec)?;
+    check_values(path, &spec).map_err(|e| e.at_line_in(text))?;
     Ok(spec)
 }
 
@@ -145,6 +149,7 @@ impl Checker<'_> {
     fn fail(&self, key: String, problem: String, fix: &str) -> JobError {
         JobError::Invalid {
             path: self.path.to_path_buf(),
+            line: None,
             key,
             problem,
             fix: fix.to_string(),

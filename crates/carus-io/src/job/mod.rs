@@ -10,6 +10,7 @@ mod load;
 mod run;
 pub mod spec;
 
+use std::num::NonZeroUsize;
 use std::path::PathBuf;
 
 pub use load::{load_job, mesh_path, parse_job};
@@ -58,17 +59,21 @@ pub enum JobError {
         hint: String,
     },
     /// A value that cannot be right (a negative modulus, a missing pair).
-    #[error("{}: `{key}`: {problem}; fix: {fix}", path.display())]
+    #[error("{}: `{key}`: {problem}; fix: {fix}", located(path, *line))]
     Invalid {
         path: PathBuf,
+        /// The key's line in the job file; None where it writes no such key
+        /// (non-zero: keeps every `Result<_, JobError>` small).
+        line: Option<NonZeroUsize>,
         key: String,
         problem: String,
         fix: String,
     },
     /// A set the job names is not in the mesh.
-    #[error("{}: `{key}` names the {kind} {name:?}, which the mesh does not have; fix: use one of: {}", path.display(), if available.is_empty() { "(the mesh has none; define it in the mesh file)".to_string() } else { available.join(", ") })]
+    #[error("{}: `{key}` names the {kind} {name:?}, which the mesh does not have; fix: use one of: {}", located(path, *line), if available.is_empty() { "(the mesh has none; define it in the mesh file)".to_string() } else { available.join(", ") })]
     UnknownSet {
         path: PathBuf,
+        line: Option<NonZeroUsize>,
         key: String,
         kind: &'static str,
         name: String,
@@ -90,4 +95,27 @@ pub enum JobError {
     /// A result file could not be written.
     #[error(transparent)]
     Write(#[from] WriteError),
+}
+
+/// `job.toml:12`, or the name alone where there is no line.
+fn located(path: &std::path::Path, line: Option<NonZeroUsize>) -> String {
+    match line {
+        Some(line) => format!("{}:{line}", path.display()),
+        None => path.display().to_string(),
+    }
+}
+
+impl JobError {
+    /// This error with the line of its key in the job file's `text`, or
+    /// failing that of the table holding it (`material[0]` for a check of
+    /// `c10_pa + c01_pa`): value checks run on the parsed job, which keeps
+    /// no lines.
+    fn at_line_in(mut self, text: &str) -> Self {
+        if let JobError::Invalid { line, key, .. } | JobError::UnknownSet { line, key, .. } = &mut self {
+            let holder = key.rsplit_once('.').map(|(holder, _)| holder);
+            let found = crate::toml_text::line_of_key(text, key).or_else(|| holder.and_then(|h| crate::toml_text::line_of_key(text, h)));
+            *line = found;
+        }
+        self
+    }
 }

@@ -14,7 +14,7 @@ use carus_fem::{
 use carus_fem::solver::reported_time_s;
 use serde::Serialize;
 
-use super::load::{load_job, mesh_path};
+use super::load::{mesh_path, parse_job, read_job_text};
 use super::spec::{
     JobSpec, Law, LoadSpec, OutputSpec, PrecisionSpec, TetSpec, TimeStep, AUTO_TIME_STEP_FRACTION,
 };
@@ -118,12 +118,14 @@ impl Sets<'_> {
             Some(nodes) if !nodes.is_empty() => Ok(nodes.clone()),
             Some(_) => Err(JobError::Invalid {
                 path: self.job.to_path_buf(),
+                line: None,
                 key,
                 problem: format!("node set {name:?} is empty"),
                 fix: "name a set with nodes on the meshed volume".into(),
             }),
             None => Err(JobError::UnknownSet {
                 path: self.job.to_path_buf(),
+                line: None,
                 key,
                 kind: "node set",
                 name: name.to_string(),
@@ -139,6 +141,7 @@ impl Sets<'_> {
             .cloned()
             .ok_or_else(|| JobError::UnknownSet {
                 path: self.job.to_path_buf(),
+                line: None,
                 key,
                 kind: "surface",
                 name: name.to_string(),
@@ -152,6 +155,7 @@ impl Sets<'_> {
         }
         Err(JobError::UnknownSet {
             path: self.job.to_path_buf(),
+            line: None,
             key,
             kind: "element set",
             name: name.to_string(),
@@ -253,6 +257,7 @@ fn materials(spec: &JobSpec, sets: &Sets) -> Result<Vec<MaterialRegion>, JobErro
                 Material::NeoHookean(NeoHookean::from_young_poisson(e, nu).map_err(|err| {
                     JobError::Invalid {
                         path: sets.job.to_path_buf(),
+                        line: None,
                         key: format!("material[{i}]"),
                         problem: err.to_string(),
                         fix: "give valid moduli".into(),
@@ -305,6 +310,7 @@ fn boundary_conditions(
                 if let Some((first, _)) = earlier.filter(|(_, was_displaced)| displaced || *was_displaced) {
                     return Err(JobError::Invalid {
                         path: sets.job.to_path_buf(),
+                        line: None,
                         key: format!("{}.node_set", tables[this].0),
                         problem: format!(
                             "node {} (the mesh file's number) is already held in {} by {first}",
@@ -528,6 +534,7 @@ fn build_solver(
     if steps.is_nan() || steps > super::load::MAX_STEPS {
         return Err(JobError::Invalid {
             path: job_path.to_path_buf(),
+            line: None,
             key: "materials".into(),
             problem: format!(
                 "the stable time step is {critical_s:.3e} s, so {} s would take {steps:.1e} steps: \
@@ -555,6 +562,7 @@ fn build_solver(
     let solver = TledSolver::new(Arc::new(model), &bcs, dt_s, control).map_err(|e| match e {
         FemError::TimeStepAboveCritical { .. } => JobError::Invalid {
             path: job_path.to_path_buf(),
+            line: None,
             key: "solver.time_step_s".into(),
             problem: e.to_string(),
             fix: "lower time_step_s, set it to \"auto\", or set solver.sub_stepping = true".into(),
@@ -575,7 +583,8 @@ pub fn run_job(
     progress: &mut dyn FnMut(&Progress),
 ) -> Result<JobReport, JobError> {
     let start = Instant::now();
-    let spec = load_job(job_path)?;
+    let text = read_job_text(job_path)?;
+    let spec = parse_job(job_path, &text)?;
     // Refuse an occupied folder before the (possibly long) model build.
     if !options.force && occupied(out_dir) {
         return Err(JobError::OutDirExists {
@@ -584,7 +593,7 @@ pub fn run_job(
     }
     let file = crate::read_mesh(&mesh_path(job_path, &spec))?.to_metres(spec.mesh.length_unit);
     let mesh = &file.mesh;
-    let (mut solver, supports) = build_solver(job_path, &spec, &file)?;
+    let (mut solver, supports) = build_solver(job_path, &spec, &file).map_err(|e| e.at_line_in(&text))?;
     let critical_dt_s = solver.model().critical_time_step();
     let dt_s = solver.dt_s();
 
@@ -736,7 +745,6 @@ pub fn run_job(
 
 #[cfg(test)]
 mod tests {
-    use super::super::spec::Axis;
     use super::*;
 
     #[test]
@@ -763,11 +771,19 @@ mod tests {
         assert_eq!(auxetic_notes(&mooney).len(), 1);
     }
 
+    /// A `[[fixed]]` table holds the components it names, in the solver's
+    /// x, y, z order whatever order the file lists them in.
     #[test]
-    fn the_axis_order_matches_the_component_order() {
-        assert_eq!(
-            [Axis::X as usize, Axis::Y as usize, Axis::Z as usize],
-            [0, 1, 2]
+    fn fixed_components_hold_the_axes_named() {
+        let mesh = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/cube_n5.msh");
+        let text = format!(
+            "[mesh]\nfile = \"{mesh}\"\nlength_unit = \"m\"\n[[material]]\nlaw = \"neo_hookean\"\nshear_modulus_pa = 1000.0\nbulk_modulus_pa = 50000.0\ndensity_kg_m3 = 1000.0\n\
+             [[fixed]]\nnode_set = \"x0\"\ncomponents = [\"z\", \"x\"]\n[[fixed]]\nnode_set = \"x1\"\ncomponents = [\"y\"]\n[solver]\nend_time_s = 1.0\n"
         );
+        let spec = parse_job(Path::new("job.toml"), &text).unwrap();
+        let file = crate::read_mesh(Path::new(mesh)).unwrap();
+        let (bcs, _) = boundary_conditions(&spec, &Sets { job: Path::new("job.toml"), file: &file }).unwrap();
+        let held: Vec<[bool; 3]> = bcs.fixed.iter().map(|f| f.components).collect();
+        assert_eq!(held, [[true, false, true], [false, true, false]]);
     }
 }
