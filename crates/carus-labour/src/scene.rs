@@ -148,7 +148,7 @@ impl Scene {
 
         let s = scenario;
         let head_anatomy = FetalHead::with_subdivisions(&s.head, &s.fetus.atlanto_occipital(), s.numerics.head_subdivisions)
-            .map_err(|e| unbuildable(s, "head", true, e))?;
+            .map_err(|e| unbuildable(s, "head", e.diameter_key(), true, e))?;
         let spacing = s.contact.sample_spacing_mm * 1e-3;
         let head = FetalBody::new(
             "head",
@@ -753,22 +753,26 @@ fn pelvis_files_digest(s: &Scenario, import: Option<&(MeshReport, PathBuf)>) -> 
 fn build_pelvis(s: &Scenario) -> Result<(Pelvis, Option<(MeshReport, PathBuf)>), LabourError> {
     s.pelvis
         .build_with_report(&s.base_dir)
-        .map_err(|e| unbuildable(s, "pelvis", e.of_diameters(), e))
+        .map_err(|e| unbuildable(s, "pelvis", e.diameter_key(), e.of_diameters(), e))
 }
 
-/// A scenario's `[pelvis]` or `[head]` table that cannot be built, with the
-/// keys it names that the file left to their defaults (only for a table of
+/// A scenario's `[pelvis]` or `[head]` table that cannot be built, at the
+/// line of the `key` it names where the file writes it, with the keys it
+/// names that the file left to their defaults (only for a table of
 /// diameters: an import's errors quote its landmarks file, not the table),
 /// and the command that builds and measures it without a run.
-fn unbuildable(s: &Scenario, table: &str, from_diameters: bool, e: impl std::fmt::Display) -> LabourError {
+fn unbuildable(s: &Scenario, table: &str, key: Option<&str>, from_diameters: bool, e: impl std::fmt::Display) -> LabourError {
     let e = e.to_string();
     let note = from_diameters.then(|| s.defaults_note(table, &e)).flatten();
     let defaults = note.map_or(String::new(), |note| format!("\n  note: {note}"));
-    LabourError::anatomy(format!(
-        "[{table}]: {e}{defaults}\n  hint: `carus measure {table} FILE` builds the {table} of a scenario \
-         file and prints every diameter without running; `carus scenarios show normal` gives a \
-         set that builds"
-    ))
+    LabourError::Anatomy {
+        at: key.map_or(String::new(), |key| s.located_key(&format!("{table}.{key}"))),
+        message: format!(
+            "[{table}]: {e}{defaults}\n  hint: `carus measure {table} FILE` builds the {table} of a scenario \
+             file and prints every diameter without running; `carus scenarios show normal` gives a \
+             set that builds"
+        ),
+    }
 }
 
 fn build_floor(s: &Scenario, pelvis: &Pelvis) -> Result<FloorScene, LabourError> {
@@ -1038,6 +1042,19 @@ mod tests {
         let (file, line) = s.with_setting("floor.mesh.hiatus_width_mm", "90").unwrap().as_read_from("wide.toml", "hiatus_width_mm = 90");
         let e = Scene::build(&file).expect_err("refused").to_string();
         assert!(e.starts_with(&format!("wide.toml:{line}: anatomy: pelvic floor ([floor.mesh] in the scenario): hiatus_width_mm = 90")), "{e}");
+    }
+
+    /// Diameters that cannot be built lead with the line of the key to
+    /// change, read from a file: the pelvis's, and the head's.
+    #[test]
+    fn unbuildable_diameters_name_their_line() {
+        let s = Scenario::builtin("normal").unwrap();
+        let (file, line) = s.with_setting("pelvis.mid_posterior_share", "0.05").unwrap().as_read_from("shape.toml", "mid_posterior_share = 0.05");
+        let e = Scene::build(&file).expect_err("refused").to_string();
+        assert!(e.starts_with(&format!("shape.toml:{line}: anatomy: [pelvis]: mid_posterior_share = 0.05 is outside 0.2 to 0.7")), "{e}");
+        let (file, line) = s.with_setting("head.bitemporal_mm", "99").unwrap().as_read_from("head.toml", "bitemporal_mm = 99");
+        let e = Scene::build(&file).expect_err("refused").to_string();
+        assert!(e.starts_with(&format!("head.toml:{line}: anatomy: [head]: bitemporal_mm (99 mm) must be shorter than biparietal_mm")), "{e}");
     }
 
     /// A landmarks file that cannot be read is quoted as its own error: its

@@ -76,6 +76,18 @@ pub enum HeadError {
     Resolution(u32),
 }
 
+impl HeadError {
+    /// The `[head]` diameter to change, where the error names one (the
+    /// smaller of two in conflict).
+    pub fn diameter_key(&self) -> Option<&'static str> {
+        match self {
+            HeadError::NotPositive { name, .. } => Some(name),
+            HeadError::Conflict { smaller, .. } => Some(smaller),
+            HeadError::Unshapeable { .. } | HeadError::Pivot { .. } | HeadError::Resolution(_) => None,
+        }
+    }
+}
+
 impl HeadDiameters {
     /// The diameters with their canonical names.
     pub fn named(&self) -> [(&'static str, f64); 6] {

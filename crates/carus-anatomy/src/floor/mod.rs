@@ -1367,8 +1367,11 @@ mod tests {
             outlet_t in 95.0..120.0f64, angle in 90.0..120.0f64,
             thickness in 4.0..12.0f64, sag in 5.0..33.0f64,
             length in 42.0..60.0f64, width in 30.0..45.0f64,
+            inlet_share in 0.3..0.6f64, mid_share in 0.3..0.55f64,
         ) {
             let d = PelvisDiameters {
+                inlet_posterior_share: inlet_share,
+                mid_posterior_share: mid_share,
                 inlet_ap_mm: ap,
                 inlet_transverse_mm: t,
                 inlet_oblique_mm: 0.73 * ap.hypot(t),

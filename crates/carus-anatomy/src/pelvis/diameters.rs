@@ -49,6 +49,21 @@ pub struct PelvisDiameters {
     /// sacrum's anterior curve) behind the promontory-apex chord. REFERENCE_DATA.md only says "concave": 20 mm is an engineering
     /// value (a sacral curve turning about 40 degrees over its length).
     pub sacral_depth_mm: f64,
+    /// Where the widest inlet transverse crosses the obstetric conjugate:
+    /// the inlet's posterior sagittal diameter (promontory to that crossing)
+    /// as a share of the conjugate. 0.45, an engineering choice: a gynecoid
+    /// inlet is widest slightly behind its centre; the pelvis types of
+    /// Caldwell and Moloy differ in it (an android inlet is widest far back,
+    /// with a short posterior sagittal). The greatest-dimensions plane takes
+    /// the same share. `carus measure` gives the diameter in mm.
+    pub inlet_posterior_share: f64,
+    /// Where the interspinous line crosses the mid-pelvis AP diameter: the
+    /// mid-pelvis posterior sagittal diameter (S4-S5 to that crossing) as a
+    /// share of `mid_ap_mm`. 0.4, an engineering choice (about 45-50 mm of
+    /// 115, the posterior sagittal of the mid-pelvis often quoted). It sets
+    /// how far forward the ischial spines stand, and with them the
+    /// sacrospinous ligaments and the floor's attachment.
+    pub mid_posterior_share: f64,
 }
 
 impl Default for PelvisDiameters {
@@ -66,6 +81,8 @@ impl Default for PelvisDiameters {
             sacral_length_mm: 105.0,
             subpubic_angle_deg: 105.0,
             sacral_depth_mm: 20.0,
+            inlet_posterior_share: 0.45,
+            mid_posterior_share: 0.4,
         }
     }
 }
@@ -100,6 +117,22 @@ pub enum DiameterError {
     SacrumTooDeep { depth: f64, length: f64 },
     #[error("symphysis_length_mm = {symphysis} must be shorter than inlet_ap_mm = {inlet_ap} and outlet_ap_mm = {outlet_ap}")]
     SymphysisTooLong { symphysis: f64, inlet_ap: f64, outlet_ap: f64 },
+    #[error("{key} = {value:?} is outside {least} to {most}: a share of the AP diameter, not a length or a percentage (the default is {default})")]
+    ShareOutOfRange { key: &'static str, value: f64, least: f64, most: f64, default: f64 },
+}
+
+impl DiameterError {
+    /// The key to change (the first named, where two are in conflict).
+    pub fn key(&self) -> &'static str {
+        match self {
+            DiameterError::NotPositive { key, .. } | DiameterError::OutOfReach { key, .. } | DiameterError::ShareOutOfRange { key, .. } => key,
+            DiameterError::SubpubicAngle { .. } => "subpubic_angle_deg",
+            DiameterError::ObliqueTooShort { oblique_key, .. } => oblique_key,
+            DiameterError::InterspinousWiderThanInlet { .. } => "interspinous_mm",
+            DiameterError::SacrumTooDeep { .. } => "sacral_depth_mm",
+            DiameterError::SymphysisTooLong { .. } => "symphysis_length_mm",
+        }
+    }
 }
 
 impl PelvisDiameters {
@@ -126,6 +159,15 @@ impl PelvisDiameters {
         for (key, value) in self.sizes() {
             if !(value.is_finite() && value > 0.0) {
                 return Err(DiameterError::NotPositive { key, value });
+            }
+        }
+        let d = PelvisDiameters::default();
+        for (key, value, default, (least, most)) in [
+            ("inlet_posterior_share", self.inlet_posterior_share, d.inlet_posterior_share, POSTERIOR_SHARE_RANGE),
+            ("mid_posterior_share", self.mid_posterior_share, d.mid_posterior_share, POSTERIOR_SHARE_RANGE),
+        ] {
+            if !(least..=most).contains(&value) {
+                return Err(DiameterError::ShareOutOfRange { key, value, least, most, default });
             }
         }
         let angle = self.subpubic_angle_deg;
@@ -172,6 +214,12 @@ impl PelvisDiameters {
     }
 }
 
+/// The posterior shares a pelvis may have: a band wide enough for the
+/// Caldwell-Moloy types as described (an android inlet widest far back,
+/// near the sacrum) that keeps the transverse off the promontory and the
+/// symphysis (engineering choice).
+pub(crate) const POSTERIOR_SHARE_RANGE: (f64, f64) = (0.2, 0.7);
+
 /// The outlet oblique runs from a ligament midpoint behind the tuberosities to
 /// the opposite pubic arch, so it can be shorter than both outlet diameters;
 /// below this fraction of the smaller one it would cross the arch itself.
@@ -205,6 +253,11 @@ mod tests {
         assert!(nan.validate().unwrap_err().to_string().contains("sacral_length_mm"));
         let angle = PelvisDiameters { subpubic_angle_deg: 10.0, ..Default::default() };
         assert!(angle.validate().unwrap_err().to_string().contains("subpubic_angle_deg"));
+        let length = PelvisDiameters { inlet_posterior_share: 49.5, ..Default::default() };
+        let message = length.validate().unwrap_err().to_string();
+        assert!(message.contains("inlet_posterior_share = 49.5 is outside 0.2 to 0.7") && message.contains("default is 0.45"), "{message}");
+        let forward = PelvisDiameters { mid_posterior_share: 0.1, ..Default::default() };
+        assert!(forward.validate().unwrap_err().to_string().contains("mid_posterior_share = 0.1"));
     }
 
     #[test]

@@ -12,10 +12,6 @@ use glam::{DVec2, DVec3};
 use super::diameters::{DiameterError, PelvisDiameters};
 use super::PelvisLandmarks;
 
-/// Share of the obstetric conjugate behind the widest inlet transverse
-/// (posterior sagittal / conjugate). Engineering choice: a gynecoid inlet is
-/// widest slightly behind its centre.
-pub(crate) const INLET_POSTERIOR_SHARE: f64 = 0.45;
 /// Forward tilt of the symphysis' inner surface from the inlet normal, rad.
 /// Engineering choice: a standing pelvis with a 55-60 degree inlet
 /// (REFERENCE_DATA.md) and its symphysis leaning about 45 degrees.
@@ -32,9 +28,6 @@ const COCCYX_RATIO: f64 = 0.33;
 /// rad: from pointing straight down (the sacrum's end turns forward about 40
 /// degrees) to curled forward.
 const COCCYX_BEND_RANGE: (f64, f64) = (-1.2, 1.3);
-/// Share of the mid-pelvis AP diameter behind the interspinous line
-/// (posterior sagittal diameter of the mid-pelvis, about 45-50 mm of 115).
-const SPINE_POSTERIOR_SHARE: f64 = 0.4;
 /// How far the tuberosities lie below the outlet's AP line, seen from the
 /// side, as an angle at the symphysis, rad (the outlet's anterior triangle
 /// is tilted down from its posterior one).
@@ -170,7 +163,7 @@ pub(crate) fn layout(d: &PelvisDiameters) -> Result<Layout, DiameterError> {
     let inlet_exponent = std::f64::consts::LN_2 / -share.ln();
     let promontory = DVec2::new(-0.5 * a, 0.0);
     let symphysis_upper = DVec2::new(0.5 * a, 0.0);
-    let inlet_transverse_y = -0.5 * a + INLET_POSTERIOR_SHARE * a;
+    let inlet_transverse_y = -0.5 * a + d.inlet_posterior_share * a;
     let (front, back) = (0.5 * a - inlet_transverse_y, inlet_transverse_y + 0.5 * a);
     let eminence = DVec2::new(inlet_transverse_y + share * front, 0.0);
     let sacroiliac = DVec2::new(inlet_transverse_y - share * back, 0.0);
@@ -250,8 +243,8 @@ pub(crate) fn layout(d: &PelvisDiameters) -> Result<Layout, DiameterError> {
     };
     let coccyx_tip = apex + coccyx_length * coccyx_direction;
 
-    let spine = s4_s5 + SPINE_POSTERIOR_SHARE * (symphysis_lower - s4_s5);
-    let greatest_lateral = s2_s3 + INLET_POSTERIOR_SHARE * (0.5 * (symphysis_upper + symphysis_lower) - s2_s3);
+    let spine = s4_s5 + d.mid_posterior_share * (symphysis_lower - s4_s5);
+    let greatest_lateral = s2_s3 + d.inlet_posterior_share * (0.5 * (symphysis_upper + symphysis_lower) - s2_s3);
     let (i, ot) = (d.interspinous_mm * mm, d.outlet_transverse_mm * mm);
     let greatest_half_width = 0.5 * t - 0.1 * (t - i);
 

@@ -69,6 +69,14 @@ pub struct PelvisMeasurement {
     pub inlet_oblique_left_mm: f64,
     pub outlet_oblique_right_mm: f64,
     pub outlet_oblique_left_mm: f64,
+    /// Posterior sagittal diameter of the inlet: the sacral promontory to
+    /// where the widest transverse (between the iliopectineal points)
+    /// crosses the obstetric conjugate, mm (`inlet_posterior_share` of it).
+    pub inlet_posterior_sagittal_mm: f64,
+    /// Posterior sagittal diameter of the mid-pelvis: S4-S5 to where the
+    /// interspinous line crosses the mid-pelvis AP diameter, mm
+    /// (`mid_posterior_share` of it).
+    pub mid_posterior_sagittal_mm: f64,
     /// Posterior sagittal diameter of the outlet: midpoint of the
     /// intertuberous line to the coccyx tip, mm.
     pub outlet_posterior_sagittal_mm: f64,
@@ -101,6 +109,8 @@ pub fn diameters_from_landmarks(l: &PelvisLandmarks) -> PelvisDiameters {
         l.ischial_tuberosity_right - l.symphysis_lower,
     );
     PelvisDiameters {
+        inlet_posterior_share: posterior_share(l.sacral_promontory, l.symphysis_upper, l.iliopectineal_left, l.iliopectineal_right),
+        mid_posterior_share: posterior_share(l.sacrum_s4_s5, l.symphysis_lower, l.ischial_spine_left, l.ischial_spine_right),
         inlet_ap_mm: d(l.sacral_promontory, l.symphysis_upper),
         inlet_transverse_mm: d(l.iliopectineal_left, l.iliopectineal_right),
         inlet_oblique_mm: 0.5 * (inlet_obliques.0 + inlet_obliques.1),
@@ -114,6 +124,15 @@ pub fn diameters_from_landmarks(l: &PelvisLandmarks) -> PelvisDiameters {
         subpubic_angle_deg: left.angle_between(right).to_degrees(),
         sacral_depth_mm: depth * MM,
     }
+}
+
+/// Where a transverse diameter (between `left` and `right`) crosses the AP
+/// diameter from `back` to `front`: the share of it behind the crossing
+/// (the posterior sagittal diameter over the AP), the transverse's midpoint
+/// taken square onto the AP line.
+fn posterior_share(back: DVec3, front: DVec3, left: DVec3, right: DVec3) -> f64 {
+    let ap = front - back;
+    (0.5 * (left + right) - back).dot(ap) / ap.length_squared()
 }
 
 /// (right, left) inlet obliques, mm: each named after the sacroiliac joint it starts from.
@@ -194,8 +213,11 @@ pub fn measure(pelvis: &Pelvis) -> PelvisMeasurement {
     let inlet_obliques = inlet_obliques(l);
     let outlet_obliques = outlet_obliques(l);
     let tuberosity_midpoint = 0.5 * (l.ischial_tuberosity_left + l.ischial_tuberosity_right);
+    let diameters = diameters_from_landmarks(l);
     PelvisMeasurement {
-        diameters: diameters_from_landmarks(l),
+        inlet_posterior_sagittal_mm: diameters.inlet_posterior_share * diameters.inlet_ap_mm,
+        mid_posterior_sagittal_mm: diameters.mid_posterior_share * diameters.mid_ap_mm,
+        diameters,
         inlet_oblique_right_mm: inlet_obliques.0,
         inlet_oblique_left_mm: inlet_obliques.1,
         outlet_oblique_right_mm: outlet_obliques.0,

@@ -168,6 +168,13 @@ mod tests {
             assert!((want - got).abs() < 0.1, "{key}: requested {want} mm, measured {got} mm");
         }
         assert!((requested.subpubic_angle_deg - measured.subpubic_angle_deg).abs() < 0.1);
+        // The posterior sagittal diameters to a tenth of a millimetre too.
+        for (key, share, got, ap) in [
+            ("inlet_posterior_share", requested.inlet_posterior_share, measured.inlet_posterior_share, requested.inlet_ap_mm),
+            ("mid_posterior_share", requested.mid_posterior_share, measured.mid_posterior_share, requested.mid_ap_mm),
+        ] {
+            assert!((share - got).abs() * ap < 0.1, "{key}: requested {share}, measured {got}");
+        }
     }
 
     #[test]
@@ -292,8 +299,9 @@ mod tests {
         (
             (85.0..125.0f64, 115.0..145.0f64, 0.0..1.0f64, 100.0..130.0f64, 0.0..1.0f64, 0.85..1.08f64),
             (95.0..125.0f64, 0.0..1.0f64, 35.0..55.0f64, 90.0..120.0f64, 90.0..120.0f64, 12.0..30.0f64),
+            (0.3..0.6f64, 0.3..0.55f64),
         )
-            .prop_map(|((ap, t, oblique, mid_ap, spines, outlet_ap), (outlet_t, outlet_oblique, symphysis, sacrum, angle, depth))| {
+            .prop_map(|((ap, t, oblique, mid_ap, spines, outlet_ap), (outlet_t, outlet_oblique, symphysis, sacrum, angle, depth), (inlet_share, mid_share))| {
                 let hypotenuse = ap.hypot(t);
                 let low = (ap.min(t) / hypotenuse).max(0.62);
                 PelvisDiameters {
@@ -309,6 +317,8 @@ mod tests {
                     sacral_length_mm: sacrum,
                     subpubic_angle_deg: angle,
                     sacral_depth_mm: depth,
+                    inlet_posterior_share: inlet_share,
+                    mid_posterior_share: mid_share,
                 }
             })
     }

@@ -43,6 +43,14 @@ impl PelvisBuildError {
     pub fn of_diameters(&self) -> bool {
         matches!(self, PelvisBuildError::Generate(_))
     }
+
+    /// The `[pelvis]` key to change, where the diameters name one.
+    pub fn diameter_key(&self) -> Option<&'static str> {
+        match self {
+            PelvisBuildError::Generate(PelvisError::Diameters(e)) => Some(e.key()),
+            _ => None,
+        }
+    }
 }
 
 impl PelvisSpec {

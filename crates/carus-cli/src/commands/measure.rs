@@ -65,7 +65,7 @@ fn print_pelvis(m: &PelvisMeasurement, source: String) {
     println!();
     println!("Diameters");
     let d = &m.diameters;
-    let rows: [(&str, &str, f64); 12] = [
+    let rows: [(&str, &str, f64); 14] = [
         ("inlet_ap_mm", "obstetric conjugate (promontory - upper inner symphysis)", d.inlet_ap_mm),
         ("inlet_transverse_mm", "widest inlet transverse (iliopectineal points)", d.inlet_transverse_mm),
         ("inlet_oblique_mm", "inlet oblique, mean of right and left", d.inlet_oblique_mm),
@@ -78,12 +78,18 @@ fn print_pelvis(m: &PelvisMeasurement, source: String) {
         ("sacral_length_mm", "promontory - sacral apex", d.sacral_length_mm),
         ("sacral_depth_mm", "S2-S3 behind the promontory-apex chord", d.sacral_depth_mm),
         ("subpubic_angle_deg", "pubic arch at the lower symphysis", d.subpubic_angle_deg),
+        ("inlet_posterior_share", "inlet posterior sagittal / obstetric conjugate", d.inlet_posterior_share),
+        ("mid_posterior_share", "mid-pelvis posterior sagittal / mid_ap_mm", d.mid_posterior_share),
     ];
     for (key, meaning, value) in rows {
-        println!("  {key:<22} {value:8.1}   {meaning}");
+        // A share needs more than the tenth of a millimetre a size does.
+        let places = if key.ends_with("_share") { 3 } else { 1 };
+        println!("  {key:<22} {value:8.places$}   {meaning}");
     }
     println!("  {:<22} {:8.1} / {:.1}", "inlet obliques R / L", m.inlet_oblique_right_mm, m.inlet_oblique_left_mm);
     println!("  {:<22} {:8.1} / {:.1}", "outlet obliques R / L", m.outlet_oblique_right_mm, m.outlet_oblique_left_mm);
+    println!("  {:<22} {:8.1}", "inlet post. sagittal", m.inlet_posterior_sagittal_mm);
+    println!("  {:<22} {:8.1}", "mid post. sagittal", m.mid_posterior_sagittal_mm);
     println!("  {:<22} {:8.1}", "outlet post. sagittal", m.outlet_posterior_sagittal_mm);
     println!();
     println!("Planes (centre, caudal normal, tilt from the inlet, AP, transverse, sigma along the pelvic axis)");
@@ -273,10 +279,10 @@ impl AnatomyFile {
     pub fn pelvis(&self) -> anyhow::Result<Pelvis> {
         self.note_if_left_out("pelvis");
         let base = self.path.as_deref().and_then(Path::parent).unwrap_or(Path::new("."));
-        let where_ = self.path.as_ref().map_or("the default pelvis".to_string(), |p| format!("{}: [pelvis]", p.display()));
         let (pelvis, report) = self.pelvis.build_with_report(base).map_err(|e| {
-            // The keys the message names that the file leaves to their defaults.
             let text = self.path.as_deref().filter(|_| e.of_diameters()).and_then(|p| read_text(p).ok());
+            let where_ = self.at_key(text.as_deref(), "pelvis", e.diameter_key()).unwrap_or_else(|| "the default pelvis".into());
+            // The keys the message names that the file leaves to their defaults.
             match text.and_then(|t| carus_labour::scenario::defaults_note_in(&t, "pelvis", &e.to_string())) {
                 Some(note) => anyhow::anyhow!("{where_}: {e}\n  note: {note}"),
                 None => anyhow::Error::from(e).context(where_),
@@ -288,10 +294,27 @@ impl AnatomyFile {
         Ok(pelvis)
     }
 
-    /// Builds the head the file describes; a failure names the file.
+    /// Builds the head the file describes; a failure names the file, and
+    /// the line of the diameter to change where the file writes it.
     pub fn head(&self) -> anyhow::Result<FetalHead> {
         self.note_if_left_out("head");
-        FetalHead::with_subdivisions(&self.head, &self.pivot, DEFAULT_HEAD_SUBDIVISIONS).with_context(|| format!("{}: the [head] diameters cannot be built", self.describe()))
+        FetalHead::with_subdivisions(&self.head, &self.pivot, DEFAULT_HEAD_SUBDIVISIONS).map_err(|e| {
+            let text = self.path.as_deref().and_then(|p| read_text(p).ok());
+            let at = self.at_key(text.as_deref(), "head", e.diameter_key()).unwrap_or_else(|| format!("{}: [head]", self.describe()));
+            anyhow::Error::from(e).context(format!("{at}: the diameters cannot be built"))
+        })
+    }
+
+    /// `file:line: [table]` at the line of `key` in the file's `text`
+    /// (`file: [table]` where the file does not write it); None for the
+    /// defaults, which have no file.
+    fn at_key(&self, text: Option<&str>, table: &str, key: Option<&str>) -> Option<String> {
+        let path = self.path.as_ref()?;
+        let line = text.zip(key).and_then(|(text, key)| carus_io::toml_text::line_of_key(text, &format!("{table}.{key}")));
+        Some(match line {
+            Some(line) => format!("{}:{line}: [{table}]", path.display()),
+            None => format!("{}: [{table}]", path.display()),
+        })
     }
 
     /// Builds the pelvic floor the file describes on `pelvis`; a failure names the file.
@@ -388,6 +411,25 @@ mod tests {
         assert!(flipped.starts_with("pelvis.stl: 3 of its 100 triangles ran against their neighbours"), "{flipped}");
         let turned = import_note(&carus_anatomy::import::MeshReport { turned_outwards: true, ..report(0, 0) }, mesh).unwrap();
         assert!(turned.starts_with("pelvis.stl: its triangles faced into the bone") && turned.contains("turned to face outwards"), "{turned}");
+    }
+
+    /// A diameter set that cannot be built names the file and the line of
+    /// the key to change, for the pelvis and the head; a key the file
+    /// leaves out names no line.
+    #[test]
+    fn unbuildable_diameters_name_their_line() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("anatomy.toml");
+        let text = "[pelvis]\ninlet_ap_mm = 110.0\nmid_posterior_share = 0.05\n\n[head]\nbiparietal_mm = 95.0\nbitemporal_mm = 99.0\n";
+        std::fs::write(&path, text).unwrap();
+        let file = AnatomyFile::load(Some(&path)).unwrap();
+        let e = format!("{:#}", file.pelvis().err().unwrap());
+        assert!(e.starts_with(&format!("{}:3: [pelvis]: mid_posterior_share = 0.05 is outside 0.2 to 0.7", path.display())), "{e}");
+        let e = format!("{:#}", file.head().err().unwrap());
+        assert!(e.starts_with(&format!("{}:7: [head]: the diameters cannot be built: bitemporal_mm (99 mm)", path.display())), "{e}");
+        std::fs::write(&path, "[pelvis]\ninlet_transverse_mm = 100.0\n").unwrap();
+        let e = format!("{:#}", AnatomyFile::load(Some(&path)).unwrap().pelvis().err().unwrap());
+        assert!(e.starts_with(&format!("{}: [pelvis]: interspinous_mm = 102", path.display())) && e.contains("note: interspinous_mm is the default"), "{e}");
     }
 
     fn load(text: &str) -> anyhow::Result<AnatomyFile> {
