@@ -35,7 +35,7 @@ pub use neck::{HeadAxes, Neck, NeckAngles, NeckGeometry, NeckLoad, NeckRest, Nec
 pub use overlap::{overlapping_triangles, self_intersections};
 pub use pair::{pair_contacts, PairReport};
 pub use obstacle::{
-    obstacle_contacts, BodyContactState, BodyMotion, Contact, ContactReport, RigidObstacle, RegionTable,
+    obstacle_contacts, obstacle_contacts_by_region, BodyContactState, BodyMotion, Contact, ContactReport, RigidObstacle, RegionTable,
     DEFAULT_SEARCH_DEPTH_M,
 };
 pub use rigid::{MassProperties, RigidBodyModel, RigidBodyState, RigidPose, Wrench};

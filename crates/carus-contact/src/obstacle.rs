@@ -277,6 +277,21 @@ pub fn obstacle_contacts(
     pivot: DVec3,
     memory: &mut BodyContactState,
 ) -> Result<ContactReport, ContactError> {
+    obstacle_contacts_by_region(obstacle, law, &[], samples, motion, pivot, memory)
+}
+
+/// As [`obstacle_contacts`], with a law of its own on some regions of the
+/// obstacle (`region_laws`: region label and law; a ligament softer than
+/// the bone around it), `law` on the rest.
+pub fn obstacle_contacts_by_region(
+    obstacle: &RigidObstacle,
+    law: &ContactLaw,
+    region_laws: &[(u16, ContactLaw)],
+    samples: &SurfaceSamples,
+    motion: &BodyMotion,
+    pivot: DVec3,
+    memory: &mut BodyContactState,
+) -> Result<ContactReport, ContactError> {
     if memory.sample_count() != Some(samples.len()) {
         return Err(ContactError::LengthMismatch {
             what: "body contact state (anchors, depth flags and clearances, one of each per sample)",
@@ -288,10 +303,17 @@ pub fn obstacle_contacts(
         });
     }
     let com = motion.pose.position_m;
-    // A soft law (the trunk's cover) sinks deeper than the bone law the
-    // obstacle's depth is sized for: search down to twice its sink at the
-    // design load, so its samples keep their force.
-    let sink = law.design_penetration(DESIGN_HEAD_RADIUS_M, DESIGN_EXPULSION_FORCE_N);
+    let law_at = |triangle: u32| {
+        let region = obstacle.region_of(triangle);
+        region_laws.iter().find(|(label, _)| Some(*label) == region).map_or(law, |(_, own)| own)
+    };
+    // A soft law (the trunk's cover, a ligament) sinks deeper than the bone
+    // law the obstacle's depth is sized for: search down to twice the
+    // softest one's sink at the design load, so its samples keep their force.
+    let sink = std::iter::once(law)
+        .chain(region_laws.iter().map(|(_, own)| own))
+        .map(|l| l.design_penetration(DESIGN_HEAD_RADIUS_M, DESIGN_EXPULSION_FORCE_N))
+        .fold(0.0, f64::max);
     let band = obstacle.search_depth_m.max(2.0 * sink);
     let searched = band + obstacle.skin_m;
 
@@ -316,7 +338,7 @@ pub fn obstacle_contacts(
             };
             let velocity = motion.linear_velocity + motion.angular_velocity.cross(p - com);
             let stretch = memory_in.anchors[i].map_or(DVec3::ZERO, |a| p - a);
-            let f = law.evaluate(samples.areas[i], -hit.signed_distance, hit.normal, velocity, stretch);
+            let f = law_at(hit.triangle).evaluate(samples.areas[i], -hit.signed_distance, hit.normal, velocity, stretch);
             let contact = Contact {
                 sample: i as u32,
                 body_point: p,
@@ -361,7 +383,7 @@ pub fn obstacle_contacts(
             report.force += c.force();
             report.torque_about_com += (c.body_point - com).cross(c.force());
             report.moment_about_pivot += c.moment_about(pivot);
-            report.normal_stiffness_n_per_m += law.stiffness_at(c.depth) * samples.areas[i];
+            report.normal_stiffness_n_per_m += law_at(c.triangle).stiffness_at(c.depth) * samples.areas[i];
             report.deepest_m = report.deepest_m.max(c.depth);
             report.contacts.push(c);
         }
@@ -657,6 +679,38 @@ mod tests {
         assert_eq!(report.main_region(2), Some(1));
         let by_region = report.force_by_region(2);
         assert!(by_region[1].z > by_region[0].z && by_region[0].z > 0.0);
+    }
+
+    /// A region with a law of its own (a ligament softer than the bone): at
+    /// one depth its sample carries that law's force and stiffness, the
+    /// rest the body's law; a depth the soft law sinks to at the design
+    /// load is searched, where the bone's band would call it too deep.
+    #[test]
+    fn a_region_with_its_own_law_pushes_with_it() {
+        let pelvis = plane(DQuat::IDENTITY);
+        let law = ContactLaw::default();
+        let soft = ContactLaw { penalty_stiffness_pa_per_m: 0.01 * law.penalty_stiffness_pa_per_m, ..law };
+        // 1 mm deep over the sacrum (x > y) and over the symphysis (x < y).
+        let samples = SurfaceSamples { points: vec![DVec3::new(0.02, -0.02, -1e-3), DVec3::new(-0.02, 0.02, -1e-3)], areas: vec![1e-4; 2] };
+        let still = BodyMotion::at_rest(RigidPose::new(DVec3::ZERO, DQuat::IDENTITY));
+        let press = |region_laws: &[(u16, ContactLaw)]| {
+            let mut memory = BodyContactState::new(&samples);
+            obstacle_contacts_by_region(&pelvis, &law, region_laws, &samples, &still, DVec3::ZERO, &mut memory).unwrap()
+        };
+        let (bone, softer) = (press(&[]), press(&[(1, soft)]));
+        let (one, two) = (bone.force_by_region(2), softer.force_by_region(2));
+        assert_eq!(one[0], two[0]);
+        assert!((two[1].z / one[1].z - 0.01).abs() < 1e-12, "{} against {}", two[1].z, one[1].z);
+        let k = |l: &ContactLaw| l.stiffness_at(1e-3) * 1e-4;
+        assert!((softer.normal_stiffness_n_per_m - k(&law) - k(&soft)).abs() < 1e-9 * k(&law));
+        // 8 mm deep over the symphysis: past the bone's band (5 mm), within the soft law's.
+        let deep = SurfaceSamples { points: vec![DVec3::new(-0.02, 0.02, -8e-3)], areas: vec![1e-4] };
+        let mut memory = BodyContactState::new(&deep);
+        let bone = obstacle_contacts(&pelvis, &law, &deep, &still, DVec3::ZERO, &mut memory).unwrap();
+        assert_eq!((bone.contacts.len(), bone.too_deep), (0, 1));
+        let mut memory = BodyContactState::new(&deep);
+        let softer = obstacle_contacts_by_region(&pelvis, &law, &[(1, soft)], &deep, &still, DVec3::ZERO, &mut memory).unwrap();
+        assert_eq!((softer.contacts.len(), softer.too_deep), (1, 0));
     }
 
     #[test]

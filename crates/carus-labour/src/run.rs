@@ -896,6 +896,24 @@ mod tests {
         assert_normal_delivery(0.5 * Scenario::builtin("normal").unwrap().numerics.rigid_dt_s, 0.1);
     }
 
+    /// The same forces arrest the face presentation near the outlet (issue
+    /// 4; CARDINAL_MOVEMENTS.md's sanity case, judged as `carus sanity`
+    /// judges it). The full scenario, its whole minute: the coarse one
+    /// arrests it at the inlet, and the detector needs the minute to tell
+    /// the arrest. About 55 s.
+    #[test]
+    fn the_face_presentation_arrests_near_the_outlet() {
+        let mut s = Scenario::builtin("face").unwrap();
+        s.output.vtu = false;
+        let (_dir, record) = run_in(&s, &RunOptions::default());
+        let report = record.detector.as_ref().expect("detected");
+        let canal = &record.history.canal;
+        let outlet_station_mm = (canal.outlet_sigma() - canal.spines_sigma()) * 1000.0;
+        let verdict = carus_analysis::sanity::SanityCase::Face.judge(report, outlet_station_mm);
+        assert!(verdict.met, "{}: {:?}", verdict.why, report.outcome);
+        assert!(!report.outcome.delivered && record.summary.failure.is_none());
+    }
+
     /// The same forces arrest the head above a contracted inlet (issue 4;
     /// the full scenario too, at the inlet: README, docs/LABOUR.md). About 6 s.
     #[test]

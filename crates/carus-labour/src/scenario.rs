@@ -390,6 +390,17 @@ pub struct ContactSection {
     /// lets them (up to 45 mm in the runs of docs/LABOUR.md, fifteenth
     /// session); off, they do again (for comparison with those runs).
     pub head_trunk: bool,
+    /// Stiffness of the sacrospinous ligaments (with the coccygeus on them)
+    /// as a share of the bone's, for the head's law and the trunk's (its
+    /// cover and core alike): 1, as rigid as bone (the model's choice since
+    /// the ligaments closed the sciatic openings). No measured transverse
+    /// stiffness of the ligament was found, only its suture pull-out
+    /// strength, about 120 N (Lazarou et al. 2004); orthopaedic pelvis
+    /// models assume E = 251 MPa on a 32 mm^2 section or a 1400 N/mm spring,
+    /// with which a 50 mm ligament pressed at its middle gives some 5-11
+    /// mm at the 360-630 N of the normal run's snap. The normal outcome
+    /// turns on it (docs/LABOUR.md, forty-third session).
+    pub ligament_stiffness_ratio: f64,
 }
 
 /// Friction of the wetted canal, the built-in scenarios' `contact.friction`:
@@ -427,6 +438,7 @@ impl Default for ContactSection {
             trunk_cover_depth_mm: TRUNK_SOFT_TISSUE_DEPTH_M * 1e3,
             sample_spacing_mm: 4.0,
             head_trunk: true,
+            ligament_stiffness_ratio: 1.0,
         }
     }
 }
@@ -1451,6 +1463,15 @@ impl Scenario {
                 crushed,
                 "must be at least 0 and below 1",
                 "a volume ratio J, e.g. 0.5 (0 never lets go)",
+            ));
+        }
+        let ratio = self.contact.ligament_stiffness_ratio;
+        if !(ratio > 0.0 && ratio <= 1.0) {
+            return Err(err(
+                "contact.ligament_stiffness_ratio",
+                ratio,
+                "must be above 0 and at most 1",
+                "a share of the bone's stiffness: 1 (the default) is as rigid as bone, 0.03 about a ligament's give (docs/LABOUR.md)",
             ));
         }
         if self.contact.friction > 2.0 {
@@ -2528,6 +2549,10 @@ mod tests {
         assert!(e.contains("force_min_n"), "{e}");
         let e = parse("name = \"x\"\n[expulsion]\nforce_min_n = -1e6\n").unwrap_err().to_string();
         assert!(e.contains("expulsion.force_min_n") && e.contains("far beyond any pull back"), "{e}");
+        for ratio in ["0.0", "1.5", "nan"] {
+            let e = parse(&format!("name = \"x\"\n[contact]\nligament_stiffness_ratio = {ratio}\n")).unwrap_err().to_string();
+            assert!(e.contains("contact.ligament_stiffness_ratio") && e.contains("above 0 and at most 1") && e.contains("as rigid as bone"), "{e}");
+        }
         let e = parse("name = \"x\"\n[contact]\ntrunk_cover_depth_mm = 1000.0\n").unwrap_err().to_string();
         assert!(e.contains("contact.trunk_cover_depth_mm") && e.contains("0.1 to 30"), "{e}");
         let e = parse("name = \"x\"\n[head]\nbiparietal_mm = 9.5\n").unwrap_err().to_string();

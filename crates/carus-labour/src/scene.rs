@@ -14,7 +14,7 @@ use carus_anatomy::floor::{pelvic_floor, ATTACHED};
 use carus_anatomy::import::MeshReport;
 use carus_anatomy::{Pelvis, Plane, TriSurface};
 use carus_contact::{
-    obstacle_contacts, pair_contacts, BodyContactState, BodyMotion, ContactLaw, HeadAxes, MassProperties, NeckGeometry, RegionTable,
+    obstacle_contacts_by_region, pair_contacts, BodyContactState, BodyMotion, ContactLaw, HeadAxes, MassProperties, NeckGeometry, RegionTable,
     NeckRest, RigidBodyModel, RigidObstacle, RigidPose, SoftCover, SurfaceSamples, TriangleCollider, DESIGN_PENETRATION_M,
 };
 use carus_fem::{BoundaryConditions, Material, MaterialRegion, Mesh, ModelOptions, TledModel};
@@ -125,6 +125,10 @@ pub struct Scene {
     /// The trunk's law on bone (softer: the shoulders are soft tissue),
     /// and on the head.
     pub trunk_law: ContactLaw,
+    /// Laws of their own on regions of the canal wall, for the head and
+    /// the trunk (the ligaments, where `contact.ligament_stiffness_ratio`
+    /// makes them softer than bone; none otherwise).
+    pub region_laws: [Vec<(u16, ContactLaw)>; 2],
     /// The head against the trunk (`[contact] head_trunk`), when there is a trunk.
     pub head_trunk: Option<HeadTrunkContact>,
     pub floor: Option<FloorScene>,
@@ -142,6 +146,7 @@ impl Scene {
             .map_err(|e| LabourError::anatomy(format!("pelvic axis: {e}")))?;
         let ligaments = carus_anatomy::floor::sacrospinous_ligaments(&pelvis, scenario.floor.mesh.sacrospinous_bow);
         let CanalWall { surface: wall, labels, sites } = canal_wall(&pelvis, &ligaments);
+        let ligament_label = sites.iter().position(|site| *site == ContactSite::SacrospinousLigament).map(|i| i as u16);
         let names = sites.iter().map(|s| s.name().to_string()).collect();
         let pelvis_collider =
             RigidObstacle::new("pelvis", &wall.vertices, &wall.triangles, Some(RegionTable { names, labels }))?;
@@ -222,6 +227,17 @@ impl Scene {
             ..law
         };
         trunk_law.validate()?;
+        // The ligaments' own laws, where they are softer than bone.
+        let ratio = s.contact.ligament_stiffness_ratio;
+        let on_ligaments = |law: &ContactLaw| -> Vec<(u16, ContactLaw)> {
+            let softer = ContactLaw {
+                penalty_stiffness_pa_per_m: ratio * law.penalty_stiffness_pa_per_m,
+                cover: law.cover.map(|c| SoftCover { core_stiffness_pa_per_m: ratio * c.core_stiffness_pa_per_m, ..c }),
+                ..*law
+            };
+            ligament_label.filter(|_| ratio < 1.0).map(|label| (label, softer)).into_iter().collect()
+        };
+        let region_laws = [on_ligaments(&law), on_ligaments(&trunk_law)];
         let head_trunk = match (&trunk, thoracic_inlet) {
             (Some(body), Some(inlet)) if s.contact.head_trunk => Some(HeadTrunkContact::new(&head, body, &inlet)?),
             _ => None,
@@ -256,6 +272,7 @@ impl Scene {
             bodies,
             law,
             trunk_law,
+            region_laws,
             head_trunk,
             floor,
             start: Vec::new(),
@@ -479,9 +496,10 @@ impl Scene {
     /// The bone's contact on a head at rest at `pose`.
     fn bone_on_head(&self, pose: RigidPose) -> Result<carus_contact::ContactReport, LabourError> {
         let samples = &self.fetal_body(HEAD).samples;
-        Ok(obstacle_contacts(
+        Ok(obstacle_contacts_by_region(
             &self.pelvis_collider,
             self.contact_law(HEAD),
+            self.region_laws(HEAD),
             samples,
             &BodyMotion::at_rest(pose),
             pose.position_m,
@@ -623,6 +641,11 @@ impl Scene {
         } else {
             &self.trunk_law
         }
+    }
+
+    /// Body `b`'s laws of their own on regions of the canal wall.
+    pub fn region_laws(&self, b: usize) -> &[(u16, ContactLaw)] {
+        &self.region_laws[usize::from(b != HEAD)]
     }
 
     /// Whether the expulsion force acts at the neck's pivot (no trunk, or
@@ -1042,6 +1065,28 @@ mod tests {
         let (file, line) = s.with_setting("floor.mesh.hiatus_width_mm", "90").unwrap().as_read_from("wide.toml", "hiatus_width_mm = 90");
         let e = Scene::build(&file).expect_err("refused").to_string();
         assert!(e.starts_with(&format!("wide.toml:{line}: anatomy: pelvic floor ([floor.mesh] in the scenario): hiatus_width_mm = 90")), "{e}");
+    }
+
+    /// Below 1, `contact.ligament_stiffness_ratio` gives the head and the
+    /// trunk laws of their own on the ligaments' region, their stiffnesses
+    /// (the trunk's cover and core alike) scaled; at 1, none.
+    #[test]
+    fn softer_ligaments_get_laws_of_their_own() {
+        let mut s = Scenario::builtin("normal").unwrap();
+        s.numerics.head_subdivisions = 3;
+        s.floor.enabled = false;
+        let rigid = Scene::build(&s).unwrap();
+        assert!(rigid.region_laws(HEAD).is_empty() && rigid.region_laws(TRUNK).is_empty());
+        s.contact.ligament_stiffness_ratio = 0.1;
+        let scene = Scene::build(&s).unwrap();
+        let label = (0..32).find(|&l| scene.pelvis_collider.region_name(l) == Some("sacrospinous_ligament")).expect("a region");
+        let [(head_label, head), (trunk_label, trunk)] = [scene.region_laws(HEAD), scene.region_laws(TRUNK)].map(|laws| laws[0]);
+        assert_eq!((head_label, trunk_label), (label, label));
+        assert_eq!(head.penalty_stiffness_pa_per_m, 0.1 * scene.law.penalty_stiffness_pa_per_m);
+        assert_eq!(trunk.penalty_stiffness_pa_per_m, 0.1 * scene.trunk_law.penalty_stiffness_pa_per_m);
+        let (cover, bone_cover) = (trunk.cover.unwrap(), scene.trunk_law.cover.unwrap());
+        assert_eq!(cover.core_stiffness_pa_per_m, 0.1 * bone_cover.core_stiffness_pa_per_m);
+        assert_eq!((cover.depth_m, head.friction_coefficient), (bone_cover.depth_m, scene.law.friction_coefficient));
     }
 
     /// Diameters that cannot be built lead with the line of the key to

@@ -12,7 +12,7 @@
 
 use carus_analysis::{ContactSite, FetalPart, PoseSample};
 use carus_contact::{
-    obstacle_contacts, pair_contacts, BodyContactState, BodyMotion, ContactReport, Neck, NeckAngles, NeckGeometry,
+    obstacle_contacts_by_region, pair_contacts, BodyContactState, BodyMotion, ContactReport, Neck, NeckAngles, NeckGeometry,
     NeckLoad, RigidBodyState, RigidPose, TissueContact, TriangleCollider, Wrench,
 };
 use carus_fem::{SolverSnapshot, StepControl, TledSolver};
@@ -529,9 +529,10 @@ impl<'a> Simulation<'a> {
         let mut reports: Vec<ContactReport> = Vec::with_capacity(n);
         for (b, wrench) in wrenches.iter_mut().enumerate() {
             let motion = self.motion(b);
-            let report = obstacle_contacts(
+            let report = obstacle_contacts_by_region(
                 &scene.pelvis_collider,
                 scene.contact_law(b),
+                scene.region_laws(b),
                 &scene.fetal_body(b).samples,
                 &motion,
                 pivot,
