@@ -64,6 +64,15 @@ pub fn line_of_key(text: &str, key: &str) -> Option<std::num::NonZeroUsize> {
     None
 }
 
+/// `file.toml:12`, or the file's name alone where there is no line: how a
+/// key's place in a file leads an error message.
+pub fn located(path: &std::path::Path, line: Option<std::num::NonZeroUsize>) -> String {
+    match line {
+        Some(line) => format!("{}:{line}", path.display()),
+        None => path.display().to_string(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -274,9 +274,25 @@ fn check_pelvis_unchanged(scene: &Scene, started_in: Option<&str>) -> Result<(),
     )))
 }
 
-/// The dotted keys `current` writes that `saved` lacks. Both are complete
-/// scenario files (`Scenario::to_toml` writes every key), so a key missing
-/// from a checkpoint's is one added to the model since it was written.
+/// Keys added since checkpoints were first written whose defaults are the
+/// model as it was before them (each replaced a constant of that value): a
+/// checkpoint without them goes on as it started.
+const KEYS_ADDED_AS_THEY_WERE: [&str; 8] = [
+    "floor.mesh.hiatus_front_share",
+    "floor.mesh.hiatus_front_gap_mm",
+    "floor.mesh.hiatus_widest_share",
+    "floor.mesh.levator_origin_share",
+    "floor.mesh.sacrospinous_bow",
+    "pelvis.inlet_posterior_share",
+    "pelvis.mid_posterior_share",
+    "contact.ligament_stiffness_ratio",
+];
+
+/// The dotted keys `current` writes that `saved` lacks, but for those that
+/// default to the model as it was ([`KEYS_ADDED_AS_THEY_WERE`]). Both are
+/// complete scenario files (`Scenario::to_toml` writes every key), so a
+/// key missing from a checkpoint's is one added to the model since it was
+/// written.
 fn keys_missing(saved: &str, current: &str) -> Vec<String> {
     fn keys(prefix: &str, table: &toml::Table, out: &mut Vec<String>) {
         for (key, value) in table {
@@ -295,7 +311,7 @@ fn keys_missing(saved: &str, current: &str) -> Vec<String> {
         out
     };
     let saved = listed(saved);
-    listed(current).into_iter().filter(|k| !saved.contains(k)).collect()
+    listed(current).into_iter().filter(|k| !saved.contains(k) && !KEYS_ADDED_AS_THEY_WERE.contains(&k.as_str())).collect()
 }
 
 fn drive(
@@ -1899,6 +1915,31 @@ mod tests {
         std::fs::write(&path, json.to_string()).unwrap();
         let e = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).expect_err("refused").to_string();
         assert!(e.contains("before contact.trunk_cover_depth_mm existed") && e.contains("from the start"), "{e}");
+    }
+
+    /// A checkpoint written before the keys whose defaults are the model as
+    /// it was (the constants they replaced) goes on, and ends as the run
+    /// never stopped would.
+    #[test]
+    fn a_checkpoint_from_before_keys_that_keep_the_model_goes_on() {
+        let s = coarse(0.2);
+        let (_, whole) = run_in(&s, &RunOptions::default());
+        let dir = stopped_run();
+        let key_of = |line: &str| line.split_once(" = ").map(|(key, _)| key.trim().to_string());
+        let added: Vec<&str> = KEYS_ADDED_AS_THEY_WERE.iter().map(|k| k.rsplit('.').next().unwrap()).collect();
+        let older = |text: &str| -> String {
+            text.lines().filter(|l| !key_of(l).is_some_and(|k| added.contains(&k.as_str()))).map(|l| format!("{l}\n")).collect()
+        };
+        let path = dir.path().join(output::CHECKPOINT_FILE);
+        let mut json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+        let toml = json["scenario_toml"].as_str().unwrap().to_string();
+        assert_eq!(toml.lines().count() - older(&toml).lines().count(), KEYS_ADDED_AS_THEY_WERE.len(), "each key is written once");
+        json["scenario_toml"] = older(&toml).into();
+        std::fs::write(&path, json.to_string()).unwrap();
+        let scenario = dir.path().join(output::SCENARIO_FILE);
+        std::fs::write(&scenario, older(&std::fs::read_to_string(&scenario).unwrap())).unwrap();
+        let resumed = resume(dir.path(), &RunOptions::default(), &mut SilentObserver).unwrap();
+        assert_eq!(resumed.history, whole.history);
     }
 
     #[test]

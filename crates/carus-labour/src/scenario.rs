@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use carus_anatomy::fetus::{AtlantoOccipitalPlacement, HeadDiameters, TrunkDiameters};
 use carus_anatomy::floor::FloorParameters;
 use carus_anatomy::pelvis::{PelvisDiameters, PelvisSpec, PELVIC_CANAL_DIAMETER_MM, VISIBLE_HUMAN_FEMALE};
-use carus_io::toml_text::line_of_key;
+use carus_io::toml_text::{line_of_key, located};
 use serde::de::value::MapAccessDeserializer;
 use serde::de::{DeserializeSeed, Deserializer, Error as _, IntoDeserializer, MapAccess, Visitor};
 use serde::{Deserialize, Serialize};
@@ -2004,15 +2004,6 @@ fn set_key(table: &mut toml::Table, key: &str, value: &str) -> Result<(), Scenar
     }
     section.insert(leaf.to_string(), parsed);
     Ok(())
-}
-
-
-/// `file:line`, or the file alone where the line is not known.
-fn located(path: &Path, line: Option<NonZeroUsize>) -> String {
-    match line {
-        Some(line) => format!("{}:{line}", path.display()),
-        None => path.display().to_string(),
-    }
 }
 
 /// The unit a key's name ends with, the longer endings first.

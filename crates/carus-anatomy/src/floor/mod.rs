@@ -172,7 +172,9 @@ pub enum FloorError {
     HiatusTooLong { length: f64, outlet_ap: f64 },
     #[error("sag_mm = {sag} is too deep for hiatus_length_mm = {length}: the back of the hiatus cannot lie deeper below the outlet plane than 0.8 x its distance from the symphysis")]
     SagTooDeep { sag: f64, length: f64 },
-    #[error("the floor would have a distorted element {element} ({location}: scaled Jacobian {scaled_jacobian:.3}, below {MIN_SCALED_JACOBIAN}) in this pelvis: the sheet is too thick for how sharply it curves there; reduce thickness_mm, hiatus_width_mm or sag_mm")]
+    #[error("levator_origin_share = {share} puts the levator's origin {origin_mm:.1} mm beside the midline, not outside where the hiatus rim leaves the pubis ({rim_mm:.1} mm: hiatus_front_share x hiatus_width_mm / 2), so the sheet between them would fold; raise levator_origin_share or lower hiatus_front_share")]
+    OriginInsideHiatus { share: f64, origin_mm: f64, rim_mm: f64 },
+    #[error("the floor would have a distorted element {element} ({location}: scaled Jacobian {scaled_jacobian:.3}, below {MIN_SCALED_JACOBIAN}) in this pelvis: the sheet is too thick for how sharply it curves there; reduce thickness_mm, hiatus_width_mm or sag_mm, or bring levator_origin_share, hiatus_front_share and sacrospinous_bow nearer their defaults")]
     Distorted {
         element: usize,
         location: String,
@@ -194,6 +196,7 @@ impl FloorError {
             FloorError::HiatusTooWide { .. } => Some("hiatus_width_mm"),
             FloorError::HiatusTooLong { .. } => Some("hiatus_length_mm"),
             FloorError::FrontGapPastWidest { .. } => Some("hiatus_front_gap_mm"),
+            FloorError::OriginInsideHiatus { .. } => Some("levator_origin_share"),
             FloorError::SagTooDeep { .. } => Some("sag_mm"),
             FloorError::TooManyElements { .. } | FloorError::Distorted { .. } => None,
         }
@@ -696,6 +699,13 @@ pub fn pelvic_floor(pelvis: &Pelvis, parameters: &FloorParameters) -> Result<Mes
         origin_turn: SPINE_TURN * parameters.levator_origin_share,
         sacrospinous_bow: parameters.sacrospinous_bow,
     };
+    // The levator's origin must lie outside the hiatus's front on the pubis.
+    let beside_midline = |p: DVec3| (p - l.symphysis_lower).dot(outline.frame.right).abs() * 1e3;
+    let origin_mm = beside_midline(outline.attachment(0.0)).min(beside_midline(outline.attachment(1.0)));
+    let rim_mm = 0.5 * parameters.hiatus_front_share * parameters.hiatus_width_mm;
+    if origin_mm <= rim_mm {
+        return Err(FloorError::OriginInsideHiatus { share: parameters.levator_origin_share, origin_mm, rim_mm });
+    }
 
     let (na, nc, nt) = (
         parameters.elements_around,
@@ -1107,6 +1117,11 @@ mod tests {
             spread.push(border.iter().map(|p| (*p - l.coccyx_tip).dot(frame.right).abs()).sum::<f64>());
         }
         assert!(spread[0] < spread[1] && spread[1] < spread[2], "{spread:?}");
+        // An origin inside the hiatus's front is named with both keys.
+        let folded = FloorParameters { levator_origin_share: 0.1, hiatus_front_share: 0.9, ..base };
+        let e = pelvic_floor(&pelvis, &folded).unwrap_err();
+        assert_eq!(e.key(), Some("levator_origin_share"));
+        assert!(e.to_string().contains("17.1 mm: hiatus_front_share") && e.to_string().contains("raise levator_origin_share"), "{e}");
         for (parameters, says) in [
             (FloorParameters { levator_origin_share: 0.7, ..base }, "levator_origin_share = 0.7 is outside 0.1 to 0.6"),
             (FloorParameters { sacrospinous_bow: 0.0, ..base }, "sacrospinous_bow = 0.0 is outside 0.1 to 1"),
@@ -1403,6 +1418,36 @@ mod tests {
             let mesh = check(&pelvis, &parameters, ANY_MIN_SCALED_JACOBIAN);
             let m = measure_hiatus(&mesh, &pelvis, &parameters);
             prop_assert!((m.length_mm - length).abs() < 0.1 && (m.width_mm - width).abs() < 0.1 && (m.sag_mm - sag).abs() < 0.1, "{m:?}");
+        }
+
+        /// Across the whole bands of the shape keys (the pelvis's posterior
+        /// shares, the levator's origin, the sacrospinous bow), the default
+        /// sheet is built, or refused only for an origin inside the hiatus's
+        /// front; the ligaments face the canal and span its opening, and
+        /// the hiatus measures as set.
+        #[test]
+        fn the_shape_keys_build_across_their_bands(
+            inlet_share in 0.2..0.7f64, mid_share in 0.2..0.7f64,
+            origin in 0.1..0.6f64, bow in 0.1..1.0f64,
+        ) {
+            let d = PelvisDiameters { inlet_posterior_share: inlet_share, mid_posterior_share: mid_share, ..Default::default() };
+            let pelvis = Pelvis::generate(&d).map_err(|e| TestCaseError::fail(e.to_string()))?;
+            let parameters = FloorParameters { levator_origin_share: origin, sacrospinous_bow: bow, ..Default::default() };
+            let mesh = match pelvic_floor(&pelvis, &parameters) {
+                Err(FloorError::OriginInsideHiatus { .. }) => return Err(TestCaseError::reject("origin inside the hiatus")),
+                other => other.map_err(|e| TestCaseError::fail(e.to_string()))?,
+            };
+            let m = measure_hiatus(&mesh, &pelvis, &parameters);
+            prop_assert!((m.length_mm - 50.0).abs() < 0.1 && (m.width_mm - 38.0).abs() < 0.1, "{m:?}");
+            let ligaments = sacrospinous_ligaments(&pelvis, bow);
+            let l = &pelvis.landmarks;
+            let middle = 0.5 * (l.ischial_spine_left + l.ischial_spine_right);
+            for t in 0..ligaments.triangles.len() {
+                let [a, b, c] = ligaments.corners(t);
+                prop_assert!((b - a).cross(c - a).dot(middle - (a + b + c) / 3.0) > 0.0, "triangle {} faces away from the canal", t);
+            }
+            let share = share_over_open_bone(&pelvis, &ligaments);
+            prop_assert!(share > 0.5, "only {share:.2} of the ligaments lie over open bone");
         }
     }
 }

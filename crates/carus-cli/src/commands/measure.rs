@@ -311,17 +311,25 @@ impl AnatomyFile {
     fn at_key(&self, text: Option<&str>, table: &str, key: Option<&str>) -> Option<String> {
         let path = self.path.as_ref()?;
         let line = text.zip(key).and_then(|(text, key)| carus_io::toml_text::line_of_key(text, &format!("{table}.{key}")));
-        Some(match line {
-            Some(line) => format!("{}:{line}: [{table}]", path.display()),
-            None => format!("{}: [{table}]", path.display()),
-        })
+        Some(format!("{}: [{table}]", carus_io::toml_text::located(path, line)))
     }
 
-    /// Builds the pelvic floor the file describes on `pelvis`; a failure names the file.
+    /// Builds the pelvic floor the file describes on `pelvis`; a failure names
+    /// the file, and the line of the key to change where the file writes it
+    /// (in a scenario's `[floor.mesh]` or an anatomy file's `[floor]`).
     pub fn floor(&self, pelvis: &Pelvis) -> anyhow::Result<carus_fem::Mesh> {
         self.note_if_left_out("floor");
-        pelvic_floor(pelvis, &self.floor)
-            .with_context(|| format!("{}: the [floor] cannot be built for this pelvis", self.describe()))
+        pelvic_floor(pelvis, &self.floor).map_err(|e| {
+            let text = self.path.as_deref().and_then(|p| read_text(p).ok());
+            let line = text.as_deref().zip(e.key()).and_then(|(text, key)| {
+                ["floor.mesh", "floor"].iter().find_map(|table| carus_io::toml_text::line_of_key(text, &format!("{table}.{key}")))
+            });
+            let at = match (&self.path, line) {
+                (Some(path), Some(_)) => carus_io::toml_text::located(path, line),
+                _ => self.describe(),
+            };
+            anyhow::Error::from(e).context(format!("{at}: the [floor] cannot be built for this pelvis"))
+        })
     }
 
     fn note_if_left_out(&self, table: &str) {
@@ -427,6 +435,10 @@ mod tests {
         assert!(e.starts_with(&format!("{}:3: [pelvis]: mid_posterior_share = 0.05 is outside 0.2 to 0.7", path.display())), "{e}");
         let e = format!("{:#}", file.head().err().unwrap());
         assert!(e.starts_with(&format!("{}:7: [head]: the diameters cannot be built: bitemporal_mm (99 mm)", path.display())), "{e}");
+        std::fs::write(&path, "[floor]\nsag_mm = 12.0\nlevator_origin_share = 0.1\nhiatus_front_share = 0.9\n").unwrap();
+        let file = AnatomyFile::load(Some(&path)).unwrap();
+        let e = format!("{:#}", file.floor(&file.pelvis().unwrap()).err().unwrap());
+        assert!(e.starts_with(&format!("{}:3: the [floor] cannot be built for this pelvis: levator_origin_share = 0.1", path.display())), "{e}");
         std::fs::write(&path, "[pelvis]\ninlet_transverse_mm = 100.0\n").unwrap();
         let e = format!("{:#}", AnatomyFile::load(Some(&path)).unwrap().pelvis().err().unwrap());
         assert!(e.starts_with(&format!("{}: [pelvis]: interspinous_mm = 102", path.display())) && e.contains("note: interspinous_mm is the default"), "{e}");

@@ -482,14 +482,18 @@ pub(super) fn load(name: Option<&str>) -> anyhow::Result<Scenario> {
 /// the settings made first, so that `--set` can mend it.
 pub(crate) fn load_changed(name: Option<&str>, settings: &[String]) -> anyhow::Result<Scenario> {
     let changes = settings.iter().map(|text| one_setting(text)).collect::<anyhow::Result<Vec<_>>>()?;
-    Ok(load_mended(name, &changes)?.with_settings(&changes)?)
+    match load_mended(name, &changes)? {
+        (scenario, true) => Ok(scenario),
+        (scenario, false) => Ok(scenario.with_settings(&changes)?),
+    }
 }
 
-/// A scenario as loaded; a file refused for a value one of `changes`
-/// sets is read with the changes made first (and returned so).
-pub(super) fn load_mended(name: Option<&str>, changes: &[(String, String)]) -> anyhow::Result<Scenario> {
+/// A scenario as loaded, and whether it was mended: a file refused for a
+/// value one of `changes` sets is read with the changes made first (and
+/// returned so, `true`); otherwise it is returned as loaded (`false`).
+pub(super) fn load_mended(name: Option<&str>, changes: &[(String, String)]) -> anyhow::Result<(Scenario, bool)> {
     let e = match load(name) {
-        Ok(scenario) => return Ok(scenario),
+        Ok(scenario) => return Ok((scenario, false)),
         Err(e) => e,
     };
     let mended = e.downcast_ref::<carus_labour::ScenarioError>().is_some_and(|e| match e {
@@ -497,7 +501,7 @@ pub(super) fn load_mended(name: Option<&str>, changes: &[(String, String)]) -> a
         _ => false,
     });
     match (mended, name) {
-        (true, Some(file)) => Ok(Scenario::from_file_with_settings(Path::new(file), changes)?),
+        (true, Some(file)) => Ok((Scenario::from_file_with_settings(Path::new(file), changes)?, true)),
         _ => Err(e),
     }
 }

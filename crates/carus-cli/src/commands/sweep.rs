@@ -86,17 +86,28 @@ fn key_given_twice(settings: &[Setting]) -> Option<&str> {
 fn load_base(args: &SweepArgs) -> anyhow::Result<Scenario> {
     let settings = args.settings.iter().map(|s| parse_setting(s)).collect::<anyhow::Result<Vec<_>>>()?;
     let with = args.with.iter().map(|s| fixed_setting(s)).collect::<anyhow::Result<Vec<_>>>()?;
-    if let Some((key, _)) = with.iter().enumerate().find_map(|(i, (key, _))| with[..i].iter().any(|(k, _)| k == key).then_some(&with[i])) {
-        crate::bad_argument!("--with {key} is given twice; a key set in every run takes one value");
-    }
-    if let Some((key, _)) = with.iter().find(|(key, _)| settings.iter().any(|s| &s.key == key)) {
-        crate::bad_argument!("{key} is given to both --with and --set; --with sets it in every run, --set sweeps it: keep one");
+    // A key, or a table or list holding it (`floor.mesh` holds `floor.mesh.sag_mm`).
+    let overlap = |a: &str, b: &str| {
+        let holds = |outer: &str, key: &str| key.strip_prefix(outer).is_some_and(|rest| rest.is_empty() || rest.starts_with(['.', '[']));
+        holds(a, b) || holds(b, a)
+    };
+    for (i, (key, _)) in with.iter().enumerate() {
+        if let Some((earlier, _)) = with[..i].iter().find(|(k, _)| overlap(k, key)) {
+            crate::bad_argument!("--with {earlier} and --with {key} set one key twice; a key set in every run takes one value");
+        }
+        if let Some(swept) = settings.iter().find(|s| overlap(&s.key, key)) {
+            crate::bad_argument!("--with {key} and --set {} change one key; --with sets it in every run, --set sweeps it: keep one", swept.key);
+        }
     }
     let mut every_run = with.clone();
     if !args.one_at_a_time {
         every_run.extend(settings.iter().map(|s| (s.key.clone(), s.values[0].clone())));
     }
-    Ok(load_mended(args.scenario.as_deref(), &every_run)?.with_settings(&with)?)
+    // A mended file was read with every run's settings made already.
+    match load_mended(args.scenario.as_deref(), &every_run)? {
+        (base, true) => Ok(base),
+        (base, false) => Ok(base.with_settings(&with)?),
+    }
 }
 
 /// Every combination of the settings' values, the first setting varying slowest.
@@ -796,13 +807,18 @@ mod tests {
         for folder in ["01-base", "02-contact.friction=0.1"] {
             let toml = std::fs::read_to_string(out.join(folder).join("scenario.toml")).unwrap();
             assert!(toml.contains("damping_time_s = 0.001\n") && toml.contains("vtu = false\n"), "{folder}");
+            // Made once, though the file was mended with it.
+            let description = toml.lines().find(|l| l.starts_with("description")).unwrap();
+            assert_eq!(description.matches("contact.damping_time_s = 0.001").count(), 1, "{folder}: {description}");
         }
         // Only the swept key has a column.
         let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
         assert!(csv.starts_with("run,contact.friction,delivered"), "{csv}");
         for (with, says) in [
-            (vec!["contact.friction=0.2"], "contact.friction is given to both --with and --set"),
-            (vec!["output.vtu=false", "output.vtu=true"], "--with output.vtu is given twice"),
+            (vec!["contact.friction=0.2"], "--with contact.friction and --set contact.friction change one key"),
+            (vec!["contact={friction=0.2}"], "--with contact and --set contact.friction change one key"),
+            (vec!["output.vtu=false", "output.vtu=true"], "--with output.vtu and --with output.vtu set one key twice"),
+            (vec!["output.vtu=false", "output={vtu=true}"], "--with output.vtu and --with output set one key twice"),
         ] {
             let (fresh, _) = coarse_sweep(&s, dir.path(), &["contact.friction=0.1"]);
             let bad = SweepArgs {

@@ -13,6 +13,8 @@ pub mod spec;
 use std::num::NonZeroUsize;
 use std::path::PathBuf;
 
+use crate::toml_text::located;
+
 pub use load::{load_job, mesh_path, parse_job};
 pub use run::{run_job, JobReport, Progress, RunOptions};
 pub use spec::JobSpec;
@@ -95,14 +97,6 @@ pub enum JobError {
     /// A result file could not be written.
     #[error(transparent)]
     Write(#[from] WriteError),
-}
-
-/// `job.toml:12`, or the name alone where there is no line.
-fn located(path: &std::path::Path, line: Option<NonZeroUsize>) -> String {
-    match line {
-        Some(line) => format!("{}:{line}", path.display()),
-        None => path.display().to_string(),
-    }
 }
 
 impl JobError {
