@@ -97,6 +97,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<Status> {
         }
         RenderPart::Fetus => {
             let file = AnatomyFile::load(args.file.as_deref())?;
+            // The head alone first, so that a diameter it cannot be built
+            // from is named at its line, as `carus render head` names it.
+            file.head()?;
             let fetus = Fetus::new(&file.head, &Default::default())
                 .with_context(|| format!("{}: the fetus cannot be built", file.describe()))?;
             fetus_meshes(&fetus)
@@ -608,6 +611,14 @@ mod tests {
         assert!(message.contains("neither a built-in scenario (normal,") && message.contains("textbook) nor a file"), "{message}");
         assert!(matches!(run(&scene("textbook")).unwrap(), Status::Success));
         std::fs::remove_file(&out).unwrap();
+        // A fetus whose head cannot be built names the diameter's line.
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("head.toml");
+        std::fs::write(&file, "[head]\nbiparietal_mm = 95.0\nbitemporal_mm = 99.0\n").unwrap();
+        let fetus = RenderArgs { part: RenderPart::Fetus, file: Some(file.clone()), out: dir.path().join("f.png"), views: vec![ViewName::Anterior], size: 32, json: false };
+        let message = format!("{:#}", run(&fetus).err().unwrap());
+        assert!(message.starts_with(&format!("{}:3: [head]: the diameters cannot be built: bitemporal_mm", file.display())), "{message}");
+        assert!(!dir.path().join("f.png").exists());
     }
 
     #[test]
