@@ -64,6 +64,13 @@ pub fn line_of_key(text: &str, key: &str) -> Option<std::num::NonZeroUsize> {
     None
 }
 
+/// Whether the dotted key `outer` is `key` or a table or list holding it
+/// (`floor.mesh` holds `floor.mesh.sag_mm`, `trajectory.waypoints` holds
+/// `trajectory.waypoints[2].phi_deg`).
+pub fn holds_key(outer: &str, key: &str) -> bool {
+    key.strip_prefix(outer).is_some_and(|rest| rest.is_empty() || rest.starts_with(['.', '[']))
+}
+
 /// `file.toml:12`, or the file's name alone where there is no line: how a
 /// key's place in a file leads an error message.
 pub fn located(path: &std::path::Path, line: Option<std::num::NonZeroUsize>) -> String {
@@ -89,6 +96,16 @@ mod tests {
         assert_eq!(twice("x = \n"), None);
         let (message, fix) = twice("[solver]\nend_time_s = 1\nend_time_s = 2\n").unwrap().message_and_fix();
         assert_eq!((message.as_str(), fix), ("duplicate key `end_time_s`: given a second time in its table", "keep one of the two lines"));
+    }
+
+    #[test]
+    fn a_key_is_held_by_itself_and_the_tables_and_lists_over_it() {
+        for outer in ["floor.mesh.sag_mm", "floor.mesh", "floor", "trajectory.waypoints"] {
+            let key = if outer.starts_with("trajectory") { "trajectory.waypoints[2].phi_deg" } else { "floor.mesh.sag_mm" };
+            assert!(holds_key(outer, key), "{outer} holds {key}");
+        }
+        assert!(!holds_key("floor.mesh.sag", "floor.mesh.sag_mm"));
+        assert!(!holds_key("floor.mesh.sag_mm", "floor.mesh"));
     }
 
     #[test]

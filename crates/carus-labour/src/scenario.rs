@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use carus_anatomy::fetus::{AtlantoOccipitalPlacement, HeadDiameters, TrunkDiameters};
 use carus_anatomy::floor::FloorParameters;
 use carus_anatomy::pelvis::{PelvisDiameters, PelvisSpec, PELVIC_CANAL_DIAMETER_MM, VISIBLE_HUMAN_FEMALE};
-use carus_io::toml_text::{line_of_key, located};
+use carus_io::toml_text::{holds_key, line_of_key, located};
 use serde::de::value::MapAccessDeserializer;
 use serde::de::{DeserializeSeed, Deserializer, Error as _, IntoDeserializer, MapAccess, Visitor};
 use serde::{Deserialize, Serialize};
@@ -845,10 +845,7 @@ impl ScenarioSource {
     /// Whether `key` (`trajectory.waypoints[2].theta_deg`) was changed
     /// since reading: it, or a table or list holding it.
     fn changed(&self, key: &str) -> bool {
-        self.changed.iter().any(|c| {
-            key.strip_prefix(c.as_str())
-                .is_some_and(|rest| rest.is_empty() || rest.starts_with('.') || rest.starts_with('['))
-        })
+        self.changed.iter().any(|c| holds_key(c, key))
     }
 }
 

@@ -195,6 +195,13 @@ fn floor_part(path: &Path, table: &toml::Table) -> anyhow::Result<FloorParameter
     }
 }
 
+/// The line of `key` in the first of `tables` of a file's `text` that
+/// writes it.
+fn line_in(text: Option<&str>, tables: &[&str], key: Option<&str>) -> Option<std::num::NonZeroUsize> {
+    let (text, key) = text.zip(key)?;
+    tables.iter().find_map(|table| carus_io::toml_text::line_of_key(text, &format!("{table}.{key}")))
+}
+
 /// The anatomy tables (`[pelvis]`, `[head]`, `[floor]`) of an anatomy or
 /// scenario file, shared with `carus mesh`. Other tables of a scenario file
 /// are left to the commands that use them.
@@ -310,8 +317,7 @@ impl AnatomyFile {
     /// defaults, which have no file.
     fn at_key(&self, text: Option<&str>, table: &str, key: Option<&str>) -> Option<String> {
         let path = self.path.as_ref()?;
-        let line = text.zip(key).and_then(|(text, key)| carus_io::toml_text::line_of_key(text, &format!("{table}.{key}")));
-        Some(format!("{}: [{table}]", carus_io::toml_text::located(path, line)))
+        Some(format!("{}: [{table}]", carus_io::toml_text::located(path, line_in(text, &[table], key))))
     }
 
     /// Builds the pelvic floor the file describes on `pelvis`; a failure names
@@ -321,9 +327,7 @@ impl AnatomyFile {
         self.note_if_left_out("floor");
         pelvic_floor(pelvis, &self.floor).map_err(|e| {
             let text = self.path.as_deref().and_then(|p| read_text(p).ok());
-            let line = text.as_deref().zip(e.key()).and_then(|(text, key)| {
-                ["floor.mesh", "floor"].iter().find_map(|table| carus_io::toml_text::line_of_key(text, &format!("{table}.{key}")))
-            });
+            let line = line_in(text.as_deref(), &["floor.mesh", "floor"], e.key());
             let at = match (&self.path, line) {
                 (Some(path), Some(_)) => carus_io::toml_text::located(path, line),
                 _ => self.describe(),

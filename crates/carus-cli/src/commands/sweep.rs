@@ -16,6 +16,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
 use anyhow::Context;
+use carus_io::toml_text::holds_key;
 use carus_analysis::movements::ROTATION_STATION_MAX_MM;
 use carus_analysis::{Movements, Outcome};
 use carus_labour::record::RunSummary;
@@ -86,11 +87,8 @@ fn key_given_twice(settings: &[Setting]) -> Option<&str> {
 fn load_base(args: &SweepArgs) -> anyhow::Result<Scenario> {
     let settings = args.settings.iter().map(|s| parse_setting(s)).collect::<anyhow::Result<Vec<_>>>()?;
     let with = args.with.iter().map(|s| fixed_setting(s)).collect::<anyhow::Result<Vec<_>>>()?;
-    // A key, or a table or list holding it (`floor.mesh` holds `floor.mesh.sag_mm`).
-    let overlap = |a: &str, b: &str| {
-        let holds = |outer: &str, key: &str| key.strip_prefix(outer).is_some_and(|rest| rest.is_empty() || rest.starts_with(['.', '[']));
-        holds(a, b) || holds(b, a)
-    };
+    // One key, or a table or list and a key in it.
+    let overlap = |a: &str, b: &str| holds_key(a, b) || holds_key(b, a);
     for (i, (key, _)) in with.iter().enumerate() {
         if let Some((earlier, _)) = with[..i].iter().find(|(k, _)| overlap(k, key)) {
             crate::bad_argument!("--with {earlier} and --with {key} set one key twice; a key set in every run takes one value");
