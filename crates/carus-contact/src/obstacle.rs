@@ -303,9 +303,9 @@ pub fn obstacle_contacts_by_region(
         });
     }
     let com = motion.pose.position_m;
-    let law_at = |triangle: u32| {
-        let region = obstacle.region_of(triangle);
-        region_laws.iter().find(|(label, _)| Some(*label) == region).map_or(law, |(_, own)| own)
+    let law_of = |region: Option<u16>| match region_laws {
+        [] => law,
+        _ => region_laws.iter().find(|(label, _)| Some(*label) == region).map_or(law, |(_, own)| own),
     };
     // A soft law (the trunk's cover, a ligament) sinks deeper than the bone
     // law the obstacle's depth is sized for: search down to twice the
@@ -338,7 +338,8 @@ pub fn obstacle_contacts_by_region(
             };
             let velocity = motion.linear_velocity + motion.angular_velocity.cross(p - com);
             let stretch = memory_in.anchors[i].map_or(DVec3::ZERO, |a| p - a);
-            let f = law_at(hit.triangle).evaluate(samples.areas[i], -hit.signed_distance, hit.normal, velocity, stretch);
+            let region = obstacle.region_of(hit.triangle);
+            let f = law_of(region).evaluate(samples.areas[i], -hit.signed_distance, hit.normal, velocity, stretch);
             let contact = Contact {
                 sample: i as u32,
                 body_point: p,
@@ -346,7 +347,7 @@ pub fn obstacle_contacts_by_region(
                 normal: hit.normal,
                 depth: -hit.signed_distance,
                 triangle: hit.triangle,
-                region: obstacle.region_of(hit.triangle),
+                region,
                 normal_force: f.normal,
                 friction_force: f.friction,
                 sliding: f.sliding,
@@ -383,7 +384,7 @@ pub fn obstacle_contacts_by_region(
             report.force += c.force();
             report.torque_about_com += (c.body_point - com).cross(c.force());
             report.moment_about_pivot += c.moment_about(pivot);
-            report.normal_stiffness_n_per_m += law_at(c.triangle).stiffness_at(c.depth) * samples.areas[i];
+            report.normal_stiffness_n_per_m += law_of(c.region).stiffness_at(c.depth) * samples.areas[i];
             report.deepest_m = report.deepest_m.max(c.depth);
             report.contacts.push(c);
         }
