@@ -196,8 +196,9 @@ pub const FARTHEST_POSITION_M: f64 = 10.0;
 const BIPARIETAL_MM: std::ops::RangeInclusive<f64> = 10.0..=1000.0;
 
 /// Tolerance on unit lengths and orthogonality of given directions: loose
-/// enough for values written to JSON with a dozen digits.
-const UNIT_TOLERANCE: f64 = 1e-6;
+/// enough for values written to JSON with a dozen digits. A checkpoint's
+/// orientations are held to it too (carus-labour).
+pub const UNIT_TOLERANCE: f64 = 1e-6;
 
 fn check_unit(v: DVec3, what: &str) -> Result<(), String> {
     if !v.is_finite() || (v.length() - 1.0).abs() > UNIT_TOLERANCE {

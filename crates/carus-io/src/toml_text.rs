@@ -1,5 +1,12 @@
 //! Reading TOML's errors against the text they came from, for messages
-//! that name what the parser leaves out.
+//! that name what the parser leaves out; and vectors read whole, which
+//! the parser's arrays do not check.
+
+use std::collections::BTreeMap;
+use std::fmt;
+
+use serde::de::{self, DeserializeSeed, Deserializer, MapAccess, SeqAccess, Visitor};
+use serde::Deserialize;
 
 /// A key or table written twice: the parser says "duplicate key" and names
 /// neither, but its span covers the name.
@@ -80,6 +87,95 @@ pub fn located(path: &std::path::Path, line: Option<std::num::NonZeroUsize>) -> 
     }
 }
 
+/// `[x, y, z]`, three numbers and no more. A `[f64; 3]` read through
+/// toml takes the first three numbers of a longer array and drops the
+/// rest unread (toml's arrays do not check that they were read to their
+/// end), so a stray fourth number would pass without a word; read
+/// through this, it is refused where it stands with "give [x, y, z]".
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Xyz(pub [f64; 3]);
+
+impl<'de> Deserialize<'de> for Xyz {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        XyzVisitor { key: None }.deserialize(deserializer)
+    }
+}
+
+/// Reads an [`Xyz`]; `key`, where known, leads its message (the name of
+/// a map entry, which the error's path would not give).
+struct XyzVisitor<'a> {
+    key: Option<&'a str>,
+}
+
+impl<'de> DeserializeSeed<'de> for XyzVisitor<'_> {
+    type Value = Xyz;
+
+    fn deserialize<D: Deserializer<'de>>(self, deserializer: D) -> Result<Xyz, D::Error> {
+        deserializer.deserialize_seq(self)
+    }
+}
+
+impl<'de> Visitor<'de> for XyzVisitor<'_> {
+    type Value = Xyz;
+
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("[x, y, z], three numbers")
+    }
+
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Xyz, A::Error> {
+        let mut xyz = [0.0; 3];
+        let mut count = 0;
+        // Read to the end, so that the count said is the count written.
+        while let Some(value) = seq.next_element::<f64>()? {
+            if let Some(slot) = xyz.get_mut(count) {
+                *slot = value;
+            }
+            count += 1;
+        }
+        if count != 3 {
+            let key = self.key.map_or(String::new(), |k| format!("`{k}`: "));
+            let numbers = if count == 1 { "number" } else { "numbers" };
+            return Err(de::Error::custom(format!("{key}{count} {numbers} where a vector has 3; give [x, y, z]")));
+        }
+        Ok(Xyz(xyz))
+    }
+}
+
+/// `#[serde(deserialize_with = "carus_io::toml_text::xyz")]` on a
+/// `[f64; 3]`: see [`Xyz`].
+pub fn xyz<'de, D: Deserializer<'de>>(deserializer: D) -> Result<[f64; 3], D::Error> {
+    Xyz::deserialize(deserializer).map(|v| v.0)
+}
+
+/// [`xyz`] on an `Option<[f64; 3]>` (with `#[serde(default)]`, which
+/// `deserialize_with` needs for a key left out).
+pub fn optional_xyz<'de, D: Deserializer<'de>>(deserializer: D) -> Result<Option<[f64; 3]>, D::Error> {
+    Option::<Xyz>::deserialize(deserializer).map(|v| v.map(|v| v.0))
+}
+
+/// [`xyz`] on each value of a table of named points, its message led by
+/// the point's name.
+pub fn xyz_by_name<'de, D: Deserializer<'de>>(deserializer: D) -> Result<BTreeMap<String, [f64; 3]>, D::Error> {
+    struct Points;
+    impl<'de> Visitor<'de> for Points {
+        type Value = BTreeMap<String, [f64; 3]>;
+
+        fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+            f.write_str("a table of name = [x, y, z]")
+        }
+
+        fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Self::Value, A::Error> {
+            let mut points = BTreeMap::new();
+            while let Some(name) = map.next_key::<String>()? {
+                let Xyz(point) = map.next_value_seed(XyzVisitor { key: Some(&name) })?;
+                points.insert(name, point);
+            }
+            Ok(points)
+        }
+    }
+    deserializer.deserialize_map(Points)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -96,6 +192,33 @@ mod tests {
         assert_eq!(twice("x = \n"), None);
         let (message, fix) = twice("[solver]\nend_time_s = 1\nend_time_s = 2\n").unwrap().message_and_fix();
         assert_eq!((message.as_str(), fix), ("duplicate key `end_time_s`: given a second time in its table", "keep one of the two lines"));
+    }
+
+    /// A vector takes three numbers, no more and no fewer, whole numbers
+    /// too; a table of points names the point whose count is wrong.
+    #[test]
+    fn a_vector_is_three_numbers() {
+        #[derive(Debug, Deserialize)]
+        struct Holder {
+            #[serde(deserialize_with = "xyz")]
+            v: [f64; 3],
+            #[serde(default, deserialize_with = "optional_xyz")]
+            o: Option<[f64; 3]>,
+            #[serde(default, deserialize_with = "xyz_by_name")]
+            points: BTreeMap<String, [f64; 3]>,
+        }
+        let read = |text: &str| toml::from_str::<Holder>(text).map_err(|e| e.to_string());
+        let held = read("v = [0, 0.5, -1]\n").unwrap();
+        assert_eq!((held.v, held.o, held.points.len()), ([0.0, 0.5, -1.0], None, 0));
+        assert_eq!(read("v = [1, 2, 3]\no = [4, 5, 6]\n").unwrap().o, Some([4.0, 5.0, 6.0]));
+        for (text, count) in [("v = [0.0, 0.0, -9.81, 5.0]\n", "4 numbers"), ("v = [1, 2, 3]\no = [1.0]\n", "1 number")] {
+            let e = read(text).unwrap_err();
+            assert!(e.contains(&format!("{count} where a vector has 3; give [x, y, z]")), "{e}");
+        }
+        let e = read("v = [1, 2, 3]\n\n[points]\na = [1, 2, 3]\nb = [1, 2, 3, 999.0]\n").unwrap_err();
+        assert!(e.contains("line 5") && e.contains("`b`: 4 numbers where a vector has 3; give [x, y, z]"), "{e}");
+        let e = read("v = 9.81\n").unwrap_err();
+        assert!(e.contains("expected [x, y, z], three numbers"), "{e}");
     }
 
     #[test]

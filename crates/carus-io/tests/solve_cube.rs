@@ -110,14 +110,16 @@ fn the_example_job_matches_the_direct_api_and_writes_readable_results() {
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["steps"], 5000);
 
-    // A second run into the same folder is refused unless forced.
+    // A second run into the same folder is refused, and leaves it as it was.
     let again = run_job(&example(), &out, &RunOptions::default(), &mut |_| {});
     assert!(matches!(again, Err(JobError::OutDirExists { .. })));
+    assert_eq!(summary["steps"], serde_json::from_str::<serde_json::Value>(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()["steps"]);
 
     // A run stopped part way (Ctrl-C) writes its state then as the last
     // frame, its history and summary, and says it was stopped.
+    std::fs::remove_dir_all(&out).unwrap();
     let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
-    let options = RunOptions { force: true, stop: Some(stop.clone()) };
+    let options = RunOptions { stop: Some(stop.clone()) };
     let stopped = run_job(&example(), &out, &options, &mut |p| {
         if p.steps >= 1000 {
             stop.store(true, std::sync::atomic::Ordering::Relaxed);
@@ -302,7 +304,7 @@ fn the_history_ends_with_the_end_and_the_reactions_are_its() {
 #[test]
 fn job_errors_name_the_key_the_line_and_the_fix() {
     let dir = fresh_dir("errors");
-    let cases: [(&str, &str); 9] = [
+    let cases: [(&str, &str); 12] = [
         (
             "\n[solver]\nend_time_s = 1.0\ntime_stepp_s = 1e-3\n",
             "job.toml:17:1: `solver.time_stepp_s`: unknown field `time_stepp_s`",
@@ -321,6 +323,19 @@ fn job_errors_name_the_key_the_line_and_the_fix() {
             "job.toml:18:8: `pressure[0].load`: unknown field `ramp`",
         ),
         ("\n[solver]\nend_time_s = 1.0\nhourglass_coefficient = \"high\"\n", "job.toml:17:25: `solver.hourglass_coefficient`: invalid type"),
+        // A vector's stray number is refused, not dropped; too few are too.
+        (
+            "\n[gravity]\nacceleration_m_s2 = [0.0, 0.0, -9.81, 5.0]\n[solver]\nend_time_s = 1.0\n",
+            "job.toml:16:21: `gravity.acceleration_m_s2`: 4 numbers where a vector has 3; give [x, y, z]",
+        ),
+        (
+            "\n[[force]]\nnode_set = \"x1\"\ntotal_force_n = [0.0, 0.0, -0.01, 99.0]\nload = { shape = \"step\" }\n[solver]\nend_time_s = 1.0\n",
+            "job.toml:17:17: `force[0].total_force_n`: 4 numbers where a vector has 3; give [x, y, z]",
+        ),
+        (
+            "\n[[force]]\nnode_set = \"x1\"\nforce_per_node_n = [0.0, -0.01]\nload = { shape = \"step\" }\n[solver]\nend_time_s = 1.0\n",
+            "job.toml:17:20: `force[0].force_per_node_n`: 2 numbers where a vector has 3; give [x, y, z]",
+        ),
         // A node held twice: one table would silently override the other.
         (
             "\n[[displacement]]\nnode_set = \"x0\"\nx_m = 0.001\nload = { shape = \"step\" }\n[solver]\nend_time_s = 1.0\n",

@@ -375,11 +375,15 @@ impl<'a> Simulation<'a> {
         // metre, THROWN_M, and no push carries a trunk that far): a saved
         // body there is a slip of exponent.
         let thrown = b.position.iter().any(|p| p.length() > 1e3);
-        if state.step > end_step || b.first_not_finite().is_some() || thrown {
+        // Every step leaves a unit quaternion (rigid.rs normalises it); any
+        // other is no rotation, and the motion built on it blows up later.
+        let not_rotation = b.orientation.iter().any(|q| (q.length() - 1.0).abs() > carus_analysis::history::UNIT_TOLERANCE);
+        if state.step > end_step || b.first_not_finite().is_some() || thrown || not_rotation {
             return Err(LabourError::Checkpoint(format!(
                 "the saved state is not one its scenario can reach (its step count puts it at t = \
-                 {reached_s:.3e} s, the scenario ends at {} s; or a pose is not finite, or beyond a \
-                 kilometre of the pelvis): the checkpoint was edited or damaged: run the scenario \
+                 {reached_s:.3e} s, the scenario ends at {} s; or a pose is not finite, beyond a \
+                 kilometre of the pelvis, or its orientation not a unit quaternion \
+                 (`state.bodies.orientation`)): the checkpoint was edited or damaged: run the scenario \
                  again from the start",
                 scene.scenario.numerics.end_time_s
             )));

@@ -55,7 +55,7 @@ pub struct LandmarksFile {
     pub axes: AxesDeclaration,
     /// Landmark name -> [x, y, z] in the mesh's coordinates and units
     /// (without the table, every landmark is missing and listed as such).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "carus_io::toml_text::xyz_by_name")]
     pub landmarks: BTreeMap<String, [f64; 3]>,
 }
 

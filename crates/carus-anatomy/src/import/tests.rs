@@ -565,6 +565,16 @@ fn landmark_file_mistakes_are_named_with_their_fix() {
         "{err}"
     );
 
+    // A fourth number in a point is refused where it stands, not dropped.
+    let four = edited_landmarks(&dir, |t| t.replace("46.86547815799713]", "46.86547815799713, 999.0]"));
+    let line = std::fs::read_to_string(&four).unwrap().lines().position(|l| l.starts_with("sacral_apex")).unwrap() + 1;
+    let err = import_pelvis(&four).unwrap_err().to_string();
+    assert!(
+        err.contains("edited.landmarks.toml") && err.contains(&format!("line {line},"))
+            && err.contains("`sacral_apex`: 4 numbers where a vector has 3; give [x, y, z]"),
+        "{err}"
+    );
+
     let unknown = edited_landmarks(&dir, |t| t.replace("coccyx_tip", "coccyx_top"));
     let err = import_pelvis(&unknown).unwrap_err().to_string();
     assert!(err.contains("coccyx_top"), "{err}");

@@ -679,15 +679,18 @@ fn check_replaceable(dir: &Path) -> anyhow::Result<()> {
 /// user's notes, an analysis folder, another run made inside it), which
 /// `--force` must not delete: a run's files, its ParaView series, a
 /// sweep's or sanity's plan and tables and its run folders, each checked
-/// the same way. The files an operating system leaves in any folder it
-/// shows (`.DS_Store`, `Thumbs.db`, `desktop.ini`) go with it.
+/// the same way, and `carus solve`'s frames, series, history and summary.
+/// The files an operating system leaves in any folder it shows
+/// (`.DS_Store`, `Thumbs.db`, `desktop.ini`) go with it.
 pub(super) fn foreign_entries(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
     use carus_labour::output::*;
+    use carus_io::job as solve;
     let own = [
         OUT_DIR_MARK, SCENARIO_FILE, CHECKPOINT_FILE, HISTORY_JSON, HISTORY_CSV, CONTACTS_CSV, MOVEMENTS_FILE,
         RUN_FILE, PELVIS_VTU, LIGAMENTS_VTU, HEAD_BODY_VTU, TRUNK_BODY_VTU, LOWER_TRUNK_BODY_VTU, REPORT_FILE,
         super::sweep::PLAN_FILE, super::sweep::CSV_FILE, super::sweep::JSON_FILE, super::sanity::PLAN_FILE,
-        super::sanity::RECORD_FILE, ".DS_Store", "Thumbs.db", "desktop.ini",
+        super::sanity::RECORD_FILE, solve::SOLUTION_PVD, solve::HISTORY_FILE, solve::SUMMARY_FILE, ".DS_Store",
+        "Thumbs.db", "desktop.ini",
     ];
     let series = |name: &str| name.strip_suffix(".pvd").is_some_and(|stem| SERIES_STEMS.contains(&stem));
     // A file written whole goes through NAME.partial (write_json_whole, PVDs).
@@ -696,9 +699,10 @@ pub(super) fn foreign_entries(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
         own.contains(&name) || series(name)
     };
     let frame = |name: &str| {
-        name.strip_suffix(".vtu").and_then(|stem| stem.rsplit_once('_')).is_some_and(|(stem, k)| {
-            SERIES_STEMS.contains(&stem) && k.len() >= 4 && k.bytes().all(|b| b.is_ascii_digit())
-        })
+        solve::is_frame_name(name)
+            || name.strip_suffix(".vtu").and_then(|stem| stem.rsplit_once('_')).is_some_and(|(stem, k)| {
+                SERIES_STEMS.contains(&stem) && k.len() >= 4 && k.bytes().all(|b| b.is_ascii_digit())
+            })
     };
     // A sweep from before its plan was written has its two tables.
     let sweep_tables = [super::sweep::CSV_FILE, super::sweep::JSON_FILE];
@@ -717,7 +721,7 @@ pub(super) fn foreign_entries(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
     for (path, name, is_dir) in list(dir)? {
         match is_dir {
             false if ours(&name) => {}
-            true if name == FRAMES_DIR => {
+            true if name == FRAMES_DIR || name == solve::FRAMES_DIR => {
                 foreign.extend(list(&path)?.into_iter().filter(|(_, n, d)| *d || !frame(n)).map(|(p, ..)| p))
             }
             true if batch && carus_made(&path) => foreign.extend(foreign_entries(&path)?),

@@ -4,7 +4,8 @@
 //! contracted inlet and the face, shoulder arrest with large shoulders),
 //! each its built-in scenario run forward with the same changes, judged
 //! against its expected outcome (carus_analysis::sanity). Each run is a
-//! whole `carus run` in its own folder. Exit status 1 when a case is not met.
+//! whole `carus run` in its own folder. Exit status 1 when a case is not met
+//! or has no verdict (stopped by Ctrl-C, or unable to start).
 //! `carus sanity --resume DIR` goes on with stopped cases, with the changes
 //! they started with (sanity_plan.json).
 
@@ -43,9 +44,40 @@ pub struct SanityArgs {
     pub output: OutputArgs,
 }
 
+/// Where a case stands after the command: judged, or left without a
+/// verdict (as `carus validate` leaves a case it could not run).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+enum CaseState {
+    Met,
+    NotMet,
+    /// Stopped (Ctrl-C) before its run ended, or before it started:
+    /// nothing to judge yet; `--resume` goes on with it.
+    Stopped,
+    /// Its run could not start (a change left it no anatomy).
+    NotRun,
+}
+
+impl CaseState {
+    /// The word a case's line leads with.
+    fn label(self) -> &'static str {
+        match self {
+            CaseState::Met => "met",
+            CaseState::NotMet => "NOT MET",
+            CaseState::Stopped => "stopped",
+            CaseState::NotRun => "not run",
+        }
+    }
+
+    fn judged(self) -> bool {
+        matches!(self, CaseState::Met | CaseState::NotMet)
+    }
+}
+
 /// One case run and judged.
 struct Judged {
     case: SanityCase,
+    state: CaseState,
     verdict: Verdict,
     outcome: Option<Outcome>,
     /// `carus run`'s words for the outcome, and how the run ended.
@@ -118,27 +150,74 @@ pub fn run(args: &SanityArgs) -> anyhow::Result<Status> {
             .map(|i| {
                 let case = SanityCase::ALL[i];
                 if let Some(reason) = &cannot_start[i] {
-                    return not_run(case, &format!("the run cannot start: {reason}"));
+                    return not_run(case, CaseState::NotRun, &format!("the run cannot start: {reason}"));
                 }
                 if stop.load(Ordering::Relaxed) {
-                    return not_run(case, "stopped before it started");
+                    return not_run(case, CaseState::Stopped, "stopped before it started");
                 }
                 // A run that fails outright is judged so; the others' verdicts are kept.
                 judge_case(case, &scenarios[i], &dirs[i], &stop).unwrap_or_else(|e| Judged {
                     out_dir: dirs[i].display().to_string(),
                     outcome_line: "the run failed".into(),
                     verdict: Verdict { met: false, why: format!("the run failed: {e:#}") },
-                    ..not_run(case, "")
+                    ..not_run(case, CaseState::NotMet, "")
                 })
             })
             .collect()
     });
-    let met = judged.iter().filter(|j| j.verdict.met).count();
-    let verdicts = json!({
+    let verdicts = verdicts_json(&judged, &changes, &out_dir);
+    let record = out_dir.join(RECORD_FILE);
+    std::fs::write(&record, serde_json::to_string_pretty(&verdicts)?)
+        .with_context(|| format!("cannot write {}", record.display()))?;
+    if args.output.json {
+        print_json(&verdicts)?;
+    } else {
+        for j in &judged {
+            println!("{}", case_lines(j));
+        }
+        println!("{}", count_line(&judged, &changes, &out_dir));
+    }
+    // A Ctrl-C after the last case that could start ended stops nothing.
+    let stopped = judged.iter().any(|j| j.state == CaseState::Stopped);
+    if stopped {
+        eprintln!("stopped before every case ended; go on with: carus sanity --resume {}", out_dir.display());
+    }
+    Ok(if judged.iter().all(|j| j.state == CaseState::Met) {
+        Status::Success
+    } else {
+        Status::Failed
+    })
+}
+
+/// How many cases were judged, met, and left without a verdict.
+struct Counts {
+    met: usize,
+    judged: usize,
+    stopped: usize,
+    not_run: usize,
+}
+
+fn counts(judged: &[Judged]) -> Counts {
+    let count = |state| judged.iter().filter(|j| j.state == state).count();
+    Counts {
+        met: count(CaseState::Met),
+        judged: judged.iter().filter(|j| j.state.judged()).count(),
+        stopped: count(CaseState::Stopped),
+        not_run: count(CaseState::NotRun),
+    }
+}
+
+/// What `--json` prints and `sanity.json` keeps. A case without a verdict
+/// keeps `met: false`, for readers from before `state`; `state` and the
+/// top `status` say whether it was judged.
+fn verdicts_json(judged: &[Judged], changes: &[(String, String)], out_dir: &Path) -> serde_json::Value {
+    let Counts { met, judged: judged_count, stopped, not_run } = counts(judged);
+    json!({
         "cases": judged.iter().map(|j| json!({
             "case": j.case,
             "scenario": j.case.scenario(),
             "expected": j.case.expected(),
+            "state": j.state,
             "met": j.verdict.met,
             "why": j.verdict.why,
             "outcome": j.outcome,
@@ -149,45 +228,59 @@ pub fn run(args: &SanityArgs) -> anyhow::Result<Status> {
         })).collect::<Vec<_>>(),
         "met": met,
         "of": judged.len(),
+        "judged": judged_count,
+        "stopped": stopped,
+        "not_run": not_run,
+        "status": super::validate::status(met, judged_count - met, stopped + not_run),
         "set": changes.iter().map(|(k, v)| (k.clone(), json!(v))).collect::<serde_json::Map<_, _>>(),
         "out_dir": out_dir.display().to_string(),
-    });
-    let record = out_dir.join(RECORD_FILE);
-    std::fs::write(&record, serde_json::to_string_pretty(&verdicts)?)
-        .with_context(|| format!("cannot write {}", record.display()))?;
-    if args.output.json {
-        print_json(&verdicts)?;
-    } else {
-        for j in &judged {
-            println!(
-                "{:18} {:8} expected: {}\n{:27} found:    {}\n{:27} outcome:  {}",
-                j.case.scenario(),
-                if j.verdict.met { "met" } else { "NOT MET" },
-                j.case.expected(),
-                "",
-                j.verdict.why,
-                "",
-                j.outcome_line
-            );
-        }
-        // The changes are part of the verdict: "3 of 4" at another friction is another claim.
-        let with = match changes.is_empty() {
-            true => String::new(),
-            false => format!(" with {}", changes.iter().map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>().join(" ")),
-        };
-        println!("{met} of {} cases met{with}; runs in {}", judged.len(), out_dir.display());
-    }
-    // A Ctrl-C after the last case that could start ended stops nothing.
-    let stopped = stop.load(Ordering::Relaxed)
-        && judged.iter().zip(&cannot_start).any(|(j, cannot)| cannot.is_none() && !j.completed);
-    if stopped {
-        eprintln!("stopped before every case ended; go on with: carus sanity --resume {}", out_dir.display());
-    }
-    Ok(if met == judged.len() && !stopped {
-        Status::Success
-    } else {
-        Status::Failed
     })
+}
+
+/// A case's three printed lines: its state, what decided it, the outcome.
+fn case_lines(j: &Judged) -> String {
+    format!(
+        "{:18} {:8} expected: {}\n{:27} found:    {}\n{:27} outcome:  {}",
+        j.case.scenario(),
+        j.state.label(),
+        j.case.expected(),
+        "",
+        j.verdict.why,
+        "",
+        j.outcome_line
+    )
+}
+
+/// The closing count. Cases stopped or not run are no verdict: counted
+/// apart, and the whole said incomplete rather than not met, as `carus
+/// validate` says of a case it could not run.
+fn count_line(judged: &[Judged], changes: &[(String, String)], out_dir: &Path) -> String {
+    let Counts { met, judged: judged_count, stopped, not_run } = counts(judged);
+    // The changes are part of the verdict: "3 of 4" at another friction is another claim.
+    let with = match changes.is_empty() {
+        true => String::new(),
+        false => format!(" with {}", changes.iter().map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>().join(" ")),
+    };
+    let mut unjudged = Vec::new();
+    if stopped > 0 {
+        unjudged.push(format!("{stopped} stopped before {} ended", if stopped == 1 { "it" } else { "they" }));
+    }
+    if not_run > 0 {
+        unjudged.push(format!("{not_run} could not start"));
+    }
+    if unjudged.is_empty() {
+        return format!("{met} of {} cases met{with}; runs in {}", judged.len(), out_dir.display());
+    }
+    // A case judged and not met fails the whole, whatever the rest would show.
+    let incomplete = match met == judged_count {
+        true => ": incomplete, not passed",
+        false => "",
+    };
+    format!(
+        "{met} of {judged_count} judged cases met{with}; {}, not judged{incomplete}; runs in {}",
+        unjudged.join(", "),
+        out_dir.display()
+    )
 }
 
 /// Runs one case into `dir` with its report, as `carus run` would (or,
@@ -199,7 +292,9 @@ fn judge_case(case: SanityCase, scenario: &Scenario, dir: &Path, stop: &Arc<Atom
     let outlet_station_mm = (canal.outlet_sigma() - canal.spines_sigma()) * 1000.0;
     let summary = &record.summary;
     // A run that failed or was stopped ended before its outcome did: it
-    // meets nothing, whatever its last samples show.
+    // meets nothing, whatever its last samples show; a stopped one is not
+    // judged at all (`--resume` ends it).
+    let stopped = summary.failure.is_none() && !summary.completed;
     let ended_early = match (&summary.failure, summary.completed) {
         (Some(failure), _) => Some(format!("ended early: {failure}")),
         (None, false) => Some(format!("stopped at t = {:.1} s", summary.simulated_s)),
@@ -220,8 +315,14 @@ fn judge_case(case: SanityCase, scenario: &Scenario, dir: &Path, stop: &Arc<Atom
         Some(why) => format!("{}; {why}", outcome_line(&summary.outcome)),
         None => outcome_line(&summary.outcome),
     };
+    let state = match (stopped, verdict.met) {
+        (true, _) => CaseState::Stopped,
+        (false, true) => CaseState::Met,
+        (false, false) => CaseState::NotMet,
+    };
     Ok(Judged {
         case,
+        state,
         verdict,
         outcome: Some(summary.outcome.clone()),
         outcome_line,
@@ -232,9 +333,10 @@ fn judge_case(case: SanityCase, scenario: &Scenario, dir: &Path, stop: &Arc<Atom
 }
 
 /// A case that was not run, or whose run could not be made, and why.
-fn not_run(case: SanityCase, why: &str) -> Judged {
+fn not_run(case: SanityCase, state: CaseState, why: &str) -> Judged {
     Judged {
         case,
+        state,
         verdict: Verdict {
             met: false,
             why: format!("not run: {why}"),
@@ -278,6 +380,67 @@ mod tests {
         assert_eq!(arrest.stage, carus_analysis::ArrestStage::Inlet);
         assert!(judged.outcome_line.contains("inlet"), "{}", judged.outcome_line);
         assert!(dir.path().join("report.html").is_file());
+    }
+
+    /// A case whose run is stopped (Ctrl-C) before it ends has no verdict:
+    /// it is stopped, not "not met", whatever its samples so far show.
+    #[test]
+    fn a_case_stopped_before_its_run_ended_is_not_judged() {
+        let dir = tempfile::tempdir().unwrap();
+        let changes: Vec<(String, String)> =
+            ["numerics.head_subdivisions=3", "contact.sample_spacing_mm=8.0", "floor.mesh.elements_around=16", "floor.mesh.elements_across=3", "output.vtu=false"]
+                .iter()
+                .map(|text| one_setting(text).unwrap())
+                .collect();
+        let case = SanityCase::Normal;
+        let scenario = Scenario::builtin(case.scenario()).unwrap().with_settings(&changes).unwrap();
+        let judged = judge_case(case, &scenario, dir.path(), &Arc::new(AtomicBool::new(true))).unwrap();
+        assert_eq!(judged.state, CaseState::Stopped);
+        assert!(!judged.verdict.met && !judged.completed && judged.failure.is_none());
+        assert!(judged.verdict.why.contains("stopped at t = 0.0 s"), "{}", judged.verdict.why);
+        assert!(case_lines(&judged).starts_with("normal             stopped  expected:"), "{}", case_lines(&judged));
+    }
+
+    /// Cases stopped before they ended are counted apart from the judged
+    /// ones, and sanity.json says so of each (keeping `met: false`): the
+    /// whole is incomplete, not failed, unless a judged case is not met.
+    #[test]
+    fn stopped_cases_are_counted_apart_from_the_judged() {
+        let out = Path::new("runs/sanity-1");
+        let judged_as = |state: CaseState| Judged {
+            verdict: Verdict { met: state == CaseState::Met, why: "delivered".into() },
+            completed: true,
+            ..not_run(SanityCase::Normal, state, "")
+        };
+        let mut judged: Vec<Judged> = std::iter::once(judged_as(CaseState::Met))
+            .chain(SanityCase::ALL[1..].iter().map(|&case| not_run(case, CaseState::Stopped, "stopped before it started")))
+            .collect();
+        let record = verdicts_json(&judged, &[], out);
+        let figures = ["met", "of", "judged", "stopped", "not_run"].map(|key| record[key].as_u64().unwrap());
+        assert_eq!((figures, record["status"].as_str()), ([1, 4, 1, 3, 0], Some("incomplete")));
+        let cases = record["cases"].as_array().unwrap();
+        assert_eq!((cases[0]["state"].as_str(), cases[0]["met"].as_bool()), (Some("met"), Some(true)));
+        assert!(cases[1..].iter().all(|c| c["state"] == json!("stopped") && c["met"] == json!(false)), "{record}");
+        assert_eq!(
+            count_line(&judged, &[], out),
+            "1 of 1 judged cases met; 3 stopped before they ended, not judged: incomplete, not passed; runs in runs/sanity-1"
+        );
+        assert!(case_lines(&judged[1]).starts_with("contracted-inlet   stopped  expected:"), "{}", case_lines(&judged[1]));
+        assert!(!case_lines(&judged[1]).contains("NOT MET"));
+        // A judged case not met fails the whole, stopped cases or not.
+        judged[0] = judged_as(CaseState::NotMet);
+        judged[3] = not_run(SanityCase::LargeShoulders, CaseState::NotRun, "the run cannot start: no pelvis");
+        assert_eq!(verdicts_json(&judged, &[], out)["status"], json!("fail"));
+        let changes = [("contact.friction".to_string(), "0.35".to_string())];
+        assert_eq!(
+            count_line(&judged, &changes, out),
+            "0 of 1 judged cases met with contact.friction=0.35; 2 stopped before they ended, 1 could not start, not judged; \
+             runs in runs/sanity-1"
+        );
+        // Every case judged: the count as it always was.
+        let all: Vec<Judged> = SanityCase::ALL.iter().map(|_| judged_as(CaseState::Met)).collect();
+        assert_eq!(count_line(&all, &[], out), "4 of 4 cases met; runs in runs/sanity-1");
+        assert_eq!(verdicts_json(&all, &[], out)["status"], json!("pass"));
     }
 
     /// The four cases run (cut to a fifth of a second and made coarse
@@ -395,9 +558,13 @@ mod tests {
             let why = case["why"].as_str().unwrap();
             match case["scenario"].as_str().unwrap() {
                 "contracted-inlet" => assert!(case["completed"] == json!(true) && !why.starts_with("not run"), "{case}"),
-                _ => assert!(why.starts_with("not run: the run cannot start") && why.contains("inlet_oblique_mm"), "{case}"),
+                _ => assert!(
+                    case["state"] == json!("not_run") && why.starts_with("not run: the run cannot start") && why.contains("inlet_oblique_mm"),
+                    "{case}"
+                ),
             }
         }
+        assert_eq!((verdicts["judged"].clone(), verdicts["not_run"].clone()), (json!(1), json!(3)));
         assert!(out.join("contracted-inlet").join("movements.json").is_file());
         assert!(!out.join("normal").exists());
     }

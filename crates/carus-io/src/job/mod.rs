@@ -16,7 +16,10 @@ use std::path::PathBuf;
 use crate::toml_text::located;
 
 pub use load::{load_job, mesh_path, parse_job};
-pub use run::{run_job, JobReport, Progress, RunOptions};
+pub use run::{
+    is_frame_name, prepare_job, run_job, JobReport, PreparedJob, Progress, RunOptions, FRAMES_DIR, HISTORY_FILE,
+    SOLUTION_PVD, SUMMARY_FILE,
+};
 pub use spec::JobSpec;
 
 use crate::error::{ReadError, WriteError};
@@ -88,8 +91,9 @@ pub enum JobError {
     /// element by index and by the mesh file's own id).
     #[error("{}: {message}", path.display())]
     Model { path: PathBuf, message: String },
-    /// The output folder holds an earlier run.
-    #[error("{}: the output folder exists and is not empty; fix: choose another --out, or pass --force to replace the run in it", dir.display())]
+    /// The output folder holds something: [`run_job`] writes only into a
+    /// new or empty one.
+    #[error("{}: the output folder exists and is not empty; fix: choose another output folder, or empty this one", dir.display())]
     OutDirExists { dir: PathBuf },
     /// The output folder could not be prepared.
     #[error("{}: cannot prepare the output folder: {cause}; fix: {}", dir.display(), out_dir_fix(dir))]

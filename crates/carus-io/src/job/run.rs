@@ -27,8 +27,6 @@ use crate::vtk::{write_vtu, FrameFields};
 /// Options of a run that are not part of the job.
 #[derive(Debug, Clone, Default)]
 pub struct RunOptions {
-    /// Replace an earlier run in the output folder.
-    pub force: bool,
     /// Set from outside (Ctrl-C) to end the run at the next step, with its
     /// state then written as the last frame and the report saying so.
     pub stop: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
@@ -370,39 +368,42 @@ fn boundary_conditions(
     Ok((bcs, supports))
 }
 
+/// The folder of a run's frames, in its output folder.
+pub const FRAMES_DIR: &str = "frames";
+/// The frames as a ParaView time series.
+pub const SOLUTION_PVD: &str = "solution.pvd";
+/// The time histories.
+pub const HISTORY_FILE: &str = "history.csv";
+/// The report, as `--json` prints it.
+pub const SUMMARY_FILE: &str = "summary.json";
+
+/// The name in [`FRAMES_DIR`] of frame `k`.
+fn frame_name(k: usize) -> String {
+    format!("frame_{k:05}.vtu")
+}
+
+/// Whether `name` is one of a run's frames (`frame_00012.vtu`).
+pub fn is_frame_name(name: &str) -> bool {
+    name.strip_prefix("frame_")
+        .and_then(|rest| rest.strip_suffix(".vtu"))
+        .is_some_and(|k| k.len() >= 5 && k.bytes().all(|b| b.is_ascii_digit()))
+}
+
 /// Whether `dir` exists and holds anything.
 fn occupied(dir: &Path) -> bool {
     std::fs::read_dir(dir).is_ok_and(|mut entries| entries.next().is_some())
 }
 
-/// Makes `dir/frames`; a non-empty `dir` needs `force`, which then removes
-/// only the files a run writes.
-fn prepare_out_dir(dir: &Path, force: bool) -> Result<(), JobError> {
-    let io = |cause| JobError::OutDir {
-        dir: dir.to_path_buf(),
-        cause,
-    };
-    if dir.exists() {
-        if occupied(dir) && !force {
-            return Err(JobError::OutDirExists {
-                dir: dir.to_path_buf(),
-            });
-        }
-        let frames = dir.join("frames");
-        if frames.is_dir() {
-            for entry in std::fs::read_dir(&frames).map_err(io)? {
-                let path = entry.map_err(io)?.path();
-                let is_frame = path
-                    .file_name()
-                    .and_then(|n| n.to_str())
-                    .is_some_and(|n| n.starts_with("frame_") && n.ends_with(".vtu"));
-                if is_frame {
-                    std::fs::remove_file(&path).map_err(io)?;
-                }
-            }
-        }
+/// Refuses an output folder that holds anything: replacing one is the
+/// caller's to decide (`carus solve --force` replaces only a folder carus
+/// made, and nothing a user added to it).
+fn refuse_occupied(dir: &Path) -> Result<(), JobError> {
+    match occupied(dir) {
+        true => Err(JobError::OutDirExists {
+            dir: dir.to_path_buf(),
+        }),
+        false => Ok(()),
     }
-    std::fs::create_dir_all(dir.join("frames")).map_err(io)
 }
 
 /// A column name from a set name (letters, digits and `_` only).
@@ -437,7 +438,7 @@ struct Recorder {
 
 impl Recorder {
     fn frame(&mut self, solver: &TledSolver, mesh: &Mesh) -> Result<(), JobError> {
-        let name = format!("frames/frame_{:05}.vtu", self.pvd.frames().len());
+        let name = format!("{FRAMES_DIR}/{}", frame_name(self.pvd.frames().len()));
         let displacement = solver.displacements();
         let fields = solver.element_fields();
         write_vtu(
@@ -454,7 +455,7 @@ impl Recorder {
         // Listed once its frame is written, and the list written whole.
         let mut listed = self.pvd.clone();
         listed.push(reported_time_s(solver.time_s()), name);
-        listed.write(&self.out_dir.join("solution.pvd"))?;
+        listed.write(&self.out_dir.join(SOLUTION_PVD))?;
         self.pvd = listed;
         self.last_frame_time_s = Some(solver.time_s());
         Ok(())
@@ -572,7 +573,37 @@ fn build_solver(
     Ok((solver, supports))
 }
 
-/// Runs the job file at `job_path`, writing into `out_dir`:
+/// A job read, checked and its model built, not yet run: all that can be
+/// refused about a job is refused before its output folder is touched.
+pub struct PreparedJob {
+    spec: JobSpec,
+    file: MeshFile,
+    solver: TledSolver,
+    supports: Supports,
+    /// Reading and building, counted in the run's wall time.
+    prepared_in: std::time::Duration,
+}
+
+/// Reads the job file at `job_path` and builds its model (see
+/// [`PreparedJob::run_into`]).
+pub fn prepare_job(job_path: &Path) -> Result<PreparedJob, JobError> {
+    prepare(job_path, || Ok(()))
+}
+
+/// [`prepare_job`], with `before_build` checked between the job's own
+/// errors and the (possibly long) model build.
+fn prepare(job_path: &Path, before_build: impl FnOnce() -> Result<(), JobError>) -> Result<PreparedJob, JobError> {
+    let start = Instant::now();
+    let text = read_job_text(job_path)?;
+    let spec = parse_job(job_path, &text)?;
+    before_build()?;
+    let file = crate::read_mesh(&mesh_path(job_path, &spec))?.to_metres(spec.mesh.length_unit);
+    let (solver, supports) = build_solver(job_path, &spec, &file).map_err(|e| e.at_line_in(&text))?;
+    Ok(PreparedJob { spec, file, solver, supports, prepared_in: start.elapsed() })
+}
+
+/// Runs the job file at `job_path`, writing into `out_dir`, which must be
+/// new or empty (refused before the model is built):
 /// `frames/frame_NNNNN.vtu`, `solution.pvd`, `history.csv` and
 /// `summary.json`. A solver failure mid-run still writes the last good
 /// state as the final frame and returns a report whose `failure` is set.
@@ -582,170 +613,182 @@ pub fn run_job(
     options: &RunOptions,
     progress: &mut dyn FnMut(&Progress),
 ) -> Result<JobReport, JobError> {
-    let start = Instant::now();
-    let text = read_job_text(job_path)?;
-    let spec = parse_job(job_path, &text)?;
-    // Refuse an occupied folder before the (possibly long) model build.
-    if !options.force && occupied(out_dir) {
-        return Err(JobError::OutDirExists {
-            dir: out_dir.to_path_buf(),
-        });
-    }
-    let file = crate::read_mesh(&mesh_path(job_path, &spec))?.to_metres(spec.mesh.length_unit);
-    let mesh = &file.mesh;
-    let (mut solver, supports) = build_solver(job_path, &spec, &file).map_err(|e| e.at_line_in(&text))?;
-    let critical_dt_s = solver.model().critical_time_step();
-    let dt_s = solver.dt_s();
+    prepare(job_path, || refuse_occupied(out_dir))?.run_into(out_dir, options, progress)
+}
 
-    prepare_out_dir(out_dir, options.force)?;
-    let end_s = spec.solver.end_time_s;
-    let frame_interval_s = spec.output.frame_interval_s.unwrap_or(end_s / 20.0);
-    let history_interval_s = spec
-        .output
-        .history_interval_s
-        .unwrap_or(frame_interval_s / 10.0);
-    let mut header: Vec<String> = [
-        "time_s",
-        "step",
-        "max_displacement_m",
-        "kinetic_j",
-        "strain_j",
-        "hourglass_j",
-    ]
-    .map(String::from)
-    .to_vec();
-    for (name, _) in &supports {
-        for axis in ["x", "y", "z"] {
-            header.push(format!("reaction_{}_{axis}_n", column(name)));
-        }
-    }
-    let header: Vec<&str> = header.iter().map(String::as_str).collect();
-    let mut recorder = Recorder {
-        out_dir: out_dir.to_path_buf(),
-        pvd: PvdCollection::new(),
-        history: CsvWriter::create(&out_dir.join("history.csv"), &header)?,
-        supports,
-        last_frame_time_s: None,
-        last_history_time_s: None,
-        reactions: BTreeMap::new(),
-    };
-    recorder.frame(&solver, mesh)?;
-    recorder.history(&mut solver)?;
-    let (mut next_frame, mut next_history) = (1u64, 1u64);
-    let mut failure = None;
-    // An output that cannot be written stops the run; what was written
-    // before it is kept, and the summary says where it stopped.
-    let mut output_failed = None;
-    // Half a step of slack: the run ends on the step nearest end_time_s.
-    while solver.time_s() + 0.5 * dt_s < end_s {
-        if options.stop.as_ref().is_some_and(|s| s.load(std::sync::atomic::Ordering::Relaxed)) {
-            failure = Some(format!(
-                "stopped by the user at t = {:.6e} s (step {}); the last frame holds that state",
-                solver.time_s(),
-                solver.steps()
-            ));
-            break;
-        }
-        if let Err(e) = solver.step() {
-            failure = Some(format!(
-                "{} (step {} of dt = {dt_s:.3e} s; the last frame holds the state at t = {:.6e} s)",
-                describe(&e, &file),
-                solver.steps() + 1,
-                solver.time_s()
-            ));
-            break;
-        }
-        let t = solver.time_s() + 0.5 * dt_s;
-        let due_history = t >= next_history as f64 * history_interval_s;
-        let due_frame = t >= next_frame as f64 * frame_interval_s;
-        let written = (|| {
-            if due_history {
-                recorder.history(&mut solver)?;
-                next_history = (t / history_interval_s).floor() as u64 + 1;
+impl PreparedJob {
+    /// Runs the job into `out_dir` (made if it is not there), as
+    /// [`run_job`] does; the caller has made sure that it holds nothing
+    /// the run could overwrite.
+    pub fn run_into(self, out_dir: &Path, options: &RunOptions, progress: &mut dyn FnMut(&Progress)) -> Result<JobReport, JobError> {
+        let start = Instant::now().checked_sub(self.prepared_in).unwrap_or_else(Instant::now);
+        let PreparedJob { spec, file, mut solver, supports, .. } = self;
+        let mesh = &file.mesh;
+        let critical_dt_s = solver.model().critical_time_step();
+        let dt_s = solver.dt_s();
+
+        std::fs::create_dir_all(out_dir.join(FRAMES_DIR)).map_err(|cause| JobError::OutDir {
+            dir: out_dir.to_path_buf(),
+            cause,
+        })?;
+        let end_s = spec.solver.end_time_s;
+        let frame_interval_s = spec.output.frame_interval_s.unwrap_or(end_s / 20.0);
+        let history_interval_s = spec
+            .output
+            .history_interval_s
+            .unwrap_or(frame_interval_s / 10.0);
+        let mut header: Vec<String> = [
+            "time_s",
+            "step",
+            "max_displacement_m",
+            "kinetic_j",
+            "strain_j",
+            "hourglass_j",
+        ]
+        .map(String::from)
+        .to_vec();
+        for (name, _) in &supports {
+            for axis in ["x", "y", "z"] {
+                header.push(format!("reaction_{}_{axis}_n", column(name)));
             }
-            if due_frame {
-                recorder.frame(&solver, mesh)?;
-                next_frame = (t / frame_interval_s).floor() as u64 + 1;
+        }
+        let header: Vec<&str> = header.iter().map(String::as_str).collect();
+        let mut recorder = Recorder {
+            out_dir: out_dir.to_path_buf(),
+            pvd: PvdCollection::new(),
+            history: CsvWriter::create(&out_dir.join(HISTORY_FILE), &header)?,
+            supports,
+            last_frame_time_s: None,
+            last_history_time_s: None,
+            reactions: BTreeMap::new(),
+        };
+        recorder.frame(&solver, mesh)?;
+        recorder.history(&mut solver)?;
+        let (mut next_frame, mut next_history) = (1u64, 1u64);
+        let mut failure = None;
+        // An output that cannot be written stops the run; what was written
+        // before it is kept, and the summary says where it stopped.
+        let mut output_failed = None;
+        // Half a step of slack: the run ends on the step nearest end_time_s.
+        while solver.time_s() + 0.5 * dt_s < end_s {
+            if options.stop.as_ref().is_some_and(|s| s.load(std::sync::atomic::Ordering::Relaxed)) {
+                failure = Some(format!(
+                    "stopped by the user at t = {:.6e} s (step {}); the last frame holds that state",
+                    solver.time_s(),
+                    solver.steps()
+                ));
+                break;
             }
-            Ok::<(), JobError>(())
-        })();
-        if let Err(e) = written {
-            failure = Some(format!(
-                "{e}; the run stopped at t = {:.6e} s (step {}): the frames and history rows before it are kept",
-                solver.time_s(),
-                solver.steps()
-            ));
-            output_failed = Some(e);
-            break;
+            if let Err(e) = solver.step() {
+                failure = Some(format!(
+                    "{} (step {} of dt = {dt_s:.3e} s; the last frame holds the state at t = {:.6e} s)",
+                    describe(&e, &file),
+                    solver.steps() + 1,
+                    solver.time_s()
+                ));
+                break;
+            }
+            let t = solver.time_s() + 0.5 * dt_s;
+            let due_history = t >= next_history as f64 * history_interval_s;
+            let due_frame = t >= next_frame as f64 * frame_interval_s;
+            let written = (|| {
+                if due_history {
+                    recorder.history(&mut solver)?;
+                    next_history = (t / history_interval_s).floor() as u64 + 1;
+                }
+                if due_frame {
+                    recorder.frame(&solver, mesh)?;
+                    next_frame = (t / frame_interval_s).floor() as u64 + 1;
+                }
+                Ok::<(), JobError>(())
+            })();
+            if let Err(e) = written {
+                failure = Some(format!(
+                    "{e}; the run stopped at t = {:.6e} s (step {}): the frames and history rows before it are kept",
+                    solver.time_s(),
+                    solver.steps()
+                ));
+                output_failed = Some(e);
+                break;
+            }
+            let recorded = due_history || due_frame;
+            if recorded {
+                progress(&Progress {
+                    time_s: solver.time_s(),
+                    end_time_s: end_s,
+                    steps: solver.steps(),
+                    frames: recorder.pvd.frames().len(),
+                });
+            }
         }
-        let recorded = due_history || due_frame;
-        if recorded {
-            progress(&Progress {
-                time_s: solver.time_s(),
-                end_time_s: end_s,
-                steps: solver.steps(),
-                frames: recorder.pvd.frames().len(),
-            });
+        if output_failed.is_none() {
+            let closed = recorder.close(&mut solver, mesh).and_then(|()| Ok(recorder.history.flush()?));
+            if let Err(e) = closed {
+                let stopped = format!("{e}: the last frame or history row was not written, the ones before are kept");
+                failure = Some(failure.map_or(stopped.clone(), |f| format!("{f}; then {stopped}")));
+                output_failed = Some(e);
+            }
+        } else {
+            // The rows before the failure, whole; the failure itself is the error kept.
+            let _ = recorder.history.flush();
         }
-    }
-    if output_failed.is_none() {
-        let closed = recorder.close(&mut solver, mesh).and_then(|()| Ok(recorder.history.flush()?));
-        if let Err(e) = closed {
-            let stopped = format!("{e}: the last frame or history row was not written, the ones before are kept");
-            failure = Some(failure.map_or(stopped.clone(), |f| format!("{f}; then {stopped}")));
-            output_failed = Some(e);
+        let report = JobReport {
+            out_dir: out_dir.display().to_string(),
+            frames: recorder.pvd.frames().len(),
+            steps: solver.steps(),
+            simulated_s: reported_time_s(solver.time_s()),
+            wall_s: start.elapsed().as_secs_f64(),
+            critical_dt_s,
+            dt_s,
+            substeps_per_step: solver.substeps_per_step(),
+            max_displacement_m: max_norm(&solver.displacements()),
+            reactions_n: recorder.reactions.clone(),
+            element_kind: mesh.kind.name(),
+            tet_formulation: (mesh.kind == ElementKind::T4).then_some(match spec.solver.tet_formulation {
+                TetSpec::T4 => "t4",
+                TetSpec::T4anp => "t4anp",
+            }),
+            hourglass_modulus: (mesh.kind == ElementKind::H8).then(|| spec.solver.hourglass_modulus.name()),
+            elements: mesh.element_count(),
+            nodes: mesh.node_count(),
+            failure,
+            notes: file
+                .notes
+                .iter()
+                .cloned()
+                .chain(auxetic_notes(&spec))
+                .chain(displacement_notes(&spec, solver.model().size_m()))
+                .chain(interval_notes(&spec.output, dt_s, solver.steps()))
+                .collect(),
+        };
+        let summary = out_dir.join(SUMMARY_FILE);
+        let json = serde_json::to_string_pretty(&report).unwrap_or_default();
+        let written = std::fs::write(&summary, json + "\n");
+        if written.is_err() {
+            // Half a summary would read as a damaged one.
+            let _ = std::fs::remove_file(&summary);
         }
-    } else {
-        // The rows before the failure, whole; the failure itself is the error kept.
-        let _ = recorder.history.flush();
-    }
-    let report = JobReport {
-        out_dir: out_dir.display().to_string(),
-        frames: recorder.pvd.frames().len(),
-        steps: solver.steps(),
-        simulated_s: reported_time_s(solver.time_s()),
-        wall_s: start.elapsed().as_secs_f64(),
-        critical_dt_s,
-        dt_s,
-        substeps_per_step: solver.substeps_per_step(),
-        max_displacement_m: max_norm(&solver.displacements()),
-        reactions_n: recorder.reactions.clone(),
-        element_kind: mesh.kind.name(),
-        tet_formulation: (mesh.kind == ElementKind::T4).then_some(match spec.solver.tet_formulation {
-            TetSpec::T4 => "t4",
-            TetSpec::T4anp => "t4anp",
-        }),
-        hourglass_modulus: (mesh.kind == ElementKind::H8).then(|| spec.solver.hourglass_modulus.name()),
-        elements: mesh.element_count(),
-        nodes: mesh.node_count(),
-        failure,
-        notes: file
-            .notes
-            .iter()
-            .cloned()
-            .chain(auxetic_notes(&spec))
-            .chain(displacement_notes(&spec, solver.model().size_m()))
-            .chain(interval_notes(&spec.output, dt_s, solver.steps()))
-            .collect(),
-    };
-    let summary = out_dir.join("summary.json");
-    let json = serde_json::to_string_pretty(&report).unwrap_or_default();
-    let written = std::fs::write(&summary, json + "\n");
-    if written.is_err() {
-        // Half a summary would read as a damaged one.
-        let _ = std::fs::remove_file(&summary);
-    }
-    match (written, output_failed) {
-        (Ok(()), _) => Ok(report),
-        // With no room for the summary either, the first failure is the one to fix.
-        (Err(_), Some(first)) => Err(first),
-        (Err(cause), None) => Err(crate::WriteError::Io { path: summary, cause }.into()),
+        match (written, output_failed) {
+            (Ok(()), _) => Ok(report),
+            // With no room for the summary either, the first failure is the one to fix.
+            (Err(_), Some(first)) => Err(first),
+            (Err(cause), None) => Err(crate::WriteError::Io { path: summary, cause }.into()),
+        }
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `carus solve --force` tells a run's frames from files put beside them.
+    #[test]
+    fn a_frame_is_known_by_its_name() {
+        assert!(is_frame_name(&frame_name(0)) && is_frame_name(&frame_name(123_456)));
+        for name in ["frame_1.vtu", "frame_00001.vtk", "my_frame_00001.vtu", "frame_0000a.vtu", "frame_.vtu"] {
+            assert!(!is_frame_name(name), "{name}");
+        }
+    }
 
     #[test]
     fn set_names_become_csv_columns() {

@@ -118,7 +118,9 @@ pub struct DisplacementSpec {
 #[serde(deny_unknown_fields)]
 pub struct ForceSpec {
     pub node_set: String,
+    #[serde(default, deserialize_with = "crate::toml_text::optional_xyz")]
     pub force_per_node_n: Option<[f64; 3]>,
+    #[serde(default, deserialize_with = "crate::toml_text::optional_xyz")]
     pub total_force_n: Option<[f64; 3]>,
     pub load: LoadSpec,
 }
@@ -137,6 +139,7 @@ pub struct PressureSpec {
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GravitySpec {
+    #[serde(deserialize_with = "crate::toml_text::xyz")]
     pub acceleration_m_s2: [f64; 3],
 }
 
