@@ -18,9 +18,11 @@ use serde::{Deserialize, Serialize};
 /// below the ~5-10 mm a head gains per effective contraction in the
 /// second stage).
 pub const ARREST_PROGRESS_MM: f64 = 3.0;
-/// The final window spans at least this many contraction periods.
+/// The final window spans at least this many contraction periods (detector
+/// choice, docs/DETECTOR.md: one contraction's slip back is not an arrest).
 pub const ARREST_WINDOW_PERIODS: f64 = 2.0;
-/// The final window spans at least this fraction of the run.
+/// The final window spans at least this fraction of the run (detector choice,
+/// docs/DETECTOR.md).
 pub const ARREST_WINDOW_FRACTION: f64 = 0.25;
 /// Under a steady push (a history without contractions), an arrest is a
 /// stop, not a short window: a fetus whose pace since its deepest point

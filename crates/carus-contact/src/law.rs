@@ -11,7 +11,7 @@ use crate::error::{check_non_negative, ContactError};
 /// Largest expulsive force of REFERENCE_DATA.md ("over about 70 cm2 of head
 /// this is roughly 70-140 N"), N: the load the default stiffness is sized for.
 pub const DESIGN_EXPULSION_FORCE_N: f64 = 140.0;
-/// Penetration accepted at that force, m: 1 mm, ten times the anatomy's
+/// Penetration accepted at that force, m (numerical, docs/CONTACT.md): 1 mm, ten times the anatomy's
 /// 0.1 mm tolerance and well below the head-pelvis clearances
 /// (several mm) that decide arrest.
 pub const DESIGN_PENETRATION_M: f64 = 1.0e-3;

@@ -20,17 +20,19 @@ const SYMPHYSIS_TILT: f64 = 0.26;
 /// heights S1 > S2 > ... > S5; S2-S3 at the middle, where the concavity is measured).
 pub(crate) const S2_S3_FRACTION: f64 = 0.5;
 pub(crate) const S4_S5_FRACTION: f64 = 0.85;
-/// Sacral tilt (chord from the inlet normal, positive backwards) allowed, rad.
+/// Sacral tilt (chord from the inlet normal, positive backwards) allowed, rad:
+/// the bracket the closed-form profile is solved in (numerical), not a shape.
 const SACRAL_TILT_RANGE: (f64, f64) = (-1.05, 0.52);
 /// Coccyx length as a fraction of the sacral length (about 35 mm for 105 mm).
+/// Engineering choice (docs/ANATOMY.md); no measured ratio is cited.
 const COCCYX_RATIO: f64 = 0.33;
 /// Bend of the coccyx from the sacral curve's end tangent, forward positive,
 /// rad: from pointing straight down (the sacrum's end turns forward about 40
-/// degrees) to curled forward.
+/// degrees) to curled forward. The bracket it is solved in (numerical).
 const COCCYX_BEND_RANGE: (f64, f64) = (-1.2, 1.3);
 /// How far the tuberosities lie below the outlet's AP line, seen from the
 /// side, as an angle at the symphysis, rad (the outlet's anterior triangle
-/// is tilted down from its posterior one).
+/// is tilted down from its posterior one). Engineering choice (docs/ANATOMY.md).
 const OUTLET_ANTERIOR_TILT: f64 = 0.35;
 /// Junction of the ischial and pubic rami (inner edge of the pubic arch).
 /// The inferior rami do not run straight from the symphysis to the
@@ -53,11 +55,13 @@ const PUBIC_ARCH_BOW: f64 = 0.3;
 /// surface, square to the sacral chord (the lateral mass stands behind the
 /// vertebral bodies), m, and at this share of the outlet transverse from the
 /// midline. It shapes the canal wall beside the apex; the sacrotuberous
-/// attachment itself lies on the outer surface (generate.rs).
+/// attachment itself lies on the outer surface (generate.rs). Engineering
+/// choices (docs/ANATOMY.md).
 pub(crate) const LOWER_LATERAL_ANGLE_DEPTH: f64 = 0.015;
 pub(crate) const LOWER_LATERAL_ANGLE_SHARE: f64 = 0.2;
 /// Inlet shape exponent range: s = 2^(-1/n) is the share of the bounding
 /// diagonal the oblique takes; 0.6-0.9 spans a near-diamond to a near-box.
+/// The bracket the obliques are solved in (numerical), not a shape.
 const INLET_OBLIQUE_SHARE: (f64, f64) = (0.6, 0.9);
 
 /// The generated pelvis' landmarks plus the shape data the surface needs.
