@@ -133,6 +133,10 @@ pub struct TrunkSection {
     /// estimate 186 mm, not scaled with the shoulders (carus-anatomy
     /// TrunkDiameters).
     pub trunk_length_mm: f64,
+    /// Across the chest: engineering estimate 108 mm (a 322 mm
+    /// circumference), setting the girths, so that `bisacromial_mm` widens
+    /// the shoulders alone (carus-anatomy TrunkDiameters).
+    pub chest_breadth_mm: f64,
 }
 
 impl Default for TrunkSection {
@@ -144,6 +148,7 @@ impl Default for TrunkSection {
             bitrochanteric_mm: d.bitrochanteric_mm,
             cervical_spine_mm: d.cervical_spine_mm,
             trunk_length_mm: d.trunk_length_mm,
+            chest_breadth_mm: d.chest_breadth_mm,
         }
     }
 }
@@ -699,7 +704,9 @@ pub struct NumericsSection {
     pub stop_when_delivered: bool,
     /// Geodesic subdivisions of the head surface (3-6).
     pub head_subdivisions: u32,
-    /// Largest TLED sub-step as a fraction of the floor's critical step.
+    /// Largest TLED sub-step as a fraction of the floor's critical step
+    /// (numerical: below 1 for the margin the critical-step estimate lacks,
+    /// docs/LABOUR.md).
     pub floor_step_fraction: f64,
     /// Simulated seconds between checkpoints.
     pub checkpoint_every_s: f64,
@@ -1254,11 +1261,16 @@ impl Scenario {
             problem: problem.into(),
             hint: hint.into(),
         };
-        let positive: [(&'static str, f64, &str); 21] = [
+        let positive: [(&'static str, f64, &str); 22] = [
             (
                 "trunk.bisacromial_mm",
                 self.trunk.bisacromial_mm,
                 "a diameter in mm, e.g. 120.0",
+            ),
+            (
+                "trunk.chest_breadth_mm",
+                self.trunk.chest_breadth_mm,
+                "a breadth in mm, e.g. 108.0",
             ),
             (
                 "trunk.bitrochanteric_mm",
@@ -1563,6 +1575,7 @@ impl Scenario {
             &[
                 ("trunk.bisacromial_mm", self.trunk.bisacromial_mm),
                 ("trunk.bitrochanteric_mm", self.trunk.bitrochanteric_mm),
+                ("trunk.chest_breadth_mm", self.trunk.chest_breadth_mm),
             ],
             FETAL_TRUNK_WIDTH_MM,
             "is not the width of a fetal trunk",
@@ -2645,6 +2658,10 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("trunk.bisacromial_mm") && e.contains("not cm"), "{e}");
+        let e = parse("name = \"x\"\n[trunk]\nchest_breadth_mm = 10.8\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("trunk.chest_breadth_mm") && e.contains("not cm"), "{e}");
         let e = parse("name = \"x\"\n[trunk]\ncervical_spine_mm = 3.7\n")
             .unwrap_err()
             .to_string();

@@ -184,6 +184,7 @@ impl Scene {
                 bitrochanteric_mm: s.trunk.bitrochanteric_mm,
                 cervical_spine_mm: s.trunk.cervical_spine_mm,
                 trunk_length_mm: s.trunk.trunk_length_mm,
+                chest_breadth_mm: s.trunk.chest_breadth_mm,
             };
             let anatomy =
                 Trunk::new(&d).map_err(|e| LabourError::anatomy(format!("fetal trunk: {e}")))?;

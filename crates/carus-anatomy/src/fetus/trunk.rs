@@ -45,6 +45,23 @@ pub struct TrunkDiameters {
     /// (the shoulder ring, the thoracolumbar junction, the hips) stay where
     /// they are when only the shoulders widen.
     pub trunk_length_mm: f64,
+    /// Across the chest at its widest ring (0.35 of the trunk's level unit
+    /// below the neck base), side to side over the skin: it sets the
+    /// girths (the neck's, the chest's and the abdomen's, and every ring's
+    /// depth), which are fractions of it, so that only the shoulders widen
+    /// with `bisacromial_mm` (a wider girdle is not a bigger chest: macrosomic
+    /// infants of diabetic mothers have larger shoulder circumferences at the
+    /// same weight and length, J Matern Fetal Med 1998;7(6):292, and a
+    /// chest-to-head disproportion of its own goes with shoulder dystocia,
+    /// Modanlou et al. 1982, Obstet Gynecol 60:417).
+    /// Engineering estimate: 108 mm, 0.9 of the 120 mm shoulders the
+    /// sections were shaped on; with the ring's depth (0.82 of its breadth)
+    /// its circumference is 322 mm, between the 295-299 mm below which a
+    /// newborn is likely of low birth weight (Hong Kong Chinese newborns,
+    /// Early Hum Dev 2005;81:781) and the 348 mm predicted for a 3360 g
+    /// newborn with a 345 mm head circumference (CC = 14.87 + 0.003 W + 0.287
+    /// HC, cm and g: Azevedo et al. 2019, BMC Pediatr 19:341).
+    pub chest_breadth_mm: f64,
 }
 
 impl Default for TrunkDiameters {
@@ -54,6 +71,7 @@ impl Default for TrunkDiameters {
             bitrochanteric_mm: 95.0,
             cervical_spine_mm: 37.0,
             trunk_length_mm: 186.0,
+            chest_breadth_mm: 108.0,
         }
     }
 }
@@ -72,6 +90,7 @@ impl TrunkDiameters {
             ("bitrochanteric_mm", self.bitrochanteric_mm),
             ("cervical_spine_mm", self.cervical_spine_mm),
             ("trunk_length_mm", self.trunk_length_mm),
+            ("chest_breadth_mm", self.chest_breadth_mm),
         ] {
             if !(value.is_finite() && value > 0.0) {
                 return Err(TrunkError::NotPositive { name, value });
@@ -84,7 +103,8 @@ impl TrunkDiameters {
 /// Points along the ring, a multiple of 4 so that the sideways extremes
 /// (acromions, trochanters) are ring vertices.
 const RING_POINTS: usize = 48;
-/// Superellipse exponent of the cross-sections: a rounded, boxy torso.
+/// Superellipse exponent of the cross-sections: a rounded, boxy torso
+/// (engineering choice, docs/ANATOMY.md).
 const SECTION_EXPONENT: f64 = 2.5;
 
 /// One cross-section of the trunk: height, half-width (along y), half-depth
@@ -102,16 +122,21 @@ struct Section {
 /// sections were shaped on).
 const LEVEL_UNITS_PER_TRUNK_LENGTH: f64 = 1.55;
 
+/// The chest ring's breadth as a share of the girth scale G the sections'
+/// fractions are of (G = 120 mm by default, the shoulders they were shaped on).
+const CHEST_BREADTH_SHARE: f64 = 0.9;
+
 /// Cross-sections from the neck down: the pivot, then the neck base at the
 /// cervical spine's length below it, then the trunk at depths below the
-/// neck base. Girths are fractions of the bisacromial diameter S and depths
-/// fractions of the trunk's length in its 1.55 parts, L (engineering
-/// estimates shaped on a term neonate, where L = S = 120 mm: neck about
-/// 48 mm thick, chest about 108 x 88 mm and abdomen about 100 x 92 mm,
-/// i.e. circumferences near 31-33 cm), except the shoulder and hip
+/// neck base. Girths are fractions of a girth scale G (the chest's breadth
+/// over 0.9) and depths fractions of the trunk's length in its 1.55
+/// parts, L (engineering estimates shaped on a term neonate, where L = G =
+/// 120 mm: neck about 48 mm thick, chest 108 x 88 mm and abdomen about 100
+/// x 92 mm, i.e. circumferences near 31-33 cm), except the shoulder and hip
 /// widths, which are the diameters themselves.
 fn sections(d: &TrunkDiameters) -> [Section; 8] {
-    let s = d.bisacromial_mm * 1e-3;
+    let s = d.chest_breadth_mm * 1e-3 / CHEST_BREADTH_SHARE;
+    let shoulders = d.bisacromial_mm * 1e-3;
     let t = d.bitrochanteric_mm * 1e-3;
     let neck_base = d.cervical_spine_mm * 1e-3;
     let l = d.trunk_length_mm * 1e-3 / LEVEL_UNITS_PER_TRUNK_LENGTH;
@@ -128,7 +153,7 @@ fn sections(d: &TrunkDiameters) -> [Section; 8] {
     [
         pivot,
         section(0.0, 0.20 * s, 0.19, 0.06),
-        section(0.12, 0.5 * s, 0.28, 0.12),
+        section(0.12, 0.5 * shoulders, 0.28, 0.12),
         section(0.35, 0.45 * s, 0.37, 0.20),
         section(0.75, 0.42 * s, 0.38, 0.22),
         section(1.15, 0.5 * t, 0.33, 0.18),
@@ -139,8 +164,9 @@ fn sections(d: &TrunkDiameters) -> [Section; 8] {
 
 /// Index of the section at the base of the neck, where the shoulders begin.
 const NECK_BASE: usize = 1;
-/// Index of the shoulder (acromion) and hip (trochanter) sections.
+/// Index of the shoulder (acromion), chest and hip (trochanter) sections.
 const SHOULDER: usize = 2;
+const CHEST: usize = 3;
 const HIP: usize = 5;
 /// Index of the buttocks' lowest ring, the end of the trunk's length.
 const BUTTOCKS: usize = 7;
@@ -318,9 +344,12 @@ impl Trunk {
     pub fn measure(&self) -> TrunkMeasurement {
         let l = &self.landmarks;
         let (lo, hi) = self.surface.bounds().unwrap_or_default();
+        let chest = &self.surface.vertices[CHEST * RING_POINTS..(CHEST + 1) * RING_POINTS];
         TrunkMeasurement {
             bisacromial_mm: l.acromion_left.distance(l.acromion_right) * 1e3,
             bitrochanteric_mm: l.trochanter_left.distance(l.trochanter_right) * 1e3,
+            chest_breadth_mm: (chest[0].y - chest[RING_POINTS / 2].y) * 1e3,
+            chest_circumference_mm: (0..RING_POINTS).map(|k| chest[k].distance(chest[(k + 1) % RING_POINTS])).sum::<f64>() * 1e3,
             width_mm: (hi.y - lo.y) * 1e3,
             length_mm: (hi.z - lo.z) * 1e3,
             cervical_spine_mm: (l.neck.z - self.surface.vertices[NECK_BASE * RING_POINTS].z) * 1e3,
@@ -336,7 +365,10 @@ impl Trunk {
 pub struct TrunkMeasurement {
     pub bisacromial_mm: f64,
     pub bitrochanteric_mm: f64,
-    /// Extent from side to side (the wider of shoulders and hips).
+    /// Across the chest's ring, and round it.
+    pub chest_breadth_mm: f64,
+    pub chest_circumference_mm: f64,
+    /// Extent from side to side (the widest of shoulders, chest and hips).
     pub width_mm: f64,
     /// Extent along the spine, neck to breech.
     pub length_mm: f64,
@@ -354,25 +386,30 @@ mod tests {
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(32))]
         #[test]
-        fn trunks_are_closed_and_measure_back(s in 90.0..180.0f64, t in 70.0..120.0f64, c in 20.0..50.0f64, l in 120.0..260.0f64) {
-            let d = TrunkDiameters { bisacromial_mm: s, bitrochanteric_mm: t, cervical_spine_mm: c, trunk_length_mm: l };
+        fn trunks_are_closed_and_measure_back(s in 90.0..180.0f64, t in 70.0..120.0f64, c in 20.0..50.0f64, l in 120.0..260.0f64, b in 80.0..140.0f64) {
+            let d = TrunkDiameters { bisacromial_mm: s, bitrochanteric_mm: t, cervical_spine_mm: c, trunk_length_mm: l, chest_breadth_mm: b };
             let trunk = Trunk::new(&d).unwrap();
             trunk.surface.check_closed().unwrap();
             let m = trunk.measure();
             prop_assert!((m.bisacromial_mm - s).abs() < 0.1);
             prop_assert!((m.bitrochanteric_mm - t).abs() < 0.1);
-            prop_assert!((m.width_mm - s.max(t)).abs() < 0.1);
+            prop_assert!((m.chest_breadth_mm - b).abs() < 0.1);
+            prop_assert!((m.width_mm - s.max(t).max(b)).abs() < 0.1);
             prop_assert!((m.cervical_spine_mm - c).abs() < 0.1);
             prop_assert!((m.trunk_length_mm - l).abs() < 0.1);
             // The shoulders widen the trunk, not lengthen it.
             let wider = Trunk::new(&TrunkDiameters { bisacromial_mm: 1.3 * s, ..d }).unwrap();
             prop_assert!((wider.measure().trunk_length_mm - m.trunk_length_mm).abs() < 1e-9);
             prop_assert!((wider.landmarks.acromion_left.z - trunk.landmarks.acromion_left.z).abs() < 1e-12);
+            // ... nor its chest: only the shoulder ring moves.
+            let moved = |a: &Trunk, b: &Trunk| a.surface.vertices.iter().zip(&b.surface.vertices).filter(|(p, q)| p != q).count();
+            prop_assert_eq!(moved(&wider, &trunk), RING_POINTS - 2);
+            prop_assert_eq!(wider.measure().chest_circumference_mm, m.chest_circumference_mm);
         }
 
         #[test]
-        fn the_segments_close_and_fill_the_trunk(s in 90.0..180.0f64, t in 70.0..120.0f64, c in 20.0..50.0f64, l in 120.0..260.0f64) {
-            let d = TrunkDiameters { bisacromial_mm: s, bitrochanteric_mm: t, cervical_spine_mm: c, trunk_length_mm: l };
+        fn the_segments_close_and_fill_the_trunk(s in 90.0..180.0f64, t in 70.0..120.0f64, c in 20.0..50.0f64, l in 120.0..260.0f64, b in 80.0..140.0f64) {
+            let d = TrunkDiameters { bisacromial_mm: s, bitrochanteric_mm: t, cervical_spine_mm: c, trunk_length_mm: l, chest_breadth_mm: b };
             let trunk = Trunk::new(&d).unwrap();
             let parts = trunk.segments();
             parts.thorax.check_closed().unwrap();
@@ -405,6 +442,10 @@ mod tests {
         assert!(l.acromion_left.y > 0.0 && l.acromion_right.y < 0.0);
         assert!(l.breech.z < l.trochanter_left.z && l.trochanter_left.z < l.acromion_left.z);
         assert!((trunk.spine_axis - (l.breech - l.neck).normalize()).length() < 0.2);
+        // The default chest is the one the sections were shaped on: 108 mm
+        // across, 322 mm round (docs/ANATOMY.md).
+        let m = trunk.measure();
+        assert!((m.chest_breadth_mm - 108.0).abs() < 1e-9 && (m.chest_circumference_mm - 322.5).abs() < 0.1, "{m:?}");
         let bad = TrunkDiameters {
             bitrochanteric_mm: 0.0,
             ..Default::default()
