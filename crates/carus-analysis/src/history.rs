@@ -146,6 +146,26 @@ pub struct PoseHistory {
     pub samples: Vec<PoseSample>,
 }
 
+/// A vector's length that does not overflow where its components do not:
+/// squared, a coordinate of 1e300 (a slip of exponent) would make it
+/// infinite, and the message would say `inf m`.
+fn length_unbounded(p: DVec3) -> f64 {
+    let largest = p.abs().max_element();
+    match largest > 0.0 && largest.is_finite() {
+        true => largest * (p / largest).length(),
+        false => p.length(),
+    }
+}
+
+/// A distance in metres as a message shows it: to the millimetre, or in
+/// exponent form when huge (a plain 1e300 prints three hundred digits).
+fn shown_distance(metres: f64) -> String {
+    match metres.abs() < 1e6 {
+        true => format!("{metres:.3}"),
+        false => format!("{metres:.3e}"),
+    }
+}
+
 /// What is wrong with a pose history, and where.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum HistoryError {
@@ -169,7 +189,7 @@ pub enum HistoryError {
     TrunkPoseWithoutGeometry { index: usize },
     #[error("sample {index} has no trunk pose but the history has trunk geometry; record the trunk at every sample or drop `trunk`")]
     MissingTrunkPose { index: usize },
-    #[error("sample {index}: {field} lies {distance_m:.3} m from the pelvis origin, farther than a fetus goes in labour ({FARTHEST_POSITION_M} m); positions are metres in the pelvis frame (CONVENTIONS.md): divide a history written in millimetres by 1000")]
+    #[error("sample {index}: {field} lies {} m from the pelvis origin, farther than a fetus goes in labour ({FARTHEST_POSITION_M} m); positions are metres in the pelvis frame (CONVENTIONS.md): divide a history written in millimetres by 1000", shown_distance(*.distance_m))]
     TooFar {
         index: usize,
         field: &'static str,
@@ -328,7 +348,7 @@ impl PoseHistory {
             }
             let positions = [("head.position_m", Some(s.head.position_m)), ("trunk.position_m", s.trunk.map(|t| t.position_m))];
             for (field, position) in positions {
-                let distance_m = position.map_or(0.0, DVec3::length);
+                let distance_m = position.map_or(0.0, length_unbounded);
                 if distance_m > FARTHEST_POSITION_M {
                     return Err(HistoryError::TooFar { index, field, distance_m });
                 }

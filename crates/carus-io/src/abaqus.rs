@@ -228,7 +228,7 @@ impl Reader<'_> {
                     if pending.len() == per_element + 1 {
                         let values = self.integers(&pending, "an element or node id")?;
                         pending.clear();
-                        self.volume(values, set.clone())?;
+                        self.volume(values, set.clone(), pending_from)?;
                     }
                 }
                 Block::Nodes { set } => {
@@ -439,19 +439,20 @@ impl Reader<'_> {
         Ok(())
     }
 
-    fn volume(&mut self, values: Vec<u64>, set: Option<String>) -> Result<(), ReadError> {
+    /// Element `values[0]` of nodes `values[1..]`, begun on line `from`.
+    fn volume(&mut self, values: Vec<u64>, set: Option<String>, from: usize) -> Result<(), ReadError> {
         let id = values[0];
         let nodes = values[1..].to_vec();
         match nodes.len() {
             8 => {
                 let mut n = [0; 8];
                 n.copy_from_slice(&nodes);
-                self.builder.add_hexahedron(id, n);
+                self.builder.add_hexahedron(id, n, Some(from));
             }
             _ => {
                 let mut n = [0; 4];
                 n.copy_from_slice(&nodes);
-                self.builder.add_tetrahedron(id, n);
+                self.builder.add_tetrahedron(id, n, Some(from));
             }
         }
         if self.volume_nodes.insert(id, nodes).is_some() {
@@ -716,6 +717,15 @@ mod tests {
             (
                 "*NODE\n1,0,0,0\n*ELEMENT, TYPE=S4\n1, 1, 1, 1, 1\n",
                 "m.inp: the file holds no volume elements (8-node hexahedra or 4-node tetrahedra) (skipped *ELEMENT, TYPE=S4",
+            ),
+            // An element naming a node the file lacks, or one node twice: at its (first) line.
+            (
+                "*NODE\n1,0,0,0\n2,1,0,0\n3,0,1,0\n*ELEMENT, TYPE=C3D4\n1, 1, 2,\n3, 9\n",
+                "m.inp:6: element 1 names node 9, which the file does not define",
+            ),
+            (
+                "*NODE\n1,0,0,0\n2,1,0,0\n3,0,1,0\n*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 3\n",
+                "m.inp:6: element 1 uses node 3 twice",
             ),
             (
                 "*NODE\n1,0,0,0\n*ELEMENT, TYPE=C3D4,\n1, 1, 1, 1, 1\n",

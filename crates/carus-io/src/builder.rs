@@ -66,6 +66,11 @@ pub(crate) struct MeshBuilder {
     node_position: HashMap<u64, usize>,
     hexahedra: Vec<(u64, [u64; 8])>,
     tetrahedra: Vec<(u64, [u64; 4])>,
+    /// The line each hexahedron and tetrahedron began on, in the order
+    /// added, for messages about an element (None where the format has
+    /// none to give).
+    hexahedron_lines: Vec<Option<usize>>,
+    tetrahedron_lines: Vec<Option<usize>>,
     /// Elements the reader skipped (shells, lines) that sets may still name.
     ignored_elements: HashSet<u64>,
     element_sets: BTreeMap<String, Vec<u64>>,
@@ -89,6 +94,8 @@ impl MeshBuilder {
             node_position: HashMap::new(),
             hexahedra: Vec::new(),
             tetrahedra: Vec::new(),
+            hexahedron_lines: Vec::new(),
+            tetrahedron_lines: Vec::new(),
             ignored_elements: HashSet::new(),
             element_sets: BTreeMap::new(),
             node_sets: BTreeMap::new(),
@@ -131,12 +138,25 @@ impl MeshBuilder {
         Ok(())
     }
 
-    pub(crate) fn add_hexahedron(&mut self, id: u64, nodes: [u64; 8]) {
+    /// Adds hexahedron `id`, written from `line` of the file where known.
+    pub(crate) fn add_hexahedron(&mut self, id: u64, nodes: [u64; 8], line: Option<usize>) {
         self.hexahedra.push((id, nodes));
+        self.hexahedron_lines.push(line);
     }
 
-    pub(crate) fn add_tetrahedron(&mut self, id: u64, nodes: [u64; 4]) {
+    /// Adds tetrahedron `id`, written from `line` of the file where known.
+    pub(crate) fn add_tetrahedron(&mut self, id: u64, nodes: [u64; 4], line: Option<usize>) {
         self.tetrahedra.push((id, nodes));
+        self.tetrahedron_lines.push(line);
+    }
+
+    /// An error about one element: at its line where the file gave one
+    /// (a reader that counts lines names every other fault by its line).
+    fn element_error(&self, line: Option<usize>, problem: String, fix: &str) -> ReadError {
+        match line {
+            Some(line) => ReadError::Syntax { path: self.path.clone(), line, problem, fix: fix.to_string() },
+            None => self.content_error(problem, fix),
+        }
     }
 
     /// Notes that element `id` exists but has no role in a volume mesh.
@@ -224,13 +244,19 @@ impl MeshBuilder {
                     self.tetrahedra.iter().flat_map(|(_, n)| n.iter().copied()).collect(),
                 ),
             };
+        let element_lines = match kind {
+            ElementKind::H8 => &self.hexahedron_lines,
+            _ => &self.tetrahedron_lines,
+        };
+        let line_of = |element: usize| element_lines.get(element).copied().flatten();
         let per_element = kind.nodes_per_element();
 
         // Compact node numbering: nodes in file order, only those used.
         let mut new_index = vec![u32::MAX; self.coords.len()];
         for (slot, &node_id) in file_connectivity.iter().enumerate() {
             let Some(&position) = self.node_position.get(&node_id) else {
-                return Err(self.content_error(
+                return Err(self.element_error(
+                    line_of(slot / per_element),
                     format!(
                         "element {} names node {node_id}, which the file does not define",
                         volume_ids[slot / per_element]
@@ -260,7 +286,8 @@ impl MeshBuilder {
         for (e, element) in connectivity.chunks_exact(per_element).enumerate() {
             for (i, a) in element.iter().enumerate() {
                 if element[i + 1..].contains(a) {
-                    return Err(self.content_error(
+                    return Err(self.element_error(
+                        line_of(e),
                         format!(
                             "element {} uses node {} twice",
                             volume_ids[e], node_ids[*a as usize]
@@ -274,7 +301,8 @@ impl MeshBuilder {
         let mut element_index = HashMap::with_capacity(volume_ids.len());
         for (index, &id) in volume_ids.iter().enumerate() {
             if element_index.insert(id, index as u32).is_some() {
-                return Err(self.content_error(
+                return Err(self.element_error(
+                    line_of(index),
                     format!("element id {id} is used by two volume elements"),
                     "give every element its own id",
                 ));
@@ -477,7 +505,7 @@ mod tests {
         let mut b = MeshBuilder::new(Path::new("m.inp"));
         b.add_node(99, [5.0, 5.0, 5.0]).unwrap();
         unit_tet(&mut b);
-        b.add_tetrahedron(7, [10, 11, 12, 13]);
+        b.add_tetrahedron(7, [10, 11, 12, 13], None);
         b.add_to_node_set("base", 99);
         b.add_to_node_set("base", 10);
         let file = b.finish().unwrap();
@@ -492,7 +520,7 @@ mod tests {
     fn surface_triangles_are_turned_outward_and_give_node_sets() {
         let mut b = MeshBuilder::new(Path::new("m.inp"));
         unit_tet(&mut b);
-        b.add_tetrahedron(1, [10, 11, 12, 13]);
+        b.add_tetrahedron(1, [10, 11, 12, 13], None);
         // Bottom face z = 0 given with its normal pointing into the tet (+z).
         b.add_surface_polygon("bottom", &[10, 11, 12]);
         let file = b.finish().unwrap();
@@ -504,14 +532,14 @@ mod tests {
     fn mixed_kinds_and_unknown_nodes_are_refused() {
         let mut b = MeshBuilder::new(Path::new("m.msh"));
         unit_tet(&mut b);
-        b.add_tetrahedron(1, [10, 11, 12, 13]);
-        b.add_hexahedron(2, [10, 11, 12, 13, 10, 11, 12, 13]);
+        b.add_tetrahedron(1, [10, 11, 12, 13], None);
+        b.add_hexahedron(2, [10, 11, 12, 13, 10, 11, 12, 13], None);
         let err = b.finish().unwrap_err().to_string();
         assert!(err.contains("1 hexahedra and 1 tetrahedra"), "{err}");
 
         let mut b = MeshBuilder::new(Path::new("m.msh"));
         unit_tet(&mut b);
-        b.add_tetrahedron(4, [10, 11, 12, 14]);
+        b.add_tetrahedron(4, [10, 11, 12, 14], None);
         let err = b.finish().unwrap_err().to_string();
         assert!(err.contains("element 4 names node 14"), "{err}");
 
@@ -519,7 +547,7 @@ mod tests {
         // as a face of no volume element.
         let mut b = MeshBuilder::new(Path::new("m.msh"));
         unit_tet(&mut b);
-        b.add_tetrahedron(1, [10, 11, 12, 13]);
+        b.add_tetrahedron(1, [10, 11, 12, 13], None);
         b.add_surface_polygon("x0", &[10, 11, 9999]);
         let err = b.finish().unwrap_err().to_string();
         assert!(err.contains("surface \"x0\" has a face that names node 9999, which the file does not define"), "{err}");
@@ -538,7 +566,7 @@ mod tests {
     fn sets_naming_unknown_elements_are_refused_but_skipped_ones_pass() {
         let mut b = MeshBuilder::new(Path::new("m.inp"));
         unit_tet(&mut b);
-        b.add_tetrahedron(1, [10, 11, 12, 13]);
+        b.add_tetrahedron(1, [10, 11, 12, 13], None);
         b.ignore_element(2);
         b.add_to_element_set("all", 1);
         b.add_to_element_set("all", 2);
@@ -546,7 +574,7 @@ mod tests {
 
         let mut b = MeshBuilder::new(Path::new("m.inp"));
         unit_tet(&mut b);
-        b.add_tetrahedron(1, [10, 11, 12, 13]);
+        b.add_tetrahedron(1, [10, 11, 12, 13], None);
         b.add_to_element_set("all", 3);
         let err = b.finish().unwrap_err().to_string();
         assert!(err.contains("element set \"all\" names element 3"), "{err}");

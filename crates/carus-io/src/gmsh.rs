@@ -274,7 +274,9 @@ impl<'a> Parser<'a> {
             }
             Some(Version::V40) => {
                 let blocks: usize = self.tokens.parse("the number of node blocks")?;
-                self.tokens.parse::<usize>("the number of nodes")?;
+                let header_line = self.tokens.line();
+                let declared: usize = self.tokens.parse("the number of nodes")?;
+                let mut held = 0usize;
                 for _ in 0..blocks {
                     self.tokens.parse::<i64>("an entity tag")?;
                     self.tokens.parse::<u8>("an entity dimension")?;
@@ -285,13 +287,18 @@ impl<'a> Parser<'a> {
                         let id: u64 = self.tokens.parse("a node tag")?;
                         self.node(id)?;
                     }
+                    held = held.saturating_add(count);
                 }
+                self.check_total("nodes", declared, held, header_line)?;
             }
             _ => {
                 let blocks: usize = self.tokens.parse("the number of node blocks")?;
-                for _ in 0..3 {
-                    self.tokens.parse::<u64>("a node count or tag bound")?;
+                let header_line = self.tokens.line();
+                let declared: usize = self.tokens.parse("the number of nodes")?;
+                for _ in 0..2 {
+                    self.tokens.parse::<u64>("a node tag bound")?;
                 }
+                let mut held = 0usize;
                 for _ in 0..blocks {
                     self.tokens.parse::<u8>("an entity dimension")?;
                     self.tokens.parse::<i64>("an entity tag")?;
@@ -305,7 +312,9 @@ impl<'a> Parser<'a> {
                     for id in ids {
                         self.node(id)?;
                     }
+                    held = held.saturating_add(count);
                 }
+                self.check_total("nodes", declared, held, header_line)?;
             }
         }
         self.tokens.expect_marker("$EndNodes")
@@ -322,25 +331,27 @@ impl<'a> Parser<'a> {
         }
     }
 
-    /// Records one element of Gmsh type `code` in the given physical groups.
+    /// Records one element of Gmsh type `code`, written on `line`, in the
+    /// given physical groups.
     fn element(
         &mut self,
         id: u64,
         code: u32,
         nodes: Vec<u64>,
         physicals: &[i64],
+        line: usize,
     ) -> Result<(), ReadError> {
         let (_, dim, name) = element_type(code).unwrap_or((0, 0, ""));
         match code {
             5 => {
                 let mut n = [0; 8];
                 n.copy_from_slice(&nodes);
-                self.builder.add_hexahedron(id, n);
+                self.builder.add_hexahedron(id, n, Some(line));
             }
             4 => {
                 let mut n = [0; 4];
                 n.copy_from_slice(&nodes);
-                self.builder.add_tetrahedron(id, n);
+                self.builder.add_tetrahedron(id, n, Some(line));
             }
             2 | 3 | 15 => {}
             1 | 8 | 26 | 27 | 28 => {
@@ -392,12 +403,66 @@ impl<'a> Parser<'a> {
         Ok(nodes)
     }
 
+    /// The tag of entry `read` (from 0) of a section or block whose header
+    /// on `header_line` declares `declared` `noun`s: the section's end
+    /// marker found in its place is a count larger than the entries.
+    fn entry_tag(&mut self, noun: &str, end: &str, declared: usize, read: usize, header_line: usize) -> Result<u64, ReadError> {
+        let what = format!("an {noun} tag");
+        let token = self.tokens.expect(&what)?;
+        if token == end {
+            return Err(self.tokens.error_at(
+                header_line,
+                format!("the count here declares {declared} {noun}s, but {end} comes after {read} (line {})", self.tokens.line()),
+                format!("set the count to {read}, or export the mesh again"),
+            ));
+        }
+        token.parse().map_err(|_| {
+            self.tokens.error(
+                format!("expected {what}, found {token:?}"),
+                "the file is corrupted or not in the format its header states: export it again",
+            )
+        })
+    }
+
+    /// The end marker of a section whose header on `header_line` declared
+    /// `declared` (`3 elements`), all read: anything else there is more.
+    fn section_end(&mut self, end: &str, declared: &str, header_line: usize) -> Result<(), ReadError> {
+        let token = self.tokens.expect(end)?;
+        if token == end {
+            return Ok(());
+        }
+        Err(self.tokens.error_at(
+            header_line,
+            format!(
+                "the count here declares {declared}, but more follow them (from line {}, {token:?}) before {end}",
+                self.tokens.line()
+            ),
+            "set the count to what the section holds, or export the mesh again",
+        ))
+    }
+
+    /// Refuses a version 4 section whose header on `header_line` declares
+    /// `declared` entries in all where its blocks hold `held`: Gmsh writes
+    /// them equal, so one differs in an edited or damaged file.
+    fn check_total(&self, what: &str, declared: usize, held: usize, header_line: usize) -> Result<(), ReadError> {
+        if declared == held {
+            return Ok(());
+        }
+        Err(self.tokens.error_at(
+            header_line,
+            format!("the header declares {declared} {what} in all, but its blocks hold {held}"),
+            format!("set the count on this line to {held}, or export the mesh again"),
+        ))
+    }
+
     fn elements(&mut self) -> Result<(), ReadError> {
+        let end = "$EndElements";
         match self.version {
             Some(Version::V2) => {
                 let count: usize = self.tokens.parse("the number of elements")?;
-                for _ in 0..count {
-                    let id: u64 = self.tokens.parse("an element tag")?;
+                let header_line = self.tokens.line();
+                for read in 0..count {
+                    let id = self.entry_tag("element", end, count, read, header_line)?;
                     let line = self.tokens.line();
                     let code: u32 = self.tokens.parse("an element type")?;
                     let tag_count: usize = self.tokens.parse("the number of element tags")?;
@@ -413,15 +478,20 @@ impl<'a> Parser<'a> {
                         .into_iter()
                         .collect();
                     let nodes = self.element_nodes(id, code, line)?;
-                    self.element(id, code, nodes, &physical)?;
+                    self.element(id, code, nodes, &physical, line)?;
                 }
+                self.section_end(end, &format!("{count} elements"), header_line)
             }
             version => {
                 let blocks: usize = self.tokens.parse("the number of element blocks")?;
-                let bounds = if version == Some(Version::V41) { 3 } else { 1 };
-                for _ in 0..bounds {
-                    self.tokens.parse::<u64>("an element count or tag bound")?;
+                let header_line = self.tokens.line();
+                let declared: usize = self.tokens.parse("the number of elements")?;
+                if version == Some(Version::V41) {
+                    for _ in 0..2 {
+                        self.tokens.parse::<u64>("an element tag bound")?;
+                    }
                 }
+                let mut held = 0usize;
                 for _ in 0..blocks {
                     let (dim, tag) = if version == Some(Version::V41) {
                         let dim: u8 = self.tokens.parse("an entity dimension")?;
@@ -432,21 +502,24 @@ impl<'a> Parser<'a> {
                     };
                     let code: u32 = self.tokens.parse("an element type")?;
                     let count: usize = self.tokens.parse("the number of elements in the block")?;
+                    let block_line = self.tokens.line();
                     let physicals = self
                         .entity_physicals
                         .get(&(dim, tag))
                         .cloned()
                         .unwrap_or_default();
-                    for _ in 0..count {
-                        let id: u64 = self.tokens.parse("an element tag")?;
+                    for read in 0..count {
+                        let id = self.entry_tag("element", end, count, read, block_line)?;
                         let line = self.tokens.line();
                         let nodes = self.element_nodes(id, code, line)?;
-                        self.element(id, code, nodes, &physicals)?;
+                        self.element(id, code, nodes, &physicals, line)?;
                     }
+                    held = held.saturating_add(count);
                 }
+                self.section_end(end, &format!("{blocks} element blocks"), header_line)?;
+                self.check_total("elements", declared, held, header_line)
             }
         }
-        self.tokens.expect_marker("$EndElements")
     }
 
     fn skip_section(&mut self, name: &str) -> Result<(), ReadError> {
@@ -623,6 +696,47 @@ mod tests {
         let err = read("m.msh", &mixed).unwrap_err().to_string();
         assert!(err.contains("mixes 2 hexahedra and 1 tetrahedra"), "{err}");
         assert!(err.contains("fix:"), "{err}");
+    }
+
+    /// An element naming a node the file lacks, or one node twice, is
+    /// named at its own line, as every other fault of the file is.
+    #[test]
+    fn an_element_with_a_missing_or_repeated_node_is_named_at_its_line() {
+        let missing = CUBE_V22.replacen("\n2 5 2 1 1 2 3 6 5 8 9 12 11", "\n2 5 2 1 1 2 3 6 5 8 9 12 99", 1);
+        let err = read("m.msh", &missing).unwrap_err().to_string();
+        assert!(err.starts_with("m.msh:27: element 2 names node 99, which the file does not define; fix:"), "{err}");
+        let twice = CUBE_V22.replacen("\n2 5 2 1 1 2 3 6 5 8 9 12 11", "\n2 5 2 1 1 2 3 6 5 8 9 12 2", 1);
+        let err = read("t.msh", &twice).unwrap_err().to_string();
+        assert!(err.starts_with("t.msh:27: element 2 uses node 2 twice"), "{err}");
+    }
+
+    /// A header whose count differs from the entries that follow is
+    /// refused at the header's line with both counts, not read short or
+    /// passed over.
+    #[test]
+    fn a_count_that_does_not_match_its_entries_is_named_with_both() {
+        // Version 4: the total over the blocks (the cube's 175 in examples/).
+        let cube = include_str!("../../../examples/cube_n5.msh");
+        let claimed = cube.replacen("$Elements\n3 175 1 175\n", "$Elements\n3 176 1 175\n", 1);
+        assert_ne!(claimed, cube);
+        let line = cube.lines().position(|l| l == "$Elements").unwrap() + 2;
+        let err = read("c.msh", &claimed).unwrap_err().to_string();
+        assert!(err.starts_with(&format!("c.msh:{line}: the header declares 176 elements in all, but its blocks hold 175; fix: set the count on this line to 175")), "{err}");
+        let nodes = CUBE_V41.lines().position(|l| l == "$Nodes").unwrap() + 2;
+        let header = CUBE_V41.lines().nth(nodes - 1).unwrap();
+        let (blocks, rest) = header.split_once(' ').unwrap();
+        let (count, bounds) = rest.split_once(' ').unwrap();
+        let more = count.parse::<usize>().unwrap() + 1;
+        let edited = CUBE_V41.replacen(&format!("$Nodes\n{header}\n"), &format!("$Nodes\n{blocks} {more} {bounds}\n"), 1);
+        let err = read("n.msh", &edited).unwrap_err().to_string();
+        assert!(err.starts_with(&format!("n.msh:{nodes}: the header declares {more} nodes in all, but its blocks hold {count}")), "{err}");
+        // Version 2: a count one over, or one short, of the elements.
+        let over = CUBE_V22.replacen("$Elements\n5\n", "$Elements\n6\n", 1);
+        let err = read("o.msh", &over).unwrap_err().to_string();
+        assert!(err.starts_with("o.msh:25: the count here declares 6 elements, but $EndElements comes after 5 (line 31); fix: set the count to 5"), "{err}");
+        let short = CUBE_V22.replacen("$Elements\n5\n", "$Elements\n4\n", 1);
+        let err = read("s.msh", &short).unwrap_err().to_string();
+        assert!(err.starts_with("s.msh:25: the count here declares 4 elements, but more follow them (from line 30"), "{err}");
     }
 
     #[test]

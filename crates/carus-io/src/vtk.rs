@@ -438,16 +438,16 @@ fn mesh_from_piece(path: &Path, piece: &UnstructuredGridPiece) -> Result<MeshFil
         match cell_type {
             CellType::Hexahedron => {
                 is_volume[c] = true;
-                builder.add_hexahedron(id, std::array::from_fn(|i| nodes[i]))
+                builder.add_hexahedron(id, std::array::from_fn(|i| nodes[i]), None)
             }
             // A voxel numbers its top and bottom faces in x-y raster order.
             CellType::Voxel => {
                 is_volume[c] = true;
-                builder.add_hexahedron(id, [0, 1, 3, 2, 4, 5, 7, 6].map(|i| nodes[i]))
+                builder.add_hexahedron(id, [0, 1, 3, 2, 4, 5, 7, 6].map(|i| nodes[i]), None)
             }
             CellType::Tetra => {
                 is_volume[c] = true;
-                builder.add_tetrahedron(id, std::array::from_fn(|i| nodes[i]))
+                builder.add_tetrahedron(id, std::array::from_fn(|i| nodes[i]), None)
             }
             _ => {
                 is_surface[c] = true;

@@ -37,10 +37,14 @@ pub fn make_frames_dir(out_dir: &Path) -> Result<(), LabourError> {
 }
 
 fn output_error(path: &Path, e: impl std::fmt::Display) -> LabourError {
-    LabourError::Output {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-    }
+    // carus_io's write errors lead with the path already, which
+    // LabourError::Output's own would say again.
+    let message = e.to_string();
+    let message = match message.strip_prefix(&format!("{}: ", path.display())) {
+        Some(rest) => rest.to_string(),
+        None => message,
+    };
+    LabourError::Output { path: path.to_path_buf(), message }
 }
 
 /// Writes `text` to `path` whole, or leaves no half file
@@ -141,6 +145,21 @@ pub fn read_checkpoint(dir: &Path) -> Result<Checkpoint, LabourError> {
         let problem = match e.kind() {
             std::io::ErrorKind::InvalidData => format!(
                 "not text ({e}): it was damaged after carus wrote it; run the scenario again from the start"
+            ),
+            // A run's folder cut off before its first checkpoint (killed,
+            // or still going), or one it was taken from: say which and what next.
+            std::io::ErrorKind::NotFound if dir.join(SCENARIO_FILE).is_file() => format!(
+                "not there: {} holds no checkpoint to go on from; a run writes one every \
+                 `numerics.checkpoint_every_s` of simulated time (its {SCENARIO_FILE} says how often) and when it \
+                 stops, so this run was cut off before its first (or is still running to it), or the file was \
+                 removed; run the scenario again from the start: `carus run {} --out NEW_FOLDER`",
+                dir.display(),
+                dir.join(SCENARIO_FILE).display()
+            ),
+            std::io::ErrorKind::NotFound => format!(
+                "not there: {} holds no run (no {SCENARIO_FILE} either); --resume takes the folder that \
+                 `carus run` wrote",
+                dir.display()
             ),
             _ => format!("{e}; is this the out dir of a `carus run`?"),
         };
@@ -695,4 +714,44 @@ pub fn write_contacts_csv(path: &Path, loads: &[LoadSample]) -> Result<(), Labou
         }
     }
     write_text(path, &text)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A file that cannot be written is named once, not once by carus_io
+    /// and again by the run.
+    #[test]
+    fn a_write_failure_names_the_file_once() {
+        let dir = tempfile::tempdir().unwrap();
+        // A file where the run's folder should be: no write can go there.
+        let blocked = dir.path().join("trap");
+        std::fs::write(&blocked, "").unwrap();
+        let path = blocked.join(HISTORY_CSV);
+        let e = output_error(&path, carus_io::CsvWriter::create(&path, &["time_s"]).err().unwrap()).to_string();
+        let named = path.display().to_string();
+        assert_eq!(e.matches(&named).count(), 1, "{e}");
+        assert!(e.starts_with(&format!("{named}: cannot write the file")), "{e}");
+    }
+
+    /// A run's folder without its checkpoint says so, how often a run
+    /// writes one and what to do; a folder with no run says that.
+    #[test]
+    fn a_missing_checkpoint_says_why_and_what_to_do() {
+        let dir = tempfile::tempdir().unwrap();
+        let e = read_checkpoint(dir.path()).err().unwrap().to_string();
+        assert!(e.contains("checkpoint.json: not there") && e.contains("holds no run (no scenario.toml either)"), "{e}");
+        assert!(!e.contains("os error"), "{e}");
+        std::fs::write(dir.path().join(SCENARIO_FILE), "").unwrap();
+        let e = read_checkpoint(dir.path()).err().unwrap().to_string();
+        let d = dir.path().display();
+        for part in [
+            format!("{d}/checkpoint.json: not there: {d} holds no checkpoint to go on from"),
+            "every `numerics.checkpoint_every_s` of simulated time".to_string(),
+            format!("`carus run {d}/scenario.toml --out NEW_FOLDER`"),
+        ] {
+            assert!(e.contains(&part), "{part}: {e}");
+        }
+    }
 }

@@ -141,7 +141,13 @@ pub struct TrunkSection {
 
 impl Default for TrunkSection {
     fn default() -> Self {
-        let d = TrunkDiameters::default();
+        TrunkSection::with_diameters(&TrunkDiameters::default())
+    }
+}
+
+impl TrunkSection {
+    /// An enabled trunk of these diameters.
+    pub fn with_diameters(d: &TrunkDiameters) -> Self {
         TrunkSection {
             enabled: true,
             bisacromial_mm: d.bisacromial_mm,
@@ -149,6 +155,17 @@ impl Default for TrunkSection {
             cervical_spine_mm: d.cervical_spine_mm,
             trunk_length_mm: d.trunk_length_mm,
             chest_breadth_mm: d.chest_breadth_mm,
+        }
+    }
+
+    /// The diameters carus-anatomy builds the trunk from.
+    pub fn diameters(&self) -> TrunkDiameters {
+        TrunkDiameters {
+            bisacromial_mm: self.bisacromial_mm,
+            bitrochanteric_mm: self.bitrochanteric_mm,
+            cervical_spine_mm: self.cervical_spine_mm,
+            trunk_length_mm: self.trunk_length_mm,
+            chest_breadth_mm: self.chest_breadth_mm,
         }
     }
 }
@@ -816,14 +833,32 @@ impl PartialEq for ReadFrom {
 
 impl ReadFrom {
     fn file(path: &Path, text: String) -> ReadFrom {
-        ReadFrom(Some(std::sync::Arc::new(ScenarioSource { path: path.to_path_buf(), text, changed: Vec::new() })))
+        ReadFrom(Some(std::sync::Arc::new(ScenarioSource { file: Some((path.to_path_buf(), text)), changed: Vec::new() })))
     }
 
     /// The file and line that `key` is written on, where a check made after
     /// reading should point; None for a built-in or a key changed since.
     fn locate(&self, key: &str) -> Option<(&Path, Option<NonZeroUsize>)> {
         let read = self.0.as_deref().filter(|read| !read.changed(key))?;
-        Some((read.path.as_path(), line_of_key(&read.text, key)))
+        let (path, text) = read.file.as_ref()?;
+        Some((path.as_path(), line_of_key(text, key)))
+    }
+
+    /// The settings made since reading (a built-in's too), key and value
+    /// as given, in the order made.
+    fn settings(&self) -> &[(String, String)] {
+        self.0.as_deref().map_or(&[], |read| &read.changed)
+    }
+
+    /// This source with `settings` made since; a key set again (a sweep's
+    /// value over the one its file was mended with) keeps its last value.
+    fn with_changed(&self, settings: &[(String, String)]) -> ReadFrom {
+        let mut source = self.0.as_deref().cloned().unwrap_or(ScenarioSource { file: None, changed: Vec::new() });
+        for (key, value) in settings {
+            source.changed.retain(|(earlier, _)| !holds_key(key, earlier));
+            source.changed.push((key.clone(), value.clone()));
+        }
+        ReadFrom(Some(std::sync::Arc::new(source)))
     }
 }
 
@@ -839,20 +874,21 @@ impl Scenario {
     }
 }
 
-/// A scenario file's name and text, and the keys changed since it was
-/// read (`--set`, a sweep), whose lines in it no longer hold their values.
+/// A scenario file's name and text (none for a built-in), and the keys
+/// changed since it was read (`--set`, a sweep) with their values: their
+/// lines in the file no longer hold them, and a check refusing another
+/// key names them as what changed.
 #[derive(Debug, Clone)]
 pub struct ScenarioSource {
-    path: PathBuf,
-    text: String,
-    changed: Vec<String>,
+    file: Option<(PathBuf, String)>,
+    changed: Vec<(String, String)>,
 }
 
 impl ScenarioSource {
     /// Whether `key` (`trajectory.waypoints[2].theta_deg`) was changed
     /// since reading: it, or a table or list holding it.
     fn changed(&self, key: &str) -> bool {
-        self.changed.iter().any(|c| holds_key(c, key))
+        self.changed.iter().any(|(c, _)| holds_key(c, key))
     }
 }
 
@@ -1083,18 +1119,34 @@ impl Scenario {
     /// file writes it; named as a setting otherwise (a built-in, a changed
     /// key).
     pub(crate) fn refuse(&self, key: String, value: String, problem: String, hint: String) -> ScenarioError {
+        // Settings of other keys (a larger head) can make a value the
+        // scenario has (its start) fail: they are named with it, for the
+        // user changed those, not this one.
+        let made = self.source.settings();
+        let with = made.iter().map(|(k, v)| format!("{k} = {v}")).collect::<Vec<_>>().join(", ");
         match self.source.locate(&key) {
             Some((path, line)) => ScenarioError::Value {
                 path: path.into(),
                 line,
                 key: key.into(),
-                value,
+                value: match line {
+                    Some(_) => value,
+                    None => format!("{value} (the default: the file does not set it)"),
+                },
+                problem: match made.is_empty() {
+                    true => problem,
+                    false => format!("with {with} set, {problem}"),
+                },
+                hint,
+            },
+            None if made.is_empty() || made.iter().any(|(k, _)| holds_key(k, &key)) => ScenarioError::Setting {
+                setting: format!("{key} = {value}"),
                 problem,
                 hint,
             },
             None => ScenarioError::Setting {
-                setting: format!("{key} = {value}"),
-                problem,
+                setting: with,
+                problem: format!("then `{key}` = {value}, the scenario's own value: {problem}"),
                 hint,
             },
         }
@@ -1179,11 +1231,12 @@ impl Scenario {
         let changed = Scenario::parse(&label, &text, base_dir).map_err(|e| match e {
             ScenarioError::Syntax {
                 key, message, hint, ..
-            } => ScenarioError::Setting {
-                setting: written.join(", "),
-                problem: format!("{key}{message}"),
-                hint,
-            },
+            } => {
+                // The setting at fault alone, not every one given.
+                let faulty = key.trim_end_matches(": ").trim_matches('`');
+                let setting = setting_at_fault(settings, faulty).map_or_else(|| written.join(", "), |(k, v)| format!("{k} = {v}"));
+                ScenarioError::Setting { setting, problem: format!("{key}{message}"), hint }
+            }
             // A value a setting gave that the checks refuse is that
             // setting's fault, as an unknown key is (a bad argument); so is
             // another key's, refused through it, in a scenario that passed.
@@ -1205,12 +1258,9 @@ impl Scenario {
                 other
             }
         })?;
-        // Later checks still point into the file read, but not at a changed key.
-        let source = ReadFrom(source.0.as_deref().map(|source| {
-            let mut source = source.clone();
-            source.changed.extend(settings.iter().map(|(key, _)| key.clone()));
-            std::sync::Arc::new(source)
-        }));
+        // Later checks still point into the file read, but not at a changed
+        // key, and name the settings made.
+        let source = source.with_changed(settings);
         // The description was written for the scenario as it was: it says
         // what changed, so that a copy in a run folder or a report does
         // not describe the unchanged one (an imposed teaching run set to
@@ -1241,13 +1291,24 @@ impl Scenario {
         })
     }
 
-    /// The checks a scenario's `[pelvis]` and `[head]` get (a value in
-    /// another unit, a size no pelvis or head has), for an anatomy file,
+    /// The checks a scenario's `[pelvis]`, `[head]` and `[trunk]` get (a
+    /// value in another unit, a size no pelvis or fetus has), for an anatomy file,
     /// which has those tables without the rest of a scenario: `carus
     /// measure`, `mesh` and `render` refuse what `carus run` refuses, at
     /// the same line.
-    pub fn check_anatomy_tables(path: &Path, text: &str, pelvis: &PelvisSpec, head: &HeadDiameters) -> Result<(), ScenarioError> {
-        let scenario = Scenario { pelvis: pelvis.clone(), head: *head, ..Scenario::builtin("normal")? };
+    pub fn check_anatomy_tables(
+        path: &Path,
+        text: &str,
+        pelvis: &PelvisSpec,
+        head: &HeadDiameters,
+        trunk: &TrunkDiameters,
+    ) -> Result<(), ScenarioError> {
+        let scenario = Scenario {
+            pelvis: pelvis.clone(),
+            head: *head,
+            trunk: TrunkSection::with_diameters(trunk),
+            ..Scenario::builtin("normal")?
+        };
         scenario.check_at_lines(path, text)
     }
 
@@ -1575,11 +1636,16 @@ impl Scenario {
             &[
                 ("trunk.bisacromial_mm", self.trunk.bisacromial_mm),
                 ("trunk.bitrochanteric_mm", self.trunk.bitrochanteric_mm),
-                ("trunk.chest_breadth_mm", self.trunk.chest_breadth_mm),
             ],
             FETAL_TRUNK_WIDTH_MM,
             "is not the width of a fetal trunk",
             "mm (not cm): the newborn's bisacromial is 124 +- 10 mm",
+        )?;
+        in_band(
+            &[("trunk.chest_breadth_mm", self.trunk.chest_breadth_mm)],
+            FETAL_TRUNK_WIDTH_MM,
+            "is not the width of a fetal trunk",
+            "mm (not cm): a term newborn's chest is about 108 mm across (322 mm round; docs/ANATOMY.md)",
         )?;
         in_band(
             &[("trunk.cervical_spine_mm", self.trunk.cervical_spine_mm)],
@@ -1884,10 +1950,19 @@ impl Scenario {
         let dt = self.numerics.rigid_dt_s;
         for (i, w) in t.waypoints.iter().enumerate() {
             let key = |field: &str| format!("trajectory.waypoints[{i}].{field}");
+            // A nan or inf time is no time at all: said so before any order.
+            if !w.time_s.is_finite() {
+                return Err(err(
+                    key("time_s"),
+                    shown(w.time_s),
+                    "is not a finite number",
+                    "give the way-point's time in seconds from the start, after the way-point before it, e.g. 3.0",
+                ));
+            }
             // A rigid step at least between two: the head's motion over a
             // step is read from the path, and a turn within one step would
             // be taken the short way round.
-            if !(w.time_s.is_finite() && w.time_s >= previous_s + dt) {
+            if w.time_s < previous_s + dt {
                 let (before, hint) = match i {
                     0 => ("the start, at 0 s, where [start] places the head".to_string(), "give it a time after 0 s"),
                     _ => (
@@ -1918,7 +1993,8 @@ impl Scenario {
                 ("anterior_mm", w.anterior_mm, WAYPOINT_ANTERIOR_MM, "mm off the pelvic axis towards the symphysis, e.g. 10.0"),
             ] {
                 if !(value.is_finite() && (low..=high).contains(&value)) {
-                    return Err(err(key(field), shown(value), &format!("must lie between {low} and {high}"), hint));
+                    let finite = if value.is_finite() { "" } else { "is not a finite number: it " };
+                    return Err(err(key(field), shown(value), &format!("{finite}must lie between {low} and {high}"), hint));
                 }
             }
         }
@@ -1938,6 +2014,23 @@ pub const WAYPOINT_THETA_DEG: (f64, f64) = (-720.0, 720.0);
 pub const WAYPOINT_ANTERIOR_MM: (f64, f64) = (-50.0, 50.0);
 /// phi of a way-point, degrees: from full extension to full flexion.
 pub const WAYPOINT_PHI_DEG: (f64, f64) = (-90.0, 90.0);
+
+/// The one setting a reading error at `key` (`contact.friction`) is in:
+/// the setting of that key or a table holding it, else the one setting
+/// inside the table `key` names; None where that is not one setting
+/// (a key no setting names).
+fn setting_at_fault<'a>(settings: &'a [(String, String)], key: &str) -> Option<&'a (String, String)> {
+    if key.is_empty() {
+        return None;
+    }
+    if let Some(holding) = settings.iter().find(|(k, _)| holds_key(k, key)) {
+        return Some(holding);
+    }
+    match settings.iter().filter(|(k, _)| holds_key(key, k)).collect::<Vec<_>>().as_slice() {
+        [one] => Some(one),
+        _ => None,
+    }
+}
 
 /// Writes `key` (a dotted path) = `value` (TOML text; a bare word is
 /// taken as a string) into a scenario's table, refusing a value with a
@@ -1965,6 +2058,19 @@ fn set_key(table: &mut toml::Table, key: &str, value: &str) -> Result<(), Scenar
                     "the number is beyond the largest a value can hold (about 1.8e308)",
                     "check the exponent; units are in the key names (mm, deg, s, n, pa)",
                 ));
+            }
+            // Digits alone past TOML's whole numbers: no bare word either.
+            let whole = value.trim().replace('_', "").parse::<i128>();
+            let too_large = match whole {
+                Ok(n) => i64::try_from(n).is_err(),
+                Err(e) => matches!(e.kind(), std::num::IntErrorKind::PosOverflow | std::num::IntErrorKind::NegOverflow),
+            };
+            if too_large {
+                let hint = match normal_value(key) {
+                    Some(example) => format!("give a smaller number, e.g. {key}={example} as the built-in normal has it"),
+                    None => "give a smaller number".to_string(),
+                };
+                return Err(refuse(&format!("the whole number {} is too large: TOML's whole numbers end at {}", value.trim(), i64::MAX), &hint));
             }
             toml::Value::String(value.to_string())
         }
@@ -2254,10 +2360,17 @@ fn unit_in_value(path: &Path, text: &str, error: &toml::de::Error) -> Option<Sce
 /// serde's message with Rust's number types said as a reader would:
 /// "expected usize" is "expected a whole number".
 fn plain_types(message: &str) -> String {
-    let whole = ["usize", "u64", "u32", "u16", "u8", "isize", "i64", "i32", "i16", "i8"];
     let mut plain = message.to_string();
-    for rust in whole {
+    // A count or a size: a negative one is refused by its type alone.
+    for rust in ["usize", "u64", "u32", "u16", "u8"] {
+        plain = plain.replace(&format!("expected {rust}"), "expected a whole number of 0 or more");
+    }
+    for rust in ["isize", "i64", "i32", "i16", "i8"] {
         plain = plain.replace(&format!("expected {rust}"), "expected a whole number");
+    }
+    // toml reads a whole number past i64 as i128, which no key takes.
+    if let Some(number) = plain.strip_prefix("invalid type: integer `").and_then(|rest| rest.split_once("` as i128")) {
+        plain = format!("the whole number `{}` is too large: TOML's whole numbers end at {}", number.0, i64::MAX);
     }
     for rust in ["f64", "f32"] {
         plain = plain.replace(&format!("expected {rust}"), "expected a number");
@@ -2273,17 +2386,18 @@ fn plain_types(message: &str) -> String {
 
 /// Whether the dotted key holds a number in a complete scenario file.
 fn takes_a_number(full_key: &str) -> bool {
-    let Some(complete) = Scenario::builtin("normal").ok().and_then(|s| s.to_toml().ok()) else {
-        return false;
-    };
-    let Ok(table) = complete.parse::<toml::Table>() else {
-        return false;
-    };
-    let mut value = Some(&toml::Value::Table(table));
+    normal_value(full_key).is_some_and(|v| v.is_integer() || v.is_float())
+}
+
+/// The dotted key's value in the built-in normal scenario written whole,
+/// an example for a message; None for a key it has not (a way-point's).
+fn normal_value(full_key: &str) -> Option<toml::Value> {
+    let complete = Scenario::builtin("normal").ok()?.to_toml().ok()?;
+    let mut value = toml::Value::Table(complete.parse::<toml::Table>().ok()?);
     for part in full_key.split('.') {
-        value = value.and_then(|v| v.get(part));
+        value = value.get(part)?.clone();
     }
-    value.is_some_and(|v| v.is_integer() || v.is_float())
+    Some(value)
 }
 
 fn syntax(path: &Path, text: &str, key: String, error: &toml::de::Error) -> ScenarioError {
@@ -2322,8 +2436,18 @@ fn syntax(path: &Path, text: &str, key: String, error: &toml::de::Error) -> Scen
         "docs/TRAJECTORIES.md lists what a way-point needs; `carus scenarios show textbook` has them".to_string()
     } else if message.starts_with("unknown variant") {
         "use one of the values listed".to_string()
-    } else if message.starts_with("invalid type") && message.ends_with("expected a whole number") {
+    } else if message.starts_with("invalid type") && message.contains("expected a whole number") {
         "this key takes a whole number: no decimal point, no quotes".to_string()
+    } else if message.ends_with("expected a whole number of 0 or more") || message.contains("is too large: TOML's whole numbers end at") {
+        // A sign or a size no count has: the normal scenario's is an example.
+        let what = match message.contains("is too large") {
+            true => "a smaller number",
+            false => "a whole number of 0 or more",
+        };
+        match normal_value(&key) {
+            Some(example) => format!("give {what}, e.g. `{key} = {example}` as the built-in normal has it"),
+            None => format!("give {what}"),
+        }
     } else if message.starts_with("invalid type") {
         "numbers without quotes, names in quotes; units are in the key names (mm, deg, s, n, pa)"
             .to_string()
@@ -2454,6 +2578,12 @@ mod tests {
         assert!(e.contains("`trajectory.waypoints[0].time_s` = 0") && e.contains("after the start, at 0 s, where [start] places the head") && e.contains("a time after 0 s"), "{e}");
         let e = refused("imposed", &point(61.0, -40.0));
         assert!(e.contains("`trajectory.waypoints[0].time_s` = 61") && e.contains("numerics.end_time_s"), "{e}");
+        // A time that is no number is said to be that, not out of order.
+        let e = refused("imposed", &format!("{}{}", point(1.0, -40.0), point(2.0, -20.0).replace("time_s = 2", "time_s = nan")));
+        assert!(e.contains("`trajectory.waypoints[1].time_s` = NaN: is not a finite number") && !e.contains("rigid step"), "{e}");
+        assert!(e.contains("hint: give the way-point's time in seconds"), "{e}");
+        let e = refused("imposed", &point(1.0, -40.0).replace("phi_deg = 20.0", "phi_deg = inf"));
+        assert!(e.contains("`trajectory.waypoints[0].phi_deg` = inf: is not a finite number: it must lie between -90 and 90"), "{e}");
         let e = refused("imposed", &point(1.0, -400.0));
         assert!(e.contains("`trajectory.waypoints[0].station_mm` = -400") && e.contains("between -150 and 300"), "{e}");
         let e = refused("imposed", &format!("{}anterior_mm = 80.0\n", point(1.0, -40.0)));
@@ -2485,7 +2615,8 @@ mod tests {
             .with_settings(&[setting("trajectory.mode", "forward"), setting("contact.fiction", "0.3")])
             .unwrap_err()
             .to_string();
-        assert!(e.contains("trajectory.mode = forward, contact.fiction = 0.3") && e.contains("fiction"), "{e}");
+        // The setting at fault alone leads the message.
+        assert!(e.starts_with("`contact.fiction = 0.3`:") && e.contains("unknown field `fiction`"), "{e}");
         // One key set twice is a slip, not the last one winning.
         let e = textbook
             .with_settings(&[setting("contact.friction", "0.1"), setting("contact.friction", "0.2")])
@@ -2838,6 +2969,38 @@ mod tests {
         assert!(e.contains("expected a table of keys") && !e.contains("struct"), "{e}");
         let e = parse("name = \"x\"\n[pelvis]\nimport = 5\n").unwrap_err().to_string();
         assert!(e.starts_with("test.toml:3: `pelvis.import`: invalid type: integer `5`, expected a file's path in quotes"), "{e}");
+    }
+
+    /// A count given a sign, or a number past TOML's whole numbers, is
+    /// named at its line as that, with the normal scenario's value for an
+    /// example; in a file and as a setting alike.
+    #[test]
+    fn a_negative_or_huge_count_says_what_it_takes() {
+        let e = parse("name = \"x\"\n[floor.mesh]\nelements_around = -32\n").unwrap_err().to_string();
+        assert!(e.starts_with("test.toml:3: `floor.mesh.elements_around`: invalid value: integer `-32`, expected a whole number of 0 or more"), "{e}");
+        assert!(e.contains("hint: give a whole number of 0 or more, e.g. `floor.mesh.elements_around = 32`"), "{e}");
+        let e = parse("name = \"x\"\n[floor.mesh]\nelements_around = 99999999999999999999\n").unwrap_err().to_string();
+        assert!(e.starts_with("test.toml:3: `floor.mesh.elements_around`: the whole number `99999999999999999999` is too large"), "{e}");
+        assert!(e.contains("hint: give a smaller number, e.g. `floor.mesh.elements_around = 32`") && !e.contains("i128"), "{e}");
+        let normal = Scenario::builtin("normal").unwrap();
+        let e = normal.with_setting("floor.mesh.elements_around", "-32").unwrap_err().to_string();
+        assert!(e.starts_with("`floor.mesh.elements_around = -32`:") && e.contains("of 0 or more"), "{e}");
+        let e = normal.with_setting("floor.mesh.elements_around", "99999999999999999999").unwrap_err().to_string();
+        assert!(e.contains("is too large") && e.contains("give a smaller number, e.g. floor.mesh.elements_around=32"), "{e}");
+        assert!(!e.contains("invalid type: string"), "{e}");
+    }
+
+    /// Of several settings, a reading error names only the one at fault.
+    #[test]
+    fn a_refused_setting_is_named_alone() {
+        let normal = Scenario::builtin("normal").unwrap();
+        let setting = |k: &str, v: &str| (k.to_string(), v.to_string());
+        let e = normal.with_settings(&[setting("contact.friction", "abc"), setting("numerics.end_time_s", "0.02")]).unwrap_err().to_string();
+        assert!(e.starts_with("`contact.friction = abc`: ") && !e.contains("end_time_s"), "{e}");
+        let e = normal.with_settings(&[setting("expulsion.period_s", "8"), setting("expulsion.periods", "32")]).unwrap_err().to_string();
+        assert!(e.starts_with("`expulsion.periods = 32`: ") && e.contains("unknown field"), "{e}");
+        let e = normal.with_settings(&[setting("numerics.end_time_s", "0.02"), setting("expulsion", "{periods=3}")]).unwrap_err().to_string();
+        assert!(e.starts_with("`expulsion = {periods=3}`: `expulsion.periods`: unknown field"), "{e}");
     }
 
     #[test]

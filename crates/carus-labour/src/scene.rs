@@ -9,7 +9,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use carus_analysis::{BirthCanal, ContactSite, HeadGeometry, TrunkGeometry};
-use carus_anatomy::fetus::{FetalHead, HeadLandmarks, Trunk, TrunkDiameters};
+use carus_anatomy::fetus::{FetalHead, HeadLandmarks, Trunk};
 use carus_anatomy::floor::{pelvic_floor, ATTACHED};
 use carus_anatomy::import::MeshReport;
 use carus_anatomy::{Pelvis, Plane, TriSurface};
@@ -179,15 +179,8 @@ impl Scene {
         // The thoracolumbar joint in the thorax's frame.
         let mut thoracolumbar = None;
         let (trunk, trunk_geometry, spine_in_trunk, thoracic_inlet) = if s.trunk.enabled {
-            let d = TrunkDiameters {
-                bisacromial_mm: s.trunk.bisacromial_mm,
-                bitrochanteric_mm: s.trunk.bitrochanteric_mm,
-                cervical_spine_mm: s.trunk.cervical_spine_mm,
-                trunk_length_mm: s.trunk.trunk_length_mm,
-                chest_breadth_mm: s.trunk.chest_breadth_mm,
-            };
             let anatomy =
-                Trunk::new(&d).map_err(|e| LabourError::anatomy(format!("fetal trunk: {e}")))?;
+                Trunk::new(&s.trunk.diameters()).map_err(|e| LabourError::anatomy(format!("fetal trunk: {e}")))?;
             let density = s.fetus.density_kg_per_m3;
             let body = if s.spine.enabled {
                 let parts = anatomy.segments();
@@ -1036,6 +1029,19 @@ mod tests {
         assert!(e.starts_with(&format!("mine.toml:{line}: `start.station_mm` = 60: the head starts")), "{e}");
         let e = Scene::build(&file.with_setting("start.station_mm", "61").unwrap()).expect_err("refused").to_string();
         assert!(e.starts_with("`start.station_mm = 61`: the head starts"), "{e}");
+        // Another key set, the file's start is named at its line with the setting.
+        let e = Scene::build(&file.with_setting("neck.flexion_limit_deg", "67").unwrap()).expect_err("refused").to_string();
+        assert!(e.starts_with(&format!("mine.toml:{line}: `start.station_mm` = 60: with neck.flexion_limit_deg = 67 set, the head starts")), "{e}");
+        // A built-in's start, never set, is refused under what was set.
+        let setting = |k: &str, v: &str| (k.to_string(), v.to_string());
+        let larger = Scenario::builtin("normal").unwrap().with_settings(&[setting("numerics.head_subdivisions", "3"), setting("head.biparietal_mm", "200")]).unwrap();
+        let e = Scene::build(&larger).expect_err("refused").to_string();
+        assert!(e.starts_with("`numerics.head_subdivisions = 3, head.biparietal_mm = 200`: then `start.station_mm` = -55, the scenario's own value: the head starts inside the bony canal"), "{e}");
+        assert!(e.contains("hint: start the head higher"), "{e}");
+        // A key set again (a sweep's value over a mended file's) is named with its last value.
+        let again = larger.with_setting("head.biparietal_mm", "210").unwrap();
+        let e = Scene::build(&again).expect_err("refused").to_string();
+        assert!(e.starts_with("`numerics.head_subdivisions = 3, head.biparietal_mm = 210`: then"), "{e}");
         s.start.station_mm = 45.0;
         assert!(Scene::build(&s).is_ok());
     }

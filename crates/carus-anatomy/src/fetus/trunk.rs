@@ -194,6 +194,22 @@ pub struct TrunkLandmarks {
     pub breech: DVec3,
 }
 
+impl TrunkLandmarks {
+    /// Every landmark with its name.
+    pub fn named(&self) -> [(&'static str, DVec3); 8] {
+        [
+            ("neck", self.neck),
+            ("acromion_left", self.acromion_left),
+            ("acromion_right", self.acromion_right),
+            ("bisacromial_midpoint", self.bisacromial_midpoint),
+            ("trochanter_left", self.trochanter_left),
+            ("trochanter_right", self.trochanter_right),
+            ("centre", self.centre),
+            ("breech", self.breech),
+        ]
+    }
+}
+
 /// The trunk: diameters, closed outward surface, landmarks and spine axis.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Trunk {
@@ -356,12 +372,13 @@ impl Trunk {
             trunk_length_mm: (self.surface.vertices[NECK_BASE * RING_POINTS].z
                 - self.surface.vertices[BUTTOCKS * RING_POINTS].z)
                 * 1e3,
+            landmarks_mm: l.named().into_iter().map(|(name, p)| (name.to_string(), (p * 1e3).to_array())).collect(),
         }
     }
 }
 
 /// Trunk diameters measured between landmarks and the trunk's extents, mm.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TrunkMeasurement {
     pub bisacromial_mm: f64,
     pub bitrochanteric_mm: f64,
@@ -376,6 +393,8 @@ pub struct TrunkMeasurement {
     pub cervical_spine_mm: f64,
     /// From the neck base down to the buttocks' lowest ring.
     pub trunk_length_mm: f64,
+    /// Landmark positions, mm, trunk frame.
+    pub landmarks_mm: std::collections::BTreeMap<String, [f64; 3]>,
 }
 
 #[cfg(test)]

@@ -113,10 +113,13 @@ pub fn read_raw(path: &Path) -> Result<RawMesh, ImportError> {
 }
 
 fn format_error(path: &Path, format: &'static str, message: impl ToString) -> ImportError {
+    // gltf ends its list of validation errors with `;`, which the
+    // message's own `; export ...` would double.
+    let message = message.to_string();
     ImportError::Format {
         path: path.to_path_buf(),
         format,
-        message: message.to_string(),
+        message: message.trim_end_matches([';', ' ']).to_string(),
     }
 }
 
@@ -323,6 +326,14 @@ fn obj_line_at_fault(bytes: &[u8]) -> Option<String> {
                 for corner in corners {
                     let mut parts = corner.split('/');
                     let index = parts.next().and_then(|i| i.parse::<i64>().ok());
+                    if index.is_none() {
+                        return Some(format!(
+                            "line {}: face corner `{corner}` is not a number; a corner is a vertex's number, from 1 \
+                             (or from -1 counting back), with `/` and its texture coordinate's and normal's after it, \
+                             e.g. `f 1 2 3` or `f 1/1/1 2/2/2 3/3/3`",
+                            number + 1
+                        ));
+                    }
                     if !index.is_some_and(|i| in_range(i, vertices)) {
                         return Some(format!(
                             "line {}: face corner `{corner}` names no vertex; {vertices} are defined above it",
@@ -332,8 +343,12 @@ fn obj_line_at_fault(bytes: &[u8]) -> Option<String> {
                     // `v/vt/vn`, either of the last two may be left empty.
                     for (part, (what, count)) in parts.zip([("texture coordinate", texture), ("normal", normals)]) {
                         if !part.is_empty() && !part.parse::<i64>().is_ok_and(|i| in_range(i, count)) {
+                            let said = match part.parse::<i64>() {
+                                Ok(_) => "names no",
+                                Err(_) => "is not a number: no number names a",
+                            };
                             return Some(format!(
-                                "line {}: face corner `{corner}` names no {what}; {count} are defined above it",
+                                "line {}: face corner `{corner}` {said} {what}; {count} are defined above it",
                                 number + 1
                             ));
                         }
@@ -585,6 +600,28 @@ fn check_nothing_past_the_counts(path: &Path, bytes: &[u8], rest: &[u8], header:
     ))
 }
 
+/// The `index`th face (from 0) of a PLY file as messages name it: its
+/// line in an ASCII file, and counted from 1 as STL's triangles are; its
+/// corners' vertex indices stay the file's own, from 0.
+fn ply_face(bytes: &[u8], index: usize) -> String {
+    let counted = format!("face {} of the file (counting from 1)", index + 1);
+    match ply_data_line(bytes, "face", index) {
+        Some(line) => format!("line {line}, {counted},"),
+        None => counted,
+    }
+}
+
+/// The 1-based line of item `index` of `element` in an ASCII PLY file
+/// (one item a line, blank lines skipped); None in a binary one.
+fn ply_data_line(bytes: &[u8], element: &str, index: usize) -> Option<usize> {
+    let text = String::from_utf8_lossy(bytes);
+    let layout = ply_layout(&text).ok().filter(|l| l.ascii)?;
+    let at = layout.elements.iter().position(|(name, _, _)| name == element)?;
+    let before = layout.elements[..at].iter().try_fold(0usize, |sum, (_, count, _)| sum.checked_add(*count))?;
+    let (number, _) = text.lines().enumerate().skip(layout.data_line - 1).filter(|(_, l)| !l.trim().is_empty()).nth(before.checked_add(index)?)?;
+    Some(number + 1)
+}
+
 /// PLY (ASCII or binary): the `vertex` element's x, y, z and the `face`
 /// element's `vertex_indices` (or `vertex_index`) lists, fan-triangulated.
 pub fn parse_ply(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
@@ -645,7 +682,9 @@ pub fn parse_ply(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
             xyz[axis] = vertex
                 .get(*name)
                 .and_then(scalar)
-                .ok_or_else(|| format_error(path, "PLY", format!("vertex {index} has no numeric `{name}` property")))?;
+                .ok_or_else(|| {
+                    format_error(path, "PLY", format!("vertex {} of the file (counting from 1) has no numeric `{name}` property", index + 1))
+                })?;
         }
         mesh.positions.push(DVec3::from_array(xyz));
     }
@@ -695,12 +734,16 @@ pub fn parse_ply(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
             .get("vertex_indices")
             .or_else(|| face.get("vertex_index"))
             .and_then(list)
-            .ok_or_else(|| format_error(path, "PLY", format!("face {index} has no `vertex_indices` list")))?;
+            .ok_or_else(|| format_error(path, "PLY", format!("{} has no `vertex_indices` list", ply_face(bytes, index))))?;
         if let Some(&bad) = corners.iter().find(|&&i| i < 0 || i >= count) {
             return Err(format_error(
                 path,
                 "PLY",
-                format!("face {index} refers to vertex {bad}, but there are {count} vertices"),
+                format!(
+                    "{} refers to vertex index {bad}, but there are {count} vertices, indexed 0 to {}",
+                    ply_face(bytes, index),
+                    count - 1
+                ),
             ));
         }
         // Dropped unsaid, an edge or a point would leave a hole where a face was.
@@ -708,7 +751,7 @@ pub fn parse_ply(path: &Path, bytes: &[u8]) -> Result<RawMesh, ImportError> {
             return Err(format_error(
                 path,
                 "PLY",
-                format!("face {index} has {} corners; a face needs 3 or more (edges and points belong in other elements)", corners.len()),
+                format!("{} has {} corners; a face needs 3 or more (edges and points belong in other elements)", ply_face(bytes, index), corners.len()),
             ));
         }
         for k in 1..corners.len() - 1 {
@@ -776,7 +819,8 @@ fn parse_gltf(path: &Path, bytes: &[u8]) -> Result<gltf::Gltf, ImportError> {
         }
     }
     let blob = unchecked.blob;
-    let document = gltf::Document::from_json(unchecked.document.into_json()).map_err(|e| format_error(path, "glTF", e))?;
+    let document = gltf::Document::from_json(unchecked.document.into_json())
+        .map_err(|e| format_error(path, "glTF", e.to_string().replace("Index out of bounds", "names an item past the end of its list")))?;
     Ok(gltf::Gltf { document, blob })
 }
 

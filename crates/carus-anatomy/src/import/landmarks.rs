@@ -79,6 +79,12 @@ fn file_error(path: &Path, message: impl ToString) -> ImportError {
     }
 }
 
+/// An error in the landmark `name`, led by its line of `text` (`file:12:`).
+fn at_landmark(path: &Path, text: &str, name: &str, message: String) -> ImportError {
+    let line = carus_io::toml_text::line_of_key(text, &format!("landmarks.{name}"));
+    file_error(Path::new(&carus_io::toml_text::located(path, line)), message)
+}
+
 impl AxesDeclaration {
     /// The matrix whose rows are the mother's right, anterior and cranial
     /// directions in mesh coordinates: it maps mesh vectors to the
@@ -208,17 +214,26 @@ impl LandmarksFile {
                 missing,
             });
         }
-        if let Some((name, _)) = file.landmarks.iter().find(|(_, p)| p.iter().any(|c| !c.is_finite())) {
-            return Err(file_error(
+        // `nan` and `inf` are TOML floats, read without a word.
+        if let Some((name, p)) = file.landmarks.iter().find(|(_, p)| p.iter().any(|c| !c.is_finite())) {
+            return Err(at_landmark(
                 path,
-                format!("landmark `{name}` has a non-finite coordinate"),
+                text,
+                name,
+                format!(
+                    "landmark `{name}` = {p:?} has a coordinate that is not a finite number; give three finite \
+                     numbers in {}, the file's `units`, in the mesh's own coordinates",
+                    file.units.name()
+                ),
             ));
         }
         // As for the mesh's vertices: a slip of exponent, named before it reads as a degenerate plane.
         let beyond = |p: &[f64; 3]| p.iter().any(|c| c.abs() * file.units.to_metres() > super::MAX_COORDINATE_M);
         if let Some((name, p)) = file.landmarks.iter().find(|(_, p)| beyond(p)) {
-            return Err(file_error(
+            return Err(at_landmark(
                 path,
+                text,
+                name,
                 format!(
                     "landmark `{name}` = {p:?} lies beyond {} m of the mesh's origin in {}; check its exponent and the file's `units`",
                     super::MAX_COORDINATE_M,

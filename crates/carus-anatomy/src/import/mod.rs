@@ -52,6 +52,20 @@ impl Units {
     }
 }
 
+/// Why a mesh leaves no surface, by what was read, and the fix.
+fn empty_mesh(triangles_read: usize) -> String {
+    match triangles_read {
+        0 => "the mesh holds no triangles (0 read): the file has no faces (points or lines only, or an empty \
+              export); export the surface itself as triangles or polygons"
+            .to_string(),
+        n => format!(
+            "all {n} triangles read are degenerate (two corners at one point once equal vertices are merged), so \
+             no surface is left; export the mesh again at full precision and in its own units (a rounding or \
+             scaling export collapses small triangles)"
+        ),
+    }
+}
+
 /// What went wrong importing a mesh or a landmarks file, with the file and
 /// the element concerned.
 #[derive(Debug, thiserror::Error)]
@@ -94,8 +108,12 @@ pub enum ImportError {
         vertex: usize,
         coordinate_m: f64,
     },
-    #[error("{path}: the mesh has no (non-degenerate) triangles")]
-    Empty { path: PathBuf },
+    #[error("{path}: {}", empty_mesh(*.triangles_read))]
+    Empty {
+        path: PathBuf,
+        /// The triangles the file held, every one degenerate; 0 for none.
+        triangles_read: usize,
+    },
     #[error("{path}: a closed surface is needed here, but {defect}; close the mesh (e.g. fill holes in MeshLab) and export it again")]
     NotClosed { path: PathBuf, defect: SurfaceDefect },
     #[error("{path}: {message}")]

@@ -336,6 +336,20 @@ fn broken_meshes_say_what_and_where() {
     let beyond = write(&dir, "beyond.obj", obj().replacen("f 1 3 2", "f 1 3 9", 1).as_bytes());
     let err = read_surface(&beyond, Units::Metres).unwrap_err().to_string();
     assert!(err.contains("beyond.obj") && err.contains("face corner `9` names no vertex"), "{err}");
+    // A corner that is no number is said to be that, with the form a corner takes.
+    let letters = write(&dir, "letters.obj", obj().replacen("f 1 3 2", "f a b c", 1).as_bytes());
+    let err = read_surface(&letters, Units::Metres).unwrap_err().to_string();
+    assert!(err.contains("face corner `a` is not a number; a corner is a vertex's number, from 1") && err.contains("e.g. `f 1 2 3`"), "{err}");
+    let normal = write(&dir, "normal.obj", obj().replacen("f 1 3 2", "f 1//x 3 2", 1).as_bytes());
+    let err = read_surface(&normal, Units::Metres).unwrap_err().to_string();
+    assert!(err.contains("face corner `1//x` is not a number: no number names a normal"), "{err}");
+    // A mesh of no triangles, and one of degenerate triangles only, say which.
+    let none = write(&dir, "none.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\n");
+    let err = read_surface(&none, Units::Metres).unwrap_err().to_string();
+    assert!(err.contains("none.obj: the mesh holds no triangles (0 read)") && err.contains("export the surface itself"), "{err}");
+    let flat = write(&dir, "flat.obj", b"v 0 0 0\nv 1 0 0\nv 0 0 0\nf 1 2 3\nf 2 3 1\n");
+    let err = read_surface(&flat, Units::Metres).unwrap_err().to_string();
+    assert!(err.contains("flat.obj: all 2 triangles read are degenerate") && err.contains("export the mesh again"), "{err}");
     let word = write(&dir, "word.obj", obj().replacen("v 0 1 0", "v 0 one 0", 1).as_bytes());
     let err = read_surface(&word, Units::Metres).unwrap_err().to_string();
     assert!(err.contains("`one` in `v 0 one 0` is not a number"), "{err}");
@@ -375,6 +389,10 @@ fn gltf_cycles_and_accessors_outside_their_buffers_are_named() {
     let good = embedded_gltf("");
     assert_eq!(parse_gltf_parts(path, good.as_bytes()).unwrap()[0].mesh.triangles.len(), 4);
 
+    // gltf's own validation errors: said once, without a doubled `;`.
+    let e = err(good.replacen(r#""indices": 1"#, r#""indices": 7"#, 1));
+    assert!(e.contains("meshes[0].primitives[0].indices: names an item past the end of its list; export the mesh again"), "{e}");
+    assert!(!e.contains(";;"), "{e}");
     // A node that is its own child, and a two-node loop: walked, they never end.
     let e = err(embedded_gltf(r#", "children": [0]"#));
     assert!(e.contains("bad.gltf") && e.contains("node 0 is its own ancestor") && e.contains("cycle (0 -> 0)"), "{e}");
@@ -457,7 +475,15 @@ element vertex 3
     assert!(e.contains("no `vertex_indices` (or `vertex_index`) property"), "{e}");
     // A two-corner face would be a hole, not a face skipped unsaid.
     let e = err(ply_ascii().replacen("3 0 1 3", "2 0 1", 1));
-    assert!(e.contains("face 1 has 2 corners; a face needs 3 or more"), "{e}");
+    assert!(e.contains("line 15, face 2 of the file (counting from 1), has 2 corners; a face needs 3 or more"), "{e}");
+    // A corner past the vertices: the face's line, counted from 1 as STL's.
+    let e = err(ply_ascii().replacen("3 0 1 3", "3 0 1 9", 1));
+    assert!(e.contains("line 15, face 2 of the file (counting from 1), refers to vertex index 9, but there are 4 vertices, indexed 0 to 3"), "{e}");
+    let mut binary = ply_binary();
+    let last = binary.len() - 4;
+    binary[last..].copy_from_slice(&9i32.to_le_bytes());
+    let e = parse_ply(path, &binary).unwrap_err().to_string();
+    assert!(e.contains("face 4 of the file (counting from 1) refers to vertex index 9") && !e.contains("line "), "{e}");
     // An element of no properties would read nothing for ever: refused at once.
     let e = err(ply_ascii().replacen("end_header", "element junk 100000000000\nend_header", 1));
     assert!(e.contains("`element junk 100000000000` has no `property` lines"), "{e}");
@@ -621,6 +647,14 @@ fn landmark_file_mistakes_are_named_with_their_fix() {
     let far = edited_landmarks(&dir, |t| t.replacen("sacral_promontory = [-6.074813660234213,", "sacral_promontory = [1e300,", 1));
     let e = import_pelvis(&far).unwrap_err().to_string();
     assert!(e.contains("landmark `sacral_promontory` = [1e300") && e.contains("beyond 1000 m"), "{e}");
+    let line = std::fs::read_to_string(&far).unwrap().lines().position(|l| l.starts_with("sacral_promontory")).unwrap() + 1;
+    assert!(e.starts_with(&format!("{}:{line}: ", far.display())), "{e}");
+    // A NaN (TOML's `nan`) is named at its line, with what to give.
+    let nan = edited_landmarks(&dir, |t| t.replace("46.86547815799713]", "nan]"));
+    let line = std::fs::read_to_string(&nan).unwrap().lines().position(|l| l.starts_with("sacral_apex")).unwrap() + 1;
+    let e = import_pelvis(&nan).unwrap_err().to_string();
+    assert!(e.starts_with(&format!("{}:{line}: landmark `sacral_apex` = [", nan.display())), "{e}");
+    assert!(e.contains("NaN] has a coordinate that is not a finite number; give three finite numbers in mm"), "{e}");
     // A mesh that is not there is the landmarks file's `mesh` to correct.
     let gone = write(&dir, "gone.landmarks.toml", std::fs::read(visible_human_female_pelvis_path()).unwrap().as_slice());
     let e = import_pelvis(&gone).unwrap_err().to_string();
@@ -804,3 +838,4 @@ fn a_pelvis_facing_into_its_bone_is_turned_outwards() {
     assert_eq!(turned.pelvis.landmarks, as_shipped.pelvis.landmarks);
     std::fs::remove_dir_all(dir).ok();
 }
+

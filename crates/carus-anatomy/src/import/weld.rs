@@ -63,7 +63,10 @@ pub fn weld(path: &Path, raw: &RawMesh, scale: f64) -> Result<(TriSurface, MeshR
                 return Err(ImportError::Format {
                     path: path.to_path_buf(),
                     format: "mesh",
-                    message: format!("triangle {triangle} refers to vertex {vertex}, but there are {count} vertices"),
+                    message: format!(
+                        "triangle {} of the file (counting from 1) refers to vertex index {vertex}, but there are {count} vertices",
+                        triangle + 1
+                    ),
                 });
             };
             if !p.is_finite() {
@@ -89,6 +92,7 @@ pub fn weld(path: &Path, raw: &RawMesh, scale: f64) -> Result<(TriSurface, MeshR
     if raw.triangles.is_empty() {
         return Err(ImportError::Empty {
             path: path.to_path_buf(),
+            triangles_read: 0,
         });
     }
 
@@ -117,6 +121,7 @@ pub fn weld(path: &Path, raw: &RawMesh, scale: f64) -> Result<(TriSurface, MeshR
     if triangles.is_empty() {
         return Err(ImportError::Empty {
             path: path.to_path_buf(),
+            triangles_read: raw.triangles.len(),
         });
     }
     let reoriented = orient_consistently(&mut triangles);

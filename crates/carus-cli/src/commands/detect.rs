@@ -488,6 +488,8 @@ mod tests {
             (&format!("{header}\n0,0,0,0,0,0,0,1\n1,0,0,,0,0,0,1\n"), "poses.csv:3: the head's pose has 1 empty cells of 7"),
             (&format!("{header}\n1,0,0,0,0,0,0,1\n0.5,0,0,0,0,0,0,1\n"), "poses.csv:3: sample 1: time_s = 0.5 does not increase"),
             (&format!("{header}\n1,0,0,0,0,0,0,1\n-1e300,0,0,0,0,0,0,1\n"), "poses.csv:3: sample 1: time_s = -1e300 does not increase"),
+            // Squared, 1e300 would overflow: the distance is a number, not inf.
+            (&format!("{header}\n0,0,0,0,0,0,0,1\n1,1e300,1e300,1e300,0,0,0,1\n"), "poses.csv:3: a position lies 1.732e300 m from the pelvis origin"),
             (&format!("{header},dominant_contact\n0,0,0,0,0,0,0,1,sacrum\n1,0,0,0,0,0,0,1,knee\n"), "poses.csv:3: `dominant_contact` = \"knee\" names no part of the canal"),
         ] {
             std::fs::write(&table, body).unwrap();
@@ -508,5 +510,13 @@ mod tests {
         std::fs::write(&path, json.to_string()).unwrap();
         let text = format!("{:#}", detect_file(&path, None).unwrap_err());
         assert!(text.contains("samples[2]") && text.contains("missing field `head`"), "{text}");
+        // A position a slip of exponent away: its distance is printed as a number.
+        let mut json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+        json["samples"][2] = json["samples"][3].clone();
+        json["samples"][2]["time_s"] = serde_json::json!(json["samples"][1]["time_s"].as_f64().unwrap() * 0.5 + json["samples"][3]["time_s"].as_f64().unwrap() * 0.5);
+        json["samples"][2]["head"]["position_m"] = serde_json::json!([1e300, 0.0, 0.0]);
+        std::fs::write(&path, json.to_string()).unwrap();
+        let text = format!("{:#}", detect_file(&path, None).unwrap_err());
+        assert!(text.contains("sample 2: head.position_m lies 1.000e300 m from the pelvis origin") && !text.contains("inf"), "{text}");
     }
 }

@@ -1,11 +1,12 @@
-//! `carus measure pelvis|head [FILE.toml] [--json]`: builds (or imports) the
+//! `carus measure pelvis|head|trunk [FILE.toml] [--json]`: builds (or imports) the
 //! anatomy a file describes and prints every diameter, plane and landmark.
 
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use carus_anatomy::fetus::{
-    AtlantoOccipitalPlacement, FetalHead, HeadDiameters, HeadMeasurement, DEFAULT_HEAD_SUBDIVISIONS,
+    AtlantoOccipitalPlacement, FetalHead, HeadDiameters, HeadMeasurement, Trunk, TrunkDiameters, TrunkMeasurement,
+    DEFAULT_HEAD_SUBDIVISIONS,
 };
 use carus_anatomy::floor::{pelvic_floor, FloorParameters};
 use carus_anatomy::pelvis::{measure, Pelvis, PelvisMeasurement, PelvisSpec};
@@ -20,6 +21,8 @@ pub enum MeasurePart {
     Pelvis,
     /// The fetal head (`[head]` table).
     Head,
+    /// The fetal trunk (`[trunk]` table).
+    Trunk,
 }
 
 #[derive(clap::Args)]
@@ -27,8 +30,8 @@ pub struct MeasureArgs {
     /// The part to measure.
     #[arg(value_enum)]
     pub part: MeasurePart,
-    /// Anatomy or scenario file (TOML) with a `[pelvis]` or `[head]` table of
-    /// canonical keys (docs/ANATOMY.md); without it, the defaults.
+    /// Anatomy or scenario file (TOML) with a `[pelvis]`, `[head]` or `[trunk]`
+    /// table of canonical keys (docs/ANATOMY.md); without it, the defaults.
     pub file: Option<PathBuf>,
     /// Print one JSON object on standard output.
     #[arg(long)]
@@ -54,6 +57,14 @@ pub fn run(args: &MeasureArgs) -> anyhow::Result<Status> {
                 print_json(&m)?;
             } else {
                 print_head(&m, file.describe());
+            }
+        }
+        MeasurePart::Trunk => {
+            let m = file.trunk()?.measure();
+            if args.json {
+                print_json(&m)?;
+            } else {
+                print_trunk(&m, file.describe());
             }
         }
     }
@@ -152,6 +163,29 @@ fn print_head(m: &HeadMeasurement, source: String) {
     }
 }
 
+fn print_trunk(m: &TrunkMeasurement, source: String) {
+    println!("Fetal trunk ({source}), trunk frame: origin at the atlanto-occipital pivot, x ventral, y towards the fetal left, z cranial; mm");
+    println!();
+    println!("Diameters and lengths");
+    for (key, value, meaning) in [
+        ("bisacromial_mm", m.bisacromial_mm, "between the acromions"),
+        ("bitrochanteric_mm", m.bitrochanteric_mm, "between the greater trochanters"),
+        ("chest_breadth_mm", m.chest_breadth_mm, "across the chest's widest ring"),
+        ("chest circumference", m.chest_circumference_mm, "round that ring"),
+        ("cervical_spine_mm", m.cervical_spine_mm, "the neck: pivot to the first thoracic vertebra"),
+        ("trunk_length_mm", m.trunk_length_mm, "neck base to the buttocks' lowest ring"),
+        ("width", m.width_mm, "side to side, the widest ring"),
+        ("length", m.length_mm, "along the spine, pivot to breech"),
+    ] {
+        println!("  {key:<22} {value:8.1}   {meaning}");
+    }
+    println!();
+    println!("Landmarks (x, y, z)");
+    for (name, p) in &m.landmarks_mm {
+        println!("  {name:<26} {:7.1} {:7.1} {:7.1}", p[0], p[1], p[2]);
+    }
+}
+
 /// The text of an anatomy or scenario file; a folder, a mesh or a binary
 /// file is refused as not one, with how a mesh is imported.
 fn read_text(path: &Path) -> anyhow::Result<String> {
@@ -160,7 +194,7 @@ fn read_text(path: &Path) -> anyhow::Result<String> {
             "{}: {what}; give an anatomy (or scenario) file, TOML text with a [pelvis] or [head] table \
              (docs/ANATOMY.md)\n  hint: a pelvis mesh is imported through a landmarks file that names it: \
              `[pelvis] import = \"pelvis.landmarks.toml\"` (docs/IMPORT.md); a fetal head is built from \
-             its diameters (`[head]`), a head mesh cannot be imported yet",
+             its diameters (`[head]`), and its trunk from `[trunk]`; a fetal mesh cannot be imported yet",
             path.display()
         )
     };
@@ -202,7 +236,10 @@ fn line_in(text: Option<&str>, tables: &[&str], key: Option<&str>) -> Option<std
     tables.iter().find_map(|table| carus_io::toml_text::line_of_key(text, &format!("{table}.{key}")))
 }
 
-/// The anatomy tables (`[pelvis]`, `[head]`, `[floor]`) of an anatomy or
+/// The tables an anatomy file may have.
+const TABLES: [&str; 4] = ["pelvis", "head", "trunk", "floor"];
+
+/// The anatomy tables (`[pelvis]`, `[head]`, `[trunk]`, `[floor]`) of an anatomy or
 /// scenario file, shared with `carus mesh`. Other tables of a scenario file
 /// are left to the commands that use them.
 pub struct AnatomyFile {
@@ -211,6 +248,7 @@ pub struct AnatomyFile {
     pub head: HeadDiameters,
     /// The head's atlanto-occipital pivot: a scenario's `[fetus]` keys, else the default.
     pub pivot: AtlantoOccipitalPlacement,
+    pub trunk: TrunkDiameters,
     pub floor: FloorParameters,
     /// The tables an anatomy file left out (the defaults stand in), noted
     /// when the part is built so that an empty or misnamed file is not
@@ -227,6 +265,7 @@ impl AnatomyFile {
                 pelvis: PelvisSpec::default(),
                 head: HeadDiameters::default(),
                 pivot: AtlantoOccipitalPlacement::default(),
+                trunk: TrunkDiameters::default(),
                 floor: run_floor(),
                 left_out: Vec::new(),
             });
@@ -244,14 +283,15 @@ impl AnatomyFile {
                 pelvis: scenario.pelvis,
                 head: scenario.head,
                 pivot: scenario.fetus.atlanto_occipital(),
+                trunk: scenario.trunk.diameters(),
                 floor: scenario.floor.mesh,
                 path: Some(path.to_path_buf()),
                 left_out: Vec::new(),
             });
         }
-        if let Some(unknown) = table.keys().find(|k| !["pelvis", "head", "floor"].contains(&k.as_str())) {
+        if let Some(unknown) = table.keys().find(|k| !TABLES.contains(&k.as_str())) {
             anyhow::bail!(
-                "{}: `{unknown}` is not a table of an anatomy file, which has [pelvis], [head] and [floor] \
+                "{}: `{unknown}` is not a table of an anatomy file, which has [pelvis], [head], [trunk] and [floor] \
                  (docs/ANATOMY.md); a scenario file starts with its `name`",
                 path.display()
             );
@@ -264,9 +304,11 @@ impl AnatomyFile {
             pelvis: PelvisSpec,
             #[serde(default)]
             head: HeadDiameters,
+            #[serde(default)]
+            trunk: TrunkDiameters,
         }
-        let Tables { pelvis, head } = carus_labour::scenario::from_toml_text(path, &text)?;
-        carus_labour::Scenario::check_anatomy_tables(path, &text, &pelvis, &head)?;
+        let Tables { pelvis, head, trunk } = carus_labour::scenario::from_toml_text(path, &text)?;
+        carus_labour::Scenario::check_anatomy_tables(path, &text, &pelvis, &head, &trunk)?;
 
         let base = path.parent().unwrap_or(Path::new("."));
         carus_labour::scenario::check_pelvis_import(path, &text, &pelvis, base)?;
@@ -274,9 +316,10 @@ impl AnatomyFile {
             pelvis,
             head,
             pivot: AtlantoOccipitalPlacement::default(),
+            trunk,
             floor: floor_part(path, &table)?,
             path: Some(path.to_path_buf()),
-            left_out: ["pelvis", "head", "floor"].into_iter().filter(|t| !table.contains_key(*t)).collect(),
+            left_out: TABLES.into_iter().filter(|t| !table.contains_key(*t)).collect(),
         })
     }
 
@@ -310,6 +353,13 @@ impl AnatomyFile {
             let at = self.at_key(text.as_deref(), "head", e.diameter_key()).unwrap_or_else(|| format!("{}: [head]", self.describe()));
             anyhow::Error::from(e).context(format!("{at}: the diameters cannot be built"))
         })
+    }
+
+    /// Builds the trunk the file describes (its values already checked
+    /// as a scenario's are, at their lines).
+    pub fn trunk(&self) -> anyhow::Result<Trunk> {
+        self.note_if_left_out("trunk");
+        Trunk::new(&self.trunk).with_context(|| format!("{}: [trunk]", self.describe()))
     }
 
     /// `file:line: [table]` at the line of `key` in the file's `text`
@@ -498,6 +548,21 @@ biparietal_mm = \"abc\"\n").err().unwrap());
 biparietal_mn = 95.0
 ").err().unwrap());
         assert!(error.contains("file.toml:2") && error.contains("biparietal_mn"), "{error}");
+    }
+
+    /// The trunk of an anatomy file or a scenario is measured back, its
+    /// chest apart from its shoulders; a chest in cm is refused at its line.
+    #[test]
+    fn the_trunk_is_read_from_either_file_and_measured_back() {
+        let m = load("[trunk]\nbisacromial_mm = 150.0\nchest_breadth_mm = 116.6\n").unwrap().trunk().unwrap().measure();
+        assert!((m.bisacromial_mm - 150.0).abs() < 0.1 && (m.chest_breadth_mm - 116.6).abs() < 0.1, "{m:?}");
+        assert!(m.landmarks_mm.contains_key("bisacromial_midpoint") && m.landmarks_mm.len() == 8);
+        let large = carus_labour::scenario::Scenario::builtin("large-shoulders").unwrap();
+        let file = load(&large.to_toml().unwrap()).unwrap();
+        let (ours, default) = (file.trunk().unwrap().measure(), AnatomyFile::load(None).unwrap().trunk().unwrap().measure());
+        assert!((ours.bisacromial_mm - 175.0).abs() < 1e-9 && ours.chest_circumference_mm == default.chest_circumference_mm, "{ours:?}");
+        let e = format!("{:#}", load("[head]\nbiparietal_mm = 95.0\n[trunk]\nchest_breadth_mm = 10.8\n").err().unwrap());
+        assert!(e.contains("file.toml:4: `trunk.chest_breadth_mm` = 10.8") && e.contains("mm (not cm)"), "{e}");
     }
 
     /// A scenario's [floor.mesh] in an anatomy file says where its keys go.

@@ -1,4 +1,4 @@
-//! `carus mesh pelvis|head|floor [FILE.toml] --out DIR`: writes the anatomy
+//! `carus mesh pelvis|head|trunk|floor [FILE.toml] --out DIR`: writes the anatomy
 //! for inspection: surfaces as binary STL in mm (for CAD tools and
 //! slicers) and as VTU in metres (for ParaView, beside the pelvic floor's
 //! VTU and a run's outputs), landmarks as CSV and JSON (mm), each part in
@@ -25,6 +25,8 @@ pub enum MeshPart {
     Pelvis,
     /// The fetal head surface and its landmarks.
     Head,
+    /// The fetal trunk surface (neck to breech) and its landmarks.
+    Trunk,
     /// The pelvic floor volume mesh (with the pelvis it is shaped to).
     Floor,
 }
@@ -34,7 +36,7 @@ pub struct MeshArgs {
     /// The part to write.
     #[arg(value_enum)]
     pub part: MeshPart,
-    /// Anatomy or scenario file (TOML) with `[pelvis]`, `[head]` or `[floor]`
+    /// Anatomy or scenario file (TOML) with `[pelvis]`, `[head]`, `[trunk]` or `[floor]`
     /// tables (docs/ANATOMY.md); without it, the defaults (the floor a
     /// labour run builds, 192 elements).
     pub file: Option<PathBuf>,
@@ -99,6 +101,14 @@ pub fn run(args: &MeshArgs) -> anyhow::Result<Status> {
                 head.landmarks.named().iter().map(|(n, p)| (n.to_string(), p.to_array())).collect();
             written.extend(write_landmarks(&args.out, "head_landmarks", &landmarks)?);
         }
+        MeshPart::Trunk => {
+            let trunk = file.trunk()?;
+            written.extend(write_surface(&args.out, "trunk", &trunk.surface, "trunk frame")?);
+            crossings.push(("trunk", self_crossings("trunk", &trunk.surface)));
+            let landmarks: Vec<(String, [f64; 3])> =
+                trunk.landmarks.named().iter().map(|(n, p)| (n.to_string(), p.to_array())).collect();
+            written.extend(write_landmarks(&args.out, "trunk_landmarks", &landmarks)?);
+        }
     }
     if args.json {
         let files: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
@@ -134,6 +144,10 @@ fn file_names(part: MeshPart) -> Vec<String> {
         MeshPart::Head => {
             names.extend(pair("head", "stl", "vtu"));
             names.extend(pair("head_landmarks", "csv", "json"));
+        }
+        MeshPart::Trunk => {
+            names.extend(pair("trunk", "stl", "vtu"));
+            names.extend(pair("trunk_landmarks", "csv", "json"));
         }
     }
     names
@@ -252,7 +266,7 @@ mod tests {
     #[test]
     fn the_overwrite_check_knows_every_file_and_refuses_without_force() {
         let dir = tempfile::tempdir().unwrap();
-        for part in [MeshPart::Head, MeshPart::Floor] {
+        for part in [MeshPart::Head, MeshPart::Trunk, MeshPart::Floor] {
             let out = dir.path().join(format!("{part:?}"));
             let args = MeshArgs { part, file: None, out: out.clone(), json: false, force: false };
             run(&args).unwrap();

@@ -121,15 +121,50 @@ pub fn create_out_folder(dir: &std::path::Path, flag: &str) -> anyhow::Result<()
     if dir.exists() && !dir.is_dir() {
         anyhow::bail!("{} is a file, not a folder; choose another {flag}", dir.display());
     }
-    std::fs::create_dir_all(dir).map_err(|e| anyhow::anyhow!("cannot create the folder {}: {e}", dir.display()))
+    std::fs::create_dir_all(dir)
+        .map_err(|e| anyhow::anyhow!("cannot create the folder {}: {e}; {}", dir.display(), io_fix(&e, flag)))
+}
+
+/// What to do when the system refuses to make or write what `flag` named,
+/// by its reason: the OS's words alone ("No such file or directory" for a
+/// folder under /proc) do not say.
+pub fn io_fix(error: &std::io::Error, flag: &str) -> String {
+    use std::io::ErrorKind;
+    match error.kind() {
+        ErrorKind::NotFound => format!(
+            "nothing can be made there (a system folder such as /proc, or a path through a folder or \
+             drive that is not there and cannot be made); choose another {flag}, in a folder you can write"
+        ),
+        ErrorKind::PermissionDenied => {
+            format!("you may not write there; choose another {flag}, in a folder you can write, or change its permissions")
+        }
+        ErrorKind::ReadOnlyFilesystem => format!("that disk is read-only; choose another {flag} on a writable disk"),
+        ErrorKind::StorageFull | ErrorKind::QuotaExceeded => format!("free some space, or choose another {flag} on another disk"),
+        ErrorKind::IsADirectory => format!("a folder has that name; give {flag} a file's name (in that folder, say)"),
+        ErrorKind::NotADirectory => format!("a file stands where a folder above it should be; choose another {flag}"),
+        _ => format!("choose another {flag}, in a folder you can write"),
+    }
+}
+
+/// Refuses a folder given for the picture `flag` names, before anything is
+/// drawn (writing would fail with the OS's bare "Is a directory").
+pub fn check_picture_path(path: &std::path::Path, flag: &str) -> anyhow::Result<()> {
+    if path.is_dir() {
+        crate::bad_argument!(
+            "{flag} {0} is a folder; give the picture's file name, e.g. {flag} {1}",
+            path.display(),
+            path.join("picture.png").display()
+        );
+    }
+    Ok(())
 }
 
 /// Writes a picture as a PNG whole, or leaves none (a full disk would
 /// leave an empty or cut file that reads as a damaged picture); an earlier
-/// file that cannot be opened is left as it was.
-pub fn save_picture(picture: &carus_render::Image, path: &std::path::Path) -> anyhow::Result<()> {
+/// file that cannot be opened is left as it was. `flag` named the path.
+pub fn save_picture(picture: &carus_render::Image, path: &std::path::Path, flag: &str) -> anyhow::Result<()> {
     carus_io::output::write_whole(path, &picture.encode_png()?)
-        .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", path.display()))
+        .map_err(|e| anyhow::anyhow!("cannot write {}: {e}; {}", path.display(), io_fix(&e, flag)))
 }
 
 /// The largest test cube `carus validate cube` and `carus bench tled`
@@ -310,5 +345,27 @@ mod tests {
         assert_eq!(std::fs::read_to_string(&file).unwrap(), "mine");
         super::create_out_folder(&dir.path().join("a/b"), "--out").unwrap();
         assert!(dir.path().join("a/b").is_dir());
+    }
+
+    /// A folder that cannot be made, or a picture path that is a folder,
+    /// is named with what to do, not the OS's words alone; a folder given
+    /// for a picture is refused before anything is drawn.
+    #[test]
+    fn a_place_that_cannot_be_written_says_what_to_do() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("afile");
+        std::fs::write(&file, "mine").unwrap();
+        let e = super::create_out_folder(&file.join("x"), "--out").unwrap_err().to_string();
+        assert!(e.contains("cannot create the folder") && e.contains("choose another --out"), "{e}");
+        let missing = std::io::Error::from(std::io::ErrorKind::NotFound);
+        assert!(super::io_fix(&missing, "--out").contains("a system folder such as /proc"), "{missing}");
+        let e = super::check_picture_path(dir.path(), "--out").unwrap_err();
+        assert!(e.downcast_ref::<super::BadArgument>().is_some(), "{e}");
+        let e = e.to_string();
+        assert!(e.contains("is a folder; give the picture's file name, e.g. --out") && e.contains("picture.png"), "{e}");
+        super::check_picture_path(&dir.path().join("new.png"), "--out").unwrap();
+        let picture = carus_render::Image::filled(2, 2, [0, 0, 0, 255]);
+        let e = super::save_picture(&picture, dir.path(), "--picture").unwrap_err().to_string();
+        assert!(e.contains("cannot write") && e.contains("--picture"), "{e}");
     }
 }

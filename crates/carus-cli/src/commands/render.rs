@@ -85,6 +85,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<Status> {
     if !args.out.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
         crate::bad_argument!("--out {}: carus render writes a PNG picture; name the file *.png", args.out.display());
     }
+    super::check_picture_path(&args.out, "--out")?;
     let meshes = match args.part {
         RenderPart::Pelvis => pelvis_meshes(
             &AnatomyFile::load(args.file.as_deref())?.pelvis()?,
@@ -100,7 +101,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<Status> {
             // The head alone first, so that a diameter it cannot be built
             // from is named at its line, as `carus render head` names it.
             file.head()?;
-            let fetus = Fetus::new(&file.head, &Default::default())
+            let fetus = Fetus::new(&file.head, &file.trunk)
                 .with_context(|| format!("{}: the fetus cannot be built", file.describe()))?;
             fetus_meshes(&fetus)
         }
@@ -132,7 +133,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<Status> {
     if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         super::create_out_folder(dir, "--out")?;
     }
-    super::save_picture(&picture, &args.out)?;
+    super::save_picture(&picture, &args.out, "--out")?;
     if args.json {
         let views: Vec<&str> = sheet.views.iter().map(|v| v.name()).collect();
         print_json(&serde_json::json!({

@@ -46,6 +46,11 @@ pub(super) fn fixed_setting_arg(text: &str) -> Result<String, String> {
 fn one_setting_of(flag: &str, several: &str, text: &str) -> anyhow::Result<(String, String)> {
     match text.split_once('=') {
         Some((key, value)) if !key.trim().is_empty() && !value.trim().is_empty() => {}
+        // `KEY=` alone (a shell variable that was empty, say): the value is what is missing.
+        Some((key, _)) if !key.trim().is_empty() => bail!(
+            "{flag} {text}: the value after `=` is empty; give one, e.g. {flag} contact.friction=0.1 \
+             (`carus scenarios show normal` lists every key with its value; quote a text, e.g. description=\"\")"
+        ),
         _ => bail!("{flag} {text}: write KEY=VALUE, e.g. {flag} contact.friction=0.1"),
     }
     let setting = parse_setting_of(flag, text)?;
@@ -66,8 +71,21 @@ fn parse_setting_of(flag: &str, text: &str) -> anyhow::Result<Setting> {
     };
     let values = split_values(values).map_err(|why| anyhow::anyhow!("{flag} {text}: {why}; a value is TOML (quote a string with commas, e.g. description=\"a, b\")"))?;
     let values: Vec<String> = values.into_iter().map(|v| v.trim().to_string()).collect();
-    if key.trim().is_empty() || values.iter().any(String::is_empty) {
-        bail!("{flag} {text}: a key and at least one value, none empty, e.g. {flag} contact.friction=0.1,0.35");
+    if key.trim().is_empty() {
+        bail!("{flag} {text}: no key before `=`; write KEY=V1,V2,..., e.g. {flag} contact.friction=0.1,0.35");
+    }
+    if let [only] = values.as_slice() {
+        if only.is_empty() {
+            bail!("{flag} {text}: the value after `=` is empty; give at least one, e.g. {flag} contact.friction=0.1,0.35");
+        }
+    }
+    if let Some(n) = values.iter().position(String::is_empty) {
+        bail!(
+            "{flag} {text}: value {} of {} is empty (two commas together, or one at an end); \
+             list values with one comma between each, e.g. {flag} contact.friction=0.1,0.35",
+            n + 1,
+            values.len()
+        );
     }
     if let Some(twice) = values.iter().enumerate().find_map(|(i, v)| values[..i].iter().any(|u| same_value(u, v)).then_some(v)) {
         bail!("{flag} {text}: the value {twice} is given twice; each value runs once");
@@ -178,6 +196,17 @@ mod tests {
             assert!(e.contains("is given twice"), "{e}");
         }
         assert!(parse_setting("expulsion.direction=fetal_spine,pivot").is_ok());
+        // An empty value is said to be one, with an example.
+        let e = one_setting("contact.friction=").unwrap_err().to_string();
+        assert!(e.contains("--set contact.friction=: the value after `=` is empty; give one, e.g. --set contact.friction=0.1"), "{e}");
+        let e = fixed_setting("output.vtu= ").unwrap_err().to_string();
+        assert!(e.contains("--with output.vtu= : the value after `=` is empty"), "{e}");
+        let e = parse_setting("contact.friction=").unwrap_err().to_string();
+        assert!(e.contains("the value after `=` is empty; give at least one, e.g. --set contact.friction=0.1,0.35"), "{e}");
+        let e = parse_setting("contact.friction=0.1,,0.2").unwrap_err().to_string();
+        assert!(e.contains("value 2 of 3 is empty"), "{e}");
+        assert!(parse_setting("=8").unwrap_err().to_string().contains("no key before `=`"));
+        assert!(one_setting("=8").unwrap_err().to_string().contains("write KEY=VALUE"));
         assert!(parse_setting("expulsion.force_max_n=1,1.5").is_ok());
     }
 

@@ -1,6 +1,6 @@
 //! `carus sweep [NAME|FILE] --set KEY=V1,V2,... [--set ...] [--with KEY=VALUE
-//! ...] [--one-at-a-time] [--out DIR] [--jobs N] [--json] [--force]
-//! [--quiet]`: one labour run per combination of the values given (every
+//! ...] [--one-at-a-time] [--allow-large] [--out DIR] [--jobs N] [--json]
+//! [--force] [--quiet]`: one labour run per combination of the values given (every
 //! combination of every `--set`, or with `--one-at-a-time` the scenario as
 //! it is and then each value of each key alone; `--with` sets a key in
 //! every run), each a whole run in its own folder, and a table of their outcomes and movements
@@ -65,8 +65,68 @@ pub struct SweepArgs {
     /// Runs at a time; default one per core.
     #[arg(long)]
     pub jobs: Option<usize>,
+    /// Run a sweep of more than 1000 runs, which is refused without it
+    /// (at about 30 s a run per core, a long list of values would take
+    /// days and make a folder per run).
+    #[arg(long, conflicts_with = "resume")]
+    pub allow_large: bool,
     #[command(flatten)]
     pub output: OutputArgs,
+}
+
+/// The most runs a sweep makes without `--allow-large`: a day's work for
+/// a few cores, past which a list of values is more likely a slip.
+const MOST_RUNS: usize = 1000;
+
+/// Wall-clock seconds of the normal scenario's run on one core, for the
+/// estimate a refused sweep gives.
+const RUN_S_PER_CORE: f64 = 30.0;
+
+/// The runs a new sweep would make: the product of the values' counts, or
+/// with `one_at_a_time` the base and each value; None past counting.
+fn planned_runs(settings: &[Setting], one_at_a_time: bool) -> Option<usize> {
+    match one_at_a_time {
+        true => settings.iter().try_fold(1usize, |n, s| n.checked_add(s.values.len())),
+        false => settings.iter().try_fold(1usize, |n, s| n.checked_mul(s.values.len())),
+    }
+}
+
+/// Refuses a new sweep of more than [`MOST_RUNS`] runs unless
+/// `--allow-large` is given, before anything is checked or made: the
+/// count, what it would cost, and the ways out. One too large to count is
+/// refused even so.
+fn check_sweep_size(args: &SweepArgs) -> anyhow::Result<()> {
+    let settings = args.settings.iter().map(|s| parse_setting(s)).collect::<anyhow::Result<Vec<_>>>()?;
+    let runs = planned_runs(&settings, args.one_at_a_time);
+    if runs.is_some_and(|n| n <= MOST_RUNS || args.allow_large) {
+        return Ok(());
+    }
+    let counts: Vec<String> = settings.iter().map(|s| format!("{} values of {}", s.values.len(), s.key)).collect();
+    let Some(runs) = runs else {
+        crate::bad_argument!("this sweep would make more runs than can be counted ({}, every combination); give fewer values", counts.join(" x "));
+    };
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let at_once = args.jobs.unwrap_or(cores).clamp(1, cores);
+    let hours = runs as f64 * RUN_S_PER_CORE / at_once as f64 / 3600.0;
+    let cores_said = if at_once == 1 { "1 core".to_string() } else { format!("{at_once} cores") };
+    let took = match hours < 48.0 {
+        true => format!("{hours:.0} hours"),
+        false => format!("{:.0} days", hours / 24.0),
+    };
+    let how = match args.one_at_a_time {
+        true => format!("the base and {}", counts.join(", ")),
+        false => format!("{}, every combination", counts.join(" x ")),
+    };
+    let alone = planned_runs(&settings, true).map_or(String::new(), |n| format!(" ({n} runs)"));
+    let instead = match args.one_at_a_time {
+        true => "give fewer values".to_string(),
+        false => format!("give fewer values, or vary one key at a time with --one-at-a-time{alone}"),
+    };
+    crate::bad_argument!(
+        "this sweep makes {runs} runs ({how}), more than the {MOST_RUNS} a sweep makes unasked: at about \
+         {RUN_S_PER_CORE:.0} s a run per core (the normal scenario's), about {took} on {cores_said}, and a folder \
+         per run; {instead}; or, to run them all, add --allow-large"
+    )
 }
 
 /// The first key that two `--set`s name.
@@ -220,6 +280,8 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
             (plan, base, Some(dir.clone()))
         }
         None => {
+            // A sweep too large is refused before its scenario is read.
+            check_sweep_size(args)?;
             let base = load_base(args)?;
             let plan = SweepPlan {
                 scenario_toml: base.to_toml()?,
@@ -745,6 +807,7 @@ mod tests {
             one_at_a_time: false,
             resume: None,
             jobs: Some(2),
+            allow_large: false,
             output: OutputArgs {
                 out: Some(out.clone()),
                 json: true,
@@ -753,6 +816,45 @@ mod tests {
             },
         };
         (args, out)
+    }
+
+    /// A sweep of more runs than a sweep makes unasked is refused at once,
+    /// before any scenario is read or folder made, with its count, its
+    /// cost and the ways out; --allow-large lets it through to the checks.
+    #[test]
+    fn a_sweep_too_large_is_refused_before_anything_is_made() {
+        let dir = tempfile::tempdir().unwrap();
+        let hundred = |key: &str| format!("{key}={}", (1..=100).map(|i| i.to_string()).collect::<Vec<_>>().join(","));
+        let settings = [hundred("contact.friction"), hundred("expulsion.force_max_n"), hundred("expulsion.period_s")];
+        let (args, out) = coarse_sweep(&crate::commands::coarse_normal(0.05), dir.path(), &[]);
+        // A scenario that does not exist: the refusal comes before it is read.
+        let large = SweepArgs { scenario: Some("no-such-scenario".into()), settings: settings.to_vec(), ..args };
+        let e = run(&large).expect_err("refused");
+        assert!(e.downcast_ref::<crate::commands::BadArgument>().is_some(), "{e}");
+        let e = e.to_string();
+        for part in [
+            "this sweep makes 1000000 runs (100 values of contact.friction x 100 values of expulsion.force_max_n x 100 values of expulsion.period_s, every combination)",
+            "more than the 1000 a sweep makes unasked",
+            "at about 30 s a run per core",
+            "or vary one key at a time with --one-at-a-time (301 runs)",
+            "add --allow-large",
+        ] {
+            assert!(e.contains(part), "{part}: {e}");
+        }
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get()).min(2);
+        assert!(e.contains(&format!("days on {cores} core")), "{e}");
+        assert!(!out.exists());
+        // One at a time, 301 runs pass the count (and stop at the unknown scenario).
+        let once = SweepArgs { one_at_a_time: true, ..large };
+        assert!(run(&once).expect_err("no such scenario").to_string().contains("no-such-scenario"));
+        let allowed = SweepArgs { one_at_a_time: false, allow_large: true, ..once };
+        assert!(run(&allowed).expect_err("no such scenario").to_string().contains("no-such-scenario"));
+        assert_eq!(planned_runs(&[], false), Some(1));
+        let many = vec![parse_setting(&hundred("a")).unwrap(); 20];
+        assert_eq!(planned_runs(&many, false), None);
+        let e = run(&SweepArgs { settings: (0..20).map(|k| hundred(&format!("k{k}"))).collect(), allow_large: true, ..allowed }).unwrap_err();
+        assert!(e.to_string().contains("more runs than can be counted"), "{e}");
+        assert!(!out.exists());
     }
 
     /// A file refused for a value every run sets is mended by the sweep's

@@ -68,6 +68,9 @@ pub fn run(args: &ViewArgs) -> anyhow::Result<Status> {
         if let Some(path) = path.as_ref().filter(|p| !p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png"))) {
             crate::bad_argument!("{flag} {}: the picture is written as a PNG; name the file *.png", path.display());
         }
+        if let Some(path) = path {
+            super::check_picture_path(path, flag)?;
+        }
     }
     let end = replay.duration_s();
     // A run not over is followed: without --at it opens at its newest time.
@@ -90,7 +93,7 @@ pub fn run(args: &ViewArgs) -> anyhow::Result<Status> {
     }
     let [width, height] = [args.size[0], args.size[1]];
     let picture = replay.picture(at, &replay.standard_camera(args.view.into()), layers, width, height)?;
-    super::save_picture(&picture, path)?;
+    super::save_picture(&picture, path, "--picture")?;
     let k = replay.sample_at(at);
     if args.json {
         print_json(&picture_json(&replay, k, path, args))?;
