@@ -60,11 +60,7 @@ pub fn run(args: &MeshArgs) -> anyhow::Result<Status> {
     match args.part {
         MeshPart::Pelvis | MeshPart::Floor => {
             let pelvis = file.pelvis()?;
-            written.extend(write_surface(&args.out, "pelvis", &pelvis.surface, "pelvis frame")?);
-            crossings.push(("pelvis", self_crossings("pelvis", &pelvis.surface)));
-            let landmarks: Vec<(String, [f64; 3])> =
-                pelvis.landmarks.named().iter().map(|(n, p)| (n.to_string(), p.to_array())).collect();
-            written.extend(write_landmarks(&args.out, "pelvis_landmarks", &landmarks)?);
+            write_part(&args.out, "pelvis", &pelvis.surface, &pelvis.landmarks.named(), &mut written, &mut crossings)?;
             let axis = carus_anatomy::pelvis::axis_samples(&pelvis);
             written.push(write_axis(&args.out.join("pelvic_axis.csv"), &axis)?);
             if args.part == MeshPart::Floor {
@@ -95,19 +91,11 @@ pub fn run(args: &MeshArgs) -> anyhow::Result<Status> {
         }
         MeshPart::Head => {
             let head = file.head()?;
-            written.extend(write_surface(&args.out, "head", &head.surface, "head frame")?);
-            crossings.push(("head", self_crossings("head", &head.surface)));
-            let landmarks: Vec<(String, [f64; 3])> =
-                head.landmarks.named().iter().map(|(n, p)| (n.to_string(), p.to_array())).collect();
-            written.extend(write_landmarks(&args.out, "head_landmarks", &landmarks)?);
+            write_part(&args.out, "head", &head.surface, &head.landmarks.named(), &mut written, &mut crossings)?;
         }
         MeshPart::Trunk => {
             let trunk = file.trunk()?;
-            written.extend(write_surface(&args.out, "trunk", &trunk.surface, "trunk frame")?);
-            crossings.push(("trunk", self_crossings("trunk", &trunk.surface)));
-            let landmarks: Vec<(String, [f64; 3])> =
-                trunk.landmarks.named().iter().map(|(n, p)| (n.to_string(), p.to_array())).collect();
-            written.extend(write_landmarks(&args.out, "trunk_landmarks", &landmarks)?);
+            write_part(&args.out, "trunk", &trunk.surface, &trunk.landmarks.named(), &mut written, &mut crossings)?;
         }
     }
     if args.json {
@@ -125,6 +113,24 @@ pub fn run(args: &MeshArgs) -> anyhow::Result<Status> {
         }
     }
     Ok(Status::Success)
+}
+
+/// Writes a part's surface (`NAME.stl`, `NAME.vtu`, in the `NAME frame`)
+/// and its landmarks (`NAME_landmarks.csv`, `.json`), adding the files to
+/// `written` and the surface's self-crossings to `crossings`.
+fn write_part(
+    out: &Path,
+    name: &'static str,
+    surface: &TriSurface,
+    landmarks: &[(&str, glam::DVec3)],
+    written: &mut Vec<PathBuf>,
+    crossings: &mut Vec<(&'static str, Option<usize>)>,
+) -> anyhow::Result<()> {
+    written.extend(write_surface(out, name, surface, &format!("{name} frame"))?);
+    crossings.push((name, self_crossings(name, surface)));
+    let points: Vec<(String, [f64; 3])> = landmarks.iter().map(|(n, p)| (n.to_string(), p.to_array())).collect();
+    written.extend(write_landmarks(out, &format!("{name}_landmarks"), &points)?);
+    Ok(())
 }
 
 /// The names of the files `part` writes, in the order it writes them.
