@@ -201,7 +201,7 @@ pub fn resume(
     }
     let checkpoint = output::read_checkpoint(out_dir)?;
     let scenario = checkpoint.scenario(out_dir)?;
-    let missing = keys_missing(&checkpoint.scenario_toml, &scenario.to_toml()?);
+    let missing = keys_missing(&checkpoint.scenario_toml, &scenario)?;
     if !missing.is_empty() {
         return Err(LabourError::Checkpoint(format!(
             "the checkpoint was written by an older carus, before {} existed; the rest of the run \
@@ -288,12 +288,15 @@ const KEYS_ADDED_AS_THEY_WERE: [&str; 8] = [
     "contact.ligament_stiffness_ratio",
 ];
 
-/// The dotted keys `current` writes that `saved` lacks, but for those that
-/// default to the model as it was ([`KEYS_ADDED_AS_THEY_WERE`]). Both are
-/// complete scenario files (`Scenario::to_toml` writes every key), so a
-/// key missing from a checkpoint's is one added to the model since it was
-/// written.
-fn keys_missing(saved: &str, current: &str) -> Vec<String> {
+/// The dotted keys `scenario` writes that `saved` (the complete scenario
+/// file an older build wrote: a checkpoint's, a sweep plan's) lacks, but
+/// for those whose default is the model as it was, for every scenario
+/// ([`KEYS_ADDED_AS_THEY_WERE`]) or for this one. Both are complete
+/// scenario files (`Scenario::to_toml` writes every key), so a key missing
+/// from the saved one was added to the model since it was written, and
+/// `scenario` would take its default.
+pub fn keys_missing(saved: &str, scenario: &Scenario) -> Result<Vec<String>, LabourError> {
+    let current = scenario.to_toml()?;
     fn keys(prefix: &str, table: &toml::Table, out: &mut Vec<String>) {
         for (key, value) in table {
             let path = if prefix.is_empty() { key.clone() } else { format!("{prefix}.{key}") };
@@ -309,22 +312,21 @@ fn keys_missing(saved: &str, current: &str) -> Vec<String> {
         keys("", table, &mut out);
         out
     };
-    let saved_table = table(saved);
-    let saved = listed(&saved_table);
-    listed(&table(current))
+    let saved = listed(&table(saved));
+    Ok(listed(&table(&current))
         .into_iter()
-        .filter(|k| !saved.contains(k) && !KEYS_ADDED_AS_THEY_WERE.contains(&k.as_str()) && !added_as_it_was_here(k, &saved_table))
-        .collect()
+        .filter(|k| !saved.contains(k) && !KEYS_ADDED_AS_THEY_WERE.contains(&k.as_str()) && !added_as_it_was_here(k, scenario))
+        .collect())
 }
 
 /// A key added since whose default is the model as it was for some
-/// scenarios only: the chest was 0.9 of the shoulders across until
-/// `trunk.chest_breadth_mm`, whose default (108 mm) is that chest for the
-/// default 120 mm shoulders, to the bit.
-fn added_as_it_was_here(key: &str, saved: &toml::Table) -> bool {
-    let default_shoulders = carus_anatomy::fetus::TrunkDiameters::default().bisacromial_mm;
-    key == "trunk.chest_breadth_mm"
-        && saved.get("trunk").and_then(|t| t.get("bisacromial_mm")).and_then(toml::Value::as_float) == Some(default_shoulders)
+/// scenarios only: until `trunk.chest_breadth_mm` the girths were scaled by
+/// the shoulders, so its default is the old trunk where the girth scale it
+/// gives is the shoulders' width to the bit (120 mm shoulders), or where
+/// there is no trunk.
+fn added_as_it_was_here(key: &str, scenario: &Scenario) -> bool {
+    let d = scenario.trunk.diameters();
+    key == "trunk.chest_breadth_mm" && (!scenario.trunk.enabled || d.girth_scale_m() == d.bisacromial_mm * 1e-3)
 }
 
 fn drive(
@@ -1952,9 +1954,16 @@ mod tests {
             s.trunk.bisacromial_mm = shoulders;
             s.to_toml().unwrap().lines().filter(|l| !l.starts_with("chest_breadth_mm")).map(|l| format!("{l}\n")).collect()
         };
-        let current = coarse(0.1).to_toml().unwrap();
-        assert!(keys_missing(&saved(120.0), &current).is_empty());
-        assert_eq!(keys_missing(&saved(175.0), &current), ["trunk.chest_breadth_mm"]);
+        let with = |shoulders: f64, enabled: bool| {
+            let mut s = coarse(0.1);
+            s.trunk.bisacromial_mm = shoulders;
+            s.trunk.enabled = enabled;
+            s
+        };
+        assert!(keys_missing(&saved(120.0), &with(120.0, true)).unwrap().is_empty());
+        assert_eq!(keys_missing(&saved(175.0), &with(175.0, true)).unwrap(), ["trunk.chest_breadth_mm"]);
+        // Without a trunk the chest does not matter.
+        assert!(keys_missing(&saved(175.0), &with(175.0, false)).unwrap().is_empty());
     }
 
     /// A checkpoint written before the keys whose defaults are the model as

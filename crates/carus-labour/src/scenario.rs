@@ -2272,7 +2272,7 @@ pub fn defaults_note_in(text: &str, table: &str, message: &str) -> Option<String
 /// An anatomy file (`[pelvis]`, `[head]`, `[floor]` and no `name`) given
 /// for a scenario: named as one, with what to do instead.
 fn check_not_anatomy_file(path: &Path, table: &toml::Table) -> Result<(), ScenarioError> {
-    let anatomy = ["pelvis", "head", "floor"];
+    let anatomy = ["pelvis", "head", "trunk", "floor"];
     if table.contains_key("name") || table.is_empty() || !table.keys().all(|k| anatomy.contains(&k.as_str())) {
         return Ok(());
     }
@@ -2280,7 +2280,7 @@ fn check_not_anatomy_file(path: &Path, table: &toml::Table) -> Result<(), Scenar
         path: path.to_path_buf(),
         line: 1,
         key: String::new(),
-        message: "this is an anatomy file ([pelvis], [head], [floor] without a `name`), not a scenario".into(),
+        message: "this is an anatomy file ([pelvis], [head], [trunk], [floor] without a `name`), not a scenario".into(),
         hint: "`carus measure`, `carus mesh` and `carus render` read it as it is; to run or detect with it, add \
                `name = \"...\"` at its top, which makes it a scenario with the other tables at their defaults \
                (`carus scenarios show normal` lists them)"

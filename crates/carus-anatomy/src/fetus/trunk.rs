@@ -84,6 +84,13 @@ pub enum TrunkError {
 }
 
 impl TrunkDiameters {
+    /// The girth scale G the sections' girths are fractions of, m: the
+    /// chest's breadth over 0.9 (until the forty-fourth session the
+    /// bisacromial diameter, which it equals to the bit for the defaults).
+    pub fn girth_scale_m(&self) -> f64 {
+        self.chest_breadth_mm * 1e-3 / CHEST_BREADTH_SHARE
+    }
+
     pub fn validate(&self) -> Result<(), TrunkError> {
         for (name, value) in [
             ("bisacromial_mm", self.bisacromial_mm),
@@ -135,7 +142,7 @@ const CHEST_BREADTH_SHARE: f64 = 0.9;
 /// x 92 mm, i.e. circumferences near 31-33 cm), except the shoulder and hip
 /// widths, which are the diameters themselves.
 fn sections(d: &TrunkDiameters) -> [Section; 8] {
-    let s = d.chest_breadth_mm * 1e-3 / CHEST_BREADTH_SHARE;
+    let s = d.girth_scale_m();
     let shoulders = d.bisacromial_mm * 1e-3;
     let t = d.bitrochanteric_mm * 1e-3;
     let neck_base = d.cervical_spine_mm * 1e-3;

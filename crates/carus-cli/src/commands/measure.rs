@@ -191,7 +191,7 @@ fn print_trunk(m: &TrunkMeasurement, source: String) {
 fn read_text(path: &Path) -> anyhow::Result<String> {
     let not_toml = |what: &str| {
         anyhow::anyhow!(
-            "{}: {what}; give an anatomy (or scenario) file, TOML text with a [pelvis] or [head] table \
+            "{}: {what}; give an anatomy (or scenario) file, TOML text with a [pelvis], [head] or [trunk] table \
              (docs/ANATOMY.md)\n  hint: a pelvis mesh is imported through a landmarks file that names it: \
              `[pelvis] import = \"pelvis.landmarks.toml\"` (docs/IMPORT.md); a fetal head is built from \
              its diameters (`[head]`), and its trunk from `[trunk]`; a fetal mesh cannot be imported yet",

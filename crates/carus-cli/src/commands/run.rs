@@ -609,10 +609,15 @@ pub(super) const REPORT_FILE: &str = "report.html";
 const OUT_DIR_MARK: &str = ".carus-out";
 
 /// Files that together mark a folder carus wrote before it left
-/// [`OUT_DIR_MARK`]: a run (its scenario with its record or checkpoint) or
-/// a sweep (its two tables). One common file name alone is not enough.
-const EARLIER_OUTPUT_MARKS: [&[&str]; 3] =
-    [&["scenario.toml", "run.json"], &["scenario.toml", "checkpoint.json"], &[super::sweep::CSV_FILE, super::sweep::JSON_FILE]];
+/// [`OUT_DIR_MARK`]: a run (its scenario with its record or checkpoint), a
+/// sweep (its two tables) or a solve (its series with its summary). One
+/// common file name alone is not enough.
+const EARLIER_OUTPUT_MARKS: [&[&str]; 4] = [
+    &["scenario.toml", "run.json"],
+    &["scenario.toml", "checkpoint.json"],
+    &[super::sweep::CSV_FILE, super::sweep::JSON_FILE],
+    &[carus_io::job::SOLUTION_PVD, carus_io::job::SUMMARY_FILE],
+];
 
 /// Makes `dir` and marks it as an out dir of carus.
 pub(super) fn make_marked(dir: &Path) -> anyhow::Result<()> {
@@ -656,7 +661,8 @@ fn check_replaceable(dir: &Path) -> anyhow::Result<()> {
     if !carus_made(dir) {
         bail!(
             "{} is not a folder that carus made (it has no {OUT_DIR_MARK}, nor a run's scenario.toml with \
-             its run.json or checkpoint.json, nor a sweep's tables), and --force replaces only such a \
+             its run.json or checkpoint.json, nor a sweep's tables, nor a solve's series and summary), and \
+             --force replaces only such a \
              folder; choose another --out, or empty it yourself",
             dir.display()
         );
@@ -689,24 +695,27 @@ pub(super) fn foreign_entries(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
         OUT_DIR_MARK, SCENARIO_FILE, CHECKPOINT_FILE, HISTORY_JSON, HISTORY_CSV, CONTACTS_CSV, MOVEMENTS_FILE,
         RUN_FILE, PELVIS_VTU, LIGAMENTS_VTU, HEAD_BODY_VTU, TRUNK_BODY_VTU, LOWER_TRUNK_BODY_VTU, REPORT_FILE,
         super::sweep::PLAN_FILE, super::sweep::CSV_FILE, super::sweep::JSON_FILE, super::sanity::PLAN_FILE,
-        super::sanity::RECORD_FILE, solve::SOLUTION_PVD, solve::HISTORY_FILE, solve::SUMMARY_FILE, ".DS_Store",
-        "Thumbs.db", "desktop.ini",
+        super::sanity::RECORD_FILE, ".DS_Store", "Thumbs.db", "desktop.ini",
     ];
+    // A sweep from before its plan was written has its two tables.
+    let sweep_tables = [super::sweep::CSV_FILE, super::sweep::JSON_FILE];
+    let batch = super::holds_batch(dir) || sweep_tables.iter().all(|f| dir.join(f).is_file());
+    // Solve's common names (summary.json, history.csv) are its own only in
+    // a folder that holds no run or batch: in a run's they are a user's.
+    let solve_folder = !batch && !dir.join(SCENARIO_FILE).exists();
+    let solve_own = [solve::SOLUTION_PVD, solve::HISTORY_FILE, solve::SUMMARY_FILE];
     let series = |name: &str| name.strip_suffix(".pvd").is_some_and(|stem| SERIES_STEMS.contains(&stem));
     // A file written whole goes through NAME.partial (write_json_whole, PVDs).
     let ours = |name: &str| {
         let name = name.strip_suffix(".partial").unwrap_or(name);
-        own.contains(&name) || series(name)
+        own.contains(&name) || (solve_folder && solve_own.contains(&name)) || series(name)
     };
     let frame = |name: &str| {
-        solve::is_frame_name(name)
+        (solve_folder && solve::is_frame_name(name))
             || name.strip_suffix(".vtu").and_then(|stem| stem.rsplit_once('_')).is_some_and(|(stem, k)| {
                 SERIES_STEMS.contains(&stem) && k.len() >= 4 && k.bytes().all(|b| b.is_ascii_digit())
             })
     };
-    // A sweep from before its plan was written has its two tables.
-    let sweep_tables = [super::sweep::CSV_FILE, super::sweep::JSON_FILE];
-    let batch = super::holds_batch(dir) || sweep_tables.iter().all(|f| dir.join(f).is_file());
     let list = |dir: &Path| -> anyhow::Result<Vec<(PathBuf, String, bool)>> {
         let mut entries = Vec::new();
         for entry in std::fs::read_dir(dir).with_context(|| format!("{}", dir.display()))? {
@@ -1388,5 +1397,19 @@ mod tests {
             // The folder made is marked, so it can be replaced again.
             assert!(earlier.join(OUT_DIR_MARK).is_file());
         }
+
+        // `carus solve`'s common names are a user's in a run's folder.
+        let run = dir.path().join("run");
+        std::fs::create_dir_all(run.join("frames")).unwrap();
+        for f in [OUT_DIR_MARK, "scenario.toml", "run.json"] {
+            std::fs::write(run.join(f), "{}").unwrap();
+        }
+        let users = [run.join("summary.json"), run.join("history.csv"), run.join("frames/frame_00001.vtu")];
+        for f in &users {
+            std::fs::write(f, "mine").unwrap();
+        }
+        let e = format!("{:#}", choose_out_dir(Some(&run), "x", true).err().unwrap());
+        assert!(e.contains("holds what carus did not write") && e.contains("summary.json") && e.contains("frame_00001.vtu"), "{e}");
+        assert!(users.iter().all(|f| f.exists()));
     }
 }

@@ -39,6 +39,11 @@ pub fn run(args: &SolveArgs) -> anyhow::Result<Status> {
     }
     let stop = super::ctrl_c_flag();
     let job = prepare_job(&args.job)?;
+    // Ctrl-C while the model was built: the folder is not touched.
+    if stop.load(std::sync::atomic::Ordering::Relaxed) {
+        eprintln!("stopped before the solve began; {} was left as it was", args.out.display());
+        return Ok(Status::Failed);
+    }
     // Made (or an earlier run in it cleared) only now: a job that cannot
     // start leaves the folder as it was.
     let out_dir = chosen.make()?;

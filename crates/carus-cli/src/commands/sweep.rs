@@ -109,9 +109,10 @@ fn check_sweep_size(args: &SweepArgs) -> anyhow::Result<()> {
     let at_once = args.jobs.unwrap_or(cores).clamp(1, cores);
     let hours = runs as f64 * RUN_S_PER_CORE / at_once as f64 / 3600.0;
     let cores_said = if at_once == 1 { "1 core".to_string() } else { format!("{at_once} cores") };
-    let took = match hours < 48.0 {
-        true => format!("{hours:.0} hours"),
-        false => format!("{:.0} days", hours / 24.0),
+    let took = match hours {
+        h if h < 1.0 => format!("{:.0} minutes", h * 60.0),
+        h if h < 48.0 => format!("{h:.0} hours"),
+        h => format!("{:.0} days", h / 24.0),
     };
     let how = match args.one_at_a_time {
         true => format!("the base and {}", counts.join(", ")),
@@ -169,6 +170,34 @@ fn load_base(args: &SweepArgs) -> anyhow::Result<Scenario> {
 }
 
 /// Every combination of the settings' values, the first setting varying slowest.
+/// A plan written by an older build, before a key its runs now take by
+/// default, would finish with runs of another model than the ones done:
+/// refused, naming the key, unless its default is the old model for every
+/// run (carus_labour::run::keys_missing) or the sweep sets it.
+fn check_plan_keeps_the_model(
+    dir: &Path,
+    planned: &str,
+    scenarios: &[Scenario],
+    combinations: &[Vec<(String, String)>],
+) -> anyhow::Result<()> {
+    for (scenario, combination) in scenarios.iter().zip(combinations) {
+        let missing: Vec<String> = carus_labour::run::keys_missing(planned, scenario)?
+            .into_iter()
+            .filter(|key| !combination.iter().any(|(set, _)| holds_key(set, key)))
+            .collect();
+        if !missing.is_empty() {
+            anyhow::bail!(
+                "{}: the sweep was planned by an older carus, before {} existed; its runs not yet done \
+                 would take the default and so another model than the runs done; start the sweep again \
+                 (carus sweep ... --out NEW_FOLDER)",
+                dir.join(PLAN_FILE).display(),
+                missing.join(", ")
+            );
+        }
+    }
+    Ok(())
+}
+
 fn combinations(settings: &[Setting]) -> Vec<Vec<(String, String)>> {
     settings.iter().fold(vec![Vec::new()], |acc, s| {
         acc.iter()
@@ -326,6 +355,9 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<Status> {
         .map(|c| base.with_settings(c))
         .collect::<Result<Vec<Scenario>, _>>()
         .map_err(|e| from_plan(e.into()))?;
+    if let Some(dir) = &args.resume {
+        check_plan_keeps_the_model(dir, &plan.scenario_toml, &scenarios, &combinations)?;
+    }
     let varying: Vec<&str> = settings.iter().filter(|s| s.values.len() > 1).map(|s| s.key.as_str()).collect();
     // A new sweep names its folders in its plan; an older plan kept none,
     // and its folders were spelled out whole.
@@ -1021,6 +1053,17 @@ mod tests {
         std::fs::write(&plan_path, plan.to_string()).unwrap();
         let e = format!("{:#}", run(&resume).err().unwrap());
         assert!(e.contains("sweep_plan.json is damaged") && e.contains("run the sweep again"), "{e}");
+        // A plan from before the chest's key goes on where its default is
+        // the old chest (120 mm shoulders), and is refused where it is not.
+        let without_chest = |text: &str| -> String { text.lines().filter(|l| !l.starts_with("chest_breadth_mm")).map(|l| format!("{l}\n")).collect() };
+        let mut plan: serde_json::Value = serde_json::from_str(&original).unwrap();
+        plan["scenario_toml"] = json!(without_chest(plan["scenario_toml"].as_str().unwrap()));
+        std::fs::write(&plan_path, plan.to_string()).unwrap();
+        assert!(matches!(run(&resume).unwrap(), Status::Success));
+        plan["scenario_toml"] = json!(plan["scenario_toml"].as_str().unwrap().replace("bisacromial_mm = 120.0", "bisacromial_mm = 175.0"));
+        std::fs::write(&plan_path, plan.to_string()).unwrap();
+        let e = format!("{:#}", run(&resume).err().unwrap());
+        assert!(e.contains("planned by an older carus, before trunk.chest_breadth_mm existed"), "{e}");
         std::fs::write(&plan_path, original).unwrap();
         assert!(matches!(run(&resume).unwrap(), Status::Success));
         assert_eq!([history(&first), history(&second)], whole);
