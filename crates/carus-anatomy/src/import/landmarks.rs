@@ -435,6 +435,34 @@ fn check_landmarks_on_bone(
     ))
 }
 
+/// The least bone surface a pelvis mesh may have, as a multiple of the
+/// square of its obstetric conjugate. A whole pelvis has far more: the
+/// generated one 10.5, the Visible Human mesh (outer and inner bone) 24.
+/// A mesh of a few patches around the landmarks passes every landmark
+/// check, but the fetus would pass through the canal where it has no bone.
+const BONE_AREA_MIN_PER_CONJUGATE_SQUARED: f64 = 2.0;
+
+/// A mesh with too little bone for a pelvis is refused, naming its area.
+fn check_bone_enough(mesh_path: &Path, landmarks: &PelvisLandmarks, surface: &crate::TriSurface) -> Result<(), ImportError> {
+    let conjugate = landmarks.sacral_promontory.distance(landmarks.symphysis_upper);
+    let least = BONE_AREA_MIN_PER_CONJUGATE_SQUARED * conjugate * conjugate;
+    let area = surface.area();
+    if area >= least {
+        return Ok(());
+    }
+    Err(file_error(
+        mesh_path,
+        format!(
+            "its bone has {:.1} cm^2 of surface, less than the {:.0} cm^2 any whole pelvis with this \
+             {:.1} mm conjugate has: it is a partial or sparse mesh, and the fetus would pass where it has \
+             no bone; import the whole bony pelvis (both hip bones, the sacrum and the coccyx)",
+            area * 1e4,
+            least * 1e4,
+            conjugate * 1e3
+        ),
+    ))
+}
+
 /// [`import_pelvis`] for a landmarks file already read and its mesh's
 /// triangles (e.g. embedded in the program); `path` names the landmarks
 /// file in errors, `mesh_path` the mesh.
@@ -464,6 +492,7 @@ pub fn assemble_pelvis(
     // without holes has a certain outside, so it is turned (and noted).
     report.turned_outwards = super::weld::turn_parts_outwards(&mut surface) > 0;
     check_landmarks_on_bone(path, &mesh_path, file.units, &landmarks, &surface)?;
+    check_bone_enough(&mesh_path, &landmarks, &surface)?;
     let pelvis = Pelvis::from_landmarks(landmarks, surface).map_err(|source| ImportError::Pelvis {
         path: path.to_path_buf(),
         source,

@@ -839,3 +839,28 @@ fn a_pelvis_facing_into_its_bone_is_turned_outwards() {
     std::fs::remove_dir_all(dir).ok();
 }
 
+
+/// A mesh of small patches at the landmarks passes every landmark check
+/// but has no canal wall between them: refused, naming its area and the fix.
+#[test]
+fn a_sparse_mesh_around_the_landmarks_is_refused() {
+    let dir = scratch("sparse");
+    let original = anatomy_assets_dir().join("visible-human-female-pelvis.stl");
+    let file = LandmarksFile::read(&visible_human_female_pelvis_path()).unwrap();
+    // A triangle 2 mm across at each landmark (the file is in mm).
+    let patches: Vec<stl_io::Triangle> = file
+        .landmarks
+        .values()
+        .map(|p| {
+            let at = |dx: f64, dy: f64| stl_io::Vertex::new([(p[0] + dx) as f32, (p[1] + dy) as f32, p[2] as f32]);
+            stl_io::Triangle { normal: stl_io::Normal::new([0.0, 0.0, 1.0]), vertices: [at(0.0, 0.0), at(2.0, 0.0), at(0.0, 2.0)] }
+        })
+        .collect();
+    let mut bytes = Vec::new();
+    stl_io::write_stl(&mut bytes, patches.iter()).unwrap();
+    let sparse = write(&dir, "sparse.stl", &bytes);
+    let landmarks = edited_landmarks(&dir, |t| t.replace(original.to_str().unwrap(), sparse.to_str().unwrap()));
+    let e = import_pelvis(&landmarks).unwrap_err().to_string();
+    assert!(e.contains("sparse.stl") && e.contains("partial or sparse mesh") && e.contains("import the whole bony pelvis"), "{e}");
+    std::fs::remove_dir_all(dir).ok();
+}
