@@ -315,18 +315,19 @@ pub fn keys_missing(saved: &str, scenario: &Scenario) -> Result<Vec<String>, Lab
     let saved = listed(&table(saved));
     Ok(listed(&table(&current))
         .into_iter()
-        .filter(|k| !saved.contains(k) && !KEYS_ADDED_AS_THEY_WERE.contains(&k.as_str()) && !added_as_it_was_here(k, scenario))
+        .filter(|k| !saved.contains(k) && !default_is_the_old_model(k, scenario))
         .collect())
 }
 
-/// A key added since whose default is the model as it was for some
-/// scenarios only: until `trunk.chest_breadth_mm` the girths were scaled by
-/// the shoulders, so its default is the old trunk where the girth scale it
-/// gives is the shoulders' width to the bit (120 mm shoulders), or where
-/// there is no trunk.
-fn added_as_it_was_here(key: &str, scenario: &Scenario) -> bool {
+/// Whether `key`, added since, takes a default that is the model as it was
+/// for `scenario`: always for [`KEYS_ADDED_AS_THEY_WERE`]; for
+/// `trunk.chest_breadth_mm` (the girths were scaled by the shoulders until
+/// it) where the girth scale it gives is the shoulders' width to the bit
+/// (120 mm shoulders), or where there is no trunk.
+fn default_is_the_old_model(key: &str, scenario: &Scenario) -> bool {
     let d = scenario.trunk.diameters();
-    key == "trunk.chest_breadth_mm" && (!scenario.trunk.enabled || d.girth_scale_m() == d.bisacromial_mm * 1e-3)
+    KEYS_ADDED_AS_THEY_WERE.contains(&key)
+        || (key == "trunk.chest_breadth_mm" && (!scenario.trunk.enabled || d.girth_scale_m() == d.bisacromial_mm * 1e-3))
 }
 
 fn drive(

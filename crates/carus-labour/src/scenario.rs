@@ -2393,11 +2393,12 @@ fn takes_a_number(full_key: &str) -> bool {
 /// an example for a message; None for a key it has not (a way-point's).
 fn normal_value(full_key: &str) -> Option<toml::Value> {
     let complete = Scenario::builtin("normal").ok()?.to_toml().ok()?;
-    let mut value = toml::Value::Table(complete.parse::<toml::Table>().ok()?);
+    let root = toml::Value::Table(complete.parse::<toml::Table>().ok()?);
+    let mut value = &root;
     for part in full_key.split('.') {
-        value = value.get(part)?.clone();
+        value = value.get(part)?;
     }
-    Some(value)
+    Some(value.clone())
 }
 
 fn syntax(path: &Path, text: &str, key: String, error: &toml::de::Error) -> ScenarioError {

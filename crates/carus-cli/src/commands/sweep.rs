@@ -169,7 +169,6 @@ fn load_base(args: &SweepArgs) -> anyhow::Result<Scenario> {
     }
 }
 
-/// Every combination of the settings' values, the first setting varying slowest.
 /// A plan written by an older build, before a key its runs now take by
 /// default, would finish with runs of another model than the ones done:
 /// refused, naming the key, unless its default is the old model for every
@@ -198,6 +197,7 @@ fn check_plan_keeps_the_model(
     Ok(())
 }
 
+/// Every combination of the settings' values, the first setting varying slowest.
 fn combinations(settings: &[Setting]) -> Vec<Vec<(String, String)>> {
     settings.iter().fold(vec![Vec::new()], |acc, s| {
         acc.iter()

@@ -580,8 +580,8 @@ pub struct PreparedJob {
     file: MeshFile,
     solver: TledSolver,
     supports: Supports,
-    /// Reading and building, counted in the run's wall time.
-    prepared_in: std::time::Duration,
+    /// When reading began: the run's wall time counts reading and building.
+    start: Instant,
 }
 
 /// Reads the job file at `job_path` and builds its model (see
@@ -599,7 +599,7 @@ fn prepare(job_path: &Path, before_build: impl FnOnce() -> Result<(), JobError>)
     before_build()?;
     let file = crate::read_mesh(&mesh_path(job_path, &spec))?.to_metres(spec.mesh.length_unit);
     let (solver, supports) = build_solver(job_path, &spec, &file).map_err(|e| e.at_line_in(&text))?;
-    Ok(PreparedJob { spec, file, solver, supports, prepared_in: start.elapsed() })
+    Ok(PreparedJob { spec, file, solver, supports, start })
 }
 
 /// Runs the job file at `job_path`, writing into `out_dir`, which must be
@@ -621,8 +621,7 @@ impl PreparedJob {
     /// [`run_job`] does; the caller has made sure that it holds nothing
     /// the run could overwrite.
     pub fn run_into(self, out_dir: &Path, options: &RunOptions, progress: &mut dyn FnMut(&Progress)) -> Result<JobReport, JobError> {
-        let start = Instant::now().checked_sub(self.prepared_in).unwrap_or_else(Instant::now);
-        let PreparedJob { spec, file, mut solver, supports, .. } = self;
+        let PreparedJob { spec, file, mut solver, supports, start } = self;
         let mesh = &file.mesh;
         let critical_dt_s = solver.model().critical_time_step();
         let dt_s = solver.dt_s();
