@@ -77,12 +77,18 @@ pub enum ContactSite {
     /// The sacrospinous ligament with the coccygeus on it, closing the
     /// canal behind the side wall below the ischial spines.
     SacrospinousLigament,
+    /// The lower anterior abdominal wall, closing the front of the false
+    /// pelvis above the pubis.
+    AbdominalWall,
+    /// The obturator membrane with the obturator internus on it, closing
+    /// the obturator foramen in the side wall.
+    ObturatorMembrane,
     PelvicFloor,
 }
 
 impl ContactSite {
     /// Every site, for listing their names.
-    pub const ALL: [ContactSite; 9] = [
+    pub const ALL: [ContactSite; 11] = [
         ContactSite::Symphysis,
         ContactSite::PubicArch,
         ContactSite::SacralPromontory,
@@ -91,6 +97,8 @@ impl ContactSite {
         ContactSite::IschialSpines,
         ContactSite::PelvicSidewall,
         ContactSite::SacrospinousLigament,
+        ContactSite::AbdominalWall,
+        ContactSite::ObturatorMembrane,
         ContactSite::PelvicFloor,
     ];
 
@@ -105,6 +113,8 @@ impl ContactSite {
             ContactSite::IschialSpines => "ischial_spines",
             ContactSite::PelvicSidewall => "pelvic_sidewall",
             ContactSite::SacrospinousLigament => "sacrospinous_ligament",
+            ContactSite::AbdominalWall => "abdominal_wall",
+            ContactSite::ObturatorMembrane => "obturator_membrane",
             ContactSite::PelvicFloor => "pelvic_floor",
         }
     }

@@ -8,6 +8,7 @@
 //! - [`measures`]: station, theta, phi, engagement depths, shoulders per sample;
 //! - [`movements`]: the rules of "When a movement counts as observed";
 //! - [`outcome`]: delivered, or arrested where and against what;
+//! - [`shoulders`]: the shoulders' lie at the inlet and the head-to-body interval;
 //! - [`detector`]: the entry point [`detect`] and [`DetectorReport`];
 //! - [`moments`]: the key moments a report pictures, chosen from a detector's report;
 //! - [`sanity`]: the clinical sanity cases and whether a report meets each;
@@ -21,6 +22,7 @@ pub mod moments;
 pub mod movements;
 pub mod outcome;
 pub mod sanity;
+pub mod shoulders;
 pub mod synthetic;
 
 pub use canal::{BirthCanal, CanalPlanes};
@@ -31,3 +33,4 @@ pub use history::{
 pub use measures::{Series, THETA_ILL_CONDITIONED_TILT_DEG};
 pub use movements::{occiput_position, HeadBorn, Movement, Movements, NotHeldAtBirth, RotationOutsideWindow, Unit};
 pub use outcome::{Arrest, ArrestStage, Outcome};
+pub use shoulders::ShoulderPassage;

@@ -11,6 +11,7 @@
 
 use crate::history::PoseHistory;
 use crate::measures::Series;
+use crate::shoulders::from_antero_posterior_deg;
 use serde::{Deserialize, Serialize};
 
 /// Less progress than this over the final window is an arrest (detector
@@ -70,6 +71,11 @@ pub struct Arrest {
     /// that holds the head back is caught.
     #[serde(default)]
     pub shoulders_station_mm: Option<f64>,
+    /// The bisacromial line's angle from the antero-posterior diameter at
+    /// the same sample, deg (0 with one shoulder behind the symphysis, 90
+    /// transverse), when a trunk is modelled.
+    #[serde(default)]
+    pub shoulders_from_ap_deg: Option<f64>,
 }
 
 impl Arrest {
@@ -236,6 +242,10 @@ pub fn outcome(history: &PoseHistory, series: &Series, spines_sigma_mm: f64, per
                 .shoulders_sigma_mm
                 .as_ref()
                 .map(|shoulders| shoulders[stuck_at] - spines_sigma_mm),
+            shoulders_from_ap_deg: series
+                .shoulders_theta_deg
+                .as_ref()
+                .map(|back| from_antero_posterior_deg(back[stuck_at])),
         }),
     }
 }

@@ -140,14 +140,20 @@ impl SanityCase {
                         verdict(
                             head_out && at_shoulders && on_symphysis,
                             format!(
-                                "{}; arrested at the {} stage, {} the {}",
+                                "{}; arrested at the {} stage, {} the {}{}",
                                 if head_out { "head delivered" } else { "head not delivered" },
                                 stage_name(arrest.stage),
                                 match arrest.part.as_str() {
                                     "unknown" => "against".to_string(),
                                     part => format!("the {part} against"),
                                 },
-                                arrest.against.replace('_', " ")
+                                arrest.against.replace('_', " "),
+                                arrest
+                                    .shoulders_from_ap_deg
+                                    .filter(|_| at_shoulders)
+                                    .map_or(String::new(), |deg| format!(
+                                        ", the bisacromial diameter {deg:.0} deg from the antero-posterior"
+                                    ))
                             ),
                         )
                     }

@@ -54,6 +54,10 @@ fn each_case_is_met_by_its_own_outcome_only() {
     }
 
     assert!(met(SanityCase::LargeShoulders, &shoulders), "{:?}", SanityCase::LargeShoulders.judge(&shoulders, 0.0));
+    // What holds them is told with how they lie.
+    let v = SanityCase::LargeShoulders.judge(&shoulders, 0.0);
+    let lie = shoulders.outcome.arrest.as_ref().unwrap().shoulders_from_ap_deg.unwrap();
+    assert!(v.why.ends_with(&format!("the trunk against the symphysis, the bisacromial diameter {lie:.0} deg from the antero-posterior")), "{}", v.why);
     for other in [&textbook, &inlet, &outlet] {
         assert!(!met(SanityCase::LargeShoulders, other));
     }

@@ -718,3 +718,48 @@ fn movements_lost_before_the_birth_are_reported_as_not_held() {
     assert!(extension.observed && extension.start_s.unwrap() > born.time_s, "{extension:?} against {born}");
     assert!(late.not_held_at_birth.iter().all(|n| n.movement != "extension"), "{:?}", late.not_held_at_birth);
 }
+
+/// The shoulders' passage: the textbook's come into the inlet oblique (they
+/// followed the head's turn half-way, to -45) and its body is born as
+/// expulsion ends; the shoulder arrest's body is never born, and its
+/// arrest says how the held shoulders lie; without a trunk there is none.
+#[test]
+fn the_shoulders_passage_reads_their_lie_at_the_inlet_and_the_head_to_body_interval() {
+    let (_, r) = textbook();
+    let p = r.shoulders.expect("the textbook has a trunk");
+    let sigma = r.series.shoulders_sigma_mm.as_ref().unwrap();
+    let came = r.series.time_s.iter().position(|&t| Some(t) == p.inlet_s).unwrap();
+    assert!(sigma[came] >= 0.0 && sigma[came - 1] < 0.0, "{p:?}");
+    // Set along the head's stretch of the canal, read on the shoulders'
+    // (the canal curves between them): oblique, within a few degrees.
+    let lie = p.inlet_from_ap_deg.unwrap();
+    assert!((lie - 45.0).abs() < 5.0, "{p:?}");
+    let head = r.head_born.unwrap().time_s;
+    let body = r.movements.expulsion.end_s.unwrap();
+    assert_eq!((p.body_born_s, p.head_to_body_s), (Some(body), Some(body - head)));
+    assert!(body > head);
+    assert!((p.head_to_body_periods.unwrap() * r.contraction_period_s.unwrap() - (body - head)).abs() < 1e-9);
+    assert_eq!(p.body_not_born_after_s, None);
+    assert!(p.to_string().contains(&format!("the bisacromial diameter oblique ({lie:.0} deg from the antero-posterior); the body was born")), "{p}");
+
+    let held = detect(&synthetic::shoulder_arrest(&reference_canal())).unwrap();
+    let p = held.shoulders.unwrap();
+    assert_eq!((p.body_born_s, p.head_to_body_s, p.head_to_body_periods), (None, None, None));
+    let end = *held.series.time_s.last().unwrap();
+    assert_eq!(p.body_not_born_after_s, Some(end - held.head_born.unwrap().time_s));
+    assert!(p.to_string().ends_with(&format!("the body was not born in the {:.1} s after the head", end - held.head_born.unwrap().time_s)), "{p}");
+    // Read at the arrest's own sample, the deepest: the shoulders there
+    // partway through their external rotation from oblique towards the
+    // antero-posterior (the plan's -45 to -90).
+    let arrest = held.outcome.arrest.unwrap();
+    let spines = reference_canal().spines_sigma() * 1000.0;
+    let sigma = held.series.shoulders_sigma_mm.as_ref().unwrap();
+    let stuck = sigma.iter().rposition(|&s| s - spines == arrest.station_mm).unwrap();
+    let back = held.series.shoulders_theta_deg.as_ref().unwrap()[stuck];
+    assert_eq!(arrest.shoulders_from_ap_deg, Some(carus_analysis::shoulders::from_antero_posterior_deg(back)));
+    assert!((10.0..40.0).contains(&arrest.shoulders_from_ap_deg.unwrap()), "{arrest:?}");
+
+    let no_trunk = detect(&synthetic::inlet_arrest(&reference_canal())).unwrap();
+    assert_eq!(no_trunk.shoulders, None);
+    assert_eq!(no_trunk.outcome.arrest.unwrap().shoulders_from_ap_deg, None);
+}

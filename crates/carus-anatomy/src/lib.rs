@@ -10,5 +10,5 @@ pub mod pose;
 pub mod surface;
 
 pub use axis::{AxisFrame, PelvicAxis, Plane};
-pub use pelvis::{Pelvis, PelvisError, PelvisLandmarks, PelvisPlanes};
+pub use pelvis::{Pelvis, PelvisError, PelvisLandmarks, PelvisPlanes, SoftWalls};
 pub use surface::{SurfaceDefect, TriSurface};

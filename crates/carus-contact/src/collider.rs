@@ -165,6 +165,21 @@ impl TriangleCollider {
         })
     }
 
+    /// The first surface crossing from `point` along the unit `direction`
+    /// within `max_distance`, as a point inside the surface that far from
+    /// it, with `direction` as its way out: for a point that came into a
+    /// thin wall from `direction`'s side and has passed its middle, where
+    /// the nearest surface is the far face ([`closest_point`] would push it
+    /// on through).
+    ///
+    /// [`closest_point`]: TriangleCollider::closest_point
+    pub fn crossing_along(&self, point: DVec3, direction: DVec3, max_distance: f64) -> Option<SurfacePoint> {
+        let time = self.mesh.cast_local_ray(&Ray::new(point, direction), max_distance, false)?;
+        let at = point + time * direction;
+        let on = self.closest_point(at, 1e-9 * (1.0 + at.abs().max_element()))?;
+        Some(SurfacePoint { point: at, normal: direction, signed_distance: -time, triangle: on.triangle })
+    }
+
     /// Where the line through `point` along `direction` enters the surface:
     /// its first crossing met coming from far back along `-direction`.
     /// This is where a force along `direction` acting on that line meets

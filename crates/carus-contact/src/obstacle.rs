@@ -122,11 +122,20 @@ impl BodyMotion {
 /// What one body's contact remembers between steps: per sample, the anchor
 /// of its friction stick spring on the obstacle (the obstacle's frame: the
 /// pelvis frame for the pelvis; none when the sample is not in contact),
-/// and how far it may move before it must be queried again.
+/// the side of the obstacle it pressed from, and how far it may move
+/// before it must be queried again.
 /// Serializable, so a checkpoint can resume a run bit for bit.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct BodyContactState {
     anchors: Vec<Option<DVec3>>,
+    /// Per sample in contact, its contact normal at the last query: the
+    /// side of the wall it came from. A soft law (the trunk's cover) sinks
+    /// deeper than half a thin bone (the pubic rami, the iliac blade), where
+    /// the nearest surface becomes the far face; the sample is still pushed
+    /// back out of the side it came in by. Absent from a state saved before
+    /// it was kept: none remembered, as at a fresh start.
+    #[serde(default)]
+    sides: Vec<Option<DVec3>>,
     /// Samples last found inside the obstacle deeper than the search band.
     too_deep: Vec<bool>,
     clearance: Clearance,
@@ -136,6 +145,7 @@ impl BodyContactState {
     pub fn new(samples: &SurfaceSamples) -> Self {
         BodyContactState {
             anchors: vec![None; samples.len()],
+            sides: vec![None; samples.len()],
             too_deep: vec![false; samples.len()],
             clearance: Clearance::new(samples.len()),
         }
@@ -152,7 +162,8 @@ impl BodyContactState {
     /// `None` when its per-sample parts disagree in length (an edited save).
     pub fn sample_count(&self) -> Option<usize> {
         let n = self.anchors.len();
-        (self.too_deep.len() == n && self.clearance.len() == n).then_some(n)
+        let sides = self.sides.len() == n || self.sides.is_empty();
+        (sides && self.too_deep.len() == n && self.clearance.len() == n).then_some(n)
     }
 }
 
@@ -220,8 +231,9 @@ pub struct ContactReport {
     pub pushed_through: usize,
     /// The first of them: (sample, its depth in m, its obstacle region).
     pub first_pushed_through: Option<(u32, f64, Option<u16>)>,
-    /// Deepest penetration among the contacts, m: keep it well below half
-    /// the bone's thickness, or the closest point flips to the far side.
+    /// Deepest penetration among the contacts, m. A sample in contact keeps
+    /// its side past half a thin wall's thickness (`BodyContactState`); one
+    /// that first touches deeper than that is pushed out of the nearer face.
     pub deepest_m: f64,
 }
 
@@ -302,6 +314,9 @@ pub fn obstacle_contacts_by_region(
                 .unwrap_or(samples.len()),
         });
     }
+    if memory.sides.is_empty() {
+        memory.sides = vec![None; samples.len()];
+    }
     let com = motion.pose.position_m;
     let law_of = |region: Option<u16>| match region_laws {
         [] => law,
@@ -332,7 +347,26 @@ pub fn obstacle_contacts_by_region(
         // Queries are ~1 us: hand rayon chunks big enough to pay for a split.
         .with_min_len(32)
         .map(|(i, p)| {
-            let found = obstacle.surface.closest_point(p, searched);
+            let found = match (obstacle.surface.closest_point(p, searched), memory_in.sides[i]) {
+                // A soft cover's sample past the middle of a thin wall it
+                // entered from `side`: out the way it came, not on through
+                // the far face. Where the two faces are nearer together
+                // than twice the bone law's design sink, the turned normal
+                // is a sample rounding a sharp edge: out by the nearer face.
+                // The bone law (the head's) never sinks to a wall's middle
+                // at its design loads; where it is pressed that far it
+                // rounds the edge it is on (an ischial spine's tip).
+                (Some(h), Some(side)) if law.cover.is_some() && h.signed_distance < 0.0 && h.normal.dot(side) < 0.0 => {
+                    // Farther back than the band, the sample is lost either
+                    // way (a trunk wrapped round a spine's tip, dragged on):
+                    // the nearest face, as before.
+                    match obstacle.surface.crossing_along(p, side, band) {
+                        Some(back) if -(back.signed_distance + h.signed_distance) > 2.0 * DESIGN_PENETRATION_M => Some(back),
+                        _ => Some(h),
+                    }
+                }
+                (found, _) => found,
+            };
             let Some(hit) = found.filter(|h| h.signed_distance < 0.0 && -h.signed_distance <= band) else {
                 return (i, p, found, None);
             };
@@ -380,6 +414,7 @@ pub fn obstacle_contacts_by_region(
                 .get_or_insert((i as u32, -h.signed_distance, obstacle.region_of(h.triangle)));
         }
         memory.anchors[i] = contact.as_ref().map(|(_, anchor)| *anchor);
+        memory.sides[i] = contact.as_ref().map(|(c, _)| c.normal);
         if let Some((c, _)) = contact {
             report.force += c.force();
             report.torque_about_com += (c.body_point - com).cross(c.force());
@@ -591,6 +626,58 @@ mod tests {
             );
             assert!((a / expected - 1.0).abs() < 0.02, "angle {angle}: a {a} vs {expected}");
             assert!((spin_rate / expected_spin_rate - 1.0).abs() < 0.02, "angle {angle}: spin-up {spin_rate} vs {expected_spin_rate}");
+        }
+    }
+
+    /// A closed slab `thickness` thick under the plane z = 0 (2 m square),
+    /// outward normals: a thin bone.
+    fn slab(thickness: f64) -> RigidObstacle {
+        let mut v = Vec::new();
+        for z in [0.0, -thickness] {
+            v.extend([(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)].map(|(x, y)| DVec3::new(x, y, z)));
+        }
+        let t = [
+            [0, 1, 2], [0, 2, 3], // top, facing +z
+            [4, 6, 5], [4, 7, 6], // bottom, facing -z
+            [0, 4, 5], [0, 5, 1], [1, 5, 6], [1, 6, 2], [2, 6, 7], [2, 7, 3], [3, 7, 4], [3, 4, 0],
+        ];
+        RigidObstacle::new("slab", &v, &t, None).unwrap()
+    }
+
+    /// A soft sample (the trunk's cover) pressed into a 4 mm wall from
+    /// above is still pushed back up once past the wall's middle, where
+    /// the nearest face is the underside; a sample first found there, with
+    /// no side remembered, is pushed out of the nearer face.
+    #[test]
+    fn a_sample_past_the_middle_of_a_thin_wall_is_pushed_back_the_way_it_came() {
+        let wall = slab(4e-3);
+        let bone = ContactLaw::default();
+        let law = ContactLaw {
+            penalty_stiffness_pa_per_m: 1e7,
+            cover: Some(crate::law::SoftCover { depth_m: 6e-3, core_stiffness_pa_per_m: bone.penalty_stiffness_pa_per_m }),
+            ..bone
+        };
+        let samples = SurfaceSamples { points: vec![DVec3::ZERO], areas: vec![1e-4] };
+        let at = |z: f64| BodyMotion::at_rest(RigidPose::new(DVec3::new(0.0, 0.0, z), DQuat::IDENTITY));
+        let mut memory = BodyContactState::new(&samples);
+        for (z, depth) in [(-1e-3, 1e-3), (-2.5e-3, 2.5e-3), (-3.5e-3, 3.5e-3), (-2e-3, 2e-3)] {
+            let report = obstacle_contacts(&wall, &law, &samples, &at(z), DVec3::ZERO, &mut memory).unwrap();
+            let c = report.contacts[0];
+            assert!((c.normal - DVec3::Z).length() < 1e-12 && (c.depth - depth).abs() < 1e-12, "at {z}: {c:?}");
+            assert!(report.force.z > 0.0 && (c.obstacle_point.z).abs() < 1e-12, "at {z}: {report:?}");
+        }
+        let mut fresh = BodyContactState::new(&samples);
+        let report = obstacle_contacts(&wall, &law, &samples, &at(-3e-3), DVec3::ZERO, &mut fresh).unwrap();
+        assert!(report.force.z < 0.0 && (report.contacts[0].depth - 1e-3).abs() < 1e-12, "{report:?}");
+        // Let go, it forgets: found again below the middle, it leaves by the underside.
+        let _ = obstacle_contacts(&wall, &law, &samples, &at(0.01), DVec3::ZERO, &mut memory).unwrap();
+        let report = obstacle_contacts(&wall, &law, &samples, &at(-3e-3), DVec3::ZERO, &mut memory).unwrap();
+        assert!(report.force.z < 0.0, "{report:?}");
+        // The bone law (no cover) takes the nearer face, as it always did.
+        let mut head = BodyContactState::new(&samples);
+        for z in [-1e-3, -3e-3] {
+            let report = obstacle_contacts(&wall, &bone, &samples, &at(z), DVec3::ZERO, &mut head).unwrap();
+            assert_eq!(report.contacts[0].depth, 1e-3, "at {z}");
         }
     }
 

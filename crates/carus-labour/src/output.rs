@@ -25,6 +25,7 @@ pub const MOVEMENTS_FILE: &str = "movements.json";
 pub const RUN_FILE: &str = "run.json";
 pub const PELVIS_VTU: &str = "pelvis.vtu";
 pub const LIGAMENTS_VTU: &str = "sacrospinous_ligaments.vtu";
+pub const SOFT_WALLS_VTU: &str = "pelvic_soft_walls.vtu";
 pub const HEAD_BODY_VTU: &str = "head_body.vtu";
 pub const TRUNK_BODY_VTU: &str = "trunk_body.vtu";
 pub const LOWER_TRUNK_BODY_VTU: &str = "lower_trunk_body.vtu";

@@ -113,6 +113,11 @@ pub struct Files {
     /// The sacrospinous ligaments, part of the canal's rigid wall.
     #[serde(default)]
     pub ligaments_vtu: String,
+    /// The soft walls that close the pelvis's openings, part of the canal's
+    /// rigid wall too (`contact.abdominal_wall`, `contact.obturator_membranes`;
+    /// none for an imported pelvis).
+    #[serde(default)]
+    pub soft_walls_vtu: Option<String>,
     /// Head and trunk surfaces in their body frames (place with the poses).
     pub head_body_vtu: String,
     pub trunk_body_vtu: Option<String>,

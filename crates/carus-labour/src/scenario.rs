@@ -423,6 +423,28 @@ pub struct ContactSection {
     /// mm at the 360-630 N of the normal run's snap. The normal outcome
     /// turns on it (docs/LABOUR.md, forty-third session).
     pub ligament_stiffness_ratio: f64,
+    /// Close the front of a generated pelvis's false pelvis with the lower
+    /// abdominal wall (`carus_anatomy::SoftWalls`), rising from the front
+    /// of the pubic crests: without it a shoulder above the brim passes
+    /// down in front of the pubis, outside the canal, as the anterior
+    /// shoulder did in every run before (docs/LABOUR.md, forty-fifth
+    /// session); off, it may again, for comparison. An imported pelvis has
+    /// none.
+    pub abdominal_wall: bool,
+    /// Close a generated pelvis's obturator foramina with the obturator
+    /// membranes and the obturator internus on them, lying on the canal
+    /// wall. Off by default: rigid there, they narrow the side wall where
+    /// the head turns, and the normal head is then squeezed between a
+    /// membrane and the opposite ligament at several hundred newtons
+    /// (docs/LABOUR.md, forty-fifth session); the muscle gives, and no
+    /// stiffness for it was found.
+    pub obturator_membranes: bool,
+    /// Stiffness of those soft walls as a share of the bone's, for the
+    /// head's law and the trunk's: 1, as rigid as bone, as the ligaments
+    /// are (`ligament_stiffness_ratio`). Engineering choice: the abdominal
+    /// wall gives far more than bone, but no transverse stiffness of it
+    /// or of the obturator internus on its membrane was found.
+    pub soft_wall_stiffness_ratio: f64,
 }
 
 /// Friction of the wetted canal, the built-in scenarios' `contact.friction`:
@@ -461,6 +483,9 @@ impl Default for ContactSection {
             sample_spacing_mm: 4.0,
             head_trunk: true,
             ligament_stiffness_ratio: 1.0,
+            abdominal_wall: true,
+            obturator_membranes: false,
+            soft_wall_stiffness_ratio: 1.0,
         }
     }
 }
@@ -1542,6 +1567,15 @@ impl Scenario {
                 ratio,
                 "must be above 0 and at most 1",
                 "a share of the bone's stiffness: 1 (the default) is as rigid as bone, 0.03 about a ligament's give (docs/LABOUR.md)",
+            ));
+        }
+        let ratio = self.contact.soft_wall_stiffness_ratio;
+        if !(ratio > 0.0 && ratio <= 1.0) {
+            return Err(err(
+                "contact.soft_wall_stiffness_ratio",
+                ratio,
+                "must be above 0 and at most 1",
+                "a share of the bone's stiffness: 1 (the default) is as rigid as bone",
             ));
         }
         if self.contact.friction > 2.0 {

@@ -20,7 +20,7 @@ use carus_contact::{
 use carus_fem::{BoundaryConditions, Material, MaterialRegion, Mesh, ModelOptions, TledModel};
 use glam::{DMat3, DQuat, DVec3};
 
-use crate::scenario::{Presentation, Scenario};
+use crate::scenario::{ContactSection, Presentation, Scenario};
 use crate::trajectory::{HeadCoordinates, Mode, Trajectory, TrajectoryPoint};
 use crate::LabourError;
 
@@ -145,8 +145,8 @@ impl Scene {
         let canal = BirthCanal::from_pelvis(&pelvis)
             .map_err(|e| LabourError::anatomy(format!("pelvic axis: {e}")))?;
         let ligaments = carus_anatomy::floor::sacrospinous_ligaments(&pelvis, scenario.floor.mesh.sacrospinous_bow);
-        let CanalWall { surface: wall, labels, sites } = canal_wall(&pelvis, &ligaments);
-        let ligament_label = sites.iter().position(|site| *site == ContactSite::SacrospinousLigament).map(|i| i as u16);
+        let CanalWall { surface: wall, labels, sites } = canal_wall(&pelvis, &ligaments, &scenario.contact);
+        let label_of = |wanted: ContactSite| sites.iter().position(|site| *site == wanted).map(|i| i as u16);
         let names = sites.iter().map(|s| s.name().to_string()).collect();
         let pelvis_collider =
             RigidObstacle::new("pelvis", &wall.vertices, &wall.triangles, Some(RegionTable { names, labels }))?;
@@ -221,17 +221,27 @@ impl Scene {
             ..law
         };
         trunk_law.validate()?;
-        // The ligaments' own laws, where they are softer than bone.
-        let ratio = s.contact.ligament_stiffness_ratio;
-        let on_ligaments = |law: &ContactLaw| -> Vec<(u16, ContactLaw)> {
-            let softer = ContactLaw {
-                penalty_stiffness_pa_per_m: ratio * law.penalty_stiffness_pa_per_m,
-                cover: law.cover.map(|c| SoftCover { core_stiffness_pa_per_m: ratio * c.core_stiffness_pa_per_m, ..c }),
-                ..*law
-            };
-            ligament_label.filter(|_| ratio < 1.0).map(|label| (label, softer)).into_iter().collect()
+        // The ligaments' and soft walls' own laws, where they are softer than bone.
+        let softer_sites = [
+            (ContactSite::SacrospinousLigament, s.contact.ligament_stiffness_ratio),
+            (ContactSite::AbdominalWall, s.contact.soft_wall_stiffness_ratio),
+            (ContactSite::ObturatorMembrane, s.contact.soft_wall_stiffness_ratio),
+        ];
+        let softer_regions = |law: &ContactLaw| -> Vec<(u16, ContactLaw)> {
+            softer_sites
+                .iter()
+                .filter(|(_, ratio)| *ratio < 1.0)
+                .filter_map(|&(site, ratio)| {
+                    let softer = ContactLaw {
+                        penalty_stiffness_pa_per_m: ratio * law.penalty_stiffness_pa_per_m,
+                        cover: law.cover.map(|c| SoftCover { core_stiffness_pa_per_m: ratio * c.core_stiffness_pa_per_m, ..c }),
+                        ..*law
+                    };
+                    label_of(site).map(|label| (label, softer))
+                })
+                .collect()
         };
-        let region_laws = [on_ligaments(&law), on_ligaments(&trunk_law)];
+        let region_laws = [softer_regions(&law), softer_regions(&trunk_law)];
         let head_trunk = match (&trunk, thoracic_inlet) {
             (Some(body), Some(inlet)) if s.contact.head_trunk => Some(HeadTrunkContact::new(&head, body, &inlet)?),
             _ => None,
@@ -613,6 +623,20 @@ impl Scene {
         (off > half_inlet).then_some(off)
     }
 
+    /// The soft walls in the canal's wall, as one surface (the abdominal
+    /// wall, then the obturator membranes, each as `[contact]` asks):
+    /// `None` when there are none (both off, or an imported pelvis).
+    pub fn soft_walls(&self) -> Option<TriSurface> {
+        let (walls, contact) = (&self.pelvis.soft_walls, &self.scenario.contact);
+        let mut surface = TriSurface::default();
+        for (sheet, on) in [(&walls.abdominal_wall, contact.abdominal_wall), (&walls.obturator_membranes, contact.obturator_membranes)] {
+            if on {
+                surface.append(sheet);
+            }
+        }
+        (!surface.triangles.is_empty()).then_some(surface)
+    }
+
     /// Rigid body `b`: the head, the trunk (or thorax), the lower trunk.
     pub fn fetal_body(&self, b: usize) -> &FetalBody {
         match b {
@@ -834,23 +858,30 @@ fn build_floor(s: &Scenario, pelvis: &Pelvis) -> Result<FloorScene, LabourError>
     })
 }
 
-/// The rigid wall of the canal: the bone and the sacrospinous ligaments
-/// that close it behind the side walls below the spines, with a site label
-/// per triangle and the sites the labels index.
+/// The rigid wall of the canal: the bone, the sacrospinous ligaments that
+/// close it behind the side walls below the spines, and (as `contact`
+/// asks) the abdominal wall and obturator membranes that close its other openings,
+/// with a site label per triangle and the sites the labels index.
 struct CanalWall {
     surface: TriSurface,
     labels: Vec<u16>,
     sites: Vec<ContactSite>,
 }
 
-fn canal_wall(pelvis: &Pelvis, ligaments: &TriSurface) -> CanalWall {
+fn canal_wall(pelvis: &Pelvis, ligaments: &TriSurface, contact: &ContactSection) -> CanalWall {
     let (mut labels, mut sites) = regions(pelvis);
     let mut surface = pelvis.surface.clone();
-    let offset = surface.vertices.len() as u32;
-    surface.vertices.extend(&ligaments.vertices);
-    surface.triangles.extend(ligaments.triangles.iter().map(|t| t.map(|v| v + offset)));
-    labels.resize(surface.triangles.len(), sites.len() as u16);
-    sites.push(ContactSite::SacrospinousLigament);
+    let closures = &pelvis.soft_walls;
+    let sheets = [
+        (ligaments, ContactSite::SacrospinousLigament, true),
+        (&closures.abdominal_wall, ContactSite::AbdominalWall, contact.abdominal_wall),
+        (&closures.obturator_membranes, ContactSite::ObturatorMembrane, contact.obturator_membranes),
+    ];
+    for (sheet, site, _) in sheets.into_iter().filter(|(sheet, _, on)| *on && !sheet.triangles.is_empty()) {
+        surface.append(sheet);
+        labels.resize(surface.triangles.len(), sites.len() as u16);
+        sites.push(site);
+    }
     CanalWall { surface, labels, sites }
 }
 
@@ -1233,10 +1264,11 @@ mod tests {
     #[test]
     fn the_sacrospinous_ligaments_stop_the_fetus_where_the_bone_is_open() {
         let scene = coarse_normal_without_floor();
-        let wall = canal_wall(&scene.pelvis, &scene.ligaments);
+        let bare = ContactSection { abdominal_wall: false, obturator_membranes: false, ..ContactSection::default() };
+        let wall = canal_wall(&scene.pelvis, &scene.ligaments, &bare);
         let bone = scene.pelvis.surface.triangles.len();
         assert!(wall.surface.triangles.len() > bone);
-        let collider = scene.pelvis_collider.surface();
+        let collider = canal_collider(&wall);
         for t in bone..wall.surface.triangles.len() {
             assert_eq!(wall.sites[wall.labels[t] as usize], ContactSite::SacrospinousLigament);
         }
@@ -1254,6 +1286,60 @@ mod tests {
             let to_bone = scene.pelvis.surface.vertices.iter().map(|v| (*v - behind).length()).fold(f64::MAX, f64::min);
             assert!(to_bone > 0.01, "{to_bone}");
         }
+    }
+
+    /// The collider of a canal wall, as the scene builds it.
+    fn canal_collider(wall: &CanalWall) -> carus_contact::TriangleCollider {
+        carus_contact::TriangleCollider::new("pelvis", &wall.surface.vertices, &wall.surface.triangles).unwrap()
+    }
+
+    /// The soft walls close the front of the false pelvis and the obturator
+    /// foramina, facing the canal: a point just behind either is inside
+    /// the wall, on it, and where the bone alone leaves the canal open.
+    #[test]
+    fn the_soft_walls_close_the_front_of_the_false_pelvis_and_the_obturator_foramina() {
+        let scene = coarse_normal_without_floor();
+        let walls = &scene.pelvis.soft_walls;
+        let both = ContactSection { abdominal_wall: true, obturator_membranes: true, ..ContactSection::default() };
+        let neither = ContactSection { abdominal_wall: false, obturator_membranes: false, ..both };
+        let with = canal_wall(&scene.pelvis, &scene.ligaments, &both);
+        let without = canal_wall(&scene.pelvis, &scene.ligaments, &neither);
+        let (closed, open) = (canal_collider(&with), canal_collider(&without));
+        let first = without.surface.triangles.len();
+        assert_eq!(with.surface.triangles.len(), first + walls.abdominal_wall.triangles.len() + walls.obturator_membranes.triangles.len());
+        for (sheet, site, offset) in [
+            (&walls.abdominal_wall, ContactSite::AbdominalWall, first),
+            (&walls.obturator_membranes, ContactSite::ObturatorMembrane, first + walls.abdominal_wall.triangles.len()),
+        ] {
+            assert!(!sheet.triangles.is_empty(), "{site:?}");
+            for t in 0..sheet.triangles.len() {
+                let [a, b, c] = sheet.corners(t);
+                let centre = (a + b + c) / 3.0;
+                // In front of the canal axis (the abdominal wall from the
+                // brim up, the membranes below it), facing back into the canal.
+                assert!(centre.y > 0.0, "{site:?} {t}: {centre}");
+                assert!(if site == ContactSite::AbdominalWall { centre.z > -0.005 } else { centre.z < 0.0 }, "{site:?} {t}: {centre}");
+                assert_eq!(with.sites[with.labels[offset + t] as usize], site);
+            }
+            let [a, b, c] = sheet.corners(sheet.triangles.len() / 2);
+            let into_canal = (b - a).cross(c - a).normalize();
+            assert!(into_canal.dot(DVec3::new(0.0, -1.0, 0.0)) > 0.0, "{site:?} faces {into_canal}");
+            let behind = (a + b + c) / 3.0 - 0.002 * into_canal;
+            let hit = closed.closest_point(behind, 0.01).unwrap();
+            assert!((hit.signed_distance + 0.002).abs() < 1e-4 && hit.triangle as usize >= first, "{site:?}: {hit:?}");
+            assert!(open.closest_point(behind, 0.001).is_none_or(|h| h.signed_distance > 0.0), "{site:?}: bone there");
+        }
+        // Left and right alike: the membranes are the mirror of each other.
+        let x_sum: f64 = walls.obturator_membranes.vertices.iter().map(|v| v.x).sum();
+        assert!(x_sum.abs() < 1e-9 * walls.obturator_membranes.vertices.len() as f64, "{x_sum}");
+        // By default the abdominal wall alone (the membranes narrow the
+        // turn, docs/LABOUR.md); off, the canal is the bone and the ligaments.
+        assert_eq!(scene.soft_walls().unwrap(), walls.abdominal_wall);
+        let mut off = scene.scenario.clone();
+        off.contact.abdominal_wall = false;
+        let bare = Scene::build(&off).unwrap();
+        assert_eq!(bare.sites, without.sites);
+        assert!(bare.soft_walls().is_none());
     }
 
     #[test]

@@ -63,8 +63,12 @@ pub fn headline(outcome: &Outcome) -> (&'static str, String) {
             (
                 "arrested",
                 format!(
-                    "Arrested {place}, {station} {:+.0} mm, {held}against {against}{}",
+                    "Arrested {place}, {station} {:+.0} mm{}, {held}against {against}{}",
                     arrest.station_mm,
+                    arrest
+                        .shoulders_from_ap_deg
+                        .filter(|_| arrest.stage == ArrestStage::Shoulders)
+                        .map_or(String::new(), |deg| format!(" ({deg:.0}° from antero-posterior)")),
                     arrest.shoulders_holding_head().map_or(String::new(), |s| format!(
                         ", its shoulders at station {s:+.0} mm"
                     ))
@@ -262,6 +266,17 @@ fn timeline(
         let _ = write!(
             w,
             "<p class=\"note\" data-note=\"head-born\">{}{}.</p>",
+            text[..1].to_uppercase(),
+            escape(&text[1..])
+        );
+    }
+    // The head-to-body interval and the shoulders' lie: what a shoulder
+    // dystocia is judged by, and what held them in this model.
+    if let Some(passage) = d.shoulders.filter(|p| p.inlet_s.is_some() || d.head_born.is_some()) {
+        let text = passage.to_string();
+        let _ = write!(
+            w,
+            "<p class=\"note\" data-note=\"shoulders\">{}{}.</p>",
             text[..1].to_uppercase(),
             escape(&text[1..])
         );
@@ -989,6 +1004,7 @@ mod tests {
                 against: "sacral_promontory".into(),
                 part: part.into(),
                 shoulders_station_mm: Some(-95.3),
+                shoulders_from_ap_deg: Some(64.6),
             }),
         };
         let (class, text) = headline(&arrest("unknown"));
@@ -1005,7 +1021,14 @@ mod tests {
         born.arrest.as_mut().unwrap().stage = ArrestStage::Shoulders;
         assert_eq!(
             headline(&born).1,
-            "Arrested at the shoulders (head born, trunk not), shoulders at -42 mm, the head, counted born (its centre past the outlet plane), still held against the sacral promontory"
+            "Arrested at the shoulders (head born, trunk not), shoulders at -42 mm (65° from antero-posterior), the head, counted born (its centre past the outlet plane), still held against the sacral promontory"
+        );
+        // Shoulders held by the trunk: how they lie is said with where.
+        let mut held = arrest("trunk");
+        held.arrest.as_mut().unwrap().stage = ArrestStage::Shoulders;
+        assert_eq!(
+            headline(&held).1,
+            "Arrested at the shoulders (head born, trunk not), shoulders at -42 mm (65° from antero-posterior), the trunk held against the sacral promontory"
         );
         let open = Outcome { delivered: false, arrest: None };
         assert!(headline(&open).1.contains("still progressing"));

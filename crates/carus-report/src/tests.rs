@@ -339,6 +339,22 @@ fn how_the_head_was_born_is_noted() {
     assert!(!write_report_with(&demo.input("held"), None).unwrap().html.contains("head-born"));
 }
 
+/// How the shoulders came into the inlet and how long the body took after
+/// the head are said beside the birth; a fetus without a trunk has no note.
+#[test]
+fn the_shoulders_passage_is_noted() {
+    let mut demo = Demo::textbook().unwrap();
+    let html = write_report_with(&demo.input("born"), None).unwrap().html;
+    let at = html.find("data-note=\"shoulders\"").expect("the note");
+    assert!(at < html.find("id=\"plots\"").unwrap(), "under the timeline");
+    let note = &html[at..at + html[at..].find("</p>").unwrap()];
+    let passage = demo.detector.shoulders.expect("the textbook has a trunk");
+    assert!(note.contains("The shoulders came into the inlet at") && note.contains("oblique"), "{note}");
+    assert!(note.contains(&format!("the body was born {:.1} s after the head", passage.head_to_body_s.unwrap())), "{note}");
+    demo.detector.shoulders = None;
+    assert!(!write_report_with(&demo.input("no trunk"), None).unwrap().html.contains("data-note=\"shoulders\""));
+}
+
 /// The forces plot says that its contact curve is a vector total, and
 /// the contact load (the sum of the sizes) has a plot of its own when it
 /// was recorded at every sample.

@@ -48,6 +48,8 @@ pub fn site_rgb(site: ContactSite) -> [f32; 3] {
         ContactSite::IschialSpines => [0.9, 0.8, 0.05],
         ContactSite::PelvicSidewall => [0.6, 0.38, 0.15],
         ContactSite::SacrospinousLigament => [0.95, 0.45, 0.7],
+        ContactSite::AbdominalWall => [0.55, 0.75, 0.95],
+        ContactSite::ObturatorMembrane => [0.75, 0.55, 0.95],
         ContactSite::PelvicFloor => [0.1, 0.6, 0.3],
     }
 }

@@ -19,7 +19,7 @@ use glam::{DVec2, DVec3};
 use super::diameters::DiameterError;
 use super::interpolate::{catmull_rom, SuperRing, HALF_TURN};
 use super::layout::{point, Layout};
-use super::PelvisLandmarks;
+use super::{PelvisLandmarks, SoftWalls};
 use crate::surface::TriSurface;
 
 /// Grid columns per 1/64 of a turn round the canal.
@@ -250,30 +250,54 @@ fn landmark_sites(l: &PelvisLandmarks) -> [(f64, usize, DVec3); 19] {
     ]
 }
 
+/// The front of the false pelvis, above the brim in front of the iliac
+/// wings' anterior borders: open bone, closed in the body by the lower
+/// abdominal wall. Their border runs from the crest down to the pubis: the
+/// anterior superior iliac spine (da 11.5) juts forward over a notch, the
+/// anterior inferior spine bulges below it, and the border reaches the
+/// superior pubic ramus beside the iliopubic eminence (da 5).
+fn front_of_false_pelvis(da: f64, kappa: f64) -> bool {
+    let inlet = INLET as f64;
+    let u = (inlet - kappa) / inlet;
+    let border = [(0.0, 5.0), (0.35, 8.5), (0.6, 11.0), (0.85, 13.0), (1.0, 11.5)];
+    let k = border.iter().rposition(|&(at, _)| at <= u).unwrap_or(0).min(border.len() - 2);
+    let ((u0, f0), (u1, f1)) = (border[k], border[k + 1]);
+    let front = f0 + (f1 - f0) * ((u - u0) / (u1 - u0)).clamp(0.0, 1.0);
+    kappa < inlet && da <= front
+}
+
+/// How far round from the front midline the pubic arch is open at depth
+/// `kappa`: from the lower symphysis border (mid ring, front) through the
+/// ischiopubic junctions (apex ring, da 8) to the tuberosities (outlet
+/// ring, da 16).
+fn pubic_arch(kappa: f64) -> f64 {
+    let mid = MID as f64;
+    if kappa <= mid {
+        0.0
+    } else {
+        8.0 * (kappa - mid)
+    }
+}
+
+/// The obturator foramen, kept two units clear of the arch: an oval from
+/// just below the superior pubic ramus to just above the ischiopubic ramus
+/// (kappa 2.85-4.15, da 6-13), taller than wide as in female pelves.
+fn in_obturator_foramen(da: f64, kappa: f64) -> bool {
+    let (u, v) = ((da - 9.5) / 3.5, (kappa - 3.5) / 0.65);
+    u * u + v * v < 1.0 && da - pubic_arch(kappa) > 2.0
+}
+
 /// Which cells are bone, by distance `da` from the front midline and depth
 /// `kappa` in key-ring units (engineering shapes of the bony outline).
 fn is_bone(da: f64, kappa: f64) -> bool {
     let inlet = INLET as f64;
     if kappa < inlet {
         // Iliac wings, back to the posterior superior iliac spine (da 27).
-        // Their anterior border runs from the crest down to the pubis: the
-        // anterior superior iliac spine (da 11.5) juts forward over a notch,
-        // the anterior inferior spine bulges below it, and the border reaches
-        // the superior pubic ramus beside the iliopubic eminence (da 5).
-        let u = (inlet - kappa) / inlet;
-        let border = [(0.0, 5.0), (0.35, 8.5), (0.6, 11.0), (0.85, 13.0), (1.0, 11.5)];
-        let k = border.iter().rposition(|&(at, _)| at <= u).unwrap_or(0).min(border.len() - 2);
-        let ((u0, f0), (u1, f1)) = (border[k], border[k + 1]);
-        let front = f0 + (f1 - f0) * ((u - u0) / (u1 - u0)).clamp(0.0, 1.0);
-        return da > front && da < 27.0;
+        return !front_of_false_pelvis(da, kappa) && da < 27.0;
     }
     let mid = MID as f64;
     let apex = APEX as f64;
-    // Pubic arch: opens from the lower symphysis border (mid ring, front)
-    // through the ischiopubic junctions (apex ring, da 8) to the tuberosities
-    // (outlet ring, da 16).
-    let arch = if kappa <= mid { 0.0 } else { 8.0 * (kappa - mid) };
-    if da < arch {
+    if da < pubic_arch(kappa) {
         return false;
     }
     // Sciatic notches between the ischium and the sacrum, with the ischial
@@ -291,11 +315,89 @@ fn is_bone(da: f64, kappa: f64) -> bool {
             return false;
         }
     }
-    // Obturator foramen, kept two units clear of the arch: an oval from just
-    // below the superior pubic ramus to just above the ischiopubic ramus
-    // (kappa 2.85-4.15, da 6-13), taller than wide as in female pelves.
-    let (u, v) = ((da - 9.5) / 3.5, (kappa - 3.5) / 0.65);
-    !(u * u + v * v < 1.0 && da - arch > 2.0)
+    !in_obturator_foramen(da, kappa)
+}
+
+/// The soft wall that closes a cell the bone leaves open, if one does.
+fn closure(da: f64, kappa: f64) -> Option<SoftWall> {
+    if front_of_false_pelvis(da, kappa) {
+        Some(SoftWall::AbdominalWall)
+    } else if kappa >= INLET as f64 && in_obturator_foramen(da, kappa) {
+        Some(SoftWall::ObturatorMembrane)
+    } else {
+        None
+    }
+}
+
+/// The soft tissues [`SoftWalls`] holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum SoftWall {
+    AbdominalWall,
+    ObturatorMembrane,
+}
+
+/// The open cells that soft tissue closes, on the bone's own grid (so they
+/// meet the bone edge to edge), facing the canal as its inner wall does.
+/// The obturator membranes lie on the canal wall (the obturator internus
+/// lines it); the abdominal wall rises from the bone's outer surface, the
+/// front of the pubic crests where the recti insert, so a head or shoulder
+/// may ride over the symphysis, inside the uterus, but not pass down in
+/// front of the pubis.
+fn soft_walls(inner: &[DVec3], outer: &[DVec3], bone: &[bool], kappa: &[f64], columns: usize, da: impl Fn(f64) -> f64) -> SoftWalls {
+    let rows = kappa.len();
+    let index = |r: usize, i: usize| (r * columns + i % columns) as u32;
+    let mut triangles = [Vec::new(), Vec::new()];
+    // The abdominal wall's columns in the crest's row, to carry on up.
+    let mut at_crest = Vec::new();
+    for r in 0..rows - 1 {
+        for i in 0..columns {
+            if bone[r * columns + i] {
+                continue;
+            }
+            let Some(wall) = closure(da(i as f64 + 0.5), 0.5 * (kappa[r] + kappa[r + 1])) else {
+                continue;
+            };
+            let quad = [index(r, i), index(r, i + 1), index(r + 1, i + 1), index(r + 1, i)];
+            let on = if wall == SoftWall::AbdominalWall { outer } else { inner };
+            triangles[wall as usize].extend(split_quad(on, quad));
+            if r == 0 && wall == SoftWall::AbdominalWall {
+                at_crest.push(i);
+            }
+        }
+    }
+    // Above the crest the wall goes on up, over the whole fetus: from the
+    // crest's row to ABDOMINAL_WALL_RISE_M above it.
+    let n = outer.len() as u32;
+    let mut with_rise = outer.to_vec();
+    with_rise.extend((0..columns).map(|i| outer[i] + ABDOMINAL_WALL_RISE_M * DVec3::Z));
+    let above = |i: usize| n + (i % columns) as u32;
+    let [mut abdominal, obturator] = triangles;
+    for i in at_crest {
+        abdominal.extend(split_quad(&with_rise, [above(i), above(i + 1), index(0, i + 1), index(0, i)]));
+    }
+    SoftWalls { abdominal_wall: compact(&with_rise, abdominal), obturator_membranes: compact(inner, obturator) }
+}
+
+/// How far the abdominal wall rises above the iliac crests, m, along the
+/// inlet's normal: past any fetal part (engineering choice: the wall goes
+/// on to the ribs; only that no shoulder passes over it matters here).
+const ABDOMINAL_WALL_RISE_M: f64 = 0.25;
+
+/// The surface of `triangles` over the grid points `at`, keeping only the
+/// points they use.
+fn compact(at: &[DVec3], mut triangles: Vec<[u32; 3]>) -> TriSurface {
+    let mut remap = vec![u32::MAX; at.len()];
+    let mut vertices = Vec::new();
+    for t in &mut triangles {
+        for v in t.iter_mut() {
+            if remap[*v as usize] == u32::MAX {
+                remap[*v as usize] = vertices.len() as u32;
+                vertices.push(at[*v as usize]);
+            }
+            *v = remap[*v as usize];
+        }
+    }
+    TriSurface::new(vertices, triangles)
 }
 
 /// Extra thickness of the iliac crest over the blade, m (engineering value:
@@ -363,7 +465,7 @@ fn relax_outer(inner: &[DVec3], outer: &mut [DVec3], depth: &[f64], plate: &[f64
 /// Builds the closed, outward-facing bone surface of a laid-out pelvis and
 /// places the sacral borders on it so the outlet oblique is
 /// `outlet_oblique_mm`; returns the surface and the final landmarks.
-pub(crate) fn canal_surface(layout: &Layout, outlet_oblique_mm: f64) -> Result<(TriSurface, PelvisLandmarks), DiameterError> {
+pub(crate) fn canal_surface(layout: &Layout, outlet_oblique_mm: f64) -> Result<(TriSurface, PelvisLandmarks, SoftWalls), DiameterError> {
     let (crest, canal) = key_rings(layout);
     let columns = 2 * HALF_TURN as usize * RESOLUTION;
     let mut kappa = Vec::new();
@@ -441,7 +543,8 @@ pub(crate) fn canal_surface(layout: &Layout, outlet_oblique_mm: f64) -> Result<(
     let grid = Grid { rows, columns, bone: &bone };
     let rows_along = key_row(INLET) + SACRAL_BORDER_TOP * RESOLUTION..=rows - 2;
     let landmarks = slide_sacral_borders(&layout.landmarks, &mut outer, &grid, rows_along, outlet_oblique_mm)?;
-    Ok((assemble(&inner, &outer, &bone, rows, columns), landmarks))
+    let closures = soft_walls(&inner, &outer, &bone, &kappa, columns, da);
+    Ok((assemble(&inner, &outer, &bone, rows, columns), landmarks, closures))
 }
 
 /// First grid row below the inlet where the sacrum stands free of the ilium
@@ -671,20 +774,8 @@ fn assemble(inner: &[DVec3], outer: &[DVec3], bone: &[bool], rows: usize, column
             }
         }
     }
-    // Keep only the vertices the triangles use.
-    let mut remap = vec![u32::MAX; 2 * n];
-    let mut vertices = Vec::new();
-    for t in &mut triangles {
-        for v in t.iter_mut() {
-            if remap[*v as usize] == u32::MAX {
-                remap[*v as usize] = vertices.len() as u32;
-                let k = *v as usize;
-                vertices.push(if k < n { inner[k] } else { outer[k - n] });
-            }
-            *v = remap[*v as usize];
-        }
-    }
-    TriSurface::new(vertices, triangles)
+    let points: Vec<DVec3> = inner.iter().chain(outer).copied().collect();
+    compact(&points, triangles)
 }
 
 #[cfg(test)]

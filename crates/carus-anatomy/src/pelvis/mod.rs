@@ -119,11 +119,31 @@ fn plane(
     Ok(Plane { centre: 0.5 * (anterior + posterior), normal: normal.normalize() })
 }
 
+/// Soft tissues that close the bony pelvis where it is open but the fetus
+/// may not pass, as open sheets facing the canal (pelvis frame, metres):
+/// the lower anterior abdominal wall over the front of the false pelvis,
+/// from the pubic crests and the inguinal ligaments up between the anterior
+/// superior iliac spines, and the obturator membranes with the obturator
+/// internus on them over the obturator foramina (Gray's Anatomy: the
+/// membrane closes the foramen but for the obturator canal, and the muscle
+/// lines the side wall of the true pelvis). Without them a fetal shoulder
+/// above the brim can pass in front of the pubis, outside the canal
+/// (docs/LABOUR.md, forty-fifth session).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SoftWalls {
+    pub abdominal_wall: TriSurface,
+    pub obturator_membranes: TriSurface,
+}
+
 /// A maternal bony pelvis in its own frame: the surface of the bony birth
-/// canal, its landmarks, the obstetric planes and the pelvic axis.
+/// canal, its landmarks, the obstetric planes and the pelvic axis, and the
+/// soft walls that close its openings.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Pelvis {
     pub surface: TriSurface,
+    /// Laid on a generated canal's own grid; an imported pelvis has none
+    /// (its openings are not found).
+    pub soft_walls: SoftWalls,
     pub landmarks: PelvisLandmarks,
     pub planes: PelvisPlanes,
     pub axis: PelvicAxis,
@@ -137,7 +157,7 @@ impl Pelvis {
         let planes = PelvisPlanes::from_landmarks(&landmarks)?;
         let right = landmarks.iliopectineal_right - landmarks.iliopectineal_left;
         let axis = PelvicAxis::new(&planes.in_order(), right)?;
-        Ok(Pelvis { surface, landmarks, planes, axis })
+        Ok(Pelvis { surface, soft_walls: SoftWalls::default(), landmarks, planes, axis })
     }
 
     /// Generates a pelvis from its obstetric diameters: landmarks placed so
@@ -145,8 +165,8 @@ impl Pelvis {
     /// through them (docs/ANATOMY.md).
     pub fn generate(diameters: &PelvisDiameters) -> Result<Self, PelvisError> {
         let layout = layout::layout(diameters)?;
-        let (surface, landmarks) = generate::canal_surface(&layout, diameters.outlet_oblique_mm)?;
-        Pelvis::from_landmarks(landmarks, surface)
+        let (surface, landmarks, soft_walls) = generate::canal_surface(&layout, diameters.outlet_oblique_mm)?;
+        Ok(Pelvis { soft_walls, ..Pelvis::from_landmarks(landmarks, surface)? })
     }
 
     /// Arc length of each plane along the axis: inlet, greatest, mid, outlet.

@@ -75,6 +75,7 @@ pub fn run(args: &DetectArgs) -> anyhow::Result<Status> {
             "internal_rotation_outside_window": report.internal_rotation_outside_window,
             "head_born": report.head_born,
             "not_held_at_birth": report.not_held_at_birth,
+            "shoulders": report.shoulders,
             "contraction_period_s": report.contraction_period_s,
             "series": args.series.as_ref().map(|p| p.display().to_string()),
         }))?;
@@ -397,6 +398,7 @@ mod tests {
                 against: "unknown".into(),
                 part: "unknown".into(),
                 shoulders_station_mm: None,
+                shoulders_from_ap_deg: None,
             }),
         };
         assert_eq!(
@@ -406,6 +408,14 @@ mod tests {
         let mut site_only = unnamed.clone();
         site_only.arrest.as_mut().unwrap().against = "sacrum".into();
         assert_eq!(crate::commands::run::outcome_line(&site_only), "arrested at the outlet stage, station +80 mm, against sacrum");
+        // Shoulders held: their station and how they lie.
+        let mut shoulders = site_only.clone();
+        let a = shoulders.arrest.as_mut().unwrap();
+        (a.stage, a.station_mm, a.part, a.shoulders_from_ap_deg) = (carus_analysis::ArrestStage::Shoulders, -43.6, "trunk".into(), Some(64.6));
+        assert_eq!(
+            crate::commands::run::outcome_line(&shoulders),
+            "arrested at the shoulders stage, shoulders at station -44 mm, 65 deg from antero-posterior, the trunk against sacrum"
+        );
         let (_, named) = detect_file(&table, Some("contracted-inlet")).unwrap();
         assert_eq!(named.unwrap().scenario, "contracted-inlet");
     }

@@ -693,7 +693,7 @@ pub(super) fn foreign_entries(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
     use carus_io::job as solve;
     let own = [
         OUT_DIR_MARK, SCENARIO_FILE, CHECKPOINT_FILE, HISTORY_JSON, HISTORY_CSV, CONTACTS_CSV, MOVEMENTS_FILE,
-        RUN_FILE, PELVIS_VTU, LIGAMENTS_VTU, HEAD_BODY_VTU, TRUNK_BODY_VTU, LOWER_TRUNK_BODY_VTU, REPORT_FILE,
+        RUN_FILE, PELVIS_VTU, LIGAMENTS_VTU, SOFT_WALLS_VTU, HEAD_BODY_VTU, TRUNK_BODY_VTU, LOWER_TRUNK_BODY_VTU, REPORT_FILE,
         super::sweep::PLAN_FILE, super::sweep::CSV_FILE, super::sweep::JSON_FILE, super::sanity::PLAN_FILE,
         super::sanity::RECORD_FILE, ".DS_Store", "Thumbs.db", "desktop.ini",
     ];
@@ -839,6 +839,7 @@ pub(super) fn json_summary(record: &RunRecord, out_dir: &Path) -> serde_json::Va
             .and_then(|d| d.internal_rotation_outside_window),
         "head_born": record.detector.as_ref().and_then(|d| d.head_born),
         "not_held_at_birth": record.detector.as_ref().map_or(&[][..], |d| &d.not_held_at_birth),
+        "shoulders": record.detector.as_ref().and_then(|d| d.shoulders),
         "scenario": record.summary.scenario,
         "mode": record.scenario.trajectory.mode.name(),
         "guide": GuideSummary::of(&record.loads),
@@ -862,6 +863,7 @@ pub(super) fn json_summary_not_run(out_dir: &Path, failure: &str) -> serde_json:
         "internal_rotation_outside_window": null,
         "head_born": null,
         "not_held_at_birth": [],
+        "shoulders": null,
         "scenario": null,
         "mode": null,
         "guide": null,
@@ -958,11 +960,16 @@ pub(super) fn outcome_line(outcome: &Outcome) -> String {
                 "unknown" => "a contact the history does not name",
                 site => site,
             };
+            // A shoulder arrest's station is the bisacromial midpoint's, and
+            // how the shoulders lie says what holds them.
+            let (what, lie) = match (a.stage, a.shoulders_from_ap_deg) {
+                (ArrestStage::Shoulders, Some(deg)) => ("shoulders at station", format!(" {deg:.0} deg from antero-posterior,")),
+                (ArrestStage::Shoulders, None) => ("shoulders at station", String::new()),
+                _ => ("station", String::new()),
+            };
             format!(
-                "arrested at the {} stage, {} {:+.0} mm, {held}against {against}",
+                "arrested at the {} stage, {what} {:+.0} mm,{lie} {held}against {against}",
                 serde_name(&a.stage),
-                // A shoulder arrest's station is the bisacromial midpoint's.
-                if a.stage == ArrestStage::Shoulders { "shoulders at station" } else { "station" },
                 a.station_mm,
             )
         }
@@ -1009,6 +1016,9 @@ pub(super) fn print_movements(movements: &[(&'static str, Movement)], detector: 
     }
     for lost in not_held {
         println!("  {lost}");
+    }
+    if let Some(passage) = detector.and_then(|d| d.shoulders) {
+        println!("  {passage}");
     }
 }
 
@@ -1146,6 +1156,8 @@ mod tests {
         let (record, json) = run_with(&forward);
         assert_eq!((json["mode"].as_str(), json["guide"].is_null()), (Some("forward"), true));
         assert_eq!(mode_line(&record), None);
+        // A trunk's shoulders are reported even before they come near the inlet.
+        assert!(json["shoulders"].is_object() && json["shoulders"]["inlet_s"].is_null(), "{json}");
 
         let mut imposed = forward.clone();
         imposed.trajectory.mode = Mode::Imposed;

@@ -611,6 +611,9 @@ fn header(keys: &[&str]) -> Vec<String> {
             "head_born_phi_deg",
             "not_held_at_birth",
             "state",
+            "shoulders_inlet_from_ap_deg",
+            "head_to_body_s",
+            "arrest_shoulders_from_ap_deg",
         ]
         .map(String::from),
     );
@@ -659,6 +662,10 @@ fn table_row(
     let lost = record.detector.as_ref().map_or(&[][..], |d| &d.not_held_at_birth);
     row.push(lost.iter().map(|n| n.movement.as_str()).collect::<Vec<_>>().join(" "));
     row.push(state(s).to_string());
+    let shoulders = record.detector.as_ref().and_then(|d| d.shoulders);
+    row.push(number(shoulders.and_then(|p| p.inlet_from_ap_deg)));
+    row.push(number(shoulders.and_then(|p| p.head_to_body_s)));
+    row.push(number(arrest.and_then(|a| a.shoulders_from_ap_deg)));
     row
 }
 
@@ -1104,7 +1111,8 @@ mod tests {
         assert_eq!(json["runs"].as_array().unwrap().len(), 2);
         assert_eq!(json["runs"][1]["set"]["expulsion.force_max_n"], "120");
         assert_eq!(json["runs"][1]["simulated_s"], json!(0.3));
-        assert!(lines[1].ends_with(",finished"), "{}", lines[1]);
+        let state = lines[0].split(',').position(|h| h == "state").unwrap();
+        assert_eq!(lines[1].split(',').nth(state), Some("finished"), "{}", lines[1]);
         // A run that could not be made has every key a made one has.
         let keys = |run: &serde_json::Value| run.as_object().unwrap().keys().cloned().collect::<Vec<_>>();
         let not_made = unmade(&out.join("03-x"), &[], &["expulsion.force_max_n"], &anyhow::anyhow!("no"));
