@@ -1560,23 +1560,19 @@ impl Scenario {
                 "a volume ratio J, e.g. 0.5 (0 never lets go)",
             ));
         }
-        let ratio = self.contact.ligament_stiffness_ratio;
-        if !(ratio > 0.0 && ratio <= 1.0) {
-            return Err(err(
-                "contact.ligament_stiffness_ratio",
-                ratio,
-                "must be above 0 and at most 1",
-                "a share of the bone's stiffness: 1 (the default) is as rigid as bone, 0.03 about a ligament's give (docs/LABOUR.md)",
-            ));
-        }
-        let ratio = self.contact.soft_wall_stiffness_ratio;
-        if !(ratio > 0.0 && ratio <= 1.0) {
-            return Err(err(
-                "contact.soft_wall_stiffness_ratio",
-                ratio,
-                "must be above 0 and at most 1",
-                "a share of the bone's stiffness: 1 (the default) is as rigid as bone",
-            ));
+        // Soft tissue in the canal's wall, as a share of the bone's stiffness.
+        for (key, ratio, example) in [
+            ("contact.ligament_stiffness_ratio", self.contact.ligament_stiffness_ratio, ", 0.03 about a ligament's give (docs/LABOUR.md)"),
+            ("contact.soft_wall_stiffness_ratio", self.contact.soft_wall_stiffness_ratio, ""),
+        ] {
+            if !(ratio > 0.0 && ratio <= 1.0) {
+                return Err(err(
+                    key,
+                    ratio,
+                    "must be above 0 and at most 1",
+                    &format!("a share of the bone's stiffness: 1 (the default) is as rigid as bone{example}"),
+                ));
+            }
         }
         if self.contact.friction > 2.0 {
             return Err(err(
@@ -2716,9 +2712,11 @@ mod tests {
         assert!(e.contains("force_min_n"), "{e}");
         let e = parse("name = \"x\"\n[expulsion]\nforce_min_n = -1e6\n").unwrap_err().to_string();
         assert!(e.contains("expulsion.force_min_n") && e.contains("far beyond any pull back"), "{e}");
-        for ratio in ["0.0", "1.5", "nan"] {
-            let e = parse(&format!("name = \"x\"\n[contact]\nligament_stiffness_ratio = {ratio}\n")).unwrap_err().to_string();
-            assert!(e.contains("contact.ligament_stiffness_ratio") && e.contains("above 0 and at most 1") && e.contains("as rigid as bone"), "{e}");
+        for key in ["ligament_stiffness_ratio", "soft_wall_stiffness_ratio"] {
+            for ratio in ["0.0", "1.5", "nan"] {
+                let e = parse(&format!("name = \"x\"\n[contact]\n{key} = {ratio}\n")).unwrap_err().to_string();
+                assert!(e.contains(&format!("contact.{key}")) && e.contains("above 0 and at most 1") && e.contains("as rigid as bone"), "{e}");
+            }
         }
         let e = parse("name = \"x\"\n[contact]\ntrunk_cover_depth_mm = 1000.0\n").unwrap_err().to_string();
         assert!(e.contains("contact.trunk_cover_depth_mm") && e.contains("0.1 to 30"), "{e}");
