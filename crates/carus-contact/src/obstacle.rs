@@ -348,18 +348,14 @@ pub fn obstacle_contacts_by_region(
         .with_min_len(32)
         .map(|(i, p)| {
             let found = match (obstacle.surface.closest_point(p, searched), memory_in.sides[i]) {
-                // A soft cover's sample past the middle of a thin wall it
-                // entered from `side`: out the way it came, not on through
-                // the far face. Where the two faces are nearer together
-                // than twice the bone law's design sink, the turned normal
-                // is a sample rounding a sharp edge: out by the nearer face.
-                // The bone law (the head's) never sinks to a wall's middle
-                // at its design loads; where it is pressed that far it
-                // rounds the edge it is on (an ischial spine's tip).
+                // A covered sample (the trunk's) past the middle of a thin
+                // wall it came in by `side`: back out that way, not on
+                // through the far face; unless the faces are under two
+                // design sinks apart (it is rounding a sharp edge) or the
+                // way back is beyond the band (lost either way). The bone
+                // law (the head's) never sinks to a wall's middle: pressed
+                // that far, it is rounding an edge (an ischial spine's tip).
                 (Some(h), Some(side)) if law.cover.is_some() && h.signed_distance < 0.0 && h.normal.dot(side) < 0.0 => {
-                    // Farther back than the band, the sample is lost either
-                    // way (a trunk wrapped round a spine's tip, dragged on):
-                    // the nearest face, as before.
                     match obstacle.surface.crossing_along(p, side, band) {
                         Some(back) if -(back.signed_distance + h.signed_distance) > 2.0 * DESIGN_PENETRATION_M => Some(back),
                         _ => Some(h),
