@@ -433,11 +433,11 @@ pub struct ContactSection {
     pub abdominal_wall: bool,
     /// Close a generated pelvis's obturator foramina with the obturator
     /// membranes and the obturator internus on them, lying on the canal
-    /// wall. Off by default: rigid there, they narrow the side wall where
-    /// the head turns, and the normal head is then squeezed between a
-    /// membrane and the opposite ligament at several hundred newtons
-    /// (docs/LABOUR.md, forty-fifth session); the muscle gives, and no
-    /// stiffness for it was found.
+    /// wall. Off by default, the canal of every earlier run: rigid there
+    /// they narrow the side wall where the head turns, while the muscle
+    /// gives, and no stiffness for it was found; on, the normal run is held
+    /// at the shoulders as it is off, its external rotation lost
+    /// (docs/LABOUR.md, forty-fifth session).
     pub obturator_membranes: bool,
     /// Stiffness of those soft walls as a share of the bone's, for the
     /// head's law and the trunk's: 1, as rigid as bone, as the ligaments
