@@ -87,6 +87,12 @@ impl Arrest {
             .then_some(self.shoulders_station_mm)
             .flatten()
     }
+
+    /// How the held shoulders lie, deg from the antero-posterior, for an
+    /// arrest at the shoulders stage (the words every report gives it).
+    pub fn held_shoulders_from_ap_deg(&self) -> Option<f64> {
+        self.shoulders_from_ap_deg.filter(|_| self.stage == ArrestStage::Shoulders)
+    }
 }
 
 fn unknown() -> String {

@@ -149,8 +149,7 @@ impl SanityCase {
                                 },
                                 arrest.against.replace('_', " "),
                                 arrest
-                                    .shoulders_from_ap_deg
-                                    .filter(|_| at_shoulders)
+                                    .held_shoulders_from_ap_deg()
                                     .map_or(String::new(), |deg| format!(
                                         ", the bisacromial diameter {deg:.0} deg from the antero-posterior"
                                     ))

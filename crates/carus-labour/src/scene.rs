@@ -627,12 +627,9 @@ impl Scene {
     /// wall, then the obturator membranes, each as `[contact]` asks):
     /// `None` when there are none (both off, or an imported pelvis).
     pub fn soft_walls(&self) -> Option<TriSurface> {
-        let (walls, contact) = (&self.pelvis.soft_walls, &self.scenario.contact);
         let mut surface = TriSurface::default();
-        for (sheet, on) in [(&walls.abdominal_wall, contact.abdominal_wall), (&walls.obturator_membranes, contact.obturator_membranes)] {
-            if on {
-                surface.append(sheet);
-            }
+        for (sheet, _) in soft_walls_on(&self.pelvis, &self.scenario.contact) {
+            surface.append(sheet);
         }
         (!surface.triangles.is_empty()).then_some(surface)
     }
@@ -871,18 +868,25 @@ struct CanalWall {
 fn canal_wall(pelvis: &Pelvis, ligaments: &TriSurface, contact: &ContactSection) -> CanalWall {
     let (mut labels, mut sites) = regions(pelvis);
     let mut surface = pelvis.surface.clone();
-    let closures = &pelvis.soft_walls;
-    let sheets = [
-        (ligaments, ContactSite::SacrospinousLigament, true),
-        (&closures.abdominal_wall, ContactSite::AbdominalWall, contact.abdominal_wall),
-        (&closures.obturator_membranes, ContactSite::ObturatorMembrane, contact.obturator_membranes),
-    ];
-    for (sheet, site, _) in sheets.into_iter().filter(|(sheet, _, on)| *on && !sheet.triangles.is_empty()) {
+    let sheets = std::iter::once((ligaments, ContactSite::SacrospinousLigament)).chain(soft_walls_on(pelvis, contact));
+    for (sheet, site) in sheets.filter(|(sheet, _)| !sheet.triangles.is_empty()) {
         surface.append(sheet);
         labels.resize(surface.triangles.len(), sites.len() as u16);
         sites.push(site);
     }
     CanalWall { surface, labels, sites }
+}
+
+/// The pelvis's soft walls that `[contact]` puts in the canal's wall, with
+/// their sites: the abdominal wall, then the obturator membranes.
+fn soft_walls_on<'a>(pelvis: &'a Pelvis, contact: &ContactSection) -> impl Iterator<Item = (&'a TriSurface, ContactSite)> {
+    let walls = &pelvis.soft_walls;
+    [
+        (&walls.abdominal_wall, ContactSite::AbdominalWall, contact.abdominal_wall),
+        (&walls.obturator_membranes, ContactSite::ObturatorMembrane, contact.obturator_membranes),
+    ]
+    .into_iter()
+    .filter_map(|(sheet, site, on)| on.then_some((sheet, site)))
 }
 
 /// Labels each pelvis triangle with the part of the bony canal it belongs

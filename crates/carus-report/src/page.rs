@@ -66,8 +66,7 @@ pub fn headline(outcome: &Outcome) -> (&'static str, String) {
                     "Arrested {place}, {station} {:+.0} mm{}, {held}against {against}{}",
                     arrest.station_mm,
                     arrest
-                        .shoulders_from_ap_deg
-                        .filter(|_| arrest.stage == ArrestStage::Shoulders)
+                        .held_shoulders_from_ap_deg()
                         .map_or(String::new(), |deg| format!(" ({deg:.0}° from antero-posterior)")),
                     arrest.shoulders_holding_head().map_or(String::new(), |s| format!(
                         ", its shoulders at station {s:+.0} mm"

@@ -962,11 +962,8 @@ pub(super) fn outcome_line(outcome: &Outcome) -> String {
             };
             // A shoulder arrest's station is the bisacromial midpoint's, and
             // how the shoulders lie says what holds them.
-            let (what, lie) = match (a.stage, a.shoulders_from_ap_deg) {
-                (ArrestStage::Shoulders, Some(deg)) => ("shoulders at station", format!(" {deg:.0} deg from antero-posterior,")),
-                (ArrestStage::Shoulders, None) => ("shoulders at station", String::new()),
-                _ => ("station", String::new()),
-            };
+            let what = if a.stage == ArrestStage::Shoulders { "shoulders at station" } else { "station" };
+            let lie = a.held_shoulders_from_ap_deg().map_or(String::new(), |deg| format!(" {deg:.0} deg from antero-posterior,"));
             format!(
                 "arrested at the {} stage, {what} {:+.0} mm,{lie} {held}against {against}",
                 serde_name(&a.stage),
